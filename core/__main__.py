@@ -1,0 +1,5 @@
+"""Run the command line: ``python -m regopack``."""
+
+from regopack.cli import main
+
+raise SystemExit(main())

@@ -1,0 +1,238 @@
+"""Command line: ``regopack run | scenes | config | verify``.
+
+A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
+TOML file, a missing file) prints one line ``regopack: error: <message>`` and
+exits with status 2; anything unexpected keeps its traceback. ``Ctrl-C``
+exits with status 130 and leaves no partial output file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import tomllib
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    Progress,
+    ProgressColumn,
+    Task,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+
+from regopack import __version__
+from regopack.errors import RegopackError
+from regopack.interfaces import ProgressCallback
+
+__all__ = ["build_parser", "main"]
+
+EXIT_OK = 0
+EXIT_VIOLATED = 1
+EXIT_USAGE = 2
+EXIT_INTERRUPTED = 130
+
+
+class _RateColumn(ProgressColumn):
+    """Particles handled per second."""
+
+    def render(self, task: Task) -> Text:
+        speed = task.finished_speed or task.speed
+        return Text("-- particles/s" if speed is None else f"{speed:,.0f} particles/s")
+
+
+class _PlacedColumn(ProgressColumn):
+    """Particles placed out of the total drawn."""
+
+    def render(self, task: Task) -> Text:
+        placed = int(task.fields.get("placed", 0))
+        total = "?" if task.total is None else f"{int(task.total):,}"
+        return Text(f"{placed:,}/{total} placed")
+
+
+@contextmanager
+def _progress_bar(console: Console, enabled: bool, label: str) -> Iterator[ProgressCallback | None]:
+    """Show a rich progress bar fed by ``progress(done, placed, total)`` calls."""
+    if not enabled:
+        yield None
+        return
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(bar_width=30),
+        _PlacedColumn(),
+        _RateColumn(),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=console, transient=False) as bar:
+        task = bar.add_task(label, total=None, placed=0)
+
+        def update(done: int, placed: int, total: int) -> None:
+            bar.update(task, completed=done, total=total, placed=placed)
+
+        yield update
+
+
+def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument(
+        "scene",
+        nargs="?",
+        metavar="SCENE",
+        help="built-in scene name or path of a TOML scene file (default: table1)",
+    )
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a scene value, e.g. --set density.eta=10 (repeatable)",
+    )
+    parser.add_argument("--seed", type=int, metavar="N", help="seed of the random generator")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the argument parser of the ``regopack`` command."""
+    parser = argparse.ArgumentParser(
+        prog="regopack",
+        description="Dense 2D packings of lunar regolith particles.",
+    )
+    parser.add_argument("--version", action="version", version=f"regopack {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+
+    run = sub.add_parser("run", help="pack a scene and write the packing and its summary")
+    _add_scene_arguments(run)
+    run.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output directory (default: runs/<scene>-seed<seed>)",
+    )
+    run.add_argument("--quiet", action="store_true", help="print no progress and no summary")
+    run.set_defaults(handler=_cmd_run)
+
+    scenes = sub.add_parser("scenes", help="list the built-in scenes")
+    scenes.set_defaults(handler=_cmd_scenes)
+
+    config = sub.add_parser("config", help="print the fully resolved scene as TOML")
+    _add_scene_arguments(config)
+    config.set_defaults(handler=_cmd_config)
+
+    verify = sub.add_parser("verify", help="check a packing for overlaps and wall violations")
+    verify.add_argument("packing", type=Path, metavar="PACKING", help="packing file (.npz)")
+    verify.add_argument(
+        "--rel-tol",
+        type=float,
+        default=1e-9,
+        metavar="X",
+        help="tolerated overlap, relative to the smaller particle area (default: 1e-9)",
+    )
+    verify.set_defaults(handler=_cmd_verify)
+    return parser
+
+
+def _resolve(args: argparse.Namespace) -> Any:
+    from regopack.manager import default_registry
+    from regopack.scene import load_scene, resolve_scene
+
+    scene = load_scene(args.scene, args.overrides, seed=args.seed)
+    return resolve_scene(scene, default_registry())
+
+
+def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.run import default_out_dir, run_scene, summary_rows
+
+    resolved = _resolve(args)
+    out_dir = args.out if args.out is not None else default_out_dir(resolved)
+    with _progress_bar(err, not args.quiet, f"packing {resolved.name}") as progress:
+        outcome = run_scene(resolved, out_dir, progress=progress)
+    if args.quiet:
+        return EXIT_OK
+    table = Table(title=f"regopack run: {resolved.name}", show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value", justify="right")
+    for label, value in summary_rows(outcome.summary):
+        table.add_row(label, value)
+    table.add_row("packing", str(outcome.packing_path))
+    table.add_row("summary", str(outcome.summary_path))
+    out.print(table)
+    return EXIT_OK
+
+
+def _cmd_scenes(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.scene import DEFAULT_SCENE, builtin_scenes
+
+    table = Table(title="built-in scenes")
+    table.add_column("name", style="bold")
+    table.add_column("description")
+    for name, description in builtin_scenes().items():
+        table.add_row(name + (" (default)" if name == DEFAULT_SCENE else ""), description)
+    out.print(table)
+    return EXIT_OK
+
+
+def _cmd_config(args: argparse.Namespace, out: Console, err: Console) -> int:
+    resolved = _resolve(args)
+    out.file.write(resolved.to_toml())
+    return EXIT_OK
+
+
+def _cmd_verify(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.packing import load
+    from regopack.verify import verify
+
+    report = verify(load(args.packing), rel_tol=args.rel_tol)
+    out.file.write(f"{report}\n")
+    return EXIT_OK if report.ok else EXIT_VIOLATED
+
+
+def _one_line(exc: BaseException) -> str:
+    if isinstance(exc, ValidationError):
+        first = exc.errors(include_url=False)[0]
+        loc = ".".join(str(p) for p in first["loc"])
+        text = f"{loc}: {first['msg']}" if loc else first["msg"]
+    elif isinstance(exc, OSError) and exc.filename is not None:
+        text = f"{exc.filename}: {exc.strerror or exc}"
+    else:
+        text = str(exc) or type(exc).__name__
+    return " ".join(text.split())
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run the ``regopack`` command; return its exit status.
+
+    Parameters
+    ----------
+    argv
+        Arguments without the program name (default: ``sys.argv[1:]``).
+    """
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exit_:  # --help, --version, usage errors
+        return exit_.code if isinstance(exit_.code, int) else EXIT_USAGE
+    handler: Callable[[argparse.Namespace, Console, Console], int] | None = getattr(
+        args, "handler", None
+    )
+    if handler is None:
+        parser.print_help(sys.stderr)
+        return EXIT_USAGE
+    out = Console(file=sys.stdout)
+    err = Console(file=sys.stderr)
+    try:
+        return handler(args, out, err)
+    except (RegopackError, ValidationError, tomllib.TOMLDecodeError, FileNotFoundError) as exc:
+        print(f"regopack: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("regopack: interrupted; no partial files were written", file=sys.stderr)
+        return EXIT_INTERRUPTED

@@ -1,0 +1,27 @@
+"""Error classes of regopack.
+
+Every error a user can cause derives from :class:`RegopackError`; the command
+line prints such errors as one line without a traceback.
+"""
+
+from __future__ import annotations
+
+
+class RegopackError(Exception):
+    """Base class of all errors that describe a user mistake or a bad input."""
+
+
+class ConfigError(RegopackError):
+    """A scene or command-line value is missing, malformed or out of range."""
+
+
+class PluginError(RegopackError):
+    """A plugin is unknown, registered twice, or does not honour its contract."""
+
+
+class PackingFileError(RegopackError):
+    """A packing file cannot be read or has an unsupported format version."""
+
+
+class GeometryError(RegopackError):
+    """A particle or domain geometry is invalid (e.g. a particle does not fit the domain)."""

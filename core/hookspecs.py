@@ -1,0 +1,109 @@
+"""Hook specifications of regopack.
+
+Every hook returns an iterable of spec records (:mod:`regopack.plugin_types`)
+and is called once when the plugin manager is built; none is ``firstresult``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import pluggy
+
+from regopack.plugin_types import (
+    AnalyzerSpec,
+    DensityControllerSpec,
+    InserterSpec,
+    ShapeSpec,
+    SizeDistributionSpec,
+)
+
+PROJECT = "regopack"
+hookspec = pluggy.HookspecMarker(PROJECT)
+hookimpl = pluggy.HookimplMarker(PROJECT)
+
+
+@hookspec
+def regopack_size_distributions() -> Iterable[SizeDistributionSpec]:
+    """Return the size distributions this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``: the results of
+    all plugins are collected.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_size_distributions():
+            return [SizeDistributionSpec("fixed", FixedConfig, Fixed)]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_shapes() -> Iterable[ShapeSpec]:
+    """Return the particle shape generators this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_shapes():
+            return [ShapeSpec("square", SquareConfig, Square)]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_inserters() -> Iterable[InserterSpec]:
+    """Return the insertion strategies this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_inserters():
+            return [InserterSpec("rsa", RsaConfig, RandomSequentialAddition)]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_density_controllers() -> Iterable[DensityControllerSpec]:
+    """Return the density controllers this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_density_controllers():
+            return [DensityControllerSpec("none", NoConfig, lambda cfg: Identity())]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_analyzers() -> Iterable[AnalyzerSpec]:
+    """Return the structure analyzers this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_analyzers():
+            return [AnalyzerSpec("density", DensityConfig, Density)]
+    """
+    raise NotImplementedError

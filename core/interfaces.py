@@ -1,0 +1,151 @@
+"""Interfaces of the five plugin kinds.
+
+A plugin supplies an implementation of one of these classes through a spec
+record (:mod:`regopack.plugin_types`). The core never depends on a concrete
+implementation.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, ClassVar, Self
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.domain import Rectangle
+from regopack.population import Population, ShapeBatch
+
+if TYPE_CHECKING:
+    from regopack.packing import Packing
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+ProgressCallback = Callable[[int, int, int], None]
+"""Called as ``progress(done, placed, total)`` while particles are inserted."""
+
+
+class SizeDistribution(ABC):
+    """Distribution of equivalent particle radii."""
+
+    @abstractmethod
+    def sample(self, n: int, rng: np.random.Generator) -> FloatArray:
+        """Draw ``n`` equivalent radii (area = pi r^2)."""
+
+    @property
+    @abstractmethod
+    def mean_area(self) -> float:
+        """Expected particle area E[pi r^2]; sets the particle count of ``count = "auto"``."""
+
+    @property
+    @abstractmethod
+    def r_min(self) -> float:
+        """Smallest radius the distribution can return."""
+
+    @property
+    @abstractmethod
+    def r_max(self) -> float:
+        """Largest radius the distribution can return."""
+
+
+class ShapeGenerator(ABC):
+    """Generator of convex particle outlines of prescribed area."""
+
+    @abstractmethod
+    def generate(self, radius: FloatArray, rng: np.random.Generator) -> ShapeBatch:
+        """Return one convex outline per radius, of area ``pi r^2``.
+
+        Outlines are counter-clockwise and relative to the particle's reference
+        point, which must lie strictly inside.
+        """
+
+
+class DensityController(ABC):
+    """Rule that trims available arcs before a centre is sampled on them."""
+
+    identity: bool = False
+    """True when :meth:`shrink` never changes the arcs; inserters may then skip it."""
+
+    @abstractmethod
+    def shrink(
+        self, arcs: FloatArray, r_new: float, r_candidate: float, rng: np.random.Generator
+    ) -> FloatArray:
+        """Trim arcs.
+
+        Parameters
+        ----------
+        arcs
+            ``(k, 2)`` polar-angle intervals ``[start, end]`` with ``start < end``
+            (angles may exceed 2 pi where an arc wraps through angle 0).
+        r_new, r_candidate
+            Equivalent radii of the particle being inserted and of the candidate.
+        rng
+            The run's generator.
+
+        Returns
+        -------
+        ndarray
+            ``(k', 2)`` arcs, each contained in one of the input arcs; arcs of
+            zero or negative length are dropped.
+        """
+
+
+@dataclass
+class InsertionResult:
+    """Outcome of an insertion run.
+
+    Attributes
+    ----------
+    centre
+        ``(n, 2)`` reference-point position of every particle; NaN where not placed.
+    insertion_index
+        ``(n,)`` order in which particles were placed, ``-1`` where not placed.
+    stats
+        Counters of the run (e.g. candidate analyses performed).
+    """
+
+    centre: FloatArray
+    insertion_index: IntArray
+    stats: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def placed(self) -> NDArray[np.bool_]:
+        """Mask of the particles that were placed."""
+        return self.insertion_index >= 0
+
+
+class InsertionStrategy(ABC):
+    """Algorithm that places a population inside a domain without overlaps."""
+
+    @abstractmethod
+    def pack(
+        self,
+        population: Population,
+        domain: Rectangle,
+        controller: DensityController,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Place the particles in population order; return where each went."""
+
+
+class Analyzer(ABC):
+    """Structure analysis of a packing.
+
+    ``compute`` returns ``self``; results are properties or :meth:`results`.
+    Analyzers declare the names of the analyzers whose results they need in
+    ``requires``; the runner computes those first and passes them in ``context``.
+    """
+
+    name: ClassVar[str] = ""
+    requires: ClassVar[tuple[str, ...]] = ()
+
+    @abstractmethod
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+        """Analyse ``packing``; ``context`` maps required analyzer names to computed ones."""
+
+    @abstractmethod
+    def results(self) -> dict[str, Any]:
+        """Scalar results (JSON-serialisable) of the last :meth:`compute`."""

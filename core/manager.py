@@ -1,0 +1,258 @@
+"""Plugin manager and registry of plugin implementations.
+
+The plugin manager is built by :func:`build_plugin_manager`, never at import
+time. It registers the built-in plugins listed in :data:`BUILTIN_PLUGINS`,
+then third-party plugins from the ``regopack`` entry-point group (unless
+autoloading is turned off), and rejects hook implementations that match no
+hook specification.
+
+:class:`Registry` calls every hook once and flattens the spec records by plugin
+kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``).
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Iterable, Mapping, Sequence
+from typing import Any
+
+import pluggy
+from pydantic import BaseModel
+
+from regopack import hookspecs
+from regopack.errors import PluginError
+from regopack.plugin_types import KINDS, PluginSpec
+
+__all__ = [
+    "BUILTIN_PLUGINS",
+    "DISABLE_AUTOLOAD_ENV",
+    "ENTRY_POINT_GROUP",
+    "HOOK_OF_KIND",
+    "Registry",
+    "build_plugin_manager",
+    "default_registry",
+]
+
+BUILTIN_PLUGINS: tuple[str, ...] = (
+    "regopack.plugins.change5",
+    "regopack.plugins.octagon",
+    "regopack.plugins.available_arc",
+    "regopack.plugins.eta",
+)
+"""Modules of the built-in plugins, imported and registered in this order."""
+
+ENTRY_POINT_GROUP = "regopack"
+"""Entry-point group through which third-party plugins are found."""
+
+DISABLE_AUTOLOAD_ENV = "REGOPACK_DISABLE_PLUGIN_AUTOLOAD"
+"""Environment variable that, when set to a non-empty value, turns entry-point loading off."""
+
+HOOK_OF_KIND: dict[str, str] = {
+    "size": "regopack_size_distributions",
+    "shape": "regopack_shapes",
+    "insertion": "regopack_inserters",
+    "density": "regopack_density_controllers",
+    "analysis": "regopack_analyzers",
+}
+"""Hook that provides each plugin kind (the keys of :data:`regopack.plugin_types.KINDS`)."""
+
+
+def build_plugin_manager(
+    *,
+    autoload: bool | None = None,
+    extra: Iterable[object] = (),
+    builtins: Sequence[str] = BUILTIN_PLUGINS,
+) -> pluggy.PluginManager:
+    """Build a plugin manager with the built-in and installed plugins.
+
+    Parameters
+    ----------
+    autoload
+        Load third-party plugins from the ``regopack`` entry-point group. The
+        default (``None``) loads them unless the environment variable
+        ``REGOPACK_DISABLE_PLUGIN_AUTOLOAD`` is set to a non-empty value.
+    extra
+        Further plugin objects (modules or instances with hook implementations)
+        to register, e.g. fakes in tests.
+    builtins
+        Module names of the built-in plugins to import and register.
+
+    Returns
+    -------
+    pluggy.PluginManager
+        The manager, with every hook implementation checked against its spec.
+
+    Raises
+    ------
+    PluginError
+        If a plugin is registered twice or implements a hook that does not exist.
+
+    Examples
+    --------
+    >>> pm = build_plugin_manager(autoload=False, builtins=())
+    >>> pm.get_plugins()
+    set()
+    """
+    pm = pluggy.PluginManager(hookspecs.PROJECT)
+    pm.add_hookspecs(hookspecs)
+    modules = [(name, importlib.import_module(name)) for name in builtins]
+    try:
+        for module_name, module in modules:
+            pm.register(module, name=module_name)
+        if autoload is None:
+            autoload = not os.environ.get(DISABLE_AUTOLOAD_ENV)
+        if autoload:
+            pm.load_setuptools_entrypoints(ENTRY_POINT_GROUP)
+        for plugin in extra:
+            pm.register(plugin)
+        pm.check_pending()
+    except (ValueError, pluggy.PluginValidationError) as err:
+        raise PluginError(f"cannot register plugin: {_one_line(str(err))}") from err
+    return pm
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _origins(pm: pluggy.PluginManager) -> dict[str, str]:
+    """Map plugin names to the distribution that installed them, where known."""
+    out: dict[str, str] = {}
+    for plugin, dist in pm.list_plugin_distinfo():
+        name = pm.get_name(plugin)
+        if name is not None:
+            out[name] = str(getattr(dist, "project_name", None) or dist.metadata["name"])
+    return out
+
+
+class Registry:
+    """Plugin implementations by kind and name.
+
+    Parameters
+    ----------
+    specs
+        ``specs[kind][name] = (spec, origin)`` where ``origin`` names the plugin
+        (or its distribution) that provided the spec. Use :meth:`from_manager`
+        rather than building this mapping by hand.
+
+    Examples
+    --------
+    >>> reg = Registry.from_manager(build_plugin_manager(autoload=False, builtins=()))
+    >>> reg.names("shape")
+    []
+    """
+
+    def __init__(self, specs: Mapping[str, Mapping[str, tuple[PluginSpec[Any], str]]]) -> None:
+        self._specs: dict[str, dict[str, tuple[PluginSpec[Any], str]]] = {
+            kind: dict(specs.get(kind, {})) for kind in KINDS
+        }
+
+    @classmethod
+    def from_manager(cls, pm: pluggy.PluginManager) -> Registry:
+        """Call every hook of ``pm`` once and collect the spec records.
+
+        Raises
+        ------
+        PluginError
+            If two plugins claim the same name within a kind (the message names
+            both), or a hook returns something other than that kind's spec records.
+        """
+        origins = _origins(pm)
+        specs: dict[str, dict[str, tuple[PluginSpec[Any], str]]] = {kind: {} for kind in KINDS}
+        for kind, hook_name in HOOK_OF_KIND.items():
+            record_type = KINDS[kind]
+            caller = getattr(pm.hook, hook_name)
+            for impl in caller.get_hookimpls():
+                if impl.hookwrapper or getattr(impl, "wrapper", False):
+                    continue
+                origin = origins.get(impl.plugin_name, impl.plugin_name)
+                records = impl.function()
+                if records is None:
+                    continue
+                if isinstance(records, PluginSpec) or not isinstance(records, Iterable):
+                    raise PluginError(
+                        f"plugin {origin!r}: {hook_name} must return an iterable of "
+                        f"{record_type.__name__}, got {type(records).__name__}"
+                    )
+                for record in records:
+                    cls._check_record(record, record_type, origin, hook_name)
+                    previous = specs[kind].get(record.name)
+                    if previous is not None:
+                        raise PluginError(
+                            f"{kind} kind {record.name!r} is provided by two plugins: "
+                            f"{previous[1]!r} and {origin!r}"
+                        )
+                    specs[kind][record.name] = (record, origin)
+        return cls(specs)
+
+    @staticmethod
+    def _check_record(
+        record: object, record_type: type[PluginSpec[Any]], origin: str, hook_name: str
+    ) -> None:
+        if not isinstance(record, record_type):
+            raise PluginError(
+                f"plugin {origin!r}: {hook_name} returned a {type(record).__name__}, "
+                f"expected {record_type.__name__}"
+            )
+        if not isinstance(record.name, str) or not record.name:
+            raise PluginError(f"plugin {origin!r}: {hook_name} returned a record without a name")
+        model = record.config_model
+        if not (isinstance(model, type) and issubclass(model, BaseModel)):
+            raise PluginError(
+                f"plugin {origin!r}: {record_type.__name__} {record.name!r} has a config_model "
+                "that is not a pydantic model class"
+            )
+        if not callable(record.factory):
+            raise PluginError(
+                f"plugin {origin!r}: {record_type.__name__} {record.name!r} has no callable factory"
+            )
+
+    def _kind(self, kind: str) -> dict[str, tuple[PluginSpec[Any], str]]:
+        try:
+            return self._specs[kind]
+        except KeyError:
+            raise PluginError(
+                f"unknown plugin kind {kind!r}; known plugin kinds: {', '.join(KINDS)}"
+            ) from None
+
+    def get(self, kind: str, name: str) -> PluginSpec[Any]:
+        """Return the spec registered as ``name`` for ``kind``.
+
+        Raises
+        ------
+        PluginError
+            One line naming the unknown name and the known ones, e.g.
+            ``unknown shape kind 'octagn'; known kinds: octagon``.
+        """
+        specs = self._kind(kind)
+        try:
+            return specs[name][0]
+        except KeyError:
+            known = ", ".join(sorted(specs)) or "(none)"
+            raise PluginError(f"unknown {kind} kind {name!r}; known kinds: {known}") from None
+
+    def names(self, kind: str) -> list[str]:
+        """Sorted names registered for ``kind``."""
+        return sorted(self._kind(kind))
+
+    def origin(self, kind: str, name: str) -> str:
+        """Name of the plugin (or the distribution that installed it) providing ``name``."""
+        self.get(kind, name)
+        return self._kind(kind)[name][1]
+
+    def __contains__(self, item: object) -> bool:
+        """Whether ``(kind, name)`` is registered."""
+        if not (isinstance(item, tuple) and len(item) == 2):
+            return False
+        kind, name = item
+        return kind in self._specs and name in self._specs[kind]
+
+    def __repr__(self) -> str:
+        parts = (f"{kind}={sorted(names)}" for kind, names in self._specs.items())
+        return f"Registry({', '.join(parts)})"
+
+
+def default_registry(*, autoload: bool | None = None) -> Registry:
+    """Build a fresh registry of the built-in and installed plugins (nothing is cached)."""
+    return Registry.from_manager(build_plugin_manager(autoload=autoload))

@@ -1,0 +1,80 @@
+"""Spec records that plugins return from their hooks.
+
+Each record names one implementation, the pydantic model that validates its
+parameters (``extra="forbid"``, every field described) and a factory that
+builds the implementation from a validated config.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Generic, TypeVar
+
+from pydantic import BaseModel
+
+from regopack.interfaces import (
+    Analyzer,
+    DensityController,
+    InsertionStrategy,
+    ShapeGenerator,
+    SizeDistribution,
+)
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class PluginSpec(Generic[T]):
+    """One named implementation of a plugin kind.
+
+    Attributes
+    ----------
+    name
+        The ``kind`` users write in a scene (e.g. ``"octagon"``).
+    config_model
+        Pydantic model of the parameters.
+    factory
+        Builds the implementation from a validated ``config_model`` instance.
+    description
+        One sentence shown by the command line and the docs.
+    """
+
+    name: str
+    config_model: type[BaseModel]
+    factory: Callable[[Any], T]
+    description: str = ""
+
+    def build(self, params: dict[str, Any]) -> T:
+        """Validate ``params`` with :attr:`config_model` and build the implementation."""
+        return self.factory(self.config_model.model_validate(params))
+
+
+class SizeDistributionSpec(PluginSpec[SizeDistribution]):
+    """Spec of a size distribution plugin."""
+
+
+class ShapeSpec(PluginSpec[ShapeGenerator]):
+    """Spec of a shape generator plugin."""
+
+
+class InserterSpec(PluginSpec[InsertionStrategy]):
+    """Spec of an insertion strategy plugin."""
+
+
+class DensityControllerSpec(PluginSpec[DensityController]):
+    """Spec of a density controller plugin."""
+
+
+class AnalyzerSpec(PluginSpec[Analyzer]):
+    """Spec of an analyzer plugin."""
+
+
+KINDS: dict[str, type[PluginSpec[Any]]] = {
+    "size": SizeDistributionSpec,
+    "shape": ShapeSpec,
+    "insertion": InserterSpec,
+    "density": DensityControllerSpec,
+    "analysis": AnalyzerSpec,
+}
+"""Plugin kinds by the scene section that selects them."""

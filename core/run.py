@@ -1,0 +1,289 @@
+"""Running a scene: draw the population, insert it, summarise, write the files."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from regopack.errors import ConfigError, PluginError
+from regopack.interfaces import (
+    Analyzer,
+    DensityController,
+    InsertionResult,
+    InsertionStrategy,
+    ProgressCallback,
+    ShapeGenerator,
+    SizeDistribution,
+)
+from regopack.packing import Packing, save, write_json_atomic
+from regopack.population import IntArray, Population, ShapeBatch, concat_shapes
+from regopack.scene import ResolvedPlugin, ResolvedScene
+
+__all__ = [
+    "RunOutcome",
+    "default_out_dir",
+    "draw_population",
+    "particle_count",
+    "phi_in_window",
+    "run_scene",
+]
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """Result of :func:`run_scene`.
+
+    Attributes
+    ----------
+    packing
+        The packing.
+    summary
+        Scalar results of the run (what ``summary.json`` holds).
+    packing_path, summary_path
+        Files written, or ``None`` when nothing was written.
+    """
+
+    packing: Packing
+    summary: dict[str, Any]
+    packing_path: Path | None = None
+    summary_path: Path | None = None
+
+
+def _build(plugin: ResolvedPlugin[Any], interface: type[Any], what: str) -> Any:
+    obj = plugin.build()
+    if not isinstance(obj, interface):
+        raise PluginError(
+            f"{what} plugin {plugin.kind!r} ({plugin.origin}) built a {type(obj).__name__}, "
+            f"not a {interface.__name__}"
+        )
+    return obj
+
+
+def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
+    """Return the number of particles to draw.
+
+    This is the scene's ``count``, or ``round(domain area / size_dist.mean_area)``
+    for ``count = "auto"``.
+    """
+    count = scene.scene.count
+    if count == "auto":
+        return round(scene.domain.area / size_dist.mean_area)
+    return int(count)
+
+
+def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
+    """Draw every particle of ``scene`` up front, in insertion order.
+
+    The random draws happen in exactly this order: the radii
+    (``size.sample(N, rng)``); the minerals (``rng.choice`` over the phases
+    with the normalised fractions); then, for each phase in scene order, the
+    shapes of that phase's particles (``shape.generate(radii[idx], rng)``).
+    """
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    n = particle_count(scene, size_dist)
+    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
+    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
+        raise PluginError(
+            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
+            f"(expected ({n},), all finite and positive)"
+        )
+    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    parts: list[tuple[IntArray, ShapeBatch]] = []
+    for p, phase in enumerate(scene.phases):
+        generator: ShapeGenerator = _build(phase.shape, ShapeGenerator, "shape")
+        idx = np.flatnonzero(minerals == p).astype(np.int64)
+        batch = generator.generate(radii[idx], rng)
+        if len(batch) != len(idx):
+            raise PluginError(
+                f"shape plugin {phase.shape.kind!r} returned {len(batch)} outlines "
+                f"for {len(idx)} radii (phase {phase.name!r})"
+            )
+        parts.append((idx, batch))
+    shapes = concat_shapes(parts, n)
+    return Population(
+        radius=radii, mineral=minerals, mineral_names=scene.phase_names, shapes=shapes
+    )
+
+
+def phi_in_window(packing: Packing, window_bounds: tuple[float, float, float, float]) -> float:
+    """Area fraction of the window ``(xmin, xmax, ymin, ymax)`` covered by placed particles.
+
+    Particles are clipped exactly to the window. Returns NaN for an empty window.
+    """
+    import shapely
+
+    xmin, xmax, ymin, ymax = window_bounds
+    window_area = (xmax - xmin) * (ymax - ymin)
+    if not window_area > 0:
+        return math.nan
+    geoms = packing.to_shapely()
+    if len(geoms) == 0:
+        return 0.0
+    b = shapely.bounds(geoms)
+    inside = (b[:, 0] >= xmin) & (b[:, 2] <= xmax) & (b[:, 1] >= ymin) & (b[:, 3] <= ymax)
+    away = (b[:, 2] <= xmin) | (b[:, 0] >= xmax) | (b[:, 3] <= ymin) | (b[:, 1] >= ymax)
+    straddling = ~inside & ~away
+    total = float(shapely.area(geoms[inside]).sum())
+    if straddling.any():
+        box = shapely.box(xmin, ymin, xmax, ymax)
+        total += float(shapely.area(shapely.intersection(geoms[straddling], box)).sum())
+    return total / window_area
+
+
+def default_out_dir(scene: ResolvedScene) -> Path:
+    """``runs/<scene name>-seed<seed>`` (relative to the working directory)."""
+    return Path("runs") / f"{scene.name}-seed{scene.seed}"
+
+
+def _run_analyses(packing: Packing, scene: ResolvedScene) -> dict[str, dict[str, Any]]:
+    """Compute the requested analyzers, their requirements first."""
+    done: dict[str, Analyzer] = {}
+
+    def compute(plugin: ResolvedPlugin[Any], chain: tuple[str, ...]) -> Analyzer:
+        name = plugin.kind
+        if name in done:
+            return done[name]
+        if name in chain:
+            cycle = " -> ".join((*chain, name))
+            raise PluginError(f"analyzers require each other in a cycle: {cycle}")
+        analyzer: Analyzer = _build(plugin, Analyzer, "analysis")
+        context: dict[str, Analyzer] = {}
+        for req in analyzer.requires:
+            try:
+                spec = scene.registry.get("analysis", req)
+            except PluginError as err:
+                raise PluginError(f"analyzer {name!r} requires {req!r}: {err}") from err
+            dep = ResolvedPlugin(
+                kind=req,
+                spec=spec,
+                config=spec.config_model.model_validate({}),
+                origin=scene.registry.origin("analysis", req),
+            )
+            context[req] = compute(dep, (*chain, name))
+        done[name] = analyzer.compute(packing, context)
+        return done[name]
+
+    results: dict[str, dict[str, Any]] = {}
+    for plugin in scene.analyses:
+        results[plugin.kind] = compute(plugin, ()).results()
+    return results
+
+
+def run_scene(
+    resolved: ResolvedScene,
+    out_dir: str | Path | None = None,
+    progress: ProgressCallback | None = None,
+) -> RunOutcome:
+    """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
+
+    Parameters
+    ----------
+    resolved
+        The scene, with validated plugin parameters.
+    out_dir
+        Directory for the packing and summary files (created if needed;
+        see :func:`default_out_dir`). ``None`` writes nothing.
+    progress
+        Called as ``progress(done, placed, total)`` during insertion.
+
+    Returns
+    -------
+    RunOutcome
+        The packing, the summary and the paths written.
+
+    Notes
+    -----
+    Files are written atomically: an interrupted run never leaves a partial
+    file in place of a previous one.
+    """
+    start = time.perf_counter()
+    rng = np.random.default_rng(resolved.seed)
+    population = draw_population(resolved, rng)
+    inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
+    controller: DensityController = _build(resolved.density, DensityController, "density")
+    domain = resolved.domain
+    result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
+    wall = time.perf_counter() - start
+    size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
+
+    scene_dict = resolved.to_dict()
+    packing = Packing.from_parts(
+        population, result, domain, scene_dict, resolved.seed, result.stats
+    )
+    n_placed = packing.n_placed
+    margin = 2.0 * float(size_dist.r_max)
+    window = domain.shrunk(margin)
+    phi_domain = float(packing.area()[packing.placed].sum()) / domain.area
+    phi_interior = phi_in_window(packing, (window.xmin, window.xmax, window.ymin, window.ymax))
+
+    summary: dict[str, Any] = {
+        "scene": resolved.name,
+        "seed": resolved.seed,
+        "tried": packing.n_particles,
+        "placed": n_placed,
+        "not_placed": packing.n_particles - n_placed,
+        "phi_domain": phi_domain,
+        "phi_interior": phi_interior,
+        "interior_margin": margin,
+        "wall_time_s": wall,
+    }
+    if math.isnan(phi_interior):
+        summary["phi_interior_note"] = (
+            f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
+        )
+    eta = getattr(resolved.density.config, "eta", None)
+    if eta is not None:
+        summary["eta"] = eta
+    for key, value in result.stats.items():
+        summary.setdefault(key, value)
+    if resolved.analyses:
+        summary["analyses"] = _run_analyses(packing, resolved)
+
+    packing_path = summary_path = None
+    if out_dir is not None:
+        out = Path(out_dir)
+        packing_path = out / resolved.scene.outputs.packing
+        summary_path = out / resolved.scene.outputs.summary
+        for directory in (out, packing_path.parent, summary_path.parent):
+            try:
+                directory.mkdir(parents=True, exist_ok=True)
+            except OSError as err:
+                raise ConfigError(f"cannot create the output directory {directory}: {err}") from err
+        try:
+            save(packing, packing_path)
+            write_json_atomic(summary_path, summary)
+        except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
+            raise ConfigError(f"cannot write the run's output: {err}") from err
+    return RunOutcome(packing, summary, packing_path, summary_path)
+
+
+def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """Human-readable ``(label, value)`` rows of a run summary."""
+
+    def fmt(v: Any, spec: str = "") -> str:
+        if isinstance(v, float) and math.isnan(v):
+            return "n/a"
+        return format(v, spec)
+
+    rows = [
+        ("scene", str(summary["scene"])),
+        ("seed", str(summary["seed"])),
+        ("tried", fmt(summary["tried"], ",")),
+        ("placed", fmt(summary["placed"], ",")),
+        ("not placed", fmt(summary["not_placed"], ",")),
+        ("φ domain", fmt(summary["phi_domain"], ".4f")),
+        (
+            f"φ interior (margin {summary['interior_margin']:g})",
+            fmt(summary["phi_interior"], ".4f"),
+        ),
+        ("wall time", f"{summary['wall_time_s']:.2f} s"),
+    ]
+    if "eta" in summary:
+        rows.insert(2, ("η", fmt(summary["eta"], "g")))
+    return rows

@@ -1,0 +1,619 @@
+"""Scenes: what to pack, validated in two steps.
+
+A scene file (TOML) names one plugin of each kind and its parameters. Step one
+(:class:`Scene`) checks the structure and reads each section's ``kind``; step
+two (:func:`resolve_scene`) validates each section's parameters with the
+``config_model`` of the plugin that ``kind`` selects. Every validation error is
+turned into a one-line :class:`~regopack.errors.ConfigError` naming the file,
+the dotted field, the offending value and what is allowed, for example::
+
+    scene.toml: density.eta = -3: Input should be greater than or equal to 0
+
+Phase fractions must sum to 1 within ``1e-3``; they are divided by their sum
+(normalised exactly) when minerals are drawn.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+from typing import Annotated, Any, Generic, Literal, TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
+
+from regopack import _toml
+from regopack.domain import Rectangle
+from regopack.errors import ConfigError, PluginError
+from regopack.manager import Registry
+from regopack.plugin_types import PluginSpec
+
+__all__ = [
+    "DEFAULT_SCENE",
+    "FRACTION_TOLERANCE",
+    "Domain",
+    "Outputs",
+    "Phase",
+    "PluginRef",
+    "ResolvedPhase",
+    "ResolvedPlugin",
+    "ResolvedScene",
+    "Scene",
+    "apply_overrides",
+    "builtin_scenes",
+    "load_scene",
+    "resolve_scene",
+]
+
+DEFAULT_SCENE = "table1"
+"""Built-in scene used when no scene is given (the paper's Table 1)."""
+
+FRACTION_TOLERANCE = 1e-3
+"""Largest allowed distance of the sum of the phase fractions from 1."""
+
+T = TypeVar("T")
+FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+
+
+class Domain(BaseModel):
+    """The container: a rectangle with rigid walls."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    kind: Literal["rectangle"] = Field(
+        "rectangle", description="Shape of the container; only 'rectangle' exists."
+    )
+    width: float = Field(
+        800.0, gt=0, allow_inf_nan=False, description="Extent along x (micrometres)."
+    )
+    height: float = Field(
+        800.0, gt=0, allow_inf_nan=False, description="Extent along y (micrometres)."
+    )
+    center: tuple[FiniteFloat, FiniteFloat] = Field(
+        (0.0, 0.0), description="Centre of the rectangle (micrometres)."
+    )
+
+    def to_rectangle(self) -> Rectangle:
+        """Return the domain as a :class:`regopack.domain.Rectangle`."""
+        return Rectangle.centred(self.width, self.height, self.center)
+
+
+class PluginRef(BaseModel):
+    """Selects a plugin implementation by ``kind``; other keys are its parameters.
+
+    The parameters are validated later, by the plugin's own ``config_model``
+    (see :func:`resolve_scene`).
+    """
+
+    model_config = ConfigDict(extra="allow")
+
+    kind: str = Field(min_length=1, description="Name of the plugin implementation.")
+
+    @property
+    def params(self) -> dict[str, Any]:
+        """The parameters given besides ``kind``."""
+        return dict(self.model_extra or {})
+
+
+class Phase(BaseModel):
+    """One mineral phase: its share of the particles and its shape generator."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(min_length=1, description="Name of the mineral phase.")
+    fraction: float = Field(
+        gt=0,
+        allow_inf_nan=False,
+        description="Share of the particles drawn from this phase (normalised to sum 1).",
+    )
+    shape: PluginRef = Field(description="Shape generator of this phase's particles.")
+
+
+class Outputs(BaseModel):
+    """Names of the files a run writes into its output directory."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    packing: str = Field("packing.npz", min_length=1, description="Packing file (NPZ).")
+    summary: str = Field("summary.json", min_length=1, description="Run summary (JSON).")
+    analyses: list[Annotated[str, Field(min_length=1)]] = Field(
+        default_factory=list, description="Analyzers to run after packing, by name."
+    )
+
+
+class Scene(BaseModel):
+    """A packing scene: domain, particle population, insertion and density control.
+
+    Examples
+    --------
+    >>> scene = load_scene("small")
+    >>> scene.name, scene.domain.width
+    ('small', 200.0)
+    """
+
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field("custom", min_length=1, description="Name of the scene (used for outputs).")
+    seed: int = Field(0, ge=0, strict=True, description="Seed of the run's random generator.")
+    count: Literal["auto"] | Annotated[int, Field(ge=1, strict=True)] = Field(
+        "auto",
+        description=(
+            "Number of particles to draw; 'auto' gives round(domain area / mean particle area)."
+        ),
+    )
+    domain: Domain = Field(default_factory=Domain, description="The container.")
+    size: PluginRef = Field(description="Size distribution of the equivalent radii.")
+    phases: list[Phase] = Field(
+        min_length=1, description="Mineral phases with fractions and shape generators."
+    )
+    insertion: PluginRef = Field(description="Insertion strategy.")
+    density: PluginRef = Field(description="Density controller used by the insertion.")
+    outputs: Outputs = Field(default_factory=Outputs, description="Output file names.")
+
+    _source: str | None = PrivateAttr(default=None)
+    _overridden: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @field_validator("count", mode="before")
+    @classmethod
+    def _check_count(cls, value: Any) -> Any:
+        whole = isinstance(value, int) and not isinstance(value, bool)
+        if value == "auto" or (whole and value >= 1):
+            return value
+        raise ValueError('must be "auto" or a whole number >= 1')
+
+    @field_validator("phases")
+    @classmethod
+    def _check_phases(cls, phases: list[Phase]) -> list[Phase]:
+        names = [p.name for p in phases]
+        duplicates = sorted({n for n in names if names.count(n) > 1})
+        if duplicates:
+            raise ValueError(f"phase names must be unique; repeated: {', '.join(duplicates)}")
+        total = math.fsum(p.fraction for p in phases)
+        if abs(total - 1.0) > FRACTION_TOLERANCE:
+            raise ValueError(
+                f"phase fractions sum to {total:.6g}; they must sum to 1 "
+                f"(within {FRACTION_TOLERANCE:g})"
+            )
+        return phases
+
+    @property
+    def source(self) -> str | None:
+        """File the scene was read from (for messages), if any."""
+        return self._source
+
+    @property
+    def fractions(self) -> NDArray[np.float64]:
+        """Phase fractions divided by their sum."""
+        f = np.array([p.fraction for p in self.phases], dtype=np.float64)
+        out: NDArray[np.float64] = f / f.sum()
+        return out
+
+
+# ---------------------------------------------------------------------------
+# errors
+
+
+def _format_value(value: Any) -> str | None:
+    if isinstance(value, Mapping) or (
+        isinstance(value, Sequence) and not isinstance(value, str | bytes)
+    ):
+        return None
+    if isinstance(value, bool | int | float | str):
+        return _toml._value(value)
+    return repr(value)
+
+
+def _dotted(loc: Sequence[int | str]) -> str:
+    return ".".join(str(p) for p in loc)
+
+
+def _describe_validation_error(
+    err: ValidationError,
+    *,
+    source: str | None,
+    prefix: Sequence[int | str] = (),
+    overridden: Mapping[str, str] | None = None,
+) -> str:
+    """One line describing the first error of ``err``."""
+    errors = err.errors(include_url=False)
+    first = errors[0]
+    loc = _dotted([*prefix, *first["loc"]])
+    msg = first["msg"].removeprefix("Value error, ")
+    value = None if first["type"] == "missing" else _format_value(first.get("input"))
+    text = f"{loc} = {value}: {msg}" if value is not None else f"{loc}: {msg}"
+    where = _where(loc, source, overridden or {})
+    if where:
+        text = f"{where}: {text}"
+    if len(errors) > 1:
+        more = len(errors) - 1
+        text += f" (and {more} more error{'s' if more > 1 else ''})"
+    return " ".join(text.split())
+
+
+def _where(loc: str, source: str | None, overridden: Mapping[str, str]) -> str | None:
+    """Where the value at ``loc`` came from: a command-line option or the file."""
+    for key, label in overridden.items():
+        if loc == key or loc.startswith(key + "."):
+            return label
+    return source
+
+
+# ---------------------------------------------------------------------------
+# loading
+
+
+def builtin_scenes() -> dict[str, str]:
+    """Built-in scenes: name to one-line description (the file's first comment).
+
+    Examples
+    --------
+    >>> sorted(builtin_scenes())
+    ['small', 'table1']
+    """
+    out: dict[str, str] = {}
+    for entry in sorted(resources.files("regopack.scenes").iterdir(), key=lambda e: e.name):
+        if not entry.name.endswith(".toml"):
+            continue
+        description = ""
+        for line in entry.read_text(encoding="utf-8").splitlines():
+            stripped = line.strip()
+            if stripped.startswith("#"):
+                description = stripped.lstrip("#").strip()
+                break
+            if stripped:
+                break
+        out[entry.name.removesuffix(".toml")] = description
+    return out
+
+
+def _read_builtin(name: str) -> str:
+    return resources.files("regopack.scenes").joinpath(f"{name}.toml").read_text(encoding="utf-8")
+
+
+def _parse_override(text: str) -> tuple[str, Any]:
+    key, sep, raw = text.partition("=")
+    key = key.strip()
+    if not sep or not key:
+        raise ConfigError(f"--set {text!r}: expected key=value, e.g. density.eta=10")
+    parts = key.split(".")
+    if any(not p.strip() for p in parts):
+        raise ConfigError(f"--set {text!r}: empty part in the dotted key {key!r}")
+    raw = raw.strip()
+    try:
+        value = tomllib.loads("v = " + raw)["v"]
+    except tomllib.TOMLDecodeError:
+        value = raw
+    return ".".join(p.strip() for p in parts), value
+
+
+def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> list[str]:
+    """Apply ``key=value`` overrides to a raw scene dictionary in place.
+
+    Keys are dotted paths; list items are addressed by index
+    (``phases.0.shape.psi=3``). Values are parsed as TOML values
+    (``10``, ``0.99``, ``"text"``, ``[1, 2]``, ``{kind = "eta"}``) and taken as
+    plain strings when they are not valid TOML.
+
+    Returns
+    -------
+    list of str
+        The dotted keys that were set.
+
+    Examples
+    --------
+    >>> d = {"density": {"kind": "eta"}}
+    >>> apply_overrides(d, ["density.eta=10", "insertion.first=center"])
+    ['density.eta', 'insertion.first']
+    >>> d
+    {'density': {'kind': 'eta', 'eta': 10}, 'insertion': {'first': 'center'}}
+    """
+    keys: list[str] = []
+    for text in overrides:
+        key, value = _parse_override(text)
+        parts = key.split(".")
+        node: Any = data
+        for depth, part in enumerate(parts):
+            last = depth == len(parts) - 1
+            where = ".".join(parts[: depth + 1])
+            if isinstance(node, list):
+                if not part.isdigit() or int(part) >= len(node):
+                    raise ConfigError(
+                        f"--set {key}: {where} is not an item of a list of {len(node)} items"
+                    )
+                index = int(part)
+                if last:
+                    node[index] = value
+                else:
+                    node = node[index]
+            elif isinstance(node, dict):
+                if last:
+                    node[part] = value
+                else:
+                    node = node.setdefault(part, {})
+            else:
+                parent = ".".join(parts[:depth])
+                raise ConfigError(f"--set {key}: {parent} is a value, not a table")
+        keys.append(key)
+    return keys
+
+
+def load_scene(
+    path_or_name: str | Path | None = None,
+    overrides: Sequence[str] = (),
+    seed: int | None = None,
+) -> Scene:
+    """Read a scene and apply command-line overrides (step one of validation).
+
+    Parameters
+    ----------
+    path_or_name
+        ``None`` for the default built-in scene (``table1``); the name of a
+        built-in scene (see :func:`builtin_scenes`); or the path of a TOML file.
+    overrides
+        ``key=value`` strings with dotted keys, e.g. ``density.eta=10``,
+        ``domain.width=200``, ``phases.0.shape.psi=3`` (see :func:`apply_overrides`).
+    seed
+        Replaces the scene's seed.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the file, field, value and what is allowed.
+
+    Examples
+    --------
+    >>> load_scene("table1", ["density.eta=10"], seed=7).seed
+    7
+    """
+    if path_or_name is None:
+        path_or_name = DEFAULT_SCENE
+    name = str(path_or_name)
+    builtins = builtin_scenes()
+    if isinstance(path_or_name, str) and not name.endswith(".toml") and name in builtins:
+        source = f"{name}.toml"
+        text = _read_builtin(name)
+    else:
+        path = Path(path_or_name)
+        source = str(path)
+        if not path.is_file():
+            known = ", ".join(sorted(builtins))
+            what = "is a directory, not a scene file" if path.is_dir() else "no such scene file"
+            raise ConfigError(f"{source}: {what} (built-in scenes: {known})")
+        try:
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as err:
+            raise ConfigError(f"{source}: cannot read the scene file: {err}") from err
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"{source}: invalid TOML: {' '.join(str(err).split())}") from err
+    overridden = dict.fromkeys(apply_overrides(data, overrides), "--set")
+    if seed is not None:
+        data["seed"] = seed
+        overridden["seed"] = "--seed"
+    return scene_from_dict(data, source=source, overridden=overridden)
+
+
+def scene_from_dict(
+    data: Mapping[str, Any],
+    *,
+    source: str | None = None,
+    overridden: Mapping[str, str] | None = None,
+) -> Scene:
+    """Validate a raw scene dictionary (step one), with one-line errors.
+
+    Parameters
+    ----------
+    data
+        The scene as read from TOML.
+    source
+        File name used in error messages.
+    overridden
+        Dotted keys set on the command line, mapped to the option that set them
+        (``"--set"``, ``"--seed"``); errors in them name the option, not the file.
+    """
+    try:
+        scene = Scene.model_validate(data)
+    except ValidationError as err:
+        raise ConfigError(
+            _describe_validation_error(err, source=source, overridden=overridden)
+        ) from err
+    scene._source = source
+    scene._overridden = dict(overridden or {})
+    return scene
+
+
+# ---------------------------------------------------------------------------
+# resolution
+
+
+@dataclass(frozen=True)
+class ResolvedPlugin(Generic[T]):
+    """A plugin selection with its validated configuration.
+
+    Attributes
+    ----------
+    kind
+        Name of the implementation (the scene's ``kind``).
+    spec
+        The plugin's spec record.
+    config
+        The validated ``config_model`` instance (all defaults filled in).
+    origin
+        Plugin or distribution that provides the implementation.
+    """
+
+    kind: str
+    spec: PluginSpec[T]
+    config: BaseModel
+    origin: str
+
+    def build(self) -> T:
+        """Build the implementation from the validated configuration."""
+        return self.spec.factory(self.config)
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": ..., **parameters}`` with every default filled in."""
+        params = self.config.model_dump(mode="json", by_alias=True)
+        return {"kind": self.kind, **{k: v for k, v in params.items() if k != "kind"}}
+
+
+@dataclass(frozen=True)
+class ResolvedPhase:
+    """A phase with its resolved shape generator."""
+
+    name: str
+    fraction: float
+    shape: ResolvedPlugin[Any]
+
+
+@dataclass(frozen=True)
+class ResolvedScene:
+    """A scene whose plugin parameters have been validated (step two).
+
+    Attributes
+    ----------
+    scene
+        The structural scene.
+    size, insertion, density
+        Resolved plugin selections.
+    phases
+        Phases in scene order.
+    analyses
+        Analyzers requested in ``outputs.analyses``.
+    registry
+        Registry the plugins came from (to look up analyzers' requirements).
+    """
+
+    scene: Scene
+    size: ResolvedPlugin[Any]
+    phases: tuple[ResolvedPhase, ...]
+    insertion: ResolvedPlugin[Any]
+    density: ResolvedPlugin[Any]
+    analyses: tuple[ResolvedPlugin[Any], ...]
+    registry: Registry
+
+    @property
+    def name(self) -> str:
+        """Name of the scene."""
+        return self.scene.name
+
+    @property
+    def seed(self) -> int:
+        """Seed of the run."""
+        return self.scene.seed
+
+    @property
+    def domain(self) -> Rectangle:
+        """The container."""
+        return self.scene.domain.to_rectangle()
+
+    @property
+    def phase_names(self) -> tuple[str, ...]:
+        """Phase names in scene order."""
+        return tuple(p.name for p in self.phases)
+
+    @property
+    def fractions(self) -> NDArray[np.float64]:
+        """Phase fractions divided by their sum."""
+        return self.scene.fractions
+
+    def to_dict(self) -> dict[str, Any]:
+        """Return the fully resolved scene (every default filled in) as plain data.
+
+        Reading the result back with :func:`scene_from_dict` and resolving it
+        gives the same scene.
+        """
+        s = self.scene
+        return {
+            "name": s.name,
+            "seed": s.seed,
+            "count": s.count,
+            "domain": s.domain.model_dump(mode="json"),
+            "size": self.size.to_dict(),
+            "phases": [
+                {"name": p.name, "fraction": p.fraction, "shape": p.shape.to_dict()}
+                for p in self.phases
+            ],
+            "insertion": self.insertion.to_dict(),
+            "density": self.density.to_dict(),
+            "outputs": s.outputs.model_dump(mode="json"),
+        }
+
+    def to_toml(self) -> str:
+        """:meth:`to_dict` as a TOML document."""
+        return _toml.dumps(self.to_dict())
+
+
+def _resolve_ref(
+    scene: Scene,
+    registry: Registry,
+    category: str,
+    ref: PluginRef,
+    loc: tuple[int | str, ...],
+    kind_loc: tuple[int | str, ...] | None = None,
+) -> ResolvedPlugin[Any]:
+    kind_where = _dotted(kind_loc if kind_loc is not None else (*loc, "kind"))
+    try:
+        spec = registry.get(category, ref.kind)
+        origin = registry.origin(category, ref.kind)
+    except PluginError as err:
+        text = f"{kind_where}: {err}"
+        source = _where(kind_where, scene.source, scene._overridden)
+        raise ConfigError(f"{source}: {text}" if source else text) from err
+    try:
+        config = spec.config_model.model_validate(ref.params)
+    except ValidationError as err:
+        raise ConfigError(
+            _describe_validation_error(
+                err, source=scene.source, prefix=loc, overridden=scene._overridden
+            )
+        ) from err
+    return ResolvedPlugin(kind=ref.kind, spec=spec, config=config, origin=origin)
+
+
+def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
+    """Validate every plugin's parameters with its ``config_model`` (step two).
+
+    Raises
+    ------
+    ConfigError
+        One line: an unknown ``kind`` (listing the known ones) or a bad
+        parameter, located by its path in the scene (e.g. ``phases.2.shape.psi``).
+    """
+    size = _resolve_ref(scene, registry, "size", scene.size, ("size",))
+    phases = tuple(
+        ResolvedPhase(
+            name=p.name,
+            fraction=p.fraction,
+            shape=_resolve_ref(scene, registry, "shape", p.shape, ("phases", i, "shape")),
+        )
+        for i, p in enumerate(scene.phases)
+    )
+    insertion = _resolve_ref(scene, registry, "insertion", scene.insertion, ("insertion",))
+    density = _resolve_ref(scene, registry, "density", scene.density, ("density",))
+    analyses = tuple(
+        _resolve_ref(
+            scene,
+            registry,
+            "analysis",
+            PluginRef(kind=name),
+            ("outputs", "analyses", i),
+            kind_loc=("outputs", "analyses", i),
+        )
+        for i, name in enumerate(scene.outputs.analyses)
+    )
+    return ResolvedScene(
+        scene=scene,
+        size=size,
+        phases=phases,
+        insertion=insertion,
+        density=density,
+        analyses=analyses,
+        registry=registry,
+    )

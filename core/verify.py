@@ -1,0 +1,251 @@
+"""Independent check of a packing: no overlaps, nothing outside the walls.
+
+The check uses shapely (GEOS) only, not regopack's own geometry, so it can
+serve as an oracle for the insertion algorithms. Coordinates are translated by
+the domain centre and divided by the domain's larger side before the shapely
+geometries are built, so the check behaves the same at every length scale.
+
+Floating-point overlays can fail on nearly degenerate input (two particles
+sharing an edge up to rounding). Every pair or particle that the fast pass
+flags is therefore measured again in a frame centred on the particle and
+scaled to its size, with a snap-rounding overlay on a grid of
+:data:`CONFIRM_GRID` particle sizes, which is robust; only violations confirmed
+that way are reported.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+from numpy.typing import NDArray
+
+from regopack.packing import Packing
+
+__all__ = ["CONFIRM_GRID", "VerifyReport", "assert_valid_packing", "verify"]
+
+CONFIRM_GRID = 1e-12
+"""Snap-rounding grid of the confirming overlay, in units of the particle size."""
+
+
+@dataclass(frozen=True)
+class VerifyReport:
+    """Outcome of :func:`verify`.
+
+    Attributes
+    ----------
+    ok
+        True when no pair overlaps and no particle leaves the domain.
+    n_checked
+        Number of placed particles checked.
+    n_overlapping_pairs
+        Pairs whose intersection area exceeds ``rel_tol`` times the smaller area.
+    worst_overlap
+        ``(i, j, overlap)`` for the pair with the largest overlap, as a fraction
+        of the smaller of the two areas (``i < j`` are particle indices), or
+        ``None`` when no pair overlaps.
+    n_outside
+        Particles whose area outside the domain exceeds ``rel_tol`` times their area.
+    worst_outside
+        ``(i, outside)`` for the particle with the largest area outside the
+        domain, as a fraction of its own area, or ``None``.
+    rel_tol
+        Tolerance used.
+    """
+
+    ok: bool
+    n_checked: int
+    n_overlapping_pairs: int
+    worst_overlap: tuple[int, int, float] | None
+    n_outside: int
+    worst_outside: tuple[int, float] | None
+    rel_tol: float
+
+    def __str__(self) -> str:
+        status = "OK" if self.ok else "VIOLATED"
+        lines = [f"checked {self.n_checked} placed particles (rel_tol {self.rel_tol:g}): {status}"]
+        line = f"overlapping pairs: {self.n_overlapping_pairs}"
+        if self.worst_overlap is not None:
+            i, j, frac = self.worst_overlap
+            line += f" (worst: particles {i} and {j}, {frac:.3g} of the smaller area)"
+        lines.append(line)
+        line = f"particles outside the domain: {self.n_outside}"
+        if self.worst_outside is not None:
+            i, frac = self.worst_outside
+            line += f" (worst: particle {i}, {frac:.3g} of its area)"
+        lines.append(line)
+        return "\n".join(lines)
+
+
+def _polygons(
+    packing: Packing,
+    idx: NDArray[np.int64],
+    origin: NDArray[np.float64],
+    scale: NDArray[np.float64] | float,
+) -> NDArray[np.object_]:
+    """Polygons of particles ``idx``, translated by ``-origin`` and divided by ``scale``.
+
+    ``origin`` is ``(2,)`` or ``(len(idx), 2)``; ``scale`` a scalar or ``(len(idx),)``.
+    """
+    offsets = packing.offsets
+    counts = offsets[idx + 1] - offsets[idx]
+    starts = np.repeat(offsets[idx], counts)
+    within = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    local = packing.vertices[starts + within]
+    shift = np.broadcast_to(packing.centre[idx] - origin, (len(idx), 2))
+    per = np.broadcast_to(np.asarray(scale, dtype=np.float64), (len(idx),))
+    coords = (local + np.repeat(shift, counts, axis=0)) / np.repeat(per, counts)[:, None]
+    rings = shapely.linearrings(coords, indices=np.repeat(np.arange(len(idx)), counts))
+    return np.asarray(shapely.polygons(rings), dtype=object)
+
+
+def _confirm_overlaps(
+    packing: Packing, i: NDArray[np.int64], j: NDArray[np.int64], size: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Overlap of pairs ``(i, j)`` relative to the smaller area, measured robustly.
+
+    Both particles are expressed in a frame centred on particle ``i`` and
+    scaled by ``size`` (the square root of the smaller area).
+    """
+    origin = packing.centre[i]
+    gi = _polygons(packing, i, origin, size)
+    gj = _polygons(packing, j, origin, size)
+    inter = shapely.area(shapely.intersection(gi, gj, grid_size=CONFIRM_GRID))
+    smaller = np.minimum(shapely.area(gi), shapely.area(gj))
+    out: NDArray[np.float64] = inter / smaller
+    return out
+
+
+def _confirm_outside(
+    packing: Packing, k: NDArray[np.int64], size: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Area of particles ``k`` outside the domain relative to their area, measured robustly."""
+    dom = packing.domain
+    origin = packing.centre[k]
+    geoms = _polygons(packing, k, origin, size)
+    # clip the (possibly huge) domain box to the particle's neighbourhood, so the
+    # snap-rounding grid stays far above the rounding error of the coordinates
+    reach = 2.0 * np.abs(shapely.bounds(geoms)).max(axis=1) + 1.0
+    lo_x = np.maximum((dom.xmin - origin[:, 0]) / size, -reach)
+    hi_x = np.minimum((dom.xmax - origin[:, 0]) / size, reach)
+    lo_y = np.maximum((dom.ymin - origin[:, 1]) / size, -reach)
+    hi_y = np.minimum((dom.ymax - origin[:, 1]) / size, reach)
+    areas = shapely.area(geoms)
+    inside = np.zeros(len(k))
+    nonempty = (lo_x < hi_x) & (lo_y < hi_y)
+    if nonempty.any():
+        boxes = shapely.box(lo_x[nonempty], lo_y[nonempty], hi_x[nonempty], hi_y[nonempty])
+        inside[nonempty] = shapely.area(
+            shapely.intersection(geoms[nonempty], boxes, grid_size=CONFIRM_GRID)
+        )
+    out: NDArray[np.float64] = (areas - inside) / areas
+    return out
+
+
+def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
+    """Check that placed particles do not overlap and stay inside the domain.
+
+    Parameters
+    ----------
+    packing
+        The packing to check.
+    rel_tol
+        A pair violates when its intersection area exceeds ``rel_tol`` times the
+        smaller particle area; a particle violates when its area outside the
+        domain exceeds ``rel_tol`` times its area. Touching is allowed.
+
+    Examples
+    --------
+    >>> from regopack.testing import packing_from_polygons
+    >>> sq = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    >>> p = packing_from_polygons([sq, [(x + 1, y) for x, y in sq]], domain=(0, 2, 0, 1))
+    >>> verify(p).ok
+    True
+    """
+    dom = packing.domain
+    idx = np.flatnonzero(packing.placed).astype(np.int64)
+    n = len(idx)
+    if n == 0:
+        return VerifyReport(True, 0, 0, None, 0, None, rel_tol)
+    cx, cy = dom.center
+    scale = max(dom.width, dom.height)
+    if not np.isfinite(scale) or scale <= 0:
+        scale = 1.0
+    geoms = _polygons(packing, idx, np.array([cx, cy]), scale)
+    areas = shapely.area(geoms)
+
+    # overlaps between pairs
+    tree = shapely.STRtree(geoms)
+    a, b = tree.query(geoms, predicate="intersects")
+    keep = a < b
+    a, b = a[keep], b[keep]
+    worst_overlap: tuple[int, int, float] | None = None
+    n_pairs = 0
+    if len(a):
+        inter = shapely.area(shapely.intersection(geoms[a], geoms[b]))
+        smaller = np.minimum(areas[a], areas[b])
+        flagged = ~(inter <= rel_tol * smaller)
+        if flagged.any():
+            a, b = a[flagged], b[flagged]
+            size = np.sqrt(smaller[flagged]) * scale
+            frac = _confirm_overlaps(packing, idx[a], idx[b], size)
+            bad = ~(frac <= rel_tol)
+            n_pairs = int(np.count_nonzero(bad))
+            if n_pairs:
+                k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
+                i, j = sorted((int(idx[a[k]]), int(idx[b[k]])))
+                worst_overlap = (i, j, float(frac[k]))
+
+    # particles leaving the domain
+    lo_x, hi_x = (dom.xmin - cx) / scale, (dom.xmax - cx) / scale
+    lo_y, hi_y = (dom.ymin - cy) / scale, (dom.ymax - cy) / scale
+    bounds = shapely.bounds(geoms)
+    crossing = np.flatnonzero(
+        ~(
+            (bounds[:, 0] >= lo_x)
+            & (bounds[:, 2] <= hi_x)
+            & (bounds[:, 1] >= lo_y)
+            & (bounds[:, 3] <= hi_y)
+        )
+    )
+    worst_outside: tuple[int, float] | None = None
+    n_outside = 0
+    if len(crossing):
+        box = shapely.box(lo_x, lo_y, hi_x, hi_y)
+        inside = shapely.area(shapely.intersection(geoms[crossing], box))
+        outside = areas[crossing] - inside
+        flagged = ~(outside <= rel_tol * areas[crossing])  # NaN geometry counts as flagged
+        if flagged.any():
+            crossing = crossing[flagged]
+            size = np.sqrt(areas[crossing]) * scale
+            frac = _confirm_outside(packing, idx[crossing], size)
+            bad = ~(frac <= rel_tol)
+            n_outside = int(np.count_nonzero(bad))
+            if n_outside:
+                k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
+                worst_outside = (int(idx[crossing[k]]), float(frac[k]))
+
+    return VerifyReport(
+        ok=n_pairs == 0 and n_outside == 0,
+        n_checked=n,
+        n_overlapping_pairs=n_pairs,
+        worst_overlap=worst_overlap,
+        n_outside=n_outside,
+        worst_outside=worst_outside,
+        rel_tol=rel_tol,
+    )
+
+
+def assert_valid_packing(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
+    """Raise :class:`AssertionError` with the report unless :func:`verify` passes.
+
+    Returns
+    -------
+    VerifyReport
+        The report, when the packing is valid.
+    """
+    report = verify(packing, rel_tol=rel_tol)
+    if not report.ok:
+        raise AssertionError(f"invalid packing:\n{report}")
+    return report

@@ -1,0 +1,186 @@
+"""Available-arc sequential insertion (SPEC §4), the paper's packing method.
+
+Each particle, in population order, is offered to the inserted particles in
+insertion order that pass the screening ``r_i < t * rmin_k``. For candidate
+``k`` the feasible centres lie on the envelope ``E_k = P_k ⊕ (-Q)``; the parts
+covered by interferers' envelopes or by the walls are removed, the density
+controller trims the remaining arcs, and the centre is drawn uniformly in
+polar angle over what is left.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from regopack.domain import Rectangle
+from regopack.hookspecs import hookimpl
+from regopack.interfaces import (
+    DensityController,
+    InsertionResult,
+    InsertionStrategy,
+    ProgressCallback,
+)
+from regopack.plugin_types import InserterSpec
+from regopack.population import Population
+
+if TYPE_CHECKING:
+    from regopack.plugins.available_arc.state import ArcState
+
+PROGRESS_EVERY = 256
+
+
+class AvailableArcConfig(BaseModel):
+    """Parameters of the available-arc inserter."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    t: float = Field(
+        0.999,
+        gt=0,
+        le=1,
+        allow_inf_nan=False,
+        description=(
+            "Screening coefficient t in (0, 1]: candidate k is analysed when r_new < t * rmin_k."
+        ),
+    )
+    interference: Literal["exact", "tau"] = Field(
+        "exact",
+        description=(
+            "Interferer test: 'exact' (circumradii, never misses one) or 'tau' (the "
+            "paper's rule, faster, may miss)."
+        ),
+    )
+    tau: float = Field(
+        0.65,
+        gt=0,
+        le=1,
+        allow_inf_nan=False,
+        description="Threshold tau in (0, 1] of the 'tau' interference test (ignored by 'exact').",
+    )
+    first: Literal["center", "random"] = Field(
+        "center",
+        description=(
+            "Where the first particle goes: the domain's 'center' or a 'random' feasible point."
+        ),
+    )
+    search: Literal["indexed", "linear"] = Field(
+        "indexed",
+        description=(
+            "Candidate search: 'indexed' (max-tree, fast) or 'linear' (the paper's "
+            "scan; same packing)."
+        ),
+    )
+
+
+class AvailableArc(InsertionStrategy):
+    """Sequential insertion by available-arc analysis."""
+
+    def __init__(self, config: AvailableArcConfig) -> None:
+        self.config = config
+
+    def pack(
+        self,
+        population: Population,
+        domain: Rectangle,
+        controller: DensityController,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Insert the particles one by one; see the module docstring.
+
+        The built-in ``eta`` controller runs inside the compiled loop; any other
+        controller is called from Python for every candidate with arcs. Both
+        paths draw the same random numbers in the same order.
+        """
+        from regopack.plugins.available_arc import kernel
+        from regopack.plugins.available_arc.state import ArcState
+        from regopack.plugins.eta import EtaController
+
+        cfg = self.config
+        n = len(population)
+        started = time.perf_counter()
+        compiled = type(controller) is EtaController or controller.identity
+        eta = controller.eta if type(controller) is EtaController else 0.0
+        st = ArcState(
+            population,
+            domain,
+            t=cfg.t,
+            tau=cfg.tau if cfg.interference == "tau" else None,
+            linear=cfg.search == "linear",
+            first_random=cfg.first == "random",
+            eta=eta,
+        )
+        prepared = time.perf_counter()
+        placed = 0
+        for begin in range(0, n, PROGRESS_EVERY):
+            if progress is not None:
+                progress(begin, placed, n)
+            end = min(begin + PROGRESS_EVERY, n)
+            if compiled:
+                placed += st.pack_range(begin, end, rng)
+            else:
+                placed += _pack_python(st, begin, end, controller, rng)
+        if progress is not None:
+            progress(n, placed, n)
+        index = np.full(n, -1, dtype=np.int64)
+        order = st.packed.order[: st.count]
+        index[order] = np.arange(order.shape[0])
+        centre = np.column_stack([st.packed.cx, st.packed.cy])
+        stats = {
+            "candidate_analyses": float(st.counter(kernel.I_ANALYSES)),
+            "empty_analyses": float(st.counter(kernel.I_EMPTY)),
+            "prepare_time_s": prepared - started,
+            "insert_time_s": time.perf_counter() - prepared,
+        }
+        return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+
+def _pack_python(
+    st: ArcState, begin: int, end: int, controller: DensityController, rng: np.random.Generator
+) -> int:
+    """Insert particles ``begin`` to ``end - 1`` calling ``controller`` from Python."""
+    from regopack.plugins.available_arc import kernel
+
+    radius = st.outlines.req
+    placed = 0
+    for i in range(begin, end):
+        if st.count == 0:
+            placed += st.place_first(i, rng)
+            continue
+        mq = st.begin_particle(i)
+        start = 0
+        while True:
+            k, arcs = st.find_site(i, start, mq)
+            if k < 0:
+                break
+            arcs = controller.shrink(arcs, float(radius[i]), float(radius[st.packed.order[k]]), rng)
+            if arcs.shape[0] == 0:
+                st.reject(k, float(radius[i]))
+                start = k + 1
+                continue
+            angle = float(
+                kernel.sample_angle(np.ascontiguousarray(arcs, dtype=np.float64), rng.random())
+            )
+            x, y = st.locate(k, i, mq, angle)
+            st.insert(i, x, y)
+            placed += 1
+            break
+    return placed
+
+
+@hookimpl
+def regopack_inserters() -> Iterable[InserterSpec]:
+    """Register the ``available-arc`` inserter."""
+    return [
+        InserterSpec(
+            name="available-arc",
+            config_model=AvailableArcConfig,
+            factory=AvailableArc,
+            description="Sequential insertion by available-arc analysis (the paper's method).",
+        )
+    ]

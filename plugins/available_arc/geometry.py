@@ -1,0 +1,283 @@
+"""Compiled convex-polygon geometry of the available-arc inserter.
+
+Particles are kept in a canonical form (:func:`prepare_outlines`): vertices
+counter-clockwise, vertex ``j`` the start of edge ``j``, edges ordered by
+direction angle starting from the smallest one in ``[0, 2 pi)``. The envelope
+``E = P ⊕ (-Q)`` is then a linear merge of the two edge sequences.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+TWO_PI = 2.0 * math.pi
+DEGENERATE_EDGE = 1e-12
+"""Edges shorter than this fraction of the circumradius take their predecessor's direction."""
+
+
+@numba.njit(cache=True)
+def prepare_outlines(
+    vertices: FloatArray, offsets: IntArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Bring every outline to canonical form.
+
+    Returns
+    -------
+    vx, vy
+        Vertices, rotated so that edge 0 has the smallest direction angle.
+    ex, ey
+        Unit direction of every edge (``v_j -> v_{j+1}``).
+    ang
+        Direction angle of every edge in ``[0, 2 pi)``, non-decreasing per particle.
+    circum
+        Circumradius of every particle about its reference point.
+    box
+        ``(n, 4)`` local bounding box ``xmin, xmax, ymin, ymax``.
+    """
+    total = vertices.shape[0]
+    n = offsets.shape[0] - 1
+    vx = np.empty(total)
+    vy = np.empty(total)
+    ex = np.empty(total)
+    ey = np.empty(total)
+    ang = np.empty(total)
+    circum = np.zeros(n)
+    box = np.zeros((n, 4))
+    for p in range(n):
+        s = offsets[p]
+        m = offsets[p + 1] - s
+        rad = 0.0
+        for j in range(m):
+            d = math.hypot(vertices[s + j, 0], vertices[s + j, 1])
+            if d > rad:
+                rad = d
+        circum[p] = rad
+        tol = DEGENERATE_EDGE * rad
+        raw = np.empty(m)
+        good = np.zeros(m, dtype=np.bool_)
+        for j in range(m):
+            j2 = j + 1 if j + 1 < m else 0
+            dx = vertices[s + j2, 0] - vertices[s + j, 0]
+            dy = vertices[s + j2, 1] - vertices[s + j, 1]
+            a = math.atan2(dy, dx)
+            if a < 0.0:
+                a += TWO_PI
+            if a >= TWO_PI:
+                a = 0.0
+            raw[j] = a
+            good[j] = math.hypot(dx, dy) > tol
+        # start at the smallest direction among proper edges
+        start = -1
+        for j in range(m):
+            if good[j] and (start < 0 or raw[j] < raw[start]):
+                start = j
+        if start < 0:
+            start = 0
+        last = raw[start]
+        bx0 = np.inf
+        bx1 = -np.inf
+        by0 = np.inf
+        by1 = -np.inf
+        for jj in range(m):
+            j = (start + jj) % m
+            o = s + jj
+            vx[o] = vertices[s + j, 0]
+            vy[o] = vertices[s + j, 1]
+            a = raw[j]
+            if not good[j] or a < last:
+                a = last  # degenerate edge (or rounding): keep the order
+            ang[o] = a
+            last = a
+            bx0 = min(bx0, vx[o])
+            bx1 = max(bx1, vx[o])
+            by0 = min(by0, vy[o])
+            by1 = max(by1, vy[o])
+        box[p, 0] = bx0
+        box[p, 1] = bx1
+        box[p, 2] = by0
+        box[p, 3] = by1
+        for jj in range(m):
+            ex[s + jj] = math.cos(ang[s + jj])
+            ey[s + jj] = math.sin(ang[s + jj])
+    return vx, vy, ex, ey, ang, circum, box
+
+
+@numba.njit(cache=True)
+def reflect_outline(
+    q: int,
+    vx: FloatArray,
+    vy: FloatArray,
+    ex: FloatArray,
+    ey: FloatArray,
+    ang: FloatArray,
+    offsets: IntArray,
+    rx: FloatArray,
+    ry: FloatArray,
+    rex: FloatArray,
+    rey: FloatArray,
+    rang: FloatArray,
+) -> int:
+    """Write ``-Q`` of particle ``q`` in canonical form into the ``r*`` buffers; return its size."""
+    s = offsets[q]
+    m = offsets[q + 1] - s
+    j0 = 0
+    for j in range(m):
+        if ang[s + j] >= math.pi:
+            j0 = j
+            break
+    for jj in range(m):
+        j = (j0 + jj) % m
+        rx[jj] = -vx[s + j]
+        ry[jj] = -vy[s + j]
+        rex[jj] = -ex[s + j]
+        rey[jj] = -ey[s + j]
+        a = ang[s + j] + math.pi
+        if a >= TWO_PI:
+            a -= TWO_PI
+        rang[jj] = a
+    # rounding can leave the first angle just below the last one; keep the order
+    for jj in range(1, m):
+        if rang[jj] < rang[jj - 1]:
+            rang[jj] = rang[jj - 1]
+    return m
+
+
+@numba.njit(cache=True)
+def minkowski_envelope(
+    p: int,
+    vx: FloatArray,
+    vy: FloatArray,
+    ex: FloatArray,
+    ey: FloatArray,
+    ang: FloatArray,
+    offsets: IntArray,
+    rx: FloatArray,
+    ry: FloatArray,
+    rex: FloatArray,
+    rey: FloatArray,
+    rang: FloatArray,
+    mq: int,
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+) -> int:
+    """Merge ``P`` (particle ``p``) with the canonical ``-Q`` buffers into ``E = P ⊕ (-Q)``.
+
+    Vertices (relative to P's reference point) go to ``wx, wy``; the unit
+    direction of the edge that starts at each vertex goes to ``wex, wey``.
+    Returns the number of vertices, ``m_P + m_Q``.
+    """
+    s = offsets[p]
+    mp = offsets[p + 1] - s
+    ip = 0
+    iq = 0
+    n = 0
+    while ip < mp or iq < mq:
+        pi_ = ip if ip < mp else 0
+        qi = iq if iq < mq else 0
+        wx[n] = vx[s + pi_] + rx[qi]
+        wy[n] = vy[s + pi_] + ry[qi]
+        if iq >= mq or (ip < mp and ang[s + ip] <= rang[iq]):
+            wex[n] = ex[s + ip]
+            wey[n] = ey[s + ip]
+            ip += 1
+        else:
+            wex[n] = rex[iq]
+            wey[n] = rey[iq]
+            iq += 1
+        n += 1
+    return n
+
+
+@numba.njit(cache=True)
+def clip_open_interior(
+    ax: float,
+    ay: float,
+    dx: float,
+    dy: float,
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+    n: int,
+) -> tuple[float, float]:
+    """Parameter interval ``(lo, hi)`` of ``a + s d`` inside the open interior of a convex polygon.
+
+    The polygon is given by its vertices ``w`` and unit edge directions ``we``
+    (counter-clockwise). The interval is empty when ``lo >= hi``.
+    """
+    lo = -np.inf
+    hi = np.inf
+    for j in range(n):
+        # cross(e, a + s d - w) > 0  <=>  f0 + s f1 > 0
+        f0 = wex[j] * (ay - wy[j]) - wey[j] * (ax - wx[j])
+        f1 = wex[j] * dy - wey[j] * dx
+        if f1 > 0.0:
+            t = -f0 / f1
+            if t > lo:
+                lo = t
+        elif f1 < 0.0:
+            t = -f0 / f1
+            if t < hi:
+                hi = t
+        elif f0 <= 0.0:
+            return 1.0, 0.0
+        if lo >= hi:
+            return lo, hi
+    return lo, hi
+
+
+@numba.njit(cache=True)
+def clip_closed_box(
+    ax: float, ay: float, dx: float, dy: float, x0: float, x1: float, y0: float, y1: float
+) -> tuple[float, float]:
+    """Parameter interval ``[lo, hi]`` of ``a + s d`` inside the closed box (empty if lo > hi)."""
+    lo = -np.inf
+    hi = np.inf
+    if dx == 0.0:
+        if ax < x0 or ax > x1:
+            return 1.0, 0.0
+    else:
+        t0 = (x0 - ax) / dx
+        t1 = (x1 - ax) / dx
+        if t0 > t1:
+            t0, t1 = t1, t0
+        lo = max(lo, t0)
+        hi = min(hi, t1)
+    if dy == 0.0:
+        if ay < y0 or ay > y1:
+            return 1.0, 0.0
+    else:
+        t0 = (y0 - ay) / dy
+        t1 = (y1 - ay) / dy
+        if t0 > t1:
+            t0, t1 = t1, t0
+        lo = max(lo, t0)
+        hi = min(hi, t1)
+    return lo, hi
+
+
+@numba.njit(cache=True)
+def segment_point_distance(
+    ax: float, ay: float, bx: float, by: float, px: float, py: float
+) -> float:
+    """Distance from point ``p`` to the segment ``a b``."""
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    t = 0.0
+    if ll > 0.0:
+        t = ((px - ax) * dx + (py - ay) * dy) / ll
+        if t < 0.0:
+            t = 0.0
+        elif t > 1.0:
+            t = 1.0
+    return math.hypot(ax + t * dx - px, ay + t * dy - py)

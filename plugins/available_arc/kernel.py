@@ -1,0 +1,662 @@
+"""Compiled core of the available-arc inserter: candidate analysis and placement.
+
+The state of a run is three named tuples of plain arrays (built by
+:class:`regopack.plugins.available_arc.state.ArcState`):
+
+- :class:`Outlines`, static: outlines in canonical form, radii, local boxes;
+- :class:`Packed`, growing: centres, insertion order, the screening max-tree,
+  the neighbour grid and scalar parameters ``fpar`` / ``ipar``;
+- :class:`Work`, scratch buffers, including a cache of interferer envelopes
+  (an envelope ``P_o ⊕ (-Q)`` depends only on ``o`` and the new particle).
+
+``k`` is an insertion index; ``order[k]`` is the particle it refers to.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.plugins.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.available_arc.geometry import (
+    clip_closed_box,
+    clip_open_interior,
+    minkowski_envelope,
+    reflect_outline,
+)
+from regopack.plugins.available_arc.grid import cell_range, grid_insert
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+# fpar: scalar float parameters
+F_T, F_TAU, F_XMIN, F_XMAX, F_YMIN, F_YMAX, F_GX0, F_GY0, F_GCELL, F_ETA = range(10)
+N_FPAR = 10
+# ipar: scalar integer parameters and counters
+(
+    I_TAUMODE,
+    I_LINEAR,
+    I_COUNT,
+    I_LEAVES,
+    I_GNX,
+    I_GNY,
+    I_GUSED,
+    I_STAMP,
+    I_ANALYSES,
+    I_EMPTY,
+    I_GEN,
+    I_CUSED,
+    I_FIRSTRANDOM,
+) = range(13)
+N_IPAR = 13
+CACHE_SLOTS = 512
+
+
+class Outlines(NamedTuple):
+    """Static particle data; outlines in canonical form (see ``geometry.prepare_outlines``)."""
+
+    vx: FloatArray
+    vy: FloatArray
+    ex: FloatArray
+    ey: FloatArray
+    ang: FloatArray
+    offsets: IntArray
+    circum: FloatArray
+    req: FloatArray
+    box: FloatArray
+
+
+class Packed(NamedTuple):
+    """The growing packing: centres, order, screening tree, neighbour grid, parameters."""
+
+    cx: FloatArray
+    cy: FloatArray
+    order: IntArray
+    tree: FloatArray
+    head: IntArray
+    nxt: IntArray
+    item: IntArray
+    stamp: IntArray
+    fpar: FloatArray
+    ipar: IntArray
+
+
+class Work(NamedTuple):
+    """Scratch buffers and the interferer-envelope cache."""
+
+    rx: FloatArray
+    ry: FloatArray
+    rex: FloatArray
+    rey: FloatArray
+    rang: FloatArray
+    wx: FloatArray
+    wy: FloatArray
+    wex: FloatArray
+    wey: FloatArray
+    va: FloatArray
+    ckey: IntArray
+    cslot: IntArray
+    cache_x: FloatArray
+    cache_y: FloatArray
+    cache_ex: FloatArray
+    cache_ey: FloatArray
+    cache_n: IntArray
+    cache_rad: FloatArray
+
+
+@numba.njit(cache=True)
+def reach_of(p: int, g: Outlines, fpar: FloatArray, ipar: IntArray) -> float:
+    """Registration radius of particle ``p`` in the neighbour grid."""
+    if ipar[I_TAUMODE] == 1:
+        return max(g.circum[p], g.req[p] / fpar[F_TAU])
+    return g.circum[p]
+
+
+@numba.njit(cache=True)
+def centre_box(i: int, g: Outlines, fpar: FloatArray) -> tuple[float, float, float, float]:
+    """Return the closed box of centres that keep particle ``i`` inside the walls."""
+    return (
+        fpar[F_XMIN] - g.box[i, 0],
+        fpar[F_XMAX] - g.box[i, 1],
+        fpar[F_YMIN] - g.box[i, 2],
+        fpar[F_YMAX] - g.box[i, 3],
+    )
+
+
+@numba.njit(cache=True)
+def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
+    """Place particle ``i`` at ``(x, y)``; return its insertion index."""
+    ipar = s.ipar
+    k = ipar[I_COUNT]
+    s.cx[i] = x
+    s.cy[i] = y
+    s.order[k] = i
+    tree_set(s.tree, ipar[I_LEAVES], k, np.inf)
+    ipar[I_COUNT] = k + 1
+    gpar = s.fpar[F_GX0 : F_GCELL + 1]
+    gdim = ipar[I_GNX : I_GUSED + 1]
+    grid_insert(i, x, y, reach_of(i, g, s.fpar, ipar), gpar, gdim, s.head, s.nxt, s.item)
+    return k
+
+
+@numba.njit(cache=True)
+def _vertex_angles(wx: FloatArray, wy: FloatArray, n: int, out: FloatArray) -> None:
+    """Unwrapped polar angle of every envelope vertex (``out[n]`` closes the loop)."""
+    out[0] = math.atan2(wy[0], wx[0])
+    for j in range(n):
+        j2 = j + 1 if j + 1 < n else 0
+        cr = wx[j] * wy[j2] - wy[j] * wx[j2]
+        dt = wx[j] * wx[j2] + wy[j] * wy[j2]
+        out[j + 1] = out[j] + math.atan2(cr, dt)
+
+
+@numba.njit(cache=True)
+def _angle_on_edge(
+    wx: FloatArray, wy: FloatArray, n: int, va: FloatArray, j: int, s: float
+) -> float:
+    """Polar angle of the point at parameter ``s`` of envelope edge ``j``."""
+    if s <= 0.0:
+        return va[j]
+    if s >= 1.0:
+        return va[j + 1]
+    j2 = j + 1 if j + 1 < n else 0
+    px = wx[j] + s * (wx[j2] - wx[j])
+    py = wy[j] + s * (wy[j2] - wy[j])
+    return va[j] + math.atan2(wx[j] * py - wy[j] * px, wx[j] * px + wy[j] * py)
+
+
+@numba.njit(cache=True)
+def _grow_int(a: IntArray, used: int) -> IntArray:
+    out = np.empty(2 * a.shape[0] + 16, dtype=np.int64)
+    out[:used] = a[:used]
+    return out
+
+
+@numba.njit(cache=True)
+def _grow_float(a: FloatArray, used: int) -> FloatArray:
+    out = np.empty(2 * a.shape[0] + 16)
+    out[:used] = a[:used]
+    return out
+
+
+@numba.njit(cache=True)
+def begin_particle(i: int, g: Outlines, s: Packed, w: Work) -> int:
+    """Prepare the scratch buffers for new particle ``i``; return its vertex count."""
+    mq = reflect_outline(
+        i, g.vx, g.vy, g.ex, g.ey, g.ang, g.offsets, w.rx, w.ry, w.rex, w.rey, w.rang
+    )
+    s.ipar[I_GEN] += 1
+    s.ipar[I_CUSED] = 0
+    return mq
+
+
+@numba.njit(cache=True)
+def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work) -> FloatArray:
+    """Available arcs of candidate particle ``pk`` for the new particle ``i``.
+
+    ``begin_particle(i, ...)`` must have been called.
+
+    Returns
+    -------
+    ndarray
+        ``(k, 2)`` polar-angle intervals about ``pk``'s centre, unwrapped from the
+        angle of the envelope's first vertex; an arc through that vertex is one
+        interval that starts below it.
+    """
+    fpar = s.fpar
+    ipar = s.ipar
+    cx = s.cx
+    cy = s.cy
+    wx = w.wx
+    wy = w.wy
+    n = minkowski_envelope(
+        pk,
+        g.vx,
+        g.vy,
+        g.ex,
+        g.ey,
+        g.ang,
+        g.offsets,
+        w.rx,
+        w.ry,
+        w.rex,
+        w.rey,
+        w.rang,
+        mq,
+        wx,
+        wy,
+        w.wex,
+        w.wey,
+    )
+    pcx = cx[pk]
+    pcy = cy[pk]
+
+    # ---- interferers from the grid
+    tau_mode = ipar[I_TAUMODE] == 1
+    tau = fpar[F_TAU]
+    if tau_mode:
+        qrad = (g.req[pk] + 2.0 * g.req[i]) / tau
+    else:
+        qrad = g.circum[pk] + 2.0 * g.circum[i]
+    token = ipar[I_STAMP] + 1
+    ipar[I_STAMP] = token
+    ia, ib = cell_range(pcx - qrad, pcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
+    ja, jb = cell_range(pcy - qrad, pcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
+    gnx = ipar[I_GNX]
+    found = np.empty(32, dtype=np.int64)
+    nf = 0
+    stamp = s.stamp
+    stamp[pk] = token
+    for gj in range(ja, jb + 1):
+        for gi in range(ia, ib + 1):
+            e = s.head[gj * gnx + gi]
+            while e >= 0:
+                o = s.item[e]
+                e = s.nxt[e]
+                if stamp[o] == token:
+                    continue
+                stamp[o] = token
+                ddx = cx[o] - pcx
+                ddy = cy[o] - pcy
+                d2 = ddx * ddx + ddy * ddy
+                if tau_mode:
+                    lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
+                else:
+                    lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
+                hit = d2 < lim * lim
+                if hit and tau_mode:
+                    hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
+                if hit:
+                    if nf == found.shape[0]:
+                        found = _grow_int(found, nf)
+                    found[nf] = o
+                    nf += 1
+
+    # ---- interferer envelopes (cached per new particle), relative to their centres
+    ncache = w.cache_n.shape[0]
+    if nf > ncache:
+        width = w.cache_x.shape[1]
+        ox = np.empty((nf, width))
+        oy = np.empty((nf, width))
+        oex = np.empty((nf, width))
+        oey = np.empty((nf, width))
+        on = np.empty(nf, dtype=np.int64)
+        orad = np.empty(nf)
+    else:
+        ox = w.cache_x
+        oy = w.cache_y
+        oex = w.cache_ex
+        oey = w.cache_ey
+        on = w.cache_n
+        orad = w.cache_rad
+        if ipar[I_CUSED] + nf > ncache:
+            ipar[I_GEN] += 1
+            ipar[I_CUSED] = 0
+    gen = ipar[I_GEN]
+    slot = np.empty(nf, dtype=np.int64)
+    odx = np.empty(nf)
+    ody = np.empty(nf)
+    for f in range(nf):
+        o = found[f]
+        odx[f] = cx[o] - pcx
+        ody[f] = cy[o] - pcy
+        if nf <= ncache:
+            if w.ckey[o] == gen:
+                slot[f] = w.cslot[o]
+                continue
+            sl = ipar[I_CUSED]
+            ipar[I_CUSED] = sl + 1
+            w.ckey[o] = gen
+            w.cslot[o] = sl
+        else:
+            sl = f
+        slot[f] = sl
+        on[sl] = minkowski_envelope(
+            o,
+            g.vx,
+            g.vy,
+            g.ex,
+            g.ey,
+            g.ang,
+            g.offsets,
+            w.rx,
+            w.ry,
+            w.rex,
+            w.rey,
+            w.rang,
+            mq,
+            ox[sl],
+            oy[sl],
+            oex[sl],
+            oey[sl],
+        )
+        rr = 0.0
+        for j in range(on[sl]):
+            d2 = ox[sl, j] * ox[sl, j] + oy[sl, j] * oy[sl, j]
+            if d2 > rr:
+                rr = d2
+        orad[sl] = math.sqrt(rr)
+
+    # ---- walls: closed box of admissible centres, relative to pk
+    bx0, bx1, by0, by1 = centre_box(i, g, fpar)
+    bx0 -= pcx
+    bx1 -= pcx
+    by0 -= pcy
+    by1 -= pcy
+
+    va = w.va
+    have_angles = False
+    ilo = np.empty(nf + 2)
+    ihi = np.empty(nf + 2)
+    arcs = np.empty((0, 2))
+    na = 0
+    joined_vertex = -1  # the last arc ends exactly at this envelope vertex
+    first_at_zero = False
+    last_cover = -1
+    for j in range(n):
+        j2 = j + 1 if j + 1 < n else 0
+        ax = wx[j]
+        ay = wy[j]
+        dx = wx[j2] - ax
+        dy = wy[j2] - ay
+        ni = 0
+        slo, shi = clip_closed_box(ax, ay, dx, dy, bx0, bx1, by0, by1)
+        if slo > shi:
+            continue
+        if slo > 0.0:
+            ilo[ni] = -1.0
+            ihi[ni] = slo
+            ni += 1
+        if shi < 1.0:
+            ilo[ni] = shi
+            ihi[ni] = 2.0
+            ni += 1
+        full = False
+        mx = ax + 0.5 * dx
+        my = ay + 0.5 * dy
+        half = 0.5 * math.sqrt(dx * dx + dy * dy)
+        # the interferer that covered the previous edge often covers this one too
+        for ff in range(-1, nf):
+            if ff < 0:
+                if last_cover < 0:
+                    continue
+                f = last_cover
+            else:
+                f = ff
+                if f == last_cover:
+                    continue
+            gx = odx[f] - mx
+            gy = ody[f] - my
+            sl = slot[f]
+            lim = orad[sl] + half
+            if gx * gx + gy * gy >= lim * lim:
+                continue
+            lo, hi = clip_open_interior(
+                ax - odx[f], ay - ody[f], dx, dy, ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+            )
+            if lo < hi and hi > 0.0 and lo < 1.0:
+                if lo <= 0.0 and hi >= 1.0:
+                    full = True
+                    last_cover = f
+                    break
+                ilo[ni] = lo
+                ihi[ni] = hi
+                ni += 1
+        if full:
+            continue
+        # sort covered intervals by their lower end (insertion sort; few items)
+        for a in range(1, ni):
+            kl = ilo[a]
+            kh = ihi[a]
+            b = a - 1
+            while b >= 0 and ilo[b] > kl:
+                ilo[b + 1] = ilo[b]
+                ihi[b + 1] = ihi[b]
+                b -= 1
+            ilo[b + 1] = kl
+            ihi[b + 1] = kh
+        pos = 0.0
+        for a in range(ni + 1):
+            if pos >= 1.0:
+                break
+            if a < ni:
+                lo = ilo[a]
+                hi = ihi[a]
+                if lo <= pos:
+                    if hi > pos:
+                        pos = hi
+                    continue
+                piece_lo = pos
+                piece_hi = lo if lo < 1.0 else 1.0
+                pos = hi
+            else:
+                piece_lo = pos
+                piece_hi = 1.0
+            if piece_hi <= piece_lo:
+                continue
+            if not have_angles:
+                _vertex_angles(wx, wy, n, va)
+                have_angles = True
+                arcs = np.empty((n * (nf + 3) + 1, 2))
+            a0 = _angle_on_edge(wx, wy, n, va, j, piece_lo)
+            a1 = _angle_on_edge(wx, wy, n, va, j, piece_hi)
+            if piece_lo == 0.0 and joined_vertex == j and na > 0:
+                arcs[na - 1, 1] = a1
+            else:
+                if piece_lo == 0.0 and j == 0:
+                    first_at_zero = True
+                arcs[na, 0] = a0
+                arcs[na, 1] = a1
+                na += 1
+            joined_vertex = j + 1 if piece_hi == 1.0 else -1
+    if na >= 2 and first_at_zero and joined_vertex == n:
+        arcs[0, 0] = arcs[na - 1, 0] - (va[n] - va[0])
+        na -= 1
+    # drop arcs of zero angular length (single free points)
+    out = 0
+    for a in range(na):
+        if arcs[a, 1] > arcs[a, 0]:
+            arcs[out, 0] = arcs[a, 0]
+            arcs[out, 1] = arcs[a, 1]
+            out += 1
+    return arcs[:out]
+
+
+@numba.njit(cache=True)
+def find_site(
+    i: int, start: int, mq: int, g: Outlines, s: Packed, w: Work
+) -> tuple[int, FloatArray]:
+    """First candidate (insertion index ``>= start``) with available arcs for particle ``i``.
+
+    Candidates without arcs get ``rmin = r_i``. Returns ``(k, arcs)``, or
+    ``(-1, empty)`` when no candidate accepts the particle.
+    """
+    empty = np.empty((0, 2))
+    bx0, bx1, by0, by1 = centre_box(i, g, s.fpar)
+    if bx0 > bx1 or by0 > by1:
+        return -1, empty
+    r = g.req[i]
+    t = s.fpar[F_T]
+    ipar = s.ipar
+    leaves = ipar[I_LEAVES]
+    count = ipar[I_COUNT]
+    linear = ipar[I_LINEAR] == 1
+    k = first_candidate(s.tree, leaves, start, count, r, t, linear)
+    while k >= 0:
+        ipar[I_ANALYSES] += 1
+        arcs = analyze_candidate(s.order[k], i, mq, g, s, w)
+        if arcs.shape[0] > 0:
+            return k, arcs
+        ipar[I_EMPTY] += 1
+        tree_set(s.tree, leaves, k, r)
+        k = first_candidate(s.tree, leaves, k + 1, count, r, t, linear)
+    return -1, empty
+
+
+@numba.njit(cache=True)
+def reject(k: int, r: float, s: Packed) -> None:
+    """Record that candidate ``k`` cannot take a particle of radius ``r``."""
+    tree_set(s.tree, s.ipar[I_LEAVES], k, r)
+
+
+@numba.njit(cache=True)
+def locate(
+    pk: int, i: int, mq: int, angle: float, g: Outlines, s: Packed, w: Work
+) -> tuple[float, float]:
+    """Return where the ray from ``pk``'s centre at polar ``angle`` meets the envelope.
+
+    The envelope is that of candidate ``pk`` and new particle ``i``.
+    """
+    wx = w.wx
+    wy = w.wy
+    n = minkowski_envelope(
+        pk,
+        g.vx,
+        g.vy,
+        g.ex,
+        g.ey,
+        g.ang,
+        g.offsets,
+        w.rx,
+        w.ry,
+        w.rex,
+        w.rey,
+        w.rang,
+        mq,
+        wx,
+        wy,
+        w.wex,
+        w.wey,
+    )
+    va = w.va
+    _vertex_angles(wx, wy, n, va)
+    period = va[n] - va[0]
+    a = angle - va[0]
+    a = a - period * math.floor(a / period)
+    a += va[0]
+    j = 0
+    while j < n - 1 and va[j + 1] < a:
+        j += 1
+    j2 = j + 1 if j + 1 < n else 0
+    dxr = math.cos(a)
+    dyr = math.sin(a)
+    ex_ = wx[j2] - wx[j]
+    ey_ = wy[j2] - wy[j]
+    den = dxr * ey_ - dyr * ex_
+    t = 0.0
+    if den != 0.0:
+        t = (wx[j] * dyr - wy[j] * dxr) / den
+    if t < 0.0:
+        t = 0.0
+    elif t > 1.0:
+        t = 1.0
+    return s.cx[pk] + wx[j] + t * ex_, s.cy[pk] + wy[j] + t * ey_
+
+
+@numba.njit(cache=True)
+def sample_angle(arcs: FloatArray, u01: float) -> float:
+    """Angle at fraction ``u01`` of the total length of ``arcs`` (uniform over their union)."""
+    total = 0.0
+    for a in range(arcs.shape[0]):
+        total += arcs[a, 1] - arcs[a, 0]
+    u = u01 * total
+    before = 0.0
+    j = -1
+    for a in range(arcs.shape[0]):
+        nxt = before + (arcs[a, 1] - arcs[a, 0])
+        if nxt > u:
+            j = a
+            break
+        before = nxt
+    if j < 0:  # u at the very end (rounding): the end of the last arc
+        j = arcs.shape[0] - 1
+        before -= arcs[j, 1] - arcs[j, 0]
+    ang = arcs[j, 0] + (u - before)
+    if ang < arcs[j, 0]:
+        ang = arcs[j, 0]
+    if ang > arcs[j, 1]:
+        ang = arcs[j, 1]
+    return ang
+
+
+@numba.njit(cache=True)
+def eta_shrink(
+    arcs: FloatArray, eta: float, r_new: float, r_cand: float, rng: np.random.Generator
+) -> FloatArray:
+    """Compiled twin of :class:`regopack.plugins.eta.EtaController` (same draws, same result)."""
+    m = arcs.shape[0]
+    out = np.empty((m, 2))
+    kept = 0
+    scale = 2.0 * r_new / (r_cand + r_new)
+    for a in range(m):
+        xi = rng.random()
+        d = eta + xi - 1.0
+        if d < 0.0:
+            d = 0.0
+        delta = d / 100.0 * scale
+        lo = arcs[a, 0] + delta
+        hi = arcs[a, 1] - delta
+        if hi > lo:
+            out[kept, 0] = lo
+            out[kept, 1] = hi
+            kept += 1
+    return out[:kept]
+
+
+@numba.njit(cache=True)
+def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> bool:
+    """Place the first particle at the domain centre (or a random feasible point)."""
+    x0, x1, y0, y1 = centre_box(i, g, s.fpar)
+    if x0 > x1 or y0 > y1:
+        return False
+    if s.ipar[I_FIRSTRANDOM] == 1:
+        x = x0 + rng.random() * (x1 - x0)
+        y = y0 + rng.random() * (y1 - y0)
+    else:
+        x = 0.5 * (s.fpar[F_XMIN] + s.fpar[F_XMAX])
+        y = 0.5 * (s.fpar[F_YMIN] + s.fpar[F_YMAX])
+        x = min(max(x, x0), x1)
+        y = min(max(y, y0), y1)
+    insert_particle(i, x, y, g, s)
+    return True
+
+
+@numba.njit(cache=True)
+def pack_range(
+    begin: int, end: int, g: Outlines, s: Packed, w: Work, rng: np.random.Generator
+) -> int:
+    """Insert particles ``begin`` to ``end - 1`` with the built-in eta rule.
+
+    Returns how many were placed.
+
+    ``fpar[F_ETA]`` is the packing control coefficient (0 draws nothing).
+    """
+    eta = s.fpar[F_ETA]
+    placed = 0
+    for i in range(begin, end):
+        if s.ipar[I_COUNT] == 0:
+            if place_first(i, g, s, rng):
+                placed += 1
+            continue
+        mq = begin_particle(i, g, s, w)
+        start = 0
+        while True:
+            k, arcs = find_site(i, start, mq, g, s, w)
+            if k < 0:
+                break
+            if eta != 0.0:
+                arcs = eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
+                if arcs.shape[0] == 0:
+                    reject(k, g.req[i], s)
+                    start = k + 1
+                    continue
+            angle = sample_angle(arcs, rng.random())
+            x, y = locate(s.order[k], i, mq, angle, g, s, w)
+            insert_particle(i, x, y, g, s)
+            placed += 1
+            break
+    return placed

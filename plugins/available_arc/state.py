@@ -1,0 +1,151 @@
+"""Array state of one available-arc insertion run."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.domain import Rectangle
+from regopack.plugins.available_arc import kernel
+from regopack.plugins.available_arc.candidates import tree_size
+from regopack.plugins.available_arc.geometry import prepare_outlines
+from regopack.plugins.available_arc.grid import grid_layout
+from regopack.population import Population
+
+FloatArray = NDArray[np.float64]
+
+
+class ArcState:
+    """Static outlines (canonical form), the growing packing and scratch space.
+
+    Parameters
+    ----------
+    population
+        The particles to insert.
+    domain
+        The walled rectangle.
+    t
+        Screening coefficient.
+    tau
+        Threshold of the ``tau`` interference test; ``None`` selects the exact test.
+    linear
+        Use the linear candidate scan instead of the max-tree.
+    first_random
+        Put the first particle at a random feasible point instead of the centre.
+    eta
+        Packing control coefficient of the compiled ``eta`` rule.
+    """
+
+    def __init__(
+        self,
+        population: Population,
+        domain: Rectangle,
+        *,
+        t: float,
+        tau: float | None,
+        linear: bool,
+        first_random: bool = False,
+        eta: float = 0.0,
+    ) -> None:
+        n = len(population)
+        offsets = np.ascontiguousarray(population.shapes.offsets, dtype=np.int64)
+        verts = np.ascontiguousarray(population.shapes.vertices, dtype=np.float64)
+        vx, vy, ex, ey, ang, circum, box = prepare_outlines(verts, offsets)
+        req = np.ascontiguousarray(population.radius, dtype=np.float64)
+        self.outlines = kernel.Outlines(vx, vy, ex, ey, ang, offsets, circum, req, box)
+
+        reach = np.maximum(circum, req / tau) if tau is not None else circum
+        bounds = domain.bounds()
+        cell, gnx, gny, capacity = grid_layout(bounds, reach)
+        leaves = tree_size(n)
+        fpar = np.zeros(kernel.N_FPAR)
+        fpar[kernel.F_T] = t
+        fpar[kernel.F_TAU] = tau if tau is not None else 1.0
+        fpar[kernel.F_XMIN : kernel.F_YMAX + 1] = bounds
+        fpar[kernel.F_GX0] = bounds[0]
+        fpar[kernel.F_GY0] = bounds[2]
+        fpar[kernel.F_GCELL] = cell
+        fpar[kernel.F_ETA] = eta
+        ipar = np.zeros(kernel.N_IPAR, dtype=np.int64)
+        ipar[kernel.I_TAUMODE] = 0 if tau is None else 1
+        ipar[kernel.I_LINEAR] = 1 if linear else 0
+        ipar[kernel.I_LEAVES] = leaves
+        ipar[kernel.I_GNX] = gnx
+        ipar[kernel.I_GNY] = gny
+        ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
+        self.packed = kernel.Packed(
+            cx=np.full(n, np.nan),
+            cy=np.full(n, np.nan),
+            order=np.full(n, -1, dtype=np.int64),
+            tree=np.full(2 * leaves, -np.inf),
+            head=np.full(gnx * gny, -1, dtype=np.int64),
+            nxt=np.empty(capacity, dtype=np.int64),
+            item=np.empty(capacity, dtype=np.int64),
+            stamp=np.zeros(n, dtype=np.int64),
+            fpar=fpar,
+            ipar=ipar,
+        )
+        mmax = int(np.diff(offsets).max()) if n else 1
+        width = 2 * mmax
+        slots = kernel.CACHE_SLOTS
+        self.work = kernel.Work(
+            rx=np.empty(mmax),
+            ry=np.empty(mmax),
+            rex=np.empty(mmax),
+            rey=np.empty(mmax),
+            rang=np.empty(mmax),
+            wx=np.empty(width),
+            wy=np.empty(width),
+            wex=np.empty(width),
+            wey=np.empty(width),
+            va=np.empty(width + 1),
+            ckey=np.full(n, -1, dtype=np.int64),
+            cslot=np.zeros(n, dtype=np.int64),
+            cache_x=np.empty((slots, width)),
+            cache_y=np.empty((slots, width)),
+            cache_ex=np.empty((slots, width)),
+            cache_ey=np.empty((slots, width)),
+            cache_n=np.zeros(slots, dtype=np.int64),
+            cache_rad=np.zeros(slots),
+        )
+
+    @property
+    def count(self) -> int:
+        """Number of particles inserted so far."""
+        return int(self.packed.ipar[kernel.I_COUNT])
+
+    def counter(self, index: int) -> int:
+        """Value of integer counter ``index`` of ``kernel.I_*``."""
+        return int(self.packed.ipar[index])
+
+    def pack_range(self, begin: int, end: int, rng: np.random.Generator) -> int:
+        """Insert particles ``begin`` to ``end - 1`` with the compiled eta rule."""
+        return int(kernel.pack_range(begin, end, self.outlines, self.packed, self.work, rng))
+
+    def place_first(self, i: int, rng: np.random.Generator) -> bool:
+        """Place the first particle; False when it does not fit the domain."""
+        return bool(kernel.place_first(i, self.outlines, self.packed, rng))
+
+    def begin_particle(self, i: int) -> int:
+        """Prepare for particle ``i``; return its vertex count."""
+        return int(kernel.begin_particle(i, self.outlines, self.packed, self.work))
+
+    def find_site(self, i: int, start: int, mq: int) -> tuple[int, FloatArray]:
+        """First candidate at or after insertion index ``start`` with arcs for particle ``i``."""
+        k, arcs = kernel.find_site(i, start, mq, self.outlines, self.packed, self.work)
+        return int(k), arcs
+
+    def locate(self, k: int, i: int, mq: int, angle: float) -> tuple[float, float]:
+        """Centre of particle ``i`` on candidate ``k``'s envelope at polar ``angle``."""
+        x, y = kernel.locate(
+            int(self.packed.order[k]), i, mq, angle, self.outlines, self.packed, self.work
+        )
+        return float(x), float(y)
+
+    def insert(self, i: int, x: float, y: float) -> int:
+        """Place particle ``i`` at ``(x, y)``; return its insertion index."""
+        return int(kernel.insert_particle(i, x, y, self.outlines, self.packed))
+
+    def reject(self, k: int, r: float) -> None:
+        """Record that candidate ``k`` cannot take a particle of radius ``r``."""
+        kernel.reject(k, r, self.packed)

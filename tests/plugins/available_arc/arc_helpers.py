@@ -1,0 +1,44 @@
+"""Helpers for the available-arc tests: build populations and states by hand."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from regopack.domain import Rectangle
+from regopack.plugins.octagon import OctagonConfig, RandomPolygon
+from regopack.population import Population, ShapeBatch, concat_shapes
+
+
+def octagon_population(
+    radius: np.ndarray, rng: np.random.Generator, psi: float = 0.5, a: float = 1 / 3, m: int = 8
+) -> Population:
+    """Population of random octagons with the given radii (one mineral)."""
+    batch = RandomPolygon(OctagonConfig(psi=psi, a=a, m=m)).generate(radius, rng)
+    return Population(
+        radius=radius,
+        mineral=np.zeros(len(radius), dtype=np.int64),
+        mineral_names=("m",),
+        shapes=batch,
+    )
+
+
+def mixed_population(
+    radius: np.ndarray, rng: np.random.Generator, psis: tuple[float, ...] = (0.25, 1.0, 15.0)
+) -> Population:
+    """Population with one phase per ``psi`` drawn uniformly."""
+    n = len(radius)
+    mineral = rng.integers(0, len(psis), size=n).astype(np.int64)
+    parts: list[tuple[np.ndarray, ShapeBatch]] = []
+    for p, psi in enumerate(psis):
+        idx = np.flatnonzero(mineral == p)
+        parts.append((idx, RandomPolygon(OctagonConfig(psi=psi)).generate(radius[idx], rng)))
+    return Population(
+        radius=radius,
+        mineral=mineral,
+        mineral_names=tuple(f"p{p}" for p in range(len(psis))),
+        shapes=concat_shapes(parts, n),
+    )
+
+
+def big_domain(scale: float = 1.0) -> Rectangle:
+    return Rectangle(-1e3 * scale, 1e3 * scale, -1e3 * scale, 1e3 * scale)

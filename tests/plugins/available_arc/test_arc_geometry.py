@@ -1,0 +1,99 @@
+"""Envelope construction and segment clipping of the available-arc kernel."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from arc_helpers import octagon_population
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from regopack.plugins.available_arc.geometry import (
+    clip_closed_box,
+    clip_open_interior,
+    minkowski_envelope,
+    prepare_outlines,
+    reflect_outline,
+)
+
+
+def _envelope(pop, p: int, q: int):
+    vx, vy, ex, ey, ang, _circum, _box = prepare_outlines(pop.shapes.vertices, pop.shapes.offsets)
+    off = pop.shapes.offsets
+    mq = int(off[q + 1] - off[q])
+    r = [np.empty(mq) for _ in range(5)]
+    reflect_outline(q, vx, vy, ex, ey, ang, off, *r)
+    cap = int(off[p + 1] - off[p]) + mq
+    w = [np.empty(cap) for _ in range(4)]
+    n = minkowski_envelope(p, vx, vy, ex, ey, ang, off, *r, mq, *w)
+    return n, w
+
+
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    psi=st.floats(0.01, 1000),
+    a=st.floats(0.05, 1.0),
+    mp=st.sampled_from([3, 5, 8, 13]),
+    ratio=st.floats(1e-4, 1e4),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+)
+@settings(max_examples=150, deadline=None)
+def test_envelope_is_the_hull_of_all_vertex_differences(seed, psi, a, mp, ratio, scale) -> None:
+    rng = np.random.default_rng(seed)
+    pop_p = octagon_population(np.array([scale]), rng, psi=psi, a=a, m=mp)
+    pop_q = octagon_population(np.array([scale * ratio]), rng, psi=psi, a=a, m=8)
+    from regopack.population import Population, concat_shapes
+
+    shapes = concat_shapes([(np.array([0]), pop_p.shapes), (np.array([1]), pop_q.shapes)], 2)
+    pop = Population(np.array([scale, scale * ratio]), np.zeros(2, dtype=np.int64), ("m",), shapes)
+    n, (wx, wy, wex, wey) = _envelope(pop, 0, 1)
+    assert n == mp + 8
+    P = shapes.outline(0)
+    Q = shapes.outline(1)
+    diffs = (P[:, None, :] - Q[None, :, :]).reshape(-1, 2)
+    hull = shapely.MultiPoint(diffs).convex_hull
+    env = shapely.Polygon(np.column_stack([wx[:n], wy[:n]]))
+    size = max(hull.length, 1e-300)
+    assert env.area == pytest.approx(hull.area, rel=1e-9, abs=1e-12 * size**2)
+    assert shapely.hausdorff_distance(env.exterior, hull.exterior) <= 1e-9 * size
+    # the unit edge directions follow the outline counter-clockwise
+    e = np.column_stack([np.roll(wx[:n], -1) - wx[:n], np.roll(wy[:n], -1) - wy[:n]])
+    cross = wex[:n] * e[:, 1] - wey[:n] * e[:, 0]
+    assert np.all(np.abs(cross) <= 1e-9 * size)
+    assert np.all(wex[:n] * e[:, 0] + wey[:n] * e[:, 1] >= -1e-9 * size)
+
+
+def test_clip_open_interior_square() -> None:
+    # unit square, counter-clockwise, edge directions
+    wx = np.array([0.0, 1.0, 1.0, 0.0])
+    wy = np.array([0.0, 0.0, 1.0, 1.0])
+    wex = np.array([1.0, 0.0, -1.0, 0.0])
+    wey = np.array([0.0, 1.0, 0.0, -1.0])
+    lo, hi = clip_open_interior(-1.0, 0.5, 3.0, 0.0, wx, wy, wex, wey, 4)
+    assert lo == pytest.approx(1 / 3) and hi == pytest.approx(2 / 3)
+    # a segment along an edge is not inside the open interior (tangent contact)
+    lo, hi = clip_open_interior(-1.0, 0.0, 3.0, 0.0, wx, wy, wex, wey, 4)
+    assert not lo < hi
+    lo, hi = clip_open_interior(-1.0, 2.0, 3.0, 0.0, wx, wy, wex, wey, 4)
+    assert not lo < hi
+
+
+def test_clip_closed_box() -> None:
+    lo, hi = clip_closed_box(-2.0, 0.0, 4.0, 0.0, -1.0, 1.0, -1.0, 1.0)
+    assert (lo, hi) == (0.25, 0.75)
+    lo, hi = clip_closed_box(-2.0, 5.0, 4.0, 0.0, -1.0, 1.0, -1.0, 1.0)
+    assert lo > hi
+    lo, hi = clip_closed_box(0.0, -2.0, 0.0, 4.0, -1.0, 1.0, -1.0, 1.0)
+    assert (lo, hi) == (0.25, 0.75)
+
+
+def test_prepare_outlines_orders_edges() -> None:
+    pop = octagon_population(np.ones(200), np.random.default_rng(1), psi=0.05, a=1.0)
+    outlines = prepare_outlines(pop.shapes.vertices, pop.shapes.offsets)
+    ang, circum = outlines[4], outlines[5]
+    a = ang.reshape(200, 8)
+    assert np.all(np.diff(a, axis=1) >= 0)
+    assert np.all((a >= 0) & (a < 2 * np.pi))
+    d = np.hypot(pop.shapes.vertices[:, 0], pop.shapes.vertices[:, 1]).reshape(200, 8)
+    assert np.allclose(circum, d.max(axis=1))

@@ -1,0 +1,181 @@
+"""Available arcs against an independent dense-sampling oracle (shapely)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+from arc_helpers import mixed_population
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from regopack.domain import Rectangle
+from regopack.plugins.available_arc import kernel
+from regopack.plugins.available_arc.state import ArcState
+
+MARGIN = 1e-3  # radians kept away from arc ends, where the oracle is ambiguous
+OVERLAP = 1e-12  # relative overlap area the oracle counts as interference
+
+
+def _setup(seed: int, n_neighbours: int, domain: Rectangle, ratio: float = 1.0, scale: float = 1.0):
+    """Candidate 0 at the domain centre, neighbours around it, new particle last."""
+    rng = np.random.default_rng(seed)
+    radius = scale * rng.uniform(1.0, 3.0, size=n_neighbours + 2)
+    radius[-1] *= ratio
+    pop = mixed_population(radius, rng)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    cx, cy = domain.center
+    st_.insert(0, cx, cy)
+    reach = 3.0 * scale * (2.0 + 2.0 * ratio)
+    for j in range(1, n_neighbours + 1):
+        ang = rng.uniform(0, 2 * np.pi)
+        d = rng.uniform(0.5, 1.0) * reach
+        st_.insert(j, cx + d * math.cos(ang), cy + d * math.sin(ang))
+    i = n_neighbours + 1
+    mq = st_.begin_particle(i)
+    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work)
+    return pop, st_, i, arcs
+
+
+def _oracle(pop, st_, i: int, domain: Rectangle, angles: np.ndarray) -> np.ndarray:
+    """True where particle i, on candidate 0's envelope at each polar angle, is free."""
+    P = pop.shapes.outline(0)
+    Q = pop.shapes.outline(i)
+    hull = shapely.MultiPoint((P[:, None, :] - Q[None, :, :]).reshape(-1, 2)).convex_hull
+    far = 10.0 * math.sqrt(hull.area) + 10.0 * np.abs(np.asarray(hull.bounds)).max()
+    others = [
+        shapely.Polygon(pop.shapes.outline(j) + (st_.packed.cx[j], st_.packed.cy[j]))
+        for j in range(1, i)
+    ]
+    box = shapely.box(domain.xmin, domain.ymin, domain.xmax, domain.ymax)
+    q_area = math.pi * pop.radius[i] ** 2
+    free = np.empty(len(angles), dtype=bool)
+    for a, ang in enumerate(angles):
+        ray = shapely.LineString([(0, 0), (far * math.cos(ang), far * math.sin(ang))])
+        hit = ray.intersection(hull.exterior)
+        pt = (
+            np.asarray(hit.coords[0])
+            if hit.geom_type == "Point"
+            else np.asarray(hit.geoms[0].coords[0])
+        )
+        qpoly = shapely.Polygon(Q + pt + (st_.packed.cx[0], st_.packed.cy[0]))
+        ok = qpoly.area - qpoly.intersection(box).area <= OVERLAP * q_area
+        if ok:
+            for o in others:
+                if qpoly.intersects(o) and qpoly.intersection(o).area > OVERLAP * min(
+                    q_area, o.area
+                ):
+                    ok = False
+                    break
+        free[a] = ok
+    return free
+
+
+def _classify(arcs: np.ndarray, angles: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Predicted freedom of each angle and whether it is clear of every arc end."""
+    inside = np.zeros(len(angles), dtype=bool)
+    clear = np.ones(len(angles), dtype=bool)
+    for lo, hi in arcs:
+        rel = np.mod(angles - lo, 2 * np.pi)
+        inside |= rel <= hi - lo
+        for end in (lo, hi):
+            d = np.abs(np.mod(angles - end + np.pi, 2 * np.pi) - np.pi)
+            clear &= d > MARGIN
+    return inside, clear
+
+
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(0, 9), walls=st.booleans())
+@settings(max_examples=60, deadline=None)
+def test_arcs_match_dense_sampling(seed: int, n: int, walls: bool) -> None:
+    half = 6.0 if walls else 1e3
+    domain = Rectangle(-half, half, -half, half)
+    pop, st_, i, arcs = _setup(seed, n, domain)
+    assert np.all(arcs[:, 1] > arcs[:, 0])
+    assert np.sum(arcs[:, 1] - arcs[:, 0]) <= 2 * np.pi + 1e-12
+    angles = np.linspace(0, 2 * np.pi, 721)[:-1] + 1e-4
+    predicted, clear = _classify(arcs, angles)
+    truth = _oracle(pop, st_, i, domain, angles)
+    mismatch = (predicted != truth) & clear
+    assert not mismatch.any(), f"angles {angles[mismatch][:5]} predicted {predicted[mismatch][:5]}"
+
+
+@pytest.mark.parametrize("ratio", [1e-4, 1e-2, 1e2, 1e4])
+def test_arcs_match_at_extreme_size_ratios(ratio: float) -> None:
+    domain = Rectangle(-1e7, 1e7, -1e7, 1e7)
+    pop, st_, i, arcs = _setup(11, 4, domain, ratio=ratio)
+    angles = np.linspace(0, 2 * np.pi, 361)[:-1] + 1e-4
+    predicted, clear = _classify(arcs, angles)
+    truth = _oracle(pop, st_, i, domain, angles)
+    assert not ((predicted != truth) & clear).any()
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e6])
+def test_arcs_scale_with_lengths(scale: float) -> None:
+    base = Rectangle(-1e3, 1e3, -1e3, 1e3)
+    scaled = Rectangle(-1e3 * scale, 1e3 * scale, -1e3 * scale, 1e3 * scale)
+    _, _, _, arcs = _setup(5, 6, base)
+    _, _, _, arcs_scaled = _setup(5, 6, scaled, scale=scale)
+    assert arcs.shape == arcs_scaled.shape
+    assert np.allclose(arcs, arcs_scaled, atol=1e-9)
+
+
+def test_free_envelope_is_one_full_turn() -> None:
+    domain = Rectangle(-1e3, 1e3, -1e3, 1e3)
+    _, _, _, arcs = _setup(3, 0, domain)
+    assert arcs.shape == (1, 2)
+    assert arcs[0, 1] - arcs[0, 0] == pytest.approx(2 * np.pi, abs=1e-12)
+
+
+def test_arc_through_the_first_vertex_is_one_interval() -> None:
+    """An interferer opposite the envelope's first vertex leaves one arc that wraps through it."""
+    rng = np.random.default_rng(0)
+    radius = np.array([2.0, 2.0, 1.0])
+    pop = mixed_population(radius, rng)
+    domain = Rectangle(-1e3, 1e3, -1e3, 1e3)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    st_.insert(0, 0.0, 0.0)
+    i = 2
+    mq = st_.begin_particle(i)
+    # the envelope's first vertex
+    kernel.minkowski_envelope(
+        0,
+        *st_.outlines[:6],
+        *st_.work[:5],
+        mq,
+        st_.work.wx,
+        st_.work.wy,
+        st_.work.wex,
+        st_.work.wey,
+    )
+    first = math.atan2(st_.work.wy[0], st_.work.wx[0])
+    st_.insert(1, 5.0 * math.cos(first + np.pi), 5.0 * math.sin(first + np.pi))
+    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work)
+    assert arcs.shape == (1, 2)
+    assert arcs[0, 0] < first < arcs[0, 1]
+    assert arcs[0, 1] - arcs[0, 0] < 2 * np.pi
+
+
+def test_fully_covered_candidate_has_no_arcs() -> None:
+    rng = np.random.default_rng(2)
+    pop = mixed_population(np.array([1.0] + [1.5] * 12 + [1.0]), rng)
+    domain = Rectangle(-1e3, 1e3, -1e3, 1e3)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    st_.insert(0, 0.0, 0.0)
+    for j in range(1, 13):
+        a = 2 * np.pi * j / 12
+        st_.insert(
+            j, 2.2 * math.cos(a), 2.2 * math.sin(a)
+        )  # a ring overlapping the candidate's surroundings
+    mq = st_.begin_particle(13)
+    arcs = kernel.analyze_candidate(0, 13, mq, st_.outlines, st_.packed, st_.work)
+    assert arcs.shape == (0, 2)
+
+
+def test_sample_angle_is_uniform_over_union() -> None:
+    arcs = np.array([[0.0, 1.0], [2.0, 4.0]])
+    assert kernel.sample_angle(arcs, 0.0) == 0.0
+    assert kernel.sample_angle(arcs, 0.5) == pytest.approx(2.5)
+    assert kernel.sample_angle(arcs, 1 / 3 - 1e-12) == pytest.approx(1.0)
+    assert kernel.sample_angle(arcs, 1.0) == pytest.approx(4.0)

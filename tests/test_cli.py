@@ -1,0 +1,172 @@
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import tomllib
+
+import pytest
+from fakes import fake_registry
+
+import regopack
+import regopack.manager
+from regopack.cli import main
+from regopack.packing import save
+from regopack.testing import packing_from_polygons
+
+
+@pytest.fixture(autouse=True)
+def fake_plugins(monkeypatch, tmp_path):
+    """Every command sees the fake plugins and runs in a temporary directory."""
+    monkeypatch.setattr(regopack.manager, "default_registry", lambda **kw: fake_registry())
+    monkeypatch.chdir(tmp_path)
+
+
+def one_error_line(capsys) -> str:
+    captured = capsys.readouterr()
+    lines = captured.err.splitlines()
+    assert len(lines) == 1, captured.err
+    assert lines[0].startswith("regopack: error: ")
+    return lines[0]
+
+
+def test_version(capsys):
+    assert main(["--version"]) == 0
+    assert capsys.readouterr().out.strip() == f"regopack {regopack.__version__}"
+
+
+def test_no_command_prints_help(capsys):
+    assert main([]) == 2
+    assert "usage: regopack" in capsys.readouterr().err
+
+
+def test_unknown_option_is_a_usage_error(capsys):
+    assert main(["run", "--bogus"]) == 2
+
+
+def test_scenes(capsys):
+    assert main(["scenes"]) == 0
+    out = capsys.readouterr().out
+    assert "table1" in out
+    assert "small" in out
+
+
+def test_config_prints_resolved_toml(capsys):
+    assert main(["config", "small", "--set", "density.eta=5", "--seed", "3"]) == 0
+    data = tomllib.loads(capsys.readouterr().out)
+    assert data["name"] == "small"
+    assert data["seed"] == 3
+    assert data["density"] == {"kind": "eta", "eta": 5.0}
+    assert data["insertion"]["tau"] == 0.65
+    assert len(data["phases"]) == 6
+
+
+def test_config_default_is_table1(capsys):
+    assert main(["config"]) == 0
+    assert tomllib.loads(capsys.readouterr().out)["name"] == "table1"
+
+
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (
+            ["config", "--set", "density.eta=-3"],
+            "regopack: error: --set: density.eta = -3: Input should be greater than or equal to 0",
+        ),
+        (
+            ["config", "--set", "phases.0.shape.kind=octagn"],
+            "regopack: error: --set: phases.0.shape.kind: "
+            "unknown shape kind 'octagn'; known kinds: octagon",
+        ),
+        (["run", "nope.toml"], "regopack: error: nope.toml: no such scene file"),
+        (["run", "--set", "oops"], "regopack: error: --set 'oops': expected key=value"),
+        (["verify", "missing.npz"], "regopack: error: missing.npz: no such file"),
+    ],
+)
+def test_user_errors_are_one_line(capsys, argv, expected):
+    assert main(argv) == 2
+    assert one_error_line(capsys).startswith(expected)
+
+
+def test_bad_scene_file_names_file_and_field(tmp_path, capsys):
+    (tmp_path / "scene.toml").write_text(_small_with("eta = 0.0", "eta = -3"))
+    assert main(["config", "scene.toml"]) == 2
+    assert one_error_line(capsys) == (
+        "regopack: error: scene.toml: density.eta = -3: Input should be greater than or equal to 0"
+    )
+
+
+def _small_with(old: str, new: str) -> str:
+    from importlib.resources import files
+
+    text = files("regopack.scenes").joinpath("small.toml").read_text(encoding="utf-8")
+    return text.replace(old, new, 1)
+
+
+def test_run_and_verify(tmp_path, capsys):
+    assert main(["run", "small", "--set", "count=300", "--out", "out"]) == 0
+    out = capsys.readouterr().out
+    assert "placed" in out
+    assert "out/packing.npz" in out
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["tried"] == 300
+    assert main(["verify", "out/packing.npz"]) == 0
+    assert "OK" in capsys.readouterr().out
+
+
+def test_run_default_out_dir_and_quiet(tmp_path, capsys):
+    assert main(["run", "small", "--set", "count=50", "--seed", "2", "--quiet"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert (tmp_path / "runs" / "small-seed2" / "packing.npz").exists()
+    assert (tmp_path / "runs" / "small-seed2" / "summary.json").exists()
+
+
+def test_verify_violation_exits_1(tmp_path, capsys):
+    sq = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    overlapping = packing_from_polygons([sq, [(x + 0.5, y) for x, y in sq]], domain=(0, 2, 0, 1))
+    save(overlapping, tmp_path / "bad.npz")
+    assert main(["verify", "bad.npz"]) == 1
+    assert "VIOLATED" in capsys.readouterr().out
+
+
+def test_verify_corrupt_file(tmp_path, capsys):
+    (tmp_path / "bad.npz").write_bytes(b"garbage")
+    assert main(["verify", "bad.npz"]) == 2
+    assert "not a regopack packing file" in one_error_line(capsys)
+
+
+def test_interrupt_exits_130_without_partial_files(tmp_path, capsys):
+    assert main(["run", "small", "--set", "count=50", "--out", "out", "--quiet"]) == 0
+    before = (tmp_path / "out" / "packing.npz").read_bytes()
+    argv = ["run", "small", "--set", "count=50", "--set", "insertion.fail_after=5"]
+    assert main([*argv, "--out", "out", "--seed", "7", "--quiet"]) == 130
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("regopack: interrupted")
+    assert (tmp_path / "out" / "packing.npz").read_bytes() == before
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["packing.npz", "summary.json"]
+
+
+def test_unexpected_errors_keep_their_traceback(monkeypatch):
+    def broken(**kwargs):
+        raise RuntimeError("a bug")
+
+    monkeypatch.setattr(regopack.manager, "default_registry", broken)
+    with pytest.raises(RuntimeError, match="a bug"):
+        main(["config"])
+
+
+def test_python_dash_m(tmp_path):
+    result = subprocess.run(
+        [sys.executable, "-m", "regopack", "--version"], capture_output=True, text=True, check=False
+    )
+    assert result.returncode == 0
+    assert result.stdout.strip() == f"regopack {regopack.__version__}"
+
+
+def test_import_is_light():
+    code = "import sys, regopack; print('numba' in sys.modules, 'shapely' in sys.modules)"
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.split() == ["False", "False"]

@@ -1,0 +1,23 @@
+"""The examples in the docstrings run."""
+
+from __future__ import annotations
+
+import doctest
+import importlib
+
+import pytest
+
+MODULES = [
+    "regopack._toml",
+    "regopack.manager",
+    "regopack.packing",
+    "regopack.scene",
+    "regopack.testing",
+    "regopack.verify",
+]
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_docstring_examples(name):
+    result = doctest.testmod(importlib.import_module(name), optionflags=doctest.ELLIPSIS)
+    assert result.failed == 0

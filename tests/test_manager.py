@@ -1,0 +1,197 @@
+from __future__ import annotations
+
+import sys
+import types
+
+import pluggy
+import pytest
+from fakes import FakePlugin, ShapeConfig, SizeConfig, UniformDiameter, fake_registry
+
+from regopack.errors import PluginError
+from regopack.hookspecs import hookimpl
+from regopack.manager import (
+    BUILTIN_PLUGINS,
+    DISABLE_AUTOLOAD_ENV,
+    HOOK_OF_KIND,
+    Registry,
+    build_plugin_manager,
+)
+from regopack.plugin_types import KINDS, PluginSpec, ShapeSpec, SizeDistributionSpec
+
+
+class OtherSizes:
+    @hookimpl
+    def regopack_size_distributions(self):
+        return [SizeDistributionSpec("change5", SizeConfig, UniformDiameter)]
+
+
+def test_builtin_plugins_are_the_four_modules():
+    assert BUILTIN_PLUGINS == (
+        "regopack.plugins.change5",
+        "regopack.plugins.octagon",
+        "regopack.plugins.available_arc",
+        "regopack.plugins.eta",
+    )
+
+
+def test_hooks_cover_every_kind():
+    assert set(HOOK_OF_KIND) == set(KINDS)
+
+
+def test_registry_collects_fake_plugin():
+    reg = fake_registry()
+    assert reg.names("size") == ["change5"]
+    assert reg.names("shape") == ["octagon"]
+    assert reg.names("insertion") == ["available-arc"]
+    assert reg.names("density") == ["eta"]
+    assert reg.names("analysis") == []
+    assert isinstance(reg.get("shape", "octagon"), ShapeSpec)
+    assert ("shape", "octagon") in reg
+    assert ("shape", "nope") not in reg
+
+
+def test_origin_names_the_plugin():
+    pm = build_plugin_manager(autoload=False, builtins=())
+    plugin = FakePlugin()
+    pm.register(plugin, name="my-plugin")
+    reg = Registry.from_manager(pm)
+    assert reg.origin("shape", "octagon") == "my-plugin"
+
+
+def test_duplicate_name_names_both_plugins():
+    pm = build_plugin_manager(autoload=False, builtins=())
+    pm.register(FakePlugin(), name="first-plugin")
+    pm.register(OtherSizes(), name="second-plugin")
+    with pytest.raises(PluginError) as info:
+        Registry.from_manager(pm)
+    msg = str(info.value)
+    assert "'change5'" in msg
+    assert "first-plugin" in msg
+    assert "second-plugin" in msg
+    assert "\n" not in msg
+
+
+def test_unknown_name_lists_known_sorted():
+    class MoreShapes:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("zigzag", ShapeConfig, lambda c: None)]
+
+    reg = fake_registry(MoreShapes())
+    with pytest.raises(PluginError) as info:
+        reg.get("shape", "octagn")
+    assert str(info.value) == "unknown shape kind 'octagn'; known kinds: octagon, zigzag"
+
+
+def test_unknown_name_with_nothing_registered():
+    reg = Registry.from_manager(build_plugin_manager(autoload=False, builtins=()))
+    with pytest.raises(PluginError, match=r"known kinds: \(none\)"):
+        reg.get("analysis", "rdf")
+
+
+def test_unknown_plugin_kind():
+    with pytest.raises(PluginError, match="unknown plugin kind 'colour'"):
+        fake_registry().names("colour")
+
+
+def test_wrong_record_type_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [SizeDistributionSpec("square", SizeConfig, UniformDiameter)]
+
+    with pytest.raises(PluginError, match="returned a SizeDistributionSpec, expected ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_plain_plugin_spec_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [PluginSpec("square", ShapeConfig, lambda c: None)]
+
+    with pytest.raises(PluginError, match="expected ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_non_iterable_result_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return ShapeSpec("square", ShapeConfig, lambda c: None)
+
+    with pytest.raises(PluginError, match="must return an iterable of ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_config_model_must_be_pydantic():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("square", dict, lambda c: None)]  # type: ignore[arg-type]
+
+    with pytest.raises(PluginError, match="not a pydantic model"):
+        fake_registry(Wrong())
+
+
+def test_none_result_is_empty():
+    class Nothing:
+        @hookimpl
+        def regopack_shapes(self):
+            return None
+
+    assert fake_registry(Nothing()).names("shape") == ["octagon"]
+
+
+def test_unknown_hook_is_rejected():
+    class Typo:
+        @hookimpl
+        def regopack_shape(self):
+            return []
+
+    with pytest.raises(PluginError, match="regopack_shape"):
+        build_plugin_manager(autoload=False, builtins=(), extra=[Typo()])
+
+
+def test_registering_twice_is_an_error():
+    plugin = FakePlugin()
+    with pytest.raises(PluginError):
+        build_plugin_manager(autoload=False, builtins=(), extra=[plugin, plugin])
+
+
+def test_builtins_are_imported_by_module_name(monkeypatch):
+    module = types.ModuleType("fake_builtin_module")
+
+    @hookimpl
+    def regopack_shapes():
+        return [ShapeSpec("hexagon", ShapeConfig, lambda c: None)]
+
+    module.regopack_shapes = regopack_shapes  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "fake_builtin_module", module)
+    pm = build_plugin_manager(autoload=False, builtins=("fake_builtin_module",))
+    reg = Registry.from_manager(pm)
+    assert reg.names("shape") == ["hexagon"]
+    assert reg.origin("shape", "hexagon") == "fake_builtin_module"
+
+
+@pytest.mark.parametrize(
+    ("env", "autoload", "expected"),
+    [
+        (None, None, True),
+        ("", None, True),
+        ("1", None, False),
+        (None, False, False),
+        ("1", True, True),
+    ],
+)
+def test_entry_point_autoload(monkeypatch, env, autoload, expected):
+    calls = []
+    monkeypatch.setattr(
+        pluggy.PluginManager, "load_setuptools_entrypoints", lambda self, group: calls.append(group)
+    )
+    if env is None:
+        monkeypatch.delenv(DISABLE_AUTOLOAD_ENV, raising=False)
+    else:
+        monkeypatch.setenv(DISABLE_AUTOLOAD_ENV, env)
+    build_plugin_manager(autoload=autoload, builtins=())
+    assert calls == (["regopack"] if expected else [])

@@ -1,0 +1,205 @@
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from fakes import RegularPolygon, ShapeConfig, SizeConfig, UniformDiameter
+
+from regopack.errors import ConfigError, PluginError
+from regopack.hookspecs import hookimpl
+from regopack.packing import load
+from regopack.plugin_types import ShapeSpec
+from regopack.population import ShapeBatch
+from regopack.run import default_out_dir, draw_population, particle_count, phi_in_window, run_scene
+from regopack.scene import load_scene, resolve_scene
+from regopack.testing import assert_valid_packing, packing_from_polygons
+
+
+def resolved(registry, *overrides, name="small", seed=None):
+    return resolve_scene(load_scene(name, list(overrides), seed=seed), registry)
+
+
+def test_auto_count(registry):
+    scene = resolved(registry)
+    size = UniformDiameter(SizeConfig())
+    assert particle_count(scene, size) == round(200 * 200 / size.mean_area)
+    assert particle_count(resolved(registry, "count=17"), size) == 17
+
+
+def test_draw_order(registry):
+    scene = resolved(registry, "count=500")
+    pop = draw_population(scene, np.random.default_rng(3))
+
+    rng = np.random.default_rng(3)
+    radii = UniformDiameter(SizeConfig()).sample(500, rng)
+    minerals = rng.choice(6, size=500, p=scene.fractions)
+    np.testing.assert_array_equal(pop.radius, radii)
+    np.testing.assert_array_equal(pop.mineral, minerals)
+    assert pop.mineral.dtype == np.int64
+    assert pop.mineral_names == scene.phase_names
+    for p in range(6):
+        idx = np.flatnonzero(minerals == p)
+        batch = RegularPolygon(ShapeConfig()).generate(radii[idx], rng)
+        np.testing.assert_array_equal(pop.shapes.orientation[idx], batch.orientation)
+        for k, j in enumerate(idx[:5]):
+            np.testing.assert_array_equal(pop.shapes.outline(j), batch.outline(k))
+
+
+def test_draw_is_reproducible(registry):
+    scene = resolved(registry, "count=300")
+    a = draw_population(scene, np.random.default_rng(1))
+    b = draw_population(scene, np.random.default_rng(1))
+    np.testing.assert_array_equal(a.shapes.vertices, b.shapes.vertices)
+
+
+def test_shape_plugin_returning_too_few_outlines(registry):
+    from fakes import fake_registry
+
+    class Short(RegularPolygon):
+        def generate(self, radius, rng):
+            b = super().generate(radius, rng)
+            return ShapeBatch(b.vertices[:-8], b.offsets[:-1], b.orientation[:-1])
+
+    class Plugin:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("short", ShapeConfig, Short)]
+
+    reg = fake_registry(Plugin())
+    scene = resolve_scene(load_scene("small", ["count=50", "phases.0.shape.kind=short"]), reg)
+    with pytest.raises(PluginError, match=r"returned \d+ outlines for \d+ radii"):
+        draw_population(scene, np.random.default_rng(0))
+
+
+def test_run_scene_writes_nothing_without_out_dir(registry, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    outcome = run_scene(resolved(registry, "count=200"), None)
+    assert outcome.packing_path is None
+    assert list(tmp_path.iterdir()) == []
+    assert outcome.packing.n_particles == 200
+
+
+def test_run_scene(registry, tmp_path):
+    calls = []
+    scene = resolved(registry, "count=400", seed=4)
+    outcome = run_scene(scene, tmp_path / "out", progress=lambda *a: calls.append(a))
+    s = outcome.summary
+    p = outcome.packing
+    assert s["scene"] == "small"
+    assert s["seed"] == 4
+    assert s["tried"] == 400
+    assert s["placed"] + s["not_placed"] == 400
+    assert s["placed"] == p.n_placed > 0
+    assert s["interior_margin"] == 40.0
+    assert s["eta"] == 0.0
+    assert s["cells"] > 0  # the fake inserter's stats are merged in
+    assert s["phi_domain"] == pytest.approx(p.area()[p.placed].sum() / 200**2)
+    assert 0 < s["phi_interior"] < 1
+    assert s["wall_time_s"] > 0
+    assert calls[-1] == (400, s["placed"], 400)
+    assert_valid_packing(p)
+    assert outcome.packing_path == tmp_path / "out" / "packing.npz"
+    on_disk = json.loads(outcome.summary_path.read_text())
+    assert on_disk == pytest.approx(s)
+    loaded = load(outcome.packing_path)
+    assert loaded.scene == scene.to_dict()
+    assert loaded.seed == 4
+    np.testing.assert_array_equal(loaded.centre, p.centre)
+
+
+def test_same_seed_same_packing(registry):
+    a = run_scene(resolved(registry, "count=100"), None).packing
+    b = run_scene(resolved(registry, "count=100"), None).packing
+    np.testing.assert_array_equal(a.vertices, b.vertices)
+    np.testing.assert_array_equal(a.centre, b.centre)
+
+
+def test_empty_interior_window(registry):
+    outcome = run_scene(resolved(registry, "count=5", "domain.width=60"), None)
+    assert math.isnan(outcome.summary["phi_interior"])
+    assert "empty" in outcome.summary["phi_interior_note"]
+
+
+def test_interrupted_run_keeps_previous_files(registry, tmp_path):
+    out = tmp_path / "out"
+    run_scene(resolved(registry, "count=100"), out)
+    before = {f.name: f.read_bytes() for f in out.iterdir()}
+    with pytest.raises(KeyboardInterrupt):
+        run_scene(resolved(registry, "count=100", "insertion.fail_after=10", seed=9), out)
+    assert {f.name: f.read_bytes() for f in out.iterdir()} == before
+
+
+def test_default_out_dir(registry):
+    assert str(default_out_dir(resolved(registry, seed=3))) == "runs/small-seed3"
+
+
+def test_phi_in_window():
+    sq = [(0, 0), (2, 0), (2, 2), (0, 2)]
+    p = packing_from_polygons([sq], domain=(0, 4, 0, 4))
+    assert phi_in_window(p, (0, 4, 0, 4)) == pytest.approx(4 / 16)
+    assert phi_in_window(p, (1, 3, 1, 3)) == pytest.approx(1 / 4)
+    assert phi_in_window(p, (2, 4, 2, 4)) == 0.0
+    assert math.isnan(phi_in_window(p, (2, 2, 0, 4)))
+
+
+def test_analyses_run_with_their_requirements(tmp_path):
+    from fakes import fake_registry
+    from pydantic import BaseModel, ConfigDict
+
+    from regopack.interfaces import Analyzer
+    from regopack.plugin_types import AnalyzerSpec
+
+    class NoConfig(BaseModel):
+        model_config = ConfigDict(extra="forbid")
+
+    class Count(Analyzer):
+        name = "count"
+
+        def compute(self, packing, context):
+            self.n = packing.n_placed
+            return self
+
+        def results(self):
+            return {"n": self.n}
+
+    class Twice(Analyzer):
+        name = "twice"
+        requires = ("count",)
+
+        def compute(self, packing, context):
+            self.n2 = 2 * context["count"].n
+            return self
+
+        def results(self):
+            return {"n2": self.n2}
+
+    class Plugin:
+        @hookimpl
+        def regopack_analyzers(self):
+            return [
+                AnalyzerSpec("count", NoConfig, lambda c: Count()),
+                AnalyzerSpec("twice", NoConfig, lambda c: Twice()),
+            ]
+
+    reg = fake_registry(Plugin())
+    scene = resolve_scene(load_scene("small", ["count=50", 'outputs.analyses=["twice"]']), reg)
+    outcome = run_scene(scene, tmp_path)
+    placed = outcome.packing.n_placed
+    assert outcome.summary["analyses"] == {"twice": {"n2": 2 * placed}}
+    assert json.loads(outcome.summary_path.read_text())["analyses"]["twice"]["n2"] == 2 * placed
+
+
+def test_output_names_may_contain_folders(registry, tmp_path):
+    scene = resolved(registry, "count=20", "outputs.packing=data/p.npz", "outputs.summary=s/s.json")
+    outcome = run_scene(scene, tmp_path / "o")
+    assert outcome.packing_path == tmp_path / "o" / "data" / "p.npz"
+    assert outcome.packing_path.exists()
+    assert outcome.summary_path.exists()
+
+
+def test_unwritable_output_is_a_config_error(registry, tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(ConfigError, match="cannot create the output directory"):
+        run_scene(resolved(registry, "count=20"), tmp_path / "file" / "out")

@@ -1,0 +1,182 @@
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+import regopack.testing
+from regopack.domain import Rectangle
+from regopack.packing import Packing
+from regopack.testing import packing_from_polygons
+from regopack.verify import VerifyReport, assert_valid_packing, verify
+
+SQUARE = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
+
+
+def squares(*corners, size=1.0):
+    return [SQUARE * size + np.asarray(c, dtype=float) for c in corners]
+
+
+def test_tangent_squares_are_valid():
+    p = packing_from_polygons(squares((0, 0), (1, 0), (0, 1), (1, 1)), domain=(0, 2, 0, 2))
+    report = verify(p)
+    assert report.ok
+    assert report.n_checked == 4
+    assert report.n_overlapping_pairs == 0
+    assert report.worst_overlap is None
+    assert report.n_outside == 0
+    assert report.worst_outside is None
+
+
+def test_overlap_is_detected():
+    p = packing_from_polygons(squares((0, 0), (3, 0), (3.5, 0)), domain=(0, 5, 0, 1))
+    report = verify(p)
+    assert not report.ok
+    assert report.n_overlapping_pairs == 1
+    assert report.worst_overlap is not None
+    i, j, frac = report.worst_overlap
+    assert (i, j) == (1, 2)
+    assert frac == pytest.approx(0.5)
+    assert report.n_outside == 0
+
+
+def test_overlap_relative_to_smaller_particle():
+    big = SQUARE * 10
+    small = SQUARE * 1 + (9.5, 0)
+    report = verify(packing_from_polygons([big, small], domain=(0, 20, 0, 10)))
+    assert report.worst_overlap == (0, 1, pytest.approx(0.5))
+
+
+def test_worst_overlap_is_the_largest():
+    p = packing_from_polygons(squares((0, 0), (0.9, 0), (5, 0), (5.5, 0)), domain=(0, 7, 0, 1))
+    report = verify(p)
+    assert report.n_overlapping_pairs == 2
+    assert report.worst_overlap[:2] == (2, 3)
+
+
+def test_contained_particle_is_an_overlap():
+    p = packing_from_polygons([SQUARE * 4, SQUARE + 1], domain=(0, 4, 0, 4))
+    assert verify(p).worst_overlap == (0, 1, pytest.approx(1.0))
+
+
+def test_out_of_domain_is_detected():
+    p = packing_from_polygons(squares((0, 0), (1.75, 0)), domain=(0, 2, 0, 1))
+    report = verify(p)
+    assert not report.ok
+    assert report.n_outside == 1
+    assert report.worst_outside == (1, pytest.approx(0.75))
+    assert report.n_overlapping_pairs == 0
+
+
+def test_particle_touching_the_walls_is_inside():
+    p = packing_from_polygons(squares((0, 0)), domain=(0, 1, 0, 1))
+    assert verify(p).ok
+
+
+def test_particle_entirely_outside():
+    p = packing_from_polygons(squares((5, 5)), domain=(0, 1, 0, 1))
+    assert verify(p).worst_outside == (0, pytest.approx(1.0))
+
+
+def test_unplaced_particles_are_ignored():
+    p = packing_from_polygons(
+        squares((0, 0), (0.5, 0), (9, 9)), domain=(0, 2, 0, 1), placed=[True, False, False]
+    )
+    report = verify(p)
+    assert report.ok
+    assert report.n_checked == 1
+
+
+def test_empty_packing_is_valid():
+    assert verify(packing_from_polygons([], domain=(0, 1, 0, 1))).ok
+
+
+def test_rel_tol():
+    # overlap of 1e-6 of the area
+    p = packing_from_polygons(squares((0, 0), (1 - 1e-6, 0)), domain=(0, 3, 0, 1))
+    assert not verify(p).ok
+    assert verify(p, rel_tol=1e-5).ok
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1e-3, 1.0, 1e3, 1e6])
+@pytest.mark.parametrize("shift", [0.0, 1.0, -100.0])
+def test_scale_invariance(scale, shift):
+    corners = [(x, y) for x in range(4) for y in range(3)]
+    origin = shift * 10 * scale
+    polys = [(SQUARE + c) * scale + origin for c in corners]
+    dom = (origin, origin + 4 * scale, origin, origin + 3 * scale)
+    assert verify(packing_from_polygons(polys, domain=dom)).ok
+    bad = [*polys, (SQUARE + np.array([0.5, 0.5])) * scale + origin]
+    report = verify(packing_from_polygons(bad, domain=dom))
+    assert report.n_overlapping_pairs == 4
+    assert report.worst_overlap[2] == pytest.approx(0.25)
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    st.floats(min_value=-6, max_value=6),
+    st.floats(min_value=0, max_value=2 * np.pi),
+    st.integers(min_value=2, max_value=6),
+)
+def test_rotated_tangent_grid_is_valid(log_scale, angle, k):
+    scale = 10.0**log_scale
+    c, s = np.cos(angle), np.sin(angle)
+    rot = np.array([[c, -s], [s, c]])
+    polys = [((SQUARE + np.array([x, y])) @ rot.T) * scale for x in range(k) for y in range(k)]
+    allv = np.concatenate(polys)
+    dom = (allv[:, 0].min(), allv[:, 0].max(), allv[:, 1].min(), allv[:, 1].max())
+    assert verify(packing_from_polygons(polys, domain=dom)).ok
+
+
+def test_report_text():
+    report = verify(
+        packing_from_polygons(squares((0, 0), (0.5, 0), (1.75, 0)), domain=(0, 2, 0, 1))
+    )
+    text = str(report)
+    assert "VIOLATED" in text
+    assert "particles 0 and 1" in text
+    assert "particle 2" in text
+    assert "OK" in str(verify(packing_from_polygons(squares((0, 0)), domain=(0, 1, 0, 1))))
+
+
+def test_assert_valid_packing():
+    good = packing_from_polygons(squares((0, 0), (1, 0)), domain=(0, 2, 0, 1))
+    assert isinstance(assert_valid_packing(good), VerifyReport)
+    bad = packing_from_polygons(squares((0, 0), (0.5, 0)), domain=(0, 2, 0, 1))
+    with pytest.raises(AssertionError, match="overlapping pairs: 1"):
+        assert_valid_packing(bad)
+    assert regopack.testing.assert_valid_packing is assert_valid_packing
+
+
+def grid_packing(k: int, scale: float = 1.0) -> Packing:
+    """k*k touching regular octagons' bounding squares (squares with 8 vertices)."""
+    n = k * k
+    t = np.linspace(0, 1, 3)[:-1]
+    edge = [np.c_[t, 0 * t], np.c_[1 + 0 * t, t], np.c_[1 - t, 1 + 0 * t], np.c_[0 * t, 1 - t]]
+    local = (np.concatenate(edge) - 0.5) * scale
+    g = (np.arange(k) + 0.5) * scale
+    cx, cy = np.meshgrid(g, g)
+    return Packing(
+        radius=np.full(n, scale / np.sqrt(np.pi)),
+        mineral=np.zeros(n, dtype=np.int64),
+        mineral_names=("a",),
+        vertices=np.tile(local, (n, 1)),
+        offsets=np.arange(0, 8 * n + 1, 8, dtype=np.int64),
+        orientation=np.zeros(n),
+        centre=np.c_[cx.ravel(), cy.ravel()],
+        insertion_index=np.arange(n, dtype=np.int64),
+        domain=Rectangle(0, k * scale, 0, k * scale),
+    )
+
+
+def test_large_packing_is_fast():
+    p = grid_packing(200)  # 40 000 touching particles
+    start = time.perf_counter()
+    report = verify(p)
+    elapsed = time.perf_counter() - start
+    assert report.ok
+    assert report.n_checked == 40_000
+    assert elapsed < 20
