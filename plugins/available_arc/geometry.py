@@ -236,6 +236,23 @@ def clip_open_interior(
 
 
 @numba.njit(cache=True)
+def inside_open(
+    px: float,
+    py: float,
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+    n: int,
+) -> bool:
+    """Return whether point ``p`` lies in the open interior of a convex polygon."""
+    for j in range(n):
+        if wex[j] * (py - wy[j]) - wey[j] * (px - wx[j]) <= 0.0:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
 def clip_closed_box(
     ax: float, ay: float, dx: float, dy: float, x0: float, x1: float, y0: float, y1: float
 ) -> tuple[float, float]:

@@ -25,6 +25,7 @@ from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.available_arc.geometry import (
     clip_closed_box,
     clip_open_interior,
+    inside_open,
     minkowski_envelope,
     reflect_outline,
 )
@@ -356,13 +357,44 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
     na = 0
     joined_vertex = -1  # the last arc ends exactly at this envelope vertex
     first_at_zero = False
-    last_cover = -1
+    cur = -1  # an interferer whose open envelope contains the start vertex of edge j
     for j in range(n):
         j2 = j + 1 if j + 1 < n else 0
         ax = wx[j]
         ay = wy[j]
-        dx = wx[j2] - ax
-        dy = wy[j2] - ay
+        bx = wx[j2]
+        by = wy[j2]
+        dx = bx - ax
+        dy = by - ay
+        # fast path: both ends strictly inside one interferer's envelope cover the edge
+        full = False
+        if cur >= 0:
+            sl = slot[cur]
+            full = inside_open(
+                bx - odx[cur], by - ody[cur], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+            )
+        mx = ax + 0.5 * dx
+        my = ay + 0.5 * dy
+        half = 0.5 * math.sqrt(dx * dx + dy * dy)
+        if not full:
+            cur = -1
+            for f in range(nf):
+                gx = odx[f] - mx
+                gy = ody[f] - my
+                sl = slot[f]
+                # both ends within the circumcircle need |mid - c|^2 <= R^2 - half^2
+                if gx * gx + gy * gy + half * half > orad[sl] * orad[sl]:
+                    continue
+                if inside_open(
+                    ax - odx[f], ay - ody[f], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                ) and inside_open(
+                    bx - odx[f], by - ody[f], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                ):
+                    full = True
+                    cur = f
+                    break
+        if full:
+            continue
         ni = 0
         slo, shi = clip_closed_box(ax, ay, dx, dy, bx0, bx1, by0, by1)
         if slo > shi:
@@ -375,20 +407,7 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
             ilo[ni] = shi
             ihi[ni] = 2.0
             ni += 1
-        full = False
-        mx = ax + 0.5 * dx
-        my = ay + 0.5 * dy
-        half = 0.5 * math.sqrt(dx * dx + dy * dy)
-        # the interferer that covered the previous edge often covers this one too
-        for ff in range(-1, nf):
-            if ff < 0:
-                if last_cover < 0:
-                    continue
-                f = last_cover
-            else:
-                f = ff
-                if f == last_cover:
-                    continue
+        for f in range(nf):
             gx = odx[f] - mx
             gy = ody[f] - my
             sl = slot[f]
@@ -401,7 +420,6 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
             if lo < hi and hi > 0.0 and lo < 1.0:
                 if lo <= 0.0 and hi >= 1.0:
                     full = True
-                    last_cover = f
                     break
                 ilo[ni] = lo
                 ihi[ni] = hi
