@@ -149,3 +149,10 @@ class Analyzer(ABC):
     @abstractmethod
     def results(self) -> dict[str, Any]:
         """Scalar results (JSON-serialisable) of the last :meth:`compute`."""
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Tables of the last :meth:`compute`: name -> column name -> 1-D array.
+
+        Columns of one table have equal length. The default has no tables.
+        """
+        return {}

@@ -39,6 +39,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.octagon",
     "regopack.plugins.available_arc",
     "regopack.plugins.eta",
+    "regopack.plugins.analysis",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 

@@ -144,6 +144,7 @@ def default_out_dir(scene: ResolvedScene) -> Path:
 def _run_analyses(packing: Packing, scene: ResolvedScene) -> dict[str, dict[str, Any]]:
     """Compute the requested analyzers, their requirements first."""
     done: dict[str, Analyzer] = {}
+    listed = {plugin.kind: plugin for plugin in scene.analyses}
 
     def compute(plugin: ResolvedPlugin[Any], chain: tuple[str, ...]) -> Analyzer:
         name = plugin.kind
@@ -155,16 +156,18 @@ def _run_analyses(packing: Packing, scene: ResolvedScene) -> dict[str, dict[str,
         analyzer: Analyzer = _build(plugin, Analyzer, "analysis")
         context: dict[str, Analyzer] = {}
         for req in analyzer.requires:
-            try:
-                spec = scene.registry.get("analysis", req)
-            except PluginError as err:
-                raise PluginError(f"analyzer {name!r} requires {req!r}: {err}") from err
-            dep = ResolvedPlugin(
-                kind=req,
-                spec=spec,
-                config=spec.config_model.model_validate({}),
-                origin=scene.registry.origin("analysis", req),
-            )
+            dep = listed.get(req)
+            if dep is None:  # not asked for by the scene: its defaults
+                try:
+                    spec = scene.registry.get("analysis", req)
+                except PluginError as err:
+                    raise PluginError(f"analyzer {name!r} requires {req!r}: {err}") from err
+                dep = ResolvedPlugin(
+                    kind=req,
+                    spec=spec,
+                    config=spec.config_model.model_validate({}),
+                    origin=scene.registry.origin("analysis", req),
+                )
             context[req] = compute(dep, (*chain, name))
         done[name] = analyzer.compute(packing, context)
         return done[name]

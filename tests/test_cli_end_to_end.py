@@ -48,3 +48,94 @@ def test_run_small_end_to_end(tmp_path, capsys):
     assert summary["placed"] == packing.n_placed > 0
     assert_valid_packing(packing)
     assert main(["verify", str(out / "packing.npz")]) == 0
+
+
+def _arrays(packing):
+    return (
+        packing.centre,
+        packing.insertion_index,
+        packing.vertices,
+        packing.radius,
+        packing.mineral,
+    )
+
+
+@pytest.mark.parametrize(
+    ("scene", "overrides"),
+    [
+        ("small", ["count=500", "seed=3"]),
+        ("small", ["count=500", "seed=4", "density.eta=10"]),
+        ("table1", ["domain.width=120", "domain.height=80", "seed=5", "insertion.t=1"]),
+    ],
+)
+def test_linear_scan_reference_gives_the_same_packing(scene, overrides, tmp_path):
+    reg = default_registry(autoload=False)
+    from regopack.run import run_scene
+
+    packings = []
+    for search in ("linear", "indexed"):
+        resolved = resolve_scene(load_scene(scene, [*overrides, f"insertion.search={search}"]), reg)
+        packings.append(run_scene(resolved, None).packing)
+    for a, b in zip(_arrays(packings[0]), _arrays(packings[1]), strict=True):
+        assert a.tobytes() == b.tobytes()
+
+
+def test_same_scene_and_seed_give_identical_files(tmp_path):
+    for name in ("a", "b"):
+        assert (
+            main(
+                [
+                    "run",
+                    "small",
+                    "--set",
+                    "count=400",
+                    "--seed",
+                    "9",
+                    "--out",
+                    str(tmp_path / name),
+                    "--quiet",
+                ]
+            )
+            == 0
+        )
+    a = load(tmp_path / "a" / "packing.npz")
+    b = load(tmp_path / "b" / "packing.npz")
+    for x, y in zip(_arrays(a), _arrays(b), strict=True):
+        assert x.tobytes() == y.tobytes()
+
+
+def test_mineral_frequencies_follow_the_fractions():
+    import numpy as np
+    from scipy import stats
+
+    from regopack.run import draw_population
+
+    resolved = resolve_scene(load_scene("table1"), default_registry(autoload=False))
+    pop = draw_population(resolved, np.random.default_rng(0))
+    counts = np.bincount(pop.mineral, minlength=len(resolved.phase_names))
+    expected = np.asarray(resolved.fractions) * len(pop)
+    assert len(pop) == 16579
+    assert stats.chisquare(counts, expected).pvalue > 1e-3
+    # and the test can fail: a skewed draw is detected
+    skewed = counts.copy()
+    skewed[0] += 300
+    skewed[1] -= 300
+    assert stats.chisquare(skewed, expected).pvalue < 1e-3
+    # minerals are independent of size
+    big = pop.radius > np.median(pop.radius)
+    table = np.array(
+        [np.bincount(pop.mineral[big], minlength=6), np.bincount(pop.mineral[~big], minlength=6)]
+    )
+    assert stats.chi2_contingency(table).pvalue > 1e-3
+
+
+def test_user_mistakes_are_one_line_errors(capsys):
+    assert main(["run", "--set", "density.eta=-3"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "density.eta" in err and "-3" in err
+    assert main(["run", "--set", "phases.0.shape.kind=octagn"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "octagon" in err
+    assert main(["run", "--set", "insertion.interference=fast"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "interference" in err and "exact" in err

@@ -25,12 +25,13 @@ class OtherSizes:
         return [SizeDistributionSpec("change5", SizeConfig, UniformDiameter)]
 
 
-def test_builtin_plugins_are_the_four_modules():
+def test_builtin_plugins_are_the_plugin_modules():
     assert BUILTIN_PLUGINS == (
         "regopack.plugins.change5",
         "regopack.plugins.octagon",
         "regopack.plugins.available_arc",
         "regopack.plugins.eta",
+        "regopack.plugins.analysis",
     )
 
 

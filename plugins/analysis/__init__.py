@@ -1,0 +1,38 @@
+"""Built-in structure analyzers (the paper's Stage 3).
+
+Density, contacts, coordination, rdf and network.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from regopack.hookspecs import hookimpl
+from regopack.plugin_types import AnalyzerSpec
+from regopack.plugins.analysis.contacts import Contacts, ContactsConfig
+from regopack.plugins.analysis.coordination import Coordination, CoordinationConfig
+from regopack.plugins.analysis.density import Density, DensityConfig
+from regopack.plugins.analysis.network import Network, NetworkConfig
+from regopack.plugins.analysis.rdf import Rdf, RdfConfig
+
+
+@hookimpl
+def regopack_analyzers() -> Iterable[AnalyzerSpec]:
+    """Register the built-in analyzers."""
+    return [
+        AnalyzerSpec(
+            "density", DensityConfig, Density, "Packing density over the domain and the interior."
+        ),
+        AnalyzerSpec(
+            "contacts", ContactsConfig, Contacts, "Contacts at tol with the bow-shaped model."
+        ),
+        AnalyzerSpec(
+            "coordination", CoordinationConfig, Coordination, "Coordination numbers and Z(tol)."
+        ),
+        AnalyzerSpec(
+            "rdf", RdfConfig, Rdf, "Radial distribution function, total and per mineral pair."
+        ),
+        AnalyzerSpec(
+            "network", NetworkConfig, Network, "Contact network and fabric of the contact normals."
+        ),
+    ]

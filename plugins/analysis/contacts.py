@@ -1,0 +1,224 @@
+"""Contacts and the equivalent bow-shaped (circular-segment) model (SPEC §5)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from regopack.interfaces import Analyzer
+from regopack.packing import Packing
+from regopack.plugins.analysis.common import eta_of, interior_margin, interior_mask
+from regopack.plugins.analysis.segment import equivalent_segment
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+class ContactsConfig(BaseModel):
+    """Parameters of the contact analyzer."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    tol: float = Field(
+        0.05,
+        gt=0,
+        allow_inf_nan=False,
+        description=(
+            "Contact tolerance tol (length unit): each outline grows by tol/2 along its normals."
+        ),
+    )
+    tol_max: float = Field(
+        0.5,
+        gt=0,
+        allow_inf_nan=False,
+        description="Largest tolerance of later sweeps: pairs that touch up to tol_max are kept.",
+    )
+    margin: float | None = Field(
+        None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> ContactsConfig:
+        if self.tol_max < self.tol:
+            raise ValueError(f"tol_max ({self.tol_max}) must be at least tol ({self.tol})")
+        return self
+
+
+class Contacts(Analyzer):
+    """Contact pairs, their thresholds, and the bow model of every contact at ``tol``.
+
+    After :meth:`compute`, ``pairs`` holds every pair (``i < j``, particle
+    indices of the packing) whose grown outlines overlap at ``tol_max`` and
+    ``threshold`` the tolerance above which each pair is in contact; the
+    properties ``i, j, area, width, radius, depth, normal, point`` describe the
+    contacts at ``tol``.
+    """
+
+    name = "contacts"
+
+    def __init__(self, config: ContactsConfig | None = None) -> None:
+        self.config = config or ContactsConfig()
+        self._done = False
+
+    # -- computation -------------------------------------------------------
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+        """Find candidate pairs, their thresholds, and the regions at ``tol``."""
+        from regopack.plugins.analysis import contact_kernel as ck
+
+        cfg = self.config
+        self.packing = packing
+        placed = np.flatnonzero(packing.placed)
+        offsets = np.ascontiguousarray(packing.offsets, dtype=np.int64)
+        vertices = np.ascontiguousarray(packing.vertices, dtype=np.float64)
+        nx, ny, mx, my, mitre = ck.edge_normals_and_mitres(vertices, offsets)
+        circum = np.ascontiguousarray(packing.circumradius, dtype=np.float64)
+        centre = np.ascontiguousarray(np.nan_to_num(packing.centre), dtype=np.float64)
+        s_max = 0.5 * cfg.tol_max
+        reach = circum[placed] + s_max * mitre[placed]
+        bounds = packing.domain.bounds()
+        li, lj = ck.candidate_pairs(np.ascontiguousarray(centre[placed]), reach, bounds)
+        pi = placed[li]
+        pj = placed[lj]
+        thr = ck.thresholds(pi, pj, centre, vertices, offsets, nx, ny, mx, my, circum)
+        keep = thr < s_max
+        self.pairs = np.column_stack([pi[keep], pj[keep]]).astype(np.int64)
+        self.threshold = 2.0 * thr[keep]  # as a tolerance
+        at_tol = self.threshold < cfg.tol
+        ci = self.pairs[at_tol, 0].copy()
+        cj = self.pairs[at_tol, 1].copy()
+        area, width, px, py, unx, uny = ck.contact_regions(
+            ci, cj, 0.5 * cfg.tol, centre, vertices, offsets, nx, ny, mx, my
+        )
+        ok = (area > 0.0) & (width > 0.0)
+        theta = np.zeros_like(area)
+        radius = np.zeros_like(area)
+        depth = np.zeros_like(area)
+        if ok.any():
+            theta[ok], radius[ok], depth[ok] = equivalent_segment(area[ok], width[ok])
+        self._i, self._j = ci[ok], cj[ok]
+        self._area, self._width = area[ok], width[ok]
+        self._theta, self._radius, self._depth = theta[ok], radius[ok], depth[ok]
+        self._point = np.column_stack([px[ok], py[ok]])
+        self._normal = np.column_stack([unx[ok], uny[ok]])
+        self.margin = interior_margin(packing, cfg.margin)
+        self.interior = interior_mask(packing, self.margin)
+        self._done = True
+        return self
+
+    def _need(self) -> None:
+        if not self._done:
+            raise RuntimeError("call compute() first")
+
+    # -- results -------------------------------------------------------------
+    @property
+    def i(self) -> IntArray:
+        """First particle of each contact at ``tol``."""
+        self._need()
+        return np.asarray(self._i, dtype=np.int64)
+
+    @property
+    def j(self) -> IntArray:
+        """Second particle of each contact at ``tol``."""
+        self._need()
+        return np.asarray(self._j, dtype=np.int64)
+
+    @property
+    def area(self) -> FloatArray:
+        """Contact area A_c (area of the overlap of the grown outlines)."""
+        self._need()
+        return self._area
+
+    @property
+    def width(self) -> FloatArray:
+        """Contact width b_c (longest chord of the contact region)."""
+        self._need()
+        return self._width
+
+    @property
+    def radius(self) -> FloatArray:
+        """Radius R_c of the equivalent circular segment."""
+        self._need()
+        return self._radius
+
+    @property
+    def depth(self) -> FloatArray:
+        """Depth delta of the equivalent circular segment."""
+        self._need()
+        return self._depth
+
+    @property
+    def theta(self) -> FloatArray:
+        """Central angle of the equivalent circular segment."""
+        self._need()
+        return self._theta
+
+    @property
+    def normal(self) -> FloatArray:
+        """Unit contact normal (perpendicular to the chord, from i to j)."""
+        self._need()
+        return self._normal
+
+    @property
+    def point(self) -> FloatArray:
+        """Midpoint of the chord of each contact."""
+        self._need()
+        return self._point
+
+    def count_per_particle(self, tol: float | None = None) -> IntArray:
+        """Count the contacts of every particle at ``tol`` (default: the analyzer's tol)."""
+        self._need()
+        if tol is None:
+            i, j = self._i, self._j
+        else:
+            if tol > self.config.tol_max:
+                raise ValueError(f"tol = {tol} exceeds tol_max = {self.config.tol_max}")
+            sel = self.threshold < tol
+            i, j = self.pairs[sel, 0], self.pairs[sel, 1]
+        n = self.packing.n_particles
+        return np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+
+    def results(self) -> dict[str, Any]:
+        """Return scalars: contacts, tol, medians of A_c, b_c, R_c, delta, share of delta < tol."""
+        self._need()
+        n = int(self._area.shape[0])
+
+        def med(a: FloatArray) -> float | None:
+            return float(np.median(a)) if a.shape[0] else None
+
+        return {
+            "tol": self.config.tol,
+            "tol_max": self.config.tol_max,
+            "eta": eta_of(self.packing),
+            "interior_margin": self.margin,
+            "n_contacts": n,
+            "n_candidate_pairs": int(self.pairs.shape[0]),
+            "median_area": med(self._area),
+            "median_width": med(self._width),
+            "median_radius": med(self._radius),
+            "median_depth": med(self._depth),
+            "mean_depth_over_width": float(np.mean(self._depth / self._width)) if n else None,
+            "share_depth_below_tol": float(np.mean(self._depth < self.config.tol)) if n else None,
+        }
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Per-contact table."""
+        self._need()
+        return {
+            "contacts": {
+                "i": self._i,
+                "j": self._j,
+                "area": self._area,
+                "width": self._width,
+                "radius": self._radius,
+                "depth": self._depth,
+                "theta": self._theta,
+                "normal_x": self._normal[:, 0],
+                "normal_y": self._normal[:, 1],
+                "point_x": self._point[:, 0],
+                "point_y": self._point[:, 1],
+            }
+        }

@@ -1,0 +1,56 @@
+"""Packing density over the domain and over the interior window (SPEC §6)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Self
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from regopack.interfaces import Analyzer
+from regopack.packing import Packing
+from regopack.plugins.analysis.common import eta_of, interior_margin, interior_window
+
+
+class DensityConfig(BaseModel):
+    """Parameters of the density analyzer."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    margin: float | None = Field(
+        None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
+    )
+
+
+class Density(Analyzer):
+    """Area fraction of the particles, over the domain and over the interior window."""
+
+    name = "density"
+
+    def __init__(self, config: DensityConfig | None = None) -> None:
+        self.config = config or DensityConfig()
+        self._results: dict[str, Any] | None = None
+
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+        """Measure the area fractions; particles are clipped exactly to the window."""
+        from regopack.run import phi_in_window
+
+        margin = interior_margin(packing, self.config.margin)
+        window = interior_window(packing, margin)
+        area = packing.area()[packing.placed]
+        self._results = {
+            "phi_domain": float(area.sum()) / packing.domain.area,
+            "phi_interior": phi_in_window(
+                packing, (window.xmin, window.xmax, window.ymin, window.ymax)
+            ),
+            "interior_margin": margin,
+            "n_placed": packing.n_placed,
+            "eta": eta_of(packing),
+        }
+        return self
+
+    def results(self) -> dict[str, Any]:
+        """Scalars: phi_domain, phi_interior, interior_margin, n_placed, eta."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return dict(self._results)
