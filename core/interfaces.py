@@ -77,8 +77,9 @@ class DensityController(ABC):
         Parameters
         ----------
         arcs
-            ``(k, 2)`` polar-angle intervals ``[start, end]`` with ``start < end``
-            (angles may exceed 2 pi where an arc wraps through angle 0).
+            ``(k, 2)`` polar-angle intervals ``[start, end]`` with ``start < end``,
+            unwrapped: an arc through the reference angle has ends outside
+            ``[-pi, pi]`` (below or above), so ends may be negative or exceed 2 pi.
         r_new, r_candidate
             Equivalent radii of the particle being inserted and of the candidate.
         rng

@@ -298,6 +298,10 @@ def _atomic_file(path: Path) -> Iterator[IO[bytes]]:
             yield fh
             fh.flush()
             os.fsync(fh.fileno())
+        # mkstemp creates the file readable by its owner only; give it the usual mode
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp_name, 0o666 & ~umask)
         os.replace(tmp_name, path)
     except BaseException:
         try:
@@ -378,6 +382,8 @@ def load(path: str | Path) -> Packing:
         raise PackingFileError(f"{path}: no such file")
     if path.is_dir():
         raise PackingFileError(f"{path}: is a directory, not a packing file")
+    if not zipfile.is_zipfile(path):
+        raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
     try:
         with np.load(path, allow_pickle=False) as npz:
             contents = {name: npz[name] for name in npz.files}

@@ -296,3 +296,23 @@ def test_write_json_atomic(tmp_path):
     write_json_atomic(path, {"a": 2})
     assert json.loads(path.read_text()) == {"a": 2}
     assert sorted(f.name for f in tmp_path.iterdir()) == ["s.json"]
+
+
+def test_saved_files_get_the_usual_permissions(tmp_path):
+    import os
+    import stat
+
+    path = tmp_path / "p.npz"
+    save(random_packing(), path)
+    umask = os.umask(0)
+    os.umask(umask)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o666 & ~umask
+    write_json_atomic(tmp_path / "s.json", {"a": 1})
+    assert stat.S_IMODE((tmp_path / "s.json").stat().st_mode) == 0o666 & ~umask
+
+
+def test_load_a_plain_npy_file_says_what_it_is(tmp_path):
+    path = tmp_path / "x.npy"
+    np.save(path, np.arange(3))
+    with pytest.raises(PackingFileError, match="not an NPZ archive"):
+        load(path)

@@ -51,8 +51,8 @@ class AvailableArcConfig(BaseModel):
     interference: Literal["exact", "tau"] = Field(
         "exact",
         description=(
-            "Interferer test: 'exact' (circumradii, never misses one) or 'tau' (the "
-            "paper's rule, faster, may miss)."
+            "Interferer test: 'exact' (circumradii; never misses an interferer) or 'tau' "
+            "(the paper's rule on equivalent radii; may miss interferers and leave overlaps)."
         ),
     )
     tau: float = Field(
