@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import ShapeGenerator
 from regopack.plugin_types import ShapeSpec

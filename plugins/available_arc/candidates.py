@@ -13,6 +13,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+
 FloatArray = NDArray[np.float64]
 
 

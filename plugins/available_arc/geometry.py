@@ -14,6 +14,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -132,15 +134,19 @@ def reflect_outline(
         if ang[s + j] >= math.pi:
             j0 = j
             break
+    below_two_pi = np.nextafter(TWO_PI, 0.0)
     for jj in range(m):
         j = (j0 + jj) % m
         rx[jj] = -vx[s + j]
         ry[jj] = -vy[s + j]
         rex[jj] = -ex[s + j]
         rey[jj] = -ey[s + j]
-        a = ang[s + j] + math.pi
-        if a >= TWO_PI:
-            a -= TWO_PI
+        a = ang[s + j]
+        if a >= math.pi:
+            a -= math.pi  # in [0, pi)
+        else:
+            # in [pi, 2 pi); an angle just below pi must not round up to 2 pi and wrap
+            a = min(a + math.pi, below_two_pi)
         rang[jj] = a
     # rounding can leave the first angle just below the last one; keep the order
     for jj in range(1, m):

@@ -21,6 +21,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.available_arc.geometry import (
     clip_closed_box,

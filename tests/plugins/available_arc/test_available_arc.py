@@ -178,6 +178,7 @@ def test_no_overlap_in_random_small_scenes(
     rng.shuffle(radius)
     pop = octagon_population(radius, rng, psi=psi, a=a)
     side = scale * max(4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2 / scale**2)))
+    side = max(side, 2.6 * float(pop.circumradius.max()))  # needles (a = 1) must fit
     domain = Rectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
     res = _pack(pop, domain, rng, eta=eta, interference=interference)
     assert res.placed.sum() >= 1
@@ -186,3 +187,23 @@ def test_no_overlap_in_random_small_scenes(
     else:  # the tau rule may miss interferers: only the walls are guaranteed
         report = verify(_packing(pop, res, domain))
         assert report.n_outside == 0
+
+
+def test_edge_angle_just_below_pi_keeps_the_envelope_order() -> None:
+    """An edge at angle nextafter(pi, 0) reflects to just below 2 pi, not to 0."""
+    import math
+
+    from regopack.population import ShapeBatch
+
+    dy = 4e-16  # atan2(dy, -1) == nextafter(pi, 0)
+    q = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1 + 2 * dy]], dtype=float)
+    th = -0.3
+    rot = np.array([[math.cos(th), -math.sin(th)], [math.sin(th), math.cos(th)]])
+    p = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float) @ rot.T
+    shapes = ShapeBatch(np.concatenate([p, q]), np.array([0, 4, 8]), np.zeros(2))
+    radius = np.sqrt(np.array([4.0, 4.0 + 2 * dy]) / np.pi)
+    pop = Population(radius, np.zeros(2, dtype=np.int64), ("m",), shapes)
+    domain = Rectangle.centred(20.0, 20.0)
+    for seed in range(20):
+        res = _pack(pop, domain, np.random.default_rng(seed))
+        _check(pop, res, domain)
