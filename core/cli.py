@@ -1,9 +1,10 @@
-"""Command line: ``regopack run | scenes | config | verify``.
+"""Command line: ``regopack run | scenes | config | verify | analyze``.
 
 A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
-TOML file, a missing file) prints one line ``regopack: error: <message>`` and
-exits with status 2; anything unexpected keeps its traceback. ``Ctrl-C``
-exits with status 130 and leaves no partial output file.
+TOML file, a missing file, a bad option) prints one line
+``regopack: error: <message>`` and exits with status 2; anything unexpected
+keeps its traceback. ``Ctrl-C`` exits with status 130 and leaves no partial
+output file.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from pydantic import ValidationError
 from rich.console import Console
@@ -31,7 +32,7 @@ from rich.table import Table
 from rich.text import Text
 
 from regopack import __version__
-from regopack.errors import RegopackError
+from regopack.errors import ConfigError, RegopackError
 from regopack.interfaces import ProgressCallback
 
 __all__ = ["build_parser", "main"]
@@ -82,6 +83,15 @@ def _progress_bar(console: Console, enabled: bool, label: str) -> Iterator[Progr
         yield update
 
 
+class _ArgumentParser(argparse.ArgumentParser):
+    """Argument parser whose usage errors are one line, like every other user error."""
+
+    def error(self, message: str) -> NoReturn:
+        command = self.prog.removeprefix("regopack").strip()
+        where = f"{command}: " if command else ""
+        self.exit(EXIT_USAGE, f"regopack: error: {where}{message} (see '{self.prog} --help')\n")
+
+
 def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "scene",
@@ -102,7 +112,7 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser of the ``regopack`` command."""
-    parser = argparse.ArgumentParser(
+    parser = _ArgumentParser(
         prog="regopack",
         description="Dense 2D packings of lunar regolith particles.",
     )
@@ -137,6 +147,49 @@ def build_parser() -> argparse.ArgumentParser:
         help="tolerated overlap, relative to the smaller particle area (default: 1e-9)",
     )
     verify.set_defaults(handler=_cmd_verify)
+
+    analyze = sub.add_parser(
+        "analyze",
+        help="analyse a packing: density, contacts, coordination, g(r), network",
+        description=(
+            "Run structure analyses on a saved packing and write analysis.json, one table "
+            "per analysis, figures (PNG and SVG) and report.md."
+        ),
+    )
+    analyze.add_argument("packing", type=Path, metavar="PACKING", help="packing file (.npz)")
+    analyze.add_argument(
+        "--only",
+        action="append",
+        default=[],
+        metavar="NAME[,NAME...]",
+        help="run only these analyzers (and what they need); default: "
+        "density, contacts, coordination, rdf, network",
+    )
+    analyze.add_argument(
+        "--tol",
+        type=float,
+        metavar="X",
+        help="contact tolerance in micrometres (sets contacts.tol; default 0.05)",
+    )
+    analyze.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="NAME.FIELD=VALUE",
+        help="set an analyzer parameter, e.g. --set contacts.tol_max=1 (repeatable)",
+    )
+    analyze.add_argument(
+        "--out", type=Path, metavar="DIR", help="output directory (default: <packing dir>/analysis)"
+    )
+    analyze.add_argument(
+        "--tables",
+        choices=("csv", "npz"),
+        default="csv",
+        help="file format of the tables (default: csv)",
+    )
+    analyze.add_argument("--no-figures", action="store_true", help="draw no figures")
+    analyze.set_defaults(handler=_cmd_analyze)
     return parser
 
 
@@ -164,6 +217,8 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         table.add_row(label, value)
     table.add_row("packing", str(outcome.packing_path))
     table.add_row("summary", str(outcome.summary_path))
+    if outcome.analysis is not None:
+        table.add_row("analysis", str(outcome.analysis.report))
     out.print(table)
     return EXIT_OK
 
@@ -193,6 +248,80 @@ def _cmd_verify(args: argparse.Namespace, out: Console, err: Console) -> int:
     report = verify(load(args.packing), rel_tol=args.rel_tol)
     out.file.write(f"{report}\n")
     return EXIT_OK if report.ok else EXIT_VIOLATED
+
+
+def _analyzer_names(only: Sequence[str]) -> list[str]:
+    """Names given to ``--only`` (comma-separated, repeatable), in order, without repeats."""
+    names: list[str] = []
+    for text in only:
+        parts = [p.strip() for p in text.split(",")]
+        if not all(parts):
+            raise ConfigError(f"--only {text!r}: empty analyzer name")
+        names += [p for p in parts if p not in names]
+    return names
+
+
+def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, dict[str, Any]]:
+    """Parameters by analyzer from ``--set NAME.FIELD=VALUE`` and ``--tol``."""
+    params: dict[str, dict[str, Any]] = {}
+    for text in overrides:
+        key, sep, raw = text.partition("=")
+        name, dot, field = key.strip().partition(".")
+        if not sep or not dot or not name.strip() or not field.strip() or "." in field:
+            raise ConfigError(f"--set {text!r}: expected NAME.FIELD=VALUE, e.g. contacts.tol_max=1")
+        try:
+            value = tomllib.loads("v = " + raw.strip())["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw.strip()
+        params.setdefault(name.strip(), {})[field.strip()] = value
+    if tol is not None:
+        params.setdefault("contacts", {})["tol"] = tol
+    return params
+
+
+def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.analysis import (
+        DEFAULT_ANALYSES,
+        main_numbers,
+        run_analyses,
+        write_analysis,
+    )
+    from regopack.manager import default_registry
+    from regopack.packing import load
+
+    names = _analyzer_names(args.only) or list(DEFAULT_ANALYSES)
+    params = _analyzer_params(args.overrides, args.tol)
+    packing = load(args.packing)
+    out_dir = args.out if args.out is not None else args.packing.parent / "analysis"
+    registry = default_registry()
+    with err.status(f"analysing {args.packing}"):
+        analyzers = run_analyses(packing, registry, [(n, {}) for n in names], params=params)
+        files = write_analysis(
+            out_dir,
+            packing,
+            analyzers,
+            figures=not args.no_figures,
+            packing_path=args.packing,
+            table_format=args.tables,
+        )
+    table = Table(title=f"regopack analyze: {args.packing}", show_header=False)
+    table.add_column("quantity", style="bold")
+    table.add_column("value", justify="right")
+    table.add_row("analyses", ", ".join(analyzers))
+    for label, value in main_numbers(files.summary):
+        table.add_row(label, value)
+    out.print(table)
+    written = [("results", str(files.results))]
+    if files.tables:
+        table_files = ", ".join(p.name for p in files.tables.values())
+        written.append(("tables", f"{files.out_dir} ({table_files})"))
+    if files.figures:
+        pngs = [p for p in files.figures if p.suffix == ".png"]
+        written.append(("figures", f"{files.out_dir / 'figures'} ({len(pngs)} × PNG + SVG)"))
+    written.append(("report", str(files.report)))
+    for label, text in written:  # whole paths, never cut to the terminal's width
+        out.print(f"{label:<8} {text}", soft_wrap=True, markup=False, highlight=False)
+    return EXIT_OK
 
 
 def _one_line(exc: BaseException) -> str:

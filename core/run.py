@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from regopack.analysis import AnalysisFiles, run_analyses, write_analysis
 from regopack.errors import ConfigError, PluginError
 from regopack.interfaces import (
     Analyzer,
@@ -47,12 +48,16 @@ class RunOutcome:
         Scalar results of the run (what ``summary.json`` holds).
     packing_path, summary_path
         Files written, or ``None`` when nothing was written.
+    analysis
+        The analysis files (under ``<out_dir>/analysis``), when the scene lists
+        analyses and files were written.
     """
 
     packing: Packing
     summary: dict[str, Any]
     packing_path: Path | None = None
     summary_path: Path | None = None
+    analysis: AnalysisFiles | None = None
 
 
 def _build(plugin: ResolvedPlugin[Any], interface: type[Any], what: str) -> Any:
@@ -141,47 +146,12 @@ def default_out_dir(scene: ResolvedScene) -> Path:
     return Path("runs") / f"{scene.name}-seed{scene.seed}"
 
 
-def _run_analyses(packing: Packing, scene: ResolvedScene) -> dict[str, dict[str, Any]]:
-    """Compute the requested analyzers, their requirements first."""
-    done: dict[str, Analyzer] = {}
-    listed = {plugin.kind: plugin for plugin in scene.analyses}
-
-    def compute(plugin: ResolvedPlugin[Any], chain: tuple[str, ...]) -> Analyzer:
-        name = plugin.kind
-        if name in done:
-            return done[name]
-        if name in chain:
-            cycle = " -> ".join((*chain, name))
-            raise PluginError(f"analyzers require each other in a cycle: {cycle}")
-        analyzer: Analyzer = _build(plugin, Analyzer, "analysis")
-        context: dict[str, Analyzer] = {}
-        for req in analyzer.requires:
-            dep = listed.get(req)
-            if dep is None:  # not asked for by the scene: its defaults
-                try:
-                    spec = scene.registry.get("analysis", req)
-                except PluginError as err:
-                    raise PluginError(f"analyzer {name!r} requires {req!r}: {err}") from err
-                dep = ResolvedPlugin(
-                    kind=req,
-                    spec=spec,
-                    config=spec.config_model.model_validate({}),
-                    origin=scene.registry.origin("analysis", req),
-                )
-            context[req] = compute(dep, (*chain, name))
-        done[name] = analyzer.compute(packing, context)
-        return done[name]
-
-    results: dict[str, dict[str, Any]] = {}
-    for plugin in scene.analyses:
-        results[plugin.kind] = compute(plugin, ()).results()
-    return results
-
-
 def run_scene(
     resolved: ResolvedScene,
     out_dir: str | Path | None = None,
     progress: ProgressCallback | None = None,
+    *,
+    figures: bool = True,
 ) -> RunOutcome:
     """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
 
@@ -194,6 +164,9 @@ def run_scene(
         see :func:`default_out_dir`). ``None`` writes nothing.
     progress
         Called as ``progress(done, placed, total)`` during insertion.
+    figures
+        Draw the analysis figures when the scene lists analyses and
+        ``out_dir`` is given.
 
     Returns
     -------
@@ -202,7 +175,10 @@ def run_scene(
 
     Notes
     -----
-    Files are written atomically: an interrupted run never leaves a partial
+    The analyzers in ``outputs.analyses`` (and those they require) run after
+    packing; the summary holds the results of the listed ones, and
+    :func:`regopack.analysis.write_analysis` writes all of them into
+    ``<out_dir>/analysis``. Files are written atomically: an interrupted run never leaves a partial
     file in place of a previous one.
     """
     start = time.perf_counter()
@@ -245,10 +221,14 @@ def run_scene(
         summary["eta"] = eta
     for key, value in result.stats.items():
         summary.setdefault(key, value)
+    analyzers: dict[str, Analyzer] = {}
     if resolved.analyses:
-        summary["analyses"] = _run_analyses(packing, resolved)
+        requests = [(p.kind, _params(p)) for p in resolved.analyses]
+        analyzers = run_analyses(packing, resolved.registry, requests)
+        summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
 
     packing_path = summary_path = None
+    analysis = None
     if out_dir is not None:
         out = Path(out_dir)
         packing_path = out / resolved.scene.outputs.packing
@@ -263,7 +243,18 @@ def run_scene(
             write_json_atomic(summary_path, summary)
         except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
             raise ConfigError(f"cannot write the run's output: {err}") from err
-    return RunOutcome(packing, summary, packing_path, summary_path)
+        if analyzers:
+            analysis = write_analysis(
+                out / "analysis", packing, analyzers, figures=figures, packing_path=packing_path
+            )
+    return RunOutcome(packing, summary, packing_path, summary_path, analysis)
+
+
+def _params(plugin: ResolvedPlugin[Any]) -> dict[str, Any]:
+    """Return the validated parameters of a plugin selection, without its ``kind``."""
+    params = plugin.to_dict()
+    params.pop("kind", None)
+    return params
 
 
 def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:

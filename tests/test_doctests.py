@@ -9,6 +9,7 @@ import pytest
 
 MODULES = [
     "regopack._toml",
+    "regopack.analysis",
     "regopack.manager",
     "regopack.packing",
     "regopack.scene",

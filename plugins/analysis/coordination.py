@@ -9,6 +9,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import eta_of
@@ -58,6 +59,10 @@ class Coordination(Analyzer):
         z = contacts.count_per_particle()
         self.per_particle = z
         self.interior = interior
+        self._placed_idx = np.flatnonzero(placed).astype(np.int64)
+        self._mineral = packing.mineral
+        self._centre = packing.centre
+        self._radius = packing.radius
         names = packing.mineral_names
         per_mineral: dict[str, float | None] = {}
         counts: dict[str, int] = {}
@@ -67,7 +72,16 @@ class Coordination(Analyzer):
             counts[name] = int(sel.sum())
             per_mineral[name] = float(z[sel].mean()) if sel.any() else None
             dist[name] = np.bincount(z[sel], minlength=1).tolist() if sel.any() else []
-        tols = sorted(set(self.config.tols) | {contacts.config.tol})
+        tol_max = contacts.config.tol_max
+        sweep = set(self.config.tols)
+        above = sorted(t for t in sweep if t > tol_max)
+        if above and "tols" in self.config.model_fields_set:
+            raise ConfigError(
+                f"coordination.tols: {above[0]:g} exceeds contacts.tol_max = {tol_max:g}; "
+                "raise contacts.tol_max or drop the larger tolerances"
+            )
+        # the default sweep stops at the contacts analyzer's tol_max
+        tols = sorted({t for t in sweep if t <= tol_max} | {contacts.config.tol})
         sweep_domain: list[float] = []
         sweep_interior: list[float] = []
         for tol in tols:
@@ -104,7 +118,29 @@ class Coordination(Analyzer):
         return dict(self._results)
 
     def tables(self) -> dict[str, dict[str, Any]]:
-        """Per-particle contact counts at the contact tolerance."""
+        """Per-particle table and the Z(tol) sweep.
+
+        ``particles`` has one row per placed particle: its index in the packing,
+        mineral index, centre, equivalent radius, whether it is interior, and
+        its contact count ``z`` at the contact tolerance. ``z_tol`` has the
+        columns ``tol, z_domain, z_interior``.
+        """
         if self._results is None:
             raise RuntimeError("call compute() first")
-        return {"particles_z": {"z": self.per_particle, "interior": self.interior}}
+        idx = self._placed_idx
+        return {
+            "particles": {
+                "particle": idx,
+                "mineral": self._mineral[idx],
+                "x": self._centre[idx, 0],
+                "y": self._centre[idx, 1],
+                "radius": self._radius[idx],
+                "interior": self.interior[idx],
+                "z": self.per_particle[idx],
+            },
+            "z_tol": {
+                "tol": self.tols,
+                "z_domain": self.z_tol_domain,
+                "z_interior": self.z_tol_interior,
+            },
+        }

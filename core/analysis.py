@@ -1,0 +1,561 @@
+"""Structure analysis of a packing: run the analyzers, write their results.
+
+:func:`run_analyses` computes the requested analyzers and, first, the ones they
+require (an analyzer names them in its ``requires``); nothing else is computed,
+so asking for ``rdf`` alone never finds the contacts. :func:`write_analysis`
+writes what the analyzers found into one directory:
+
+``analysis.json``
+    Every analyzer's :meth:`~regopack.interfaces.Analyzer.results` under its
+    name, plus the contact tolerance, η and exclusion margin used, the regopack
+    version and the packing file.
+``<table>.csv`` (or ``<table>.npz``)
+    One file per table of :meth:`~regopack.interfaces.Analyzer.tables`: a
+    header row, then numeric columns (booleans as 0/1).
+``figures/*.png``, ``figures/*.svg``
+    The figures of the built-in analyzers (drawn with matplotlib, which is
+    imported only here).
+``report.md``
+    The main numbers as Markdown tables, with the figures embedded.
+
+Every file is written atomically: it is either the previous one or the
+complete new one.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+from pydantic import ValidationError
+
+from regopack.errors import ConfigError, PluginError
+from regopack.interfaces import Analyzer
+from regopack.manager import Registry
+from regopack.packing import Packing, _atomic_file, write_json_atomic
+
+__all__ = [
+    "DEFAULT_ANALYSES",
+    "AnalysisFiles",
+    "analysis_summary",
+    "main_numbers",
+    "run_analyses",
+    "write_analysis",
+]
+
+DEFAULT_ANALYSES: tuple[str, ...] = ("density", "contacts", "coordination", "rdf", "network")
+"""Analyzers that ``regopack analyze`` runs when ``--only`` is not given."""
+
+TableFormat = Literal["csv", "npz"]
+
+_RESERVED = frozenset(
+    {
+        "regopack_version",
+        "packing",
+        "packing_version",
+        "scene",
+        "seed",
+        "n_particles",
+        "n_placed",
+        "mineral_names",
+        "length_unit",
+        "tol",
+        "eta",
+        "interior_margin",
+        "analyses",
+    }
+)
+"""Top-level keys of ``analysis.json`` that are not analyzer names."""
+
+
+# ---------------------------------------------------------------------------
+# running
+
+
+def _known(registry: Registry) -> str:
+    return ", ".join(registry.names("analysis")) or "(none)"
+
+
+def _build(
+    registry: Registry, name: str, params: Mapping[str, Any], needed_by: str | None
+) -> Analyzer:
+    """Validate ``params`` with the analyzer's config model and build it."""
+    from regopack.scene import _describe_validation_error
+
+    if ("analysis", name) not in registry:
+        if needed_by is not None:
+            raise PluginError(
+                f"analyzer {needed_by!r} requires {name!r}, which is not registered; "
+                f"known analyzers: {_known(registry)}"
+            )
+        raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+    spec = registry.get("analysis", name)
+    try:
+        config = spec.config_model.model_validate(dict(params))
+    except ValidationError as err:
+        raise ConfigError(_describe_validation_error(err, source=None, prefix=(name,))) from err
+    analyzer = spec.factory(config)
+    if not isinstance(analyzer, Analyzer):
+        origin = registry.origin("analysis", name)
+        raise PluginError(
+            f"analysis plugin {name!r} ({origin}) built a {type(analyzer).__name__}, "
+            "not an Analyzer"
+        )
+    return analyzer
+
+
+def _plan(
+    registry: Registry,
+    requests: Sequence[tuple[str, Mapping[str, Any]]],
+    params: Mapping[str, Mapping[str, Any]],
+) -> dict[str, Analyzer]:
+    """Build every analyzer to run, requirements before the analyzers needing them."""
+    wanted: dict[str, dict[str, Any]] = {}
+    for name, request_params in requests:
+        wanted.setdefault(name, {}).update(request_params)
+    for name in params:
+        if ("analysis", name) not in registry:
+            raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+
+    planned: dict[str, Analyzer] = {}
+
+    def visit(name: str, chain: tuple[str, ...]) -> None:
+        if name in planned:
+            return
+        if name in chain:
+            cycle = " -> ".join((*chain, name))
+            raise PluginError(f"analyzers require each other in a cycle: {cycle}")
+        merged = {**wanted.get(name, {}), **params.get(name, {})}
+        analyzer = _build(registry, name, merged, chain[-1] if chain else None)
+        for requirement in analyzer.requires:
+            visit(requirement, (*chain, name))
+        planned[name] = analyzer
+
+    for name in wanted:
+        visit(name, ())
+    unused = [name for name in params if name not in planned]
+    if unused:
+        raise ConfigError(
+            f"parameters given for analyzer {unused[0]!r}, which is not run "
+            f"(running: {', '.join(planned) or 'none'})"
+        )
+    return planned
+
+
+def run_analyses(
+    packing: Packing,
+    registry: Registry,
+    requests: Sequence[tuple[str, Mapping[str, Any]]],
+    *,
+    params: Mapping[str, Mapping[str, Any]] | None = None,
+) -> dict[str, Analyzer]:
+    """Compute the requested analyzers and those they require, requirements first.
+
+    Parameters
+    ----------
+    packing
+        The packing to analyse.
+    registry
+        Registry the analyzers are looked up in (``kind = "analysis"``).
+    requests
+        ``(name, parameters)`` pairs. An analyzer that another one requires is
+        computed once; when it is also requested, it keeps the requested
+        parameters, and otherwise it uses its defaults. A name requested twice
+        gets the parameters of both requests (the later wins).
+    params
+        Parameters by analyzer name, applied over ``requests``; they also reach
+        analyzers that run only as a requirement (``{"contacts": {"tol": 0.1}}``
+        with ``requests=[("coordination", {})]``). Naming an analyzer that is
+        not run is an error.
+
+    Returns
+    -------
+    dict
+        Every computed analyzer by name, in the order of computation (the
+        requested ones and their requirements).
+
+    Raises
+    ------
+    ConfigError
+        One line: an unknown analyzer (listing the known ones), a bad parameter
+        (naming the field, e.g. ``contacts.tol = -1: ...``), or parameters
+        for an analyzer that is not run. Every analyzer is validated before
+        any is computed.
+    PluginError
+        Analyzers that require each other in a cycle, or an unregistered
+        requirement.
+
+    Examples
+    --------
+    >>> from regopack.manager import default_registry
+    >>> from regopack.testing import packing_from_polygons
+    >>> p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
+    >>> done = run_analyses(p, default_registry(), [("density", {"margin": 0.0})])
+    >>> list(done), done["density"].results()["phi_domain"]
+    (['density'], 0.25)
+    """
+    planned = _plan(registry, requests, params or {})
+    done: dict[str, Analyzer] = {}
+    for name, analyzer in planned.items():
+        context = {req: done[req] for req in analyzer.requires}
+        result = analyzer.compute(packing, context)
+        if not isinstance(result, Analyzer):
+            raise PluginError(
+                f"analyzer {name!r}: compute() returned {type(result).__name__}, not the analyzer"
+            )
+        done[name] = result
+    return done
+
+
+# ---------------------------------------------------------------------------
+# writing
+
+
+@dataclass(frozen=True)
+class AnalysisFiles:
+    """Files written by :func:`write_analysis`.
+
+    Attributes
+    ----------
+    out_dir
+        The directory.
+    results
+        ``analysis.json``.
+    tables
+        Table name to its file.
+    figures
+        Figure files (PNG and SVG).
+    report
+        ``report.md``.
+    summary
+        What ``analysis.json`` holds.
+    """
+
+    out_dir: Path
+    results: Path
+    tables: dict[str, Path] = field(default_factory=dict)
+    figures: tuple[Path, ...] = ()
+    report: Path | None = None
+    summary: dict[str, Any] = field(default_factory=dict)
+
+
+def _first(results: Mapping[str, Mapping[str, Any]], key: str) -> Any:
+    for res in results.values():
+        value = res.get(key)
+        if value is not None:
+            return value
+    return None
+
+
+def analysis_summary(
+    packing: Packing,
+    analyzers: Mapping[str, Analyzer],
+    packing_path: str | Path | None = None,
+) -> dict[str, Any]:
+    """Return the content of ``analysis.json``: the run's context, then each analyzer's results.
+
+    ``tol``, ``eta`` and ``interior_margin`` are the first values that an
+    analyzer reports under these keys (η falls back to the scene's density
+    section); they are ``None`` when no analyzer used them.
+    """
+    from regopack import __version__
+
+    results = {name: analyzer.results() for name, analyzer in analyzers.items()}
+    clash = sorted(_RESERVED & set(results))
+    if clash:
+        raise PluginError(f"analyzer name {clash[0]!r} is a reserved key of analysis.json")
+    eta = _first(results, "eta")
+    if eta is None:
+        density = packing.scene.get("density")
+        eta = density.get("eta") if isinstance(density, dict) else None
+    summary: dict[str, Any] = {
+        "regopack_version": __version__,
+        "packing": None if packing_path is None else str(packing_path),
+        "packing_version": packing.version,
+        "scene": packing.scene.get("name"),
+        "seed": packing.seed,
+        "n_particles": packing.n_particles,
+        "n_placed": packing.n_placed,
+        "mineral_names": list(packing.mineral_names),
+        "length_unit": "µm",
+        "tol": _first(results, "tol"),
+        "eta": eta,
+        "interior_margin": _first(results, "interior_margin"),
+        "analyses": list(results),
+    }
+    summary.update(results)
+    return summary
+
+
+def _columns(table: str, columns: Mapping[str, Any]) -> dict[str, np.ndarray]:
+    out: dict[str, np.ndarray] = {}
+    length = None
+    for name, values in columns.items():
+        arr = np.asarray(values)
+        if arr.ndim != 1:
+            raise PluginError(f"table {table!r}: column {name!r} is not one-dimensional")
+        if arr.dtype == np.bool_:
+            arr = arr.astype(np.int64)
+        if not (np.issubdtype(arr.dtype, np.integer) or np.issubdtype(arr.dtype, np.floating)):
+            raise PluginError(f"table {table!r}: column {name!r} is not numeric ({arr.dtype})")
+        if length is not None and arr.shape[0] != length:
+            raise PluginError(f"table {table!r}: columns have different lengths")
+        length = arr.shape[0]
+        out[str(name)] = arr
+    return out
+
+
+def _csv_bytes(columns: Mapping[str, np.ndarray]) -> bytes:
+    names = list(columns)
+    if not names:
+        return b"\n"
+    fmt = ["%d" if np.issubdtype(a.dtype, np.integer) else "%.15g" for a in columns.values()]
+    data = np.column_stack([a.astype(np.float64, copy=False) for a in columns.values()])
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    if data.shape[0]:
+        np.savetxt(buf, data, fmt=fmt, delimiter=",")
+    return buf.getvalue().encode("utf-8")
+
+
+def _write_bytes(path: Path, data: bytes) -> None:
+    with _atomic_file(path) as fh:
+        fh.write(data)
+
+
+def _write_tables(
+    out_dir: Path, analyzers: Mapping[str, Analyzer], table_format: TableFormat
+) -> tuple[dict[str, Path], dict[str, list[str]]]:
+    written: dict[str, Path] = {}
+    names: dict[str, list[str]] = {}
+    for analyzer_name, analyzer in analyzers.items():
+        for table, cols in analyzer.tables().items():
+            name = table if table not in written else f"{analyzer_name}_{table}"
+            columns = _columns(name, cols)
+            path = out_dir / f"{name}.{table_format}"
+            if table_format == "csv":
+                _write_bytes(path, _csv_bytes(columns))
+            else:
+                buf = io.BytesIO()
+                np.savez(buf, **columns)  # type: ignore[arg-type]
+                _write_bytes(path, buf.getvalue())
+            written[name] = path
+            names[name] = list(columns)
+    return written, names
+
+
+def write_analysis(
+    out_dir: str | Path,
+    packing: Packing,
+    analyzers: Mapping[str, Analyzer],
+    *,
+    figures: bool = True,
+    packing_path: str | Path | None = None,
+    table_format: TableFormat = "csv",
+) -> AnalysisFiles:
+    """Write the results, tables, figures and report of computed analyzers.
+
+    Parameters
+    ----------
+    out_dir
+        Directory to write into (created if needed).
+    packing
+        The analysed packing.
+    analyzers
+        Computed analyzers by name, as :func:`run_analyses` returns them.
+    figures
+        Draw the figures (PNG and SVG, under ``figures/``); only the figures
+        whose analyzers were computed are drawn.
+    packing_path
+        The packing file, recorded in ``analysis.json`` and the report.
+    table_format
+        ``"csv"`` (default) or ``"npz"`` (one archive per table, one array per column).
+
+    Returns
+    -------
+    AnalysisFiles
+        The paths written and the content of ``analysis.json``.
+
+    Raises
+    ------
+    ConfigError
+        When the directory cannot be created or written.
+    """
+    if table_format not in ("csv", "npz"):
+        raise ConfigError(f"table format {table_format!r}: expected 'csv' or 'npz'")
+    out = Path(out_dir)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as err:
+        raise ConfigError(f"cannot create the output directory {out}: {err}") from err
+    summary = analysis_summary(packing, analyzers, packing_path)
+    try:
+        results_path = out / "analysis.json"
+        write_json_atomic(results_path, summary)
+        tables, columns = _write_tables(out, analyzers, table_format)
+        figure_paths: list[Path] = []
+        captions: Mapping[str, str] = {}
+        if figures and analyzers:
+            from regopack.plugins.analysis import figures as figs
+
+            figure_paths = figs.figures_for(packing, analyzers, out / "figures")
+            captions = figs.CAPTIONS
+        report_path = out / "report.md"
+        text = _report(summary, tables, columns, figure_paths, captions, out)
+        _write_bytes(report_path, text.encode("utf-8"))
+    except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
+        raise ConfigError(f"cannot write the analysis output: {err}") from err
+    return AnalysisFiles(
+        out_dir=out,
+        results=results_path,
+        tables=tables,
+        figures=tuple(figure_paths),
+        report=report_path,
+        summary=summary,
+    )
+
+
+# ---------------------------------------------------------------------------
+# presenting
+
+
+def _fmt(value: Any, spec: str = ".4g") -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, bool):
+        return str(value).lower()
+    if isinstance(value, int):
+        return f"{value:,}"
+    if isinstance(value, float):
+        return "n/a" if math.isnan(value) else format(value, spec)
+    return str(value)
+
+
+def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """``(label, value)`` rows of the headline numbers of ``analysis.json``.
+
+    Rows appear for the built-in analyzers that were run: packing density,
+    contacts, coordination numbers (overall, interior, per mineral), the first
+    peak of g(r) and the fabric anisotropy.
+    """
+    rows: list[tuple[str, str]] = []
+    margin = summary.get("interior_margin")
+    interior = f"interior (margin {_fmt(margin, 'g')} µm)" if margin is not None else "interior"
+    tol = summary.get("tol")
+    if tol is not None:
+        rows.append(("contact tolerance tol", f"{_fmt(tol, 'g')} µm"))
+    if summary.get("eta") is not None:
+        rows.append(("η", _fmt(summary["eta"], "g")))
+    density = summary.get("density")
+    if isinstance(density, dict):
+        rows.append(("φ domain", _fmt(density.get("phi_domain"))))
+        rows.append((f"φ {interior}", _fmt(density.get("phi_interior"))))
+    contacts = summary.get("contacts")
+    if isinstance(contacts, dict):
+        rows.append(("contacts", _fmt(contacts.get("n_contacts"))))
+        rows.append(("median contact area A_c", f"{_fmt(contacts.get('median_area'))} µm²"))
+        rows.append(("median contact width b_c", f"{_fmt(contacts.get('median_width'))} µm"))
+    coordination = summary.get("coordination")
+    if isinstance(coordination, dict):
+        rows.append(("Z domain", _fmt(coordination.get("z_domain"))))
+        rows.append((f"Z {interior}", _fmt(coordination.get("z_interior"))))
+        per = coordination.get("z_per_mineral") or {}
+        for mineral, z in per.items():
+            rows.append((f"Z {mineral} (interior)", _fmt(z)))
+    rdf = summary.get("rdf")
+    if isinstance(rdf, dict):
+        rows.append(("first g(r) peak", f"{_fmt(rdf.get('first_peak_r'))} µm"))
+        rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
+    network = summary.get("network")
+    if isinstance(network, dict):
+        rows.append(("fabric anisotropy", _fmt(network.get("anisotropy"))))
+    return rows
+
+
+def _flatten(prefix: str, value: Any, out: list[tuple[str, str]]) -> None:
+    if isinstance(value, dict):
+        for key, item in value.items():
+            _flatten(f"{prefix}.{key}" if prefix else str(key), item, out)
+    elif isinstance(value, list | tuple):
+        if len(value) <= 4 and all(not isinstance(v, dict) for v in value):
+            out.append((prefix, json.dumps(_rounded(value), ensure_ascii=False)))
+        else:
+            out.append((prefix, f"{len(value)} values (see analysis.json)"))
+    else:
+        out.append((prefix, _fmt(value)))
+
+
+def _rounded(value: Any) -> Any:
+    if isinstance(value, float):
+        return float(f"{value:.4g}")
+    if isinstance(value, list | tuple):
+        return [_rounded(v) for v in value]
+    return value
+
+
+def _md_table(header: tuple[str, str], rows: Sequence[tuple[str, str]]) -> list[str]:
+    def cell(text: str) -> str:
+        return text.replace("|", "\\|")
+
+    lines = [f"| {header[0]} | {header[1]} |", "|---|---:|"]
+    lines += [f"| {cell(a)} | {cell(b)} |" for a, b in rows]
+    return lines
+
+
+def _report(
+    summary: Mapping[str, Any],
+    tables: Mapping[str, Path],
+    columns: Mapping[str, Sequence[str]],
+    figure_paths: Sequence[Path],
+    captions: Mapping[str, str],
+    out: Path,
+) -> str:
+    scene = summary.get("scene") or "packing"
+    lines = [f"# Structure analysis: {scene}, seed {summary.get('seed')}", ""]
+    source = summary.get("packing")
+    lines.append(
+        f"Packing {'`' + str(source) + '`' if source else '(in memory)'}: "
+        f"{summary['n_placed']:,} of {summary['n_particles']:,} particles placed. "
+        f"Analysed with regopack {summary['regopack_version']}; lengths in µm. "
+        f"Statistics marked *interior* exclude particles whose centre lies within "
+        f"{_fmt(summary.get('interior_margin'), 'g')} µm of a wall."
+    )
+    lines += ["", "## Main numbers", ""]
+    lines += _md_table(("quantity", "value"), main_numbers(summary))
+
+    pngs = [p for p in figure_paths if p.suffix == ".png"]
+    if pngs:
+        lines += ["", "## Figures"]
+        for png in pngs:
+            rel = png.relative_to(out).as_posix()
+            caption = captions.get(png.stem, png.stem.replace("-", " "))
+            svg = png.with_suffix(".svg")
+            lines += ["", f"### {caption}", "", f"![{caption}]({rel})", ""]
+            if svg in figure_paths:
+                lines.append(f"Vector version: [{svg.name}]({svg.relative_to(out).as_posix()})")
+
+    lines += ["", "## All results", ""]
+    lines.append("Every scalar of `analysis.json`, by analyzer; long lists are only in the file.")
+    for name in summary.get("analyses", []):
+        rows: list[tuple[str, str]] = []
+        _flatten("", summary[name], rows)
+        lines += ["", f"### {name}", ""]
+        lines += _md_table(("key", "value"), rows)
+
+    if tables:
+        minerals = ", ".join(f"{k} = {n}" for k, n in enumerate(summary["mineral_names"]))
+        lines += ["", "## Tables", ""]
+        lines.append(
+            f"Particle indices are positions in the packing file; mineral indices: {minerals}."
+        )
+        lines.append("")
+        for table, path in tables.items():
+            cols = ", ".join(f"`{c}`" for c in columns.get(table, ()))
+            lines.append(f"- [{path.name}]({path.relative_to(out).as_posix()}): {cols}")
+    return "\n".join(lines) + "\n"

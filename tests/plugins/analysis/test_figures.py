@@ -1,0 +1,115 @@
+"""Figures of the structure analysis."""
+
+from __future__ import annotations
+
+import doctest
+
+import numpy as np
+import pytest
+
+pytest.importorskip("regopack.plugins.available_arc")
+pytest.importorskip("matplotlib")
+
+from matplotlib.collections import LineCollection
+from matplotlib.image import imread
+
+from regopack.analysis import DEFAULT_ANALYSES, run_analyses, write_analysis
+from regopack.manager import default_registry
+from regopack.plugins.analysis import (
+    Contacts,
+    ContactsConfig,
+    Coordination,
+    CoordinationConfig,
+    figures,
+)
+from regopack.run import run_scene
+from regopack.scene import load_scene, resolve_scene
+from regopack.testing import packing_from_polygons
+
+STEMS = ["packing", "contact-network", "contact-histograms", "z-vs-tol", "z-per-mineral", "rdf"]
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return default_registry(autoload=False)
+
+
+@pytest.fixture(scope="module")
+def packing(registry):
+    return run_scene(resolve_scene(load_scene("small", ["count=300"]), registry)).packing
+
+
+@pytest.fixture(scope="module")
+def analyzers(packing, registry):
+    return run_analyses(packing, registry, [(n, {}) for n in DEFAULT_ANALYSES])
+
+
+def test_every_figure_of_the_default_analyses_is_drawn(packing, analyzers, tmp_path):
+    paths = figures.figures_for(packing, analyzers, tmp_path / "figs", formats=("png",))
+    assert [p.name for p in paths] == [f"{s}.png" for s in STEMS]
+    for path in paths:
+        assert path.stat().st_size > 1000
+    image = imread(tmp_path / "figs" / "packing.png")
+    assert image.shape[1] == pytest.approx(figures.WIDTH * figures.DPI, abs=2)
+    assert set(figures.CAPTIONS) == set(STEMS)
+
+
+def test_only_the_figures_of_computed_analyzers(packing, registry, tmp_path):
+    done = run_analyses(packing, registry, [("rdf", {})])
+    files = write_analysis(tmp_path, packing, done)
+    assert [p.name for p in files.figures] == ["rdf.png", "rdf.svg"]
+    svg = (tmp_path / "figures" / "rdf.svg").read_text(encoding="utf-8")
+    assert "centre distance r (µm)" in svg
+    assert "<dc:date>" not in svg  # reproducible files
+    report = files.report.read_text(encoding="utf-8")
+    assert "](figures/rdf.png)" in report
+    assert "contact-network" not in report
+
+
+def test_network_line_widths_are_proportional_to_contact_area(packing, analyzers):
+    contacts = analyzers["contacts"]
+    fig = figures.draw_network(packing, contacts)
+    lines = [c for c in fig.axes[0].collections if isinstance(c, LineCollection)]
+    assert len(lines) == 1
+    widths = np.asarray(lines[0].get_linewidths())
+    assert widths.max() == pytest.approx(figures.MAX_LINE_PT)
+    assert np.allclose(widths / widths.max(), contacts.area / contacts.area.max())
+
+
+def test_mineral_centred_rdf_averages_back_to_the_total(packing, analyzers):
+    from regopack.plugins.analysis.common import interior_mask
+
+    rdf = analyzers["rdf"]
+    names = packing.mineral_names
+    sel = interior_mask(packing, rdf.results()["interior_margin"])
+    counts = np.bincount(packing.mineral[sel], minlength=len(names))
+    curves = rdf.curves["near"]
+    per = figures.mineral_centred_rdf(curves, names, counts.tolist())
+    weighted = sum(counts[k] * per[name] for k, name in enumerate(names) if name in per)
+    assert np.allclose(weighted / counts.sum(), curves["total"])
+
+
+def test_exact_z_of_tol_matches_the_sweep(packing, analyzers):
+    contacts, coordination = analyzers["contacts"], analyzers["coordination"]
+    t, z_dom, z_int = figures._exact_z_of_tol(packing, contacts, 0.02, 0.5)
+    for tol, zd, zi in zip(
+        coordination.tols, coordination.z_tol_domain, coordination.z_tol_interior, strict=True
+    ):
+        k = np.searchsorted(t, tol, side="left") - 1  # the curve just below tol
+        assert z_dom[max(k, 0)] == pytest.approx(zd)
+        assert z_int[max(k, 0)] == pytest.approx(zi)
+
+
+def test_a_packing_without_contacts_still_draws(tmp_path):
+    square = [(0, 0), (1, 0), (1, 1), (0, 1)]
+    far = [(x + 5, y + 5) for x, y in square]
+    p = packing_from_polygons([square, far], domain=(-1, 7, -1, 7))
+    contacts = Contacts(ContactsConfig(margin=0.0)).compute(p, {})
+    coordination = Coordination(CoordinationConfig()).compute(p, {"contacts": contacts})
+    done = {"contacts": contacts, "coordination": coordination}
+    paths = figures.figures_for(p, done, tmp_path)
+    assert {path.stem for path in paths} == {"contact-histograms", "z-vs-tol", "z-per-mineral"}
+
+
+def test_docstring_examples():
+    assert doctest.testmod(figures).failed == 0

@@ -1,0 +1,303 @@
+"""regopack.analysis: running analyzers with their requirements, and writing their files."""
+
+from __future__ import annotations
+
+import json
+import re
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+from pydantic import BaseModel, ConfigDict
+
+from regopack.analysis import (
+    DEFAULT_ANALYSES,
+    AnalysisFiles,
+    main_numbers,
+    run_analyses,
+    write_analysis,
+)
+from regopack.errors import ConfigError, PluginError
+from regopack.hookspecs import hookimpl
+from regopack.interfaces import Analyzer
+from regopack.manager import default_registry
+from regopack.plugin_types import AnalyzerSpec
+from regopack.plugins.analysis import Contacts, Coordination, Density, Rdf
+from regopack.run import run_scene
+from regopack.scene import load_scene, resolve_scene
+from regopack.testing import make_registry, packing_from_polygons
+
+pytest.importorskip("regopack.plugins.available_arc")
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return default_registry(autoload=False)
+
+
+@pytest.fixture(scope="module")
+def packing(registry):
+    return run_scene(resolve_scene(load_scene("small", ["count=300"]), registry)).packing
+
+
+@pytest.fixture(scope="module")
+def written(packing, registry, tmp_path_factory) -> AnalysisFiles:
+    analyzers = run_analyses(packing, registry, [(n, {}) for n in DEFAULT_ANALYSES])
+    out = tmp_path_factory.mktemp("analysis")
+    return write_analysis(out, packing, analyzers, figures=False, packing_path="p.npz")
+
+
+def _forbid(monkeypatch, cls: type) -> None:
+    def boom(self, *args, **kwargs):
+        raise AssertionError(f"{cls.__name__} was built or computed")
+
+    monkeypatch.setattr(cls, "__init__", boom)
+    monkeypatch.setattr(cls, "compute", boom)
+
+
+# ---------------------------------------------------------------------------
+# run_analyses
+
+
+def test_rdf_alone_never_builds_contacts(packing, registry, monkeypatch, tmp_path):
+    _forbid(monkeypatch, Contacts)
+    _forbid(monkeypatch, Coordination)
+    done = run_analyses(packing, registry, [("rdf", {})])
+    assert list(done) == ["rdf"]
+    assert isinstance(done["rdf"], Rdf)
+    files = write_analysis(tmp_path, packing, done, figures=False)
+    assert sorted(files.tables) == ["rdf_far", "rdf_near"]
+    assert not (tmp_path / "contacts.csv").exists()
+    assert files.summary["tol"] is None
+
+
+def test_a_scene_asking_for_rdf_never_builds_contacts(registry, monkeypatch, tmp_path):
+    _forbid(monkeypatch, Contacts)
+    scene = resolve_scene(load_scene("small", ["count=100", 'outputs.analyses=["rdf"]']), registry)
+    outcome = run_scene(scene, tmp_path, figures=False)
+    assert list(outcome.summary["analyses"]) == ["rdf"]
+    assert outcome.analysis is not None
+    assert json.loads(outcome.analysis.results.read_text())["analyses"] == ["rdf"]
+
+
+def test_requirements_come_first_and_keep_requested_parameters(packing, registry):
+    done = run_analyses(packing, registry, [("coordination", {}), ("contacts", {"tol": 0.1})])
+    assert list(done) == ["contacts", "coordination"]
+    assert done["contacts"].config.tol == 0.1
+    assert done["coordination"].results()["tol"] == 0.1
+
+
+def test_a_requirement_not_requested_uses_its_defaults(packing, registry):
+    done = run_analyses(packing, registry, [("network", {})])
+    assert list(done) == ["contacts", "network"]
+    assert done["contacts"].config.tol == 0.05
+
+
+def test_params_reach_analyzers_run_only_as_requirements(packing, registry):
+    done = run_analyses(
+        packing, registry, [("coordination", {})], params={"contacts": {"tol": 0.08}}
+    )
+    assert done["contacts"].config.tol == 0.08
+
+
+def test_params_for_an_analyzer_that_is_not_run(packing, registry):
+    with pytest.raises(ConfigError, match=r"^parameters given for analyzer 'contacts', which"):
+        run_analyses(packing, registry, [("rdf", {})], params={"contacts": {"tol": 0.1}})
+
+
+def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
+    with pytest.raises(ConfigError) as info:
+        run_analyses(packing, registry, [("rdff", {})])
+    assert str(info.value) == (
+        "unknown analyzer 'rdff'; known analyzers: contacts, coordination, density, network, rdf"
+    )
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        ({"tol": -1}, "contacts.tol = -1: Input should be greater than 0"),
+        ({"bogus": 1}, "contacts.bogus = 1: Extra inputs are not permitted"),
+        ({"tol": 1.0}, "contacts: tol_max (0.5) must be at least tol (1.0)"),
+    ],
+)
+def test_bad_parameters_name_the_field(packing, registry, params, message):
+    with pytest.raises(ConfigError) as info:
+        run_analyses(packing, registry, [("contacts", params)])
+    assert str(info.value) == message
+
+
+def test_everything_is_validated_before_anything_is_computed(packing, registry, monkeypatch):
+    def boom(self, *args):
+        raise AssertionError("density was computed")
+
+    monkeypatch.setattr(Density, "compute", boom)
+    with pytest.raises(ConfigError, match=r"contacts\.tol"):
+        run_analyses(packing, registry, [("density", {}), ("contacts", {"tol": -1})])
+
+
+def test_sweep_beyond_tol_max(packing, registry):
+    done = run_analyses(
+        packing, registry, [("coordination", {})], params={"contacts": {"tol_max": 0.2}}
+    )
+    assert max(done["coordination"].results()["tol_sweep"]) <= 0.2  # default sweep is cut
+    with pytest.raises(ConfigError, match=r"coordination.tols: 0.3 exceeds contacts.tol_max"):
+        run_analyses(
+            packing,
+            registry,
+            [("coordination", {"tols": [0.1, 0.3]})],
+            params={"contacts": {"tol_max": 0.2}},
+        )
+
+
+class _NoConfig(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+def _analyzer(name: str, requires: tuple[str, ...]) -> type[Analyzer]:
+    class Fake(Analyzer):
+        def compute(self, packing, context):
+            self.seen = sorted(context)
+            return self
+
+        def results(self):
+            return {"seen": self.seen}
+
+    Fake.name = name
+    Fake.requires = requires
+    return Fake
+
+
+def _registry_of(*classes: type[Analyzer]):
+    class Plugin:
+        @hookimpl
+        def regopack_analyzers(self):
+            return [AnalyzerSpec(c.name, _NoConfig, lambda cfg, c=c: c()) for c in classes]
+
+    return make_registry(Plugin(), builtins=())
+
+
+def test_cycles_are_detected():
+    reg = _registry_of(_analyzer("a", ("b",)), _analyzer("b", ("c",)), _analyzer("c", ("a",)))
+    p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]])
+    with pytest.raises(PluginError, match=r"cycle: a -> b -> c -> a$"):
+        run_analyses(p, reg, [("a", {})])
+
+
+def test_unregistered_requirement_names_both():
+    reg = _registry_of(_analyzer("a", ("missing",)))
+    p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]])
+    with pytest.raises(PluginError, match=r"analyzer 'a' requires 'missing', which is not"):
+        run_analyses(p, reg, [("a", {})])
+
+
+def test_shared_requirement_is_computed_once():
+    base = _analyzer("base", ())
+    calls = []
+    original = base.compute
+
+    def counting(self, packing, context):
+        calls.append(1)
+        return original(self, packing, context)
+
+    base.compute = counting  # type: ignore[method-assign]
+    reg = _registry_of(base, _analyzer("x", ("base",)), _analyzer("y", ("base", "x")))
+    p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]])
+    done = run_analyses(p, reg, [("y", {}), ("x", {})])
+    assert list(done) == ["base", "x", "y"]
+    assert done["y"].results() == {"seen": ["base", "x"]}
+    assert len(calls) == 1
+
+
+# ---------------------------------------------------------------------------
+# write_analysis
+
+
+def test_json_has_context_and_every_analyzer(written, packing):
+    data = json.loads(written.results.read_text(encoding="utf-8"))
+    for key in ("tol", "eta", "interior_margin", "regopack_version", "packing"):
+        assert key in data
+    assert data["tol"] == 0.05
+    assert data["eta"] == 0.0
+    assert data["interior_margin"] == 40.0
+    assert data["packing"] == "p.npz"
+    assert data["analyses"] == list(DEFAULT_ANALYSES)
+    for name in DEFAULT_ANALYSES:
+        assert isinstance(data[name], dict)
+    assert data["density"]["n_placed"] == packing.n_placed
+    assert data["mineral_names"] == list(packing.mineral_names)
+
+
+def test_csv_tables_have_a_header_and_numeric_columns(written, packing):
+    expected = {
+        "contacts": ["i", "j", "area", "width", "radius", "depth", "theta"],
+        "particles": ["particle", "mineral", "x", "y", "radius", "interior", "z"],
+        "z_tol": ["tol", "z_domain", "z_interior"],
+        "network": ["i", "j", "area"],
+        "rdf_near": ["r", "total", "pyroxene-pyroxene"],
+    }
+    for table, columns in expected.items():
+        path = written.tables[table]
+        assert path.name == f"{table}.csv"
+        header = path.read_text(encoding="utf-8").splitlines()[0].split(",")
+        assert header[: len(columns)] == columns
+        data = np.loadtxt(path, delimiter=",", skiprows=1, ndmin=2)
+        assert data.shape[1] == len(header)
+    particles = np.loadtxt(written.tables["particles"], delimiter=",", skiprows=1)
+    assert len(particles) == packing.n_placed
+    assert set(np.unique(particles[:, 5])) <= {0.0, 1.0}
+
+
+def test_report_shows_the_numbers_and_its_links_exist(written):
+    text = written.report.read_text(encoding="utf-8")
+    assert "| φ domain |" in text
+    assert "| Z domain |" in text
+    links = re.findall(r"\]\(([^)]+)\)", text)
+    assert "contacts.csv" in links
+    for link in links:
+        assert (written.out_dir / link).exists(), link
+
+
+def test_npz_tables(packing, registry, tmp_path):
+    done = run_analyses(packing, registry, [("network", {})])
+    files = write_analysis(tmp_path, packing, done, figures=False, table_format="npz")
+    with np.load(files.tables["network"]) as npz:
+        assert sorted(npz.files) == ["area", "i", "j"]
+        assert np.array_equal(npz["area"], done["network"].weight)
+
+
+def test_rewriting_leaves_no_temporary_files(packing, registry, tmp_path):
+    done = run_analyses(packing, registry, [("density", {})])
+    write_analysis(tmp_path, packing, done, figures=False)
+    write_analysis(tmp_path, packing, done, figures=False)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["analysis.json", "report.md"]
+
+
+def test_main_numbers_skip_what_was_not_run():
+    rows = dict(main_numbers({"tol": None, "rdf": {"first_peak_r": 4.5, "far_mean": 1.1}}))
+    assert rows == {"first g(r) peak": "4.5 µm", "far-field mean g(r)": "1.1"}
+
+
+def test_run_scene_writes_the_analysis_beside_the_packing(registry, tmp_path):
+    scene = resolve_scene(
+        load_scene("small", ["count=80", 'outputs.analyses=["coordination"]']), registry
+    )
+    outcome = run_scene(scene, tmp_path, figures=False)
+    assert list(outcome.summary["analyses"]) == ["coordination"]
+    assert outcome.analysis is not None
+    assert outcome.analysis.out_dir == tmp_path / "analysis"
+    data = json.loads((tmp_path / "analysis" / "analysis.json").read_text())
+    assert data["analyses"] == ["contacts", "coordination"]
+    assert data["packing"] == str(tmp_path / "packing.npz")
+
+
+def test_importing_does_not_load_matplotlib():
+    code = (
+        "import sys, regopack, regopack.analysis, regopack.run, regopack.cli; "
+        "print('matplotlib' in sys.modules)"
+    )
+    result = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True
+    )
+    assert result.stdout.strip() == "False"
