@@ -121,8 +121,12 @@ class Outputs(BaseModel):
 
     packing: str = Field("packing.npz", min_length=1, description="Packing file (NPZ).")
     summary: str = Field("summary.json", min_length=1, description="Run summary (JSON).")
-    analyses: list[Annotated[str, Field(min_length=1)]] = Field(
-        default_factory=list, description="Analyzers to run after packing, by name."
+    analyses: list[Annotated[str, Field(min_length=1)] | PluginRef] = Field(
+        default_factory=list,
+        description=(
+            "Analyzers to run after packing: a name (defaults), or an inline table "
+            "with its parameters, e.g. {kind = \"contacts\", tol = 0.1}."
+        ),
     )
 
 
@@ -542,7 +546,14 @@ class ResolvedScene:
             ],
             "insertion": self.insertion.to_dict(),
             "density": self.density.to_dict(),
-            "outputs": s.outputs.model_dump(mode="json"),
+            "outputs": {
+                "packing": s.outputs.packing,
+                "summary": s.outputs.summary,
+                "analyses": [
+                    a.kind if isinstance(item, str) else a.to_dict()
+                    for a, item in zip(self.analyses, s.outputs.analyses, strict=True)
+                ],
+            },
         }
 
     def to_toml(self) -> str:
@@ -602,11 +613,11 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
             scene,
             registry,
             "analysis",
-            PluginRef(kind=name),
+            PluginRef(kind=item) if isinstance(item, str) else item,
             ("outputs", "analyses", i),
-            kind_loc=("outputs", "analyses", i),
+            kind_loc=("outputs", "analyses", i) if isinstance(item, str) else None,
         )
-        for i, name in enumerate(scene.outputs.analyses)
+        for i, item in enumerate(scene.outputs.analyses)
     )
     return ResolvedScene(
         scene=scene,

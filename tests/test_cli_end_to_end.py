@@ -139,3 +139,21 @@ def test_user_mistakes_are_one_line_errors(capsys):
     assert main(["run", "--set", "insertion.interference=fast"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "interference" in err and "exact" in err
+
+
+def test_scene_analyses_take_parameters(tmp_path):
+    scene = tmp_path / "sc.toml"
+    scene.write_text(
+        'name = "sc"\ncount = 200\n[domain]\nwidth = 90.0\nheight = 90.0\n'
+        '[size]\nkind = "change5"\n[[phases]]\nname = "glass"\nfraction = 1.0\n'
+        'shape = { kind = "octagon", psi = 1.0 }\n[insertion]\nkind = "available-arc"\n'
+        '[density]\nkind = "eta"\n'
+        '[outputs]\nanalyses = ["density", { kind = "contacts", tol = 0.1 }, "coordination"]\n'
+    )
+    out = tmp_path / "out"
+    assert main(["run", str(scene), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["analyses"]["contacts"]["tol"] == 0.1
+    assert summary["analyses"]["coordination"]["tol"] == 0.1
+    resolved = resolve_scene(load_scene(str(scene)), default_registry(autoload=False))
+    assert resolved.to_dict()["outputs"]["analyses"][1]["tol"] == 0.1
