@@ -76,10 +76,27 @@ def prepare_outlines(
             raw[j] = a
             good[j] = math.hypot(dx, dy) > tol
         # start at the smallest direction among proper edges
+        # start at the proper edge where the cyclic sequence of directions wraps
+        # through 0 (its proper predecessor's angle is larger by more than pi).
+        # The smallest angle is not enough: collinear edges that rounding puts a
+        # hair above it would then be ordered last.
         start = -1
+        prev = -1
+        for j in range(m - 1, -1, -1):
+            if good[j]:
+                prev = j
+                break
         for j in range(m):
-            if good[j] and (start < 0 or raw[j] < raw[start]):
+            if not good[j]:
+                continue
+            if raw[j] < raw[prev] - math.pi:
                 start = j
+                break
+            prev = j
+        if start < 0:  # no proper edge, or no wrap found: fall back to the smallest angle
+            for j in range(m):
+                if good[j] and (start < 0 or raw[j] < raw[start]):
+                    start = j
         if start < 0:
             start = 0
         last = raw[start]
@@ -263,6 +280,8 @@ def clip_closed_box(
     ax: float, ay: float, dx: float, dy: float, x0: float, x1: float, y0: float, y1: float
 ) -> tuple[float, float]:
     """Parameter interval ``[lo, hi]`` of ``a + s d`` inside the closed box (empty if lo > hi)."""
+    if x0 > x1 or y0 > y1:
+        return 1.0, 0.0  # an empty box
     lo = -np.inf
     hi = np.inf
     if dx == 0.0:

@@ -42,8 +42,9 @@ def grid_layout(bounds: FloatArray, reach: FloatArray) -> tuple[float, int, int,
     cell = min(cell, max(width, height)) if max(width, height) > 0 else 1.0
     nx = max(1, math.ceil(width / cell))
     ny = max(1, math.ceil(height / cell))
-    per_x = np.minimum(np.floor(2.0 * reach / cell) + 2.0, float(nx))
-    per_y = np.minimum(np.floor(2.0 * reach / cell) + 2.0, float(ny))
+    # one cell of slack per axis: a disk edge on a cell boundary may round either way
+    per_x = np.minimum(np.floor(2.0 * reach / cell) + 3.0, float(nx))
+    per_y = np.minimum(np.floor(2.0 * reach / cell) + 3.0, float(ny))
     capacity = int(np.sum(per_x * per_y)) + 1
     return cell, nx, ny, capacity
 

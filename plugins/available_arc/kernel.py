@@ -495,9 +495,8 @@ def find_site(
     ``(-1, empty)`` when no candidate accepts the particle.
     """
     empty = np.empty((0, 2))
-    bx0, bx1, by0, by1 = centre_box(i, g, s.fpar)
-    if bx0 > bx1 or by0 > by1:
-        return -1, empty
+    # a particle that fits nowhere between the walls still goes through the
+    # candidates (SPEC §4.7): each is analysed, has no arc, and records rmin
     r = g.req[i]
     t = s.fpar[F_T]
     ipar = s.ipar

@@ -97,3 +97,62 @@ def test_prepare_outlines_orders_edges() -> None:
     assert np.all((a >= 0) & (a < 2 * np.pi))
     d = np.hypot(pop.shapes.vertices[:, 0], pop.shapes.vertices[:, 1]).reshape(200, 8)
     assert np.allclose(circum, d.max(axis=1))
+
+
+def _with_collinear_points(outline: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """The same polygon with points inserted inside random edges, listed from a random vertex."""
+    out = []
+    for k in range(len(outline)):
+        a, b = outline[k], outline[(k + 1) % len(outline)]
+        out.append(a)
+        for t in sorted(rng.random(rng.integers(0, 3))):
+            out.append(a + t * (b - a))
+    out = np.array(out)
+    return np.roll(out, -int(rng.integers(0, len(out))), axis=0)
+
+
+@given(seed=st.integers(0, 2**32 - 1), m=st.sampled_from([3, 4, 5, 8]))
+@settings(max_examples=200, deadline=None)
+def test_envelope_with_collinear_vertices(seed: int, m: int) -> None:
+    from regopack.population import Population, ShapeBatch
+
+    rng = np.random.default_rng(seed)
+    base = octagon_population(np.array([1.0, 1.3]), rng, psi=1.0, m=m)
+    p_out = _with_collinear_points(base.shapes.outline(0), rng)
+    q_out = _with_collinear_points(base.shapes.outline(1), rng)
+    shapes = ShapeBatch(
+        np.concatenate([p_out, q_out]),
+        np.array([0, len(p_out), len(p_out) + len(q_out)]),
+        np.zeros(2),
+    )
+    pop = Population(np.array([1.0, 1.3]), np.zeros(2, dtype=np.int64), ("m",), shapes)
+    n, (wx, wy, _, _) = _envelope(pop, 0, 1)
+    hull = shapely.MultiPoint((p_out[:, None, :] - q_out[None, :, :]).reshape(-1, 2)).convex_hull
+    env = shapely.Polygon(np.column_stack([wx[:n], wy[:n]]))
+    assert env.symmetric_difference(hull).area <= 1e-9 * hull.area
+
+
+def test_split_lowest_edge_listed_first() -> None:
+    """A collinear vertex at the start of the lowest edge must not reorder the edges."""
+    from regopack.population import Population, ShapeBatch
+
+    p_out = np.array([[0.3, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]], dtype=float)
+    th = 0.4
+    rot = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    q_out = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float) @ rot.T
+    for first, second in ((p_out, q_out), (q_out, p_out)):
+        shapes = ShapeBatch(
+            np.concatenate([first, second]), np.array([0, len(first), 9]), np.zeros(2)
+        )
+        pop = Population(np.array([1.0, 1.0]), np.zeros(2, dtype=np.int64), ("m",), shapes)
+        n, (wx, wy, _, _) = _envelope(pop, 0, 1)
+        hull = shapely.MultiPoint(
+            (first[:, None, :] - second[None, :, :]).reshape(-1, 2)
+        ).convex_hull
+        env = shapely.Polygon(np.column_stack([wx[:n], wy[:n]]))
+        assert env.symmetric_difference(hull).area <= 1e-12 * hull.area
+
+
+def test_clip_against_an_empty_box_is_empty() -> None:
+    lo, hi = clip_closed_box(-2.0, 0.0, 4.0, 1.0, 1.0, -1.0, -1.0, 1.0)
+    assert lo > hi

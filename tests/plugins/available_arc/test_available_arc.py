@@ -207,3 +207,41 @@ def test_edge_angle_just_below_pi_keeps_the_envelope_order() -> None:
     for seed in range(20):
         res = _pack(pop, domain, np.random.default_rng(seed))
         _check(pop, res, domain)
+
+
+def test_polygons_with_collinear_vertices_do_not_overlap() -> None:
+    from regopack.population import ShapeBatch
+
+    p_out = np.array([[0.3, -1], [1, -1], [1, 1], [-1, 1], [-1, -1]], dtype=float)
+    th = 0.4
+    rot = np.array([[np.cos(th), -np.sin(th)], [np.sin(th), np.cos(th)]])
+    q_out = np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]], dtype=float) @ rot.T
+    outlines = [q_out, p_out] * 60
+    offsets = np.concatenate([[0], np.cumsum([len(o) for o in outlines])])
+    shapes = ShapeBatch(np.concatenate(outlines), offsets, np.zeros(len(outlines)))
+    radius = np.full(len(outlines), np.sqrt(4.0 / np.pi))
+    pop = Population(radius, np.zeros(len(outlines), dtype=np.int64), ("m",), shapes)
+    domain = Rectangle.centred(20.0, 20.0)
+    for seed in range(3):
+        res = _pack(pop, domain, np.random.default_rng(seed))
+        _check(pop, res, domain)
+
+
+def test_particle_that_fits_nowhere_still_updates_screening() -> None:
+    """SPEC 4.7: the candidates are analysed (no arc) and record rmin = r_i."""
+    from regopack.plugins.available_arc.candidates import first_candidate
+    from regopack.plugins.available_arc.kernel import I_LEAVES
+    from regopack.plugins.available_arc.state import ArcState
+
+    rng = np.random.default_rng(0)
+    pop = octagon_population(np.array([1.0, 1.0, 30.0]), rng)
+    domain = Rectangle.centred(20.0, 20.0)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    st_.insert(0, 0.0, 0.0)
+    st_.insert(1, 5.0, 0.0)
+    mq = st_.begin_particle(2)
+    k, arcs = st_.find_site(2, 0, mq)
+    assert k == -1 and arcs.shape == (0, 2)
+    leaves = int(st_.packed.ipar[I_LEAVES])
+    assert np.all(st_.packed.tree[leaves : leaves + 2] == 30.0)
+    assert first_candidate(st_.packed.tree, leaves, 0, 2, 30.0, 1.0, False) == -1
