@@ -1,4 +1,4 @@
-"""Command line: ``regopack run | scenes | config | verify | analyze``.
+"""Command line: ``regopack run | scenes | config | verify | analyze | plugins | schema``.
 
 A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
 TOML file, a missing file, a bad option) prints one line
@@ -10,6 +10,7 @@ output file.
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any, NoReturn
 
 from pydantic import ValidationError
+from rich import box
 from rich.console import Console
 from rich.progress import (
     BarColumn,
@@ -34,6 +36,7 @@ from rich.text import Text
 from regopack import __version__
 from regopack.errors import ConfigError, RegopackError
 from regopack.interfaces import ProgressCallback
+from regopack.plugin_types import KINDS
 
 __all__ = ["build_parser", "main"]
 
@@ -190,6 +193,41 @@ def build_parser() -> argparse.ArgumentParser:
     )
     analyze.add_argument("--no-figures", action="store_true", help="draw no figures")
     analyze.set_defaults(handler=_cmd_analyze)
+
+    plugins = sub.add_parser(
+        "plugins",
+        help="list the plugins with their origin and parameters",
+        description=(
+            "List every registered plugin: its kind, name, the module that provides it, "
+            "the distribution package and version that installed it, and its parameters "
+            "with their type, default and description."
+        ),
+    )
+    plugins.add_argument(
+        "--kind",
+        choices=tuple(KINDS),
+        help="list only the plugins of this kind",
+    )
+    plugins.add_argument(
+        "--json", action="store_true", help="print machine-readable JSON instead of tables"
+    )
+    plugins.set_defaults(handler=_cmd_plugins)
+
+    schema = sub.add_parser(
+        "schema",
+        help="print the JSON Schema of scene files, with the plugins' parameters",
+        description=(
+            "Print the JSON Schema (draft 2020-12) of scene files, including the parameters "
+            "of every installed plugin, so that editors can check scene files."
+        ),
+    )
+    schema.add_argument(
+        "--output",
+        type=Path,
+        metavar="FILE",
+        help="write the schema to FILE instead of standard output",
+    )
+    schema.set_defaults(handler=_cmd_schema)
     return parser
 
 
@@ -321,6 +359,123 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
     written.append(("report", str(files.report)))
     for label, text in written:  # whole paths, never cut to the terminal's width
         out.print(f"{label:<8} {text}", soft_wrap=True, markup=False, highlight=False)
+    return EXIT_OK
+
+
+KIND_TITLES: dict[str, str] = {
+    "size": "size distribution, scene section [size]",
+    "shape": "shape generator, scene key phases[].shape",
+    "insertion": "insertion strategy, scene section [insertion]",
+    "density": "density controller, scene section [density]",
+    "analysis": "analyzer, scene key outputs.analyses",
+}
+"""What each plugin kind is and where a scene selects it."""
+
+
+def _format_number(value: Any) -> str:
+    if isinstance(value, float):
+        text = repr(value)
+        return text if len(text) <= 8 else f"{value:.6g}"
+    return json.dumps(value, ensure_ascii=False)
+
+
+def _format_default(field: dict[str, Any]) -> str:
+    """Format a field's default as a TOML-like literal, or ``required`` or ``none``."""
+    if field["required"]:
+        return "required"
+    value = field["default"]
+    if value is None:
+        return "none"
+    if isinstance(value, list):
+        shown = [_format_number(v) for v in value[: 3 if len(value) > 4 else 4]]
+        more = f", … ({len(value)} values)" if len(value) > 4 else ""
+        return "[" + ", ".join(shown) + more + "]"
+    return _format_number(value)
+
+
+def _cmd_plugins(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack import __version__
+    from regopack.manager import default_registry
+    from regopack.schema import describe_plugins
+
+    entries = describe_plugins(default_registry(), args.kind)
+    if args.json:
+        out.file.write(
+            json.dumps({"regopack": __version__, "plugins": entries}, indent=2, ensure_ascii=False)
+            + "\n"
+        )
+        return EXIT_OK
+    overview = Table(title="regopack plugins", title_justify="left")
+    overview.add_column("kind")
+    overview.add_column("name", style="bold")
+    overview.add_column("origin module", overflow="fold")
+    overview.add_column("package", overflow="fold")
+    for entry in entries:
+        overview.add_row(
+            *(Text(t) for t in (entry["kind"], entry["name"], entry["module"], _package(entry)))
+        )
+    if not entries:
+        overview.add_row("(none)", "", "", "")
+    out.print(overview)
+    for entry in entries:
+        out.print()
+        header = Text.assemble(
+            (f"{entry['kind']} ", "dim"),
+            (entry["name"], "bold"),
+            f"  {KIND_TITLES[entry['kind']]}\n",
+            (f"{entry['module']} ({_package(entry)})", "dim"),
+        )
+        if entry["description"]:
+            header.append("\n" + entry["description"])
+        out.print(header)
+        if not entry["fields"]:
+            out.print("  no parameters", style="dim")
+            continue
+        fields = Table(box=box.SIMPLE_HEAD, show_edge=False, padding=(0, 1, 0, 2), expand=True)
+        fields.add_column("parameter", style="cyan", no_wrap=True)
+        fields.add_column("type")
+        fields.add_column("default")
+        fields.add_column("description", ratio=1)
+        for field in entry["fields"]:
+            fields.add_row(
+                *(
+                    Text(t)
+                    for t in (
+                        field["name"],
+                        field["type"],
+                        _format_default(field),
+                        field["description"],
+                    )
+                )
+            )
+        out.print(fields)
+    return EXIT_OK
+
+
+def _package(entry: dict[str, Any]) -> str:
+    """``"<distribution> <version>"`` of a plugin entry, or ``"-"`` when not known."""
+    if not entry["distribution"]:
+        return "-"
+    if entry["version"]:
+        return f"{entry['distribution']} {entry['version']}"
+    return str(entry["distribution"])
+
+
+def _cmd_schema(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.manager import default_registry
+    from regopack.packing import write_json_atomic
+    from regopack.schema import dumps, json_schema
+
+    schema = json_schema(default_registry(), "scene")
+    if args.output is None:
+        out.file.write(dumps(schema))
+        return EXIT_OK
+    try:
+        write_json_atomic(args.output, schema)
+    except OSError as exc:
+        why = exc.strerror or type(exc).__name__
+        raise ConfigError(f"cannot write the schema to {args.output}: {why}") from exc
+    err.print(f"wrote the scene schema to {args.output}", soft_wrap=True, highlight=False)
     return EXIT_OK
 
 

@@ -13,8 +13,11 @@ kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``).
 from __future__ import annotations
 
 import importlib
+import importlib.metadata
 import os
+import types
 from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import pluggy
@@ -29,6 +32,7 @@ __all__ = [
     "DISABLE_AUTOLOAD_ENV",
     "ENTRY_POINT_GROUP",
     "HOOK_OF_KIND",
+    "PluginInfo",
     "Registry",
     "build_plugin_manager",
     "default_registry",
@@ -40,6 +44,9 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.available_arc",
     "regopack.plugins.eta",
     "regopack.plugins.analysis",
+    "regopack.plugins.size_distributions",
+    "regopack.plugins.shapes",
+    "regopack.plugins.rsa",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 
@@ -117,6 +124,88 @@ def _one_line(text: str) -> str:
     return " ".join(text.split())
 
 
+@dataclass(frozen=True)
+class PluginInfo:
+    """Where a plugin implementation comes from.
+
+    Attributes
+    ----------
+    plugin
+        Name of the plugin in the plugin manager: the module name of a built-in
+        plugin, the entry-point name of an installed one.
+    module
+        Module that holds the hook implementations.
+    distribution
+        Distribution package that installed the plugin (``"regopack"`` for the
+        built-in plugins), or ``None`` when it is not known, e.g. for a module
+        passed to :func:`regopack.testing.make_registry` from a source tree.
+    version
+        Version of ``distribution``, or ``None``.
+
+    Examples
+    --------
+    >>> PluginInfo("square", "regopack_square", "regopack-square", "0.1.0").package
+    'regopack-square 0.1.0'
+    >>> PluginInfo("fake", "fakes", None, None).package
+    '-'
+    """
+
+    plugin: str
+    module: str
+    distribution: str | None = None
+    version: str | None = None
+
+    @property
+    def package(self) -> str:
+        """``"<distribution> <version>"``, or ``"-"`` when the distribution is unknown."""
+        if self.distribution is None:
+            return "-"
+        return f"{self.distribution} {self.version}" if self.version else self.distribution
+
+
+def _module_of(plugin: object) -> str:
+    if isinstance(plugin, types.ModuleType):
+        return plugin.__name__
+    return str(getattr(type(plugin), "__module__", "") or type(plugin).__name__)
+
+
+def _distribution_of_module(module: str) -> tuple[str | None, str | None]:
+    """Distribution named like the top-level package of ``module``, and its version."""
+    top = module.partition(".")[0]
+    if not top:
+        return None, None
+    try:
+        dist = importlib.metadata.distribution(top)
+    except (importlib.metadata.PackageNotFoundError, ValueError):
+        return None, None
+    return str(dist.metadata["Name"] or top), dist.version
+
+
+def _plugin_infos(pm: pluggy.PluginManager) -> dict[str, PluginInfo]:
+    """Map plugin names to where they come from.
+
+    Plugins loaded from an entry point are attributed to the distribution that
+    declares the entry point; the others to the distribution that installed
+    the distribution named like their top-level package (``regopack`` for the
+    built-in plugins), where one is installed.
+    """
+    from_entry_points: dict[str, tuple[str, str | None]] = {}
+    for plugin, dist in pm.list_plugin_distinfo():
+        name = pm.get_name(plugin)
+        if name is not None:
+            project = str(getattr(dist, "project_name", None) or dist.metadata["name"])
+            from_entry_points[name] = (project, getattr(dist, "version", None))
+    out: dict[str, PluginInfo] = {}
+    for name, plugin in pm.list_name_plugin():
+        if plugin is None:  # blocked plugin
+            continue
+        module = _module_of(plugin)
+        found: tuple[str | None, str | None] | None = from_entry_points.get(name)
+        dist_name, version = found or _distribution_of_module(module)
+        out[name] = PluginInfo(name, module, dist_name, version)
+    return out
+
+
 def _origins(pm: pluggy.PluginManager) -> dict[str, str]:
     """Map plugin names to the distribution that installed them, where known."""
     out: dict[str, str] = {}
@@ -136,6 +225,9 @@ class Registry:
         ``specs[kind][name] = (spec, origin)`` where ``origin`` names the plugin
         (or its distribution) that provided the spec. Use :meth:`from_manager`
         rather than building this mapping by hand.
+    infos
+        ``infos[kind][name]``: where each implementation comes from (see
+        :meth:`info`); by default only the ``origin`` is known.
 
     Examples
     --------
@@ -144,9 +236,16 @@ class Registry:
     []
     """
 
-    def __init__(self, specs: Mapping[str, Mapping[str, tuple[PluginSpec[Any], str]]]) -> None:
+    def __init__(
+        self,
+        specs: Mapping[str, Mapping[str, tuple[PluginSpec[Any], str]]],
+        infos: Mapping[str, Mapping[str, PluginInfo]] | None = None,
+    ) -> None:
         self._specs: dict[str, dict[str, tuple[PluginSpec[Any], str]]] = {
             kind: dict(specs.get(kind, {})) for kind in KINDS
+        }
+        self._infos: dict[str, dict[str, PluginInfo]] = {
+            kind: dict((infos or {}).get(kind, {})) for kind in KINDS
         }
 
     @classmethod
@@ -160,7 +259,9 @@ class Registry:
             both), or a hook returns something other than that kind's spec records.
         """
         origins = _origins(pm)
+        plugin_infos = _plugin_infos(pm)
         specs: dict[str, dict[str, tuple[PluginSpec[Any], str]]] = {kind: {} for kind in KINDS}
+        infos: dict[str, dict[str, PluginInfo]] = {kind: {} for kind in KINDS}
         for kind, hook_name in HOOK_OF_KIND.items():
             record_type = KINDS[kind]
             caller = getattr(pm.hook, hook_name)
@@ -185,7 +286,10 @@ class Registry:
                             f"{previous[1]!r} and {origin!r}"
                         )
                     specs[kind][record.name] = (record, origin)
-        return cls(specs)
+                    infos[kind][record.name] = plugin_infos.get(
+                        impl.plugin_name, PluginInfo(impl.plugin_name, _module_of(impl.plugin))
+                    )
+        return cls(specs, infos)
 
     @staticmethod
     def _check_record(
@@ -241,6 +345,22 @@ class Registry:
         """Name of the plugin (or the distribution that installed it) providing ``name``."""
         self.get(kind, name)
         return self._kind(kind)[name][1]
+
+    def info(self, kind: str, name: str) -> PluginInfo:
+        """Where the implementation ``name`` of ``kind`` comes from.
+
+        Examples
+        --------
+        >>> info = default_registry(autoload=False).info("shape", "octagon")
+        >>> info.module, info.distribution
+        ('regopack.plugins.octagon', 'regopack')
+        """
+        self.get(kind, name)
+        found = self._infos[kind].get(name)
+        if found is None:
+            origin = self._specs[kind][name][1]
+            return PluginInfo(plugin=origin, module=origin)
+        return found
 
     def __contains__(self, item: object) -> bool:
         """Whether ``(kind, name)`` is registered."""

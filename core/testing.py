@@ -1,31 +1,58 @@
 """Helpers for testing regopack and its plugins.
 
+Plugin authors get two kinds of help:
+
+- building blocks: :func:`make_registry` (a registry with the plugins under
+  test, without installed plugins), :func:`packing_from_polygons` (a packing
+  with known particles) and :func:`assert_valid_packing`;
+- ready checks of the core contracts, which raise :class:`AssertionError`
+  with a message naming the broken rule, so a pytest test is one line:
+  :func:`check_shape_generator`, :func:`check_size_distribution` and
+  :func:`check_density_controller`.
+
 Examples
 --------
 >>> p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 1, 0, 1))
 >>> assert_valid_packing(p).ok
 True
+
+>>> from regopack.plugins.eta import EtaConfig, EtaController
+>>> check_density_controller(EtaController(EtaConfig(eta=20)))
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+import math
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
+from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from regopack.domain import Rectangle
+from regopack.interfaces import DensityController, ShapeGenerator, SizeDistribution
 from regopack.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
 from regopack.packing import Packing
+from regopack.population import ShapeBatch
 from regopack.verify import VerifyReport, assert_valid_packing, verify
 
 __all__ = [
+    "DEFAULT_RADII",
     "VerifyReport",
     "assert_valid_packing",
+    "check_density_controller",
+    "check_shape_generator",
+    "check_size_distribution",
     "make_registry",
     "packing_from_polygons",
     "verify",
 ]
+
+FloatArray = NDArray[np.float64]
+
+DEFAULT_RADII: tuple[float, ...] = tuple(float(r) for r in np.geomspace(0.01, 1000.0, 41))
+"""Radii that :func:`check_shape_generator` asks for: 41 values from 0.01 to 1000."""
 
 
 def make_registry(*plugins: object, builtins: Sequence[str] = BUILTIN_PLUGINS) -> Registry:
@@ -107,3 +134,393 @@ def packing_from_polygons(
         scene={"name": "test"},
         seed=0,
     )
+
+
+# ---------------------------------------------------------------------------
+# contract checks
+
+
+def _name(obj: object) -> str:
+    return type(obj).__name__
+
+
+def _same(a: Any, b: Any) -> bool:
+    """Equality of nested dicts, lists and arrays (a random generator's state)."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        return a.keys() == b.keys() and all(_same(a[k], b[k]) for k in a)
+    if isinstance(a, np.ndarray) or isinstance(b, np.ndarray):
+        return bool(np.array_equal(a, b))
+    return bool(a == b)
+
+
+@contextmanager
+def _global_random_untouched(what: str) -> Iterator[None]:
+    """Fail when the code inside draws from numpy's global random generator."""
+    # the legacy global state is read, on purpose, to catch plugins that use it
+    before = np.random.get_state(legacy=False)  # noqa: NPY002
+    yield
+    after = np.random.get_state(legacy=False)  # noqa: NPY002
+    if not _same(before, after):
+        raise AssertionError(
+            f"{what} draws from numpy's global random generator; use only the "
+            "numpy.random.Generator it is given"
+        )
+
+
+def _as_array(value: Any, what: str, dtype: type[Any] = np.float64) -> NDArray[Any]:
+    try:
+        return np.asarray(value, dtype=dtype)
+    except (TypeError, ValueError) as err:
+        raise AssertionError(f"{what} is not a numeric array: {err}") from None
+
+
+def _check_batch(batch: object, n: int, who: str) -> tuple[FloatArray, NDArray[np.int64]]:
+    if not isinstance(batch, ShapeBatch):
+        raise AssertionError(f"{who}.generate returned a {_name(batch)}, not a ShapeBatch")
+    vertices = _as_array(batch.vertices, f"{who}: vertices")
+    offsets = _as_array(batch.offsets, f"{who}: offsets", np.int64)
+    orientation = _as_array(batch.orientation, f"{who}: orientation")
+    if vertices.ndim != 2 or vertices.shape[1] != 2:
+        raise AssertionError(f"{who}: vertices have shape {vertices.shape}, expected (M, 2)")
+    if offsets.shape != (n + 1,):
+        raise AssertionError(
+            f"{who}: offsets have shape {offsets.shape}, expected ({n + 1},) for {n} radii"
+        )
+    if offsets[0] != 0 or offsets[-1] != vertices.shape[0] or np.any(np.diff(offsets) < 0):
+        raise AssertionError(
+            f"{who}: offsets must rise from 0 to the number of vertices "
+            f"({vertices.shape[0]}); got {offsets[0]} ... {offsets[-1]}"
+        )
+    if orientation.shape != (n,):
+        raise AssertionError(f"{who}: orientation has shape {orientation.shape}, expected ({n},)")
+    if not (np.all(np.isfinite(vertices)) and np.all(np.isfinite(orientation))):
+        raise AssertionError(f"{who}: vertices or orientations are not all finite")
+    return vertices, offsets
+
+
+def _check_outline(v: FloatArray, r: float, j: int, who: str, rtol: float) -> None:
+    where = f"{who}: outline {j} (radius {r:g})"
+    if v.shape[0] < 3:
+        raise AssertionError(f"{where} has {v.shape[0]} vertices; a polygon needs at least 3")
+    edges = np.roll(v, -1, axis=0) - v
+    signed = 0.5 * float(np.sum(v[:, 0] * edges[:, 1] - v[:, 1] * edges[:, 0]))
+    expected = math.pi * r * r
+    if signed <= 0:
+        raise AssertionError(
+            f"{where} is not counter-clockwise (signed area {signed:.6g}); list the "
+            "vertices counter-clockwise"
+        )
+    if abs(signed - expected) > rtol * expected:
+        raise AssertionError(
+            f"{where} has area {signed:.9g}, expected pi r^2 = {expected:.9g} "
+            f"(relative error {abs(signed - expected) / expected:.2e} > rtol {rtol:g})"
+        )
+    scale = float(np.max(np.hypot(v[:, 0], v[:, 1])))
+    length = np.hypot(edges[:, 0], edges[:, 1])
+    real = edges[length > 1e-12 * scale]  # edges of zero length are allowed
+    turn_cross = real[:, 0] * np.roll(real[:, 1], -1) - real[:, 1] * np.roll(real[:, 0], -1)
+    turn_dot = np.sum(real * np.roll(real, -1, axis=0), axis=1)
+    turns = np.arctan2(turn_cross, turn_dot)
+    worst = int(np.argmin(turns))
+    if turns[worst] < -1e-9:
+        raise AssertionError(
+            f"{where} is not convex: it turns clockwise by {-turns[worst]:.3g} rad "
+            f"after edge {worst}"
+        )
+    if abs(float(np.sum(turns)) - 2.0 * math.pi) > 1e-6:
+        raise AssertionError(
+            f"{where} is not convex: its edges turn by {float(np.sum(turns)):.6g} rad in total, "
+            "not 2 pi (it winds around more than once)"
+        )
+    # reference point strictly inside: on the left of every edge, by a margin
+    inner = edges[:, 0] * (-v[:, 1]) - edges[:, 1] * (-v[:, 0])
+    margin = np.where(length > 1e-12 * scale, inner / np.where(length > 0, length, 1.0), np.inf)
+    if float(np.min(margin)) <= 1e-9 * scale:
+        raise AssertionError(
+            f"{where}: the reference point (0, 0) is not strictly inside the outline "
+            f"(distance {float(np.min(margin)):.3g} from edge {int(np.argmin(margin))})"
+        )
+
+
+def check_shape_generator(
+    generator: ShapeGenerator,
+    radii: ArrayLike = DEFAULT_RADII,
+    seed: int = 0,
+    *,
+    rtol: float = 1e-6,
+) -> ShapeBatch:
+    """Check the contract of a shape generator; raise :class:`AssertionError` if broken.
+
+    The rules checked:
+
+    - ``generate`` returns a :class:`~regopack.population.ShapeBatch` of the
+      right shapes (one outline per radius, offsets rising from 0), with finite
+      values, also for an empty array of radii;
+    - every outline has at least three vertices, is counter-clockwise and convex
+      (edges of zero length are allowed) and has the area ``pi r^2`` within
+      ``rtol``;
+    - the reference point ``(0, 0)`` lies strictly inside every outline;
+    - the same seed gives the same outlines, and numpy's global random
+      generator is not used.
+
+    Parameters
+    ----------
+    generator
+        The shape generator to check.
+    radii
+        Radii to ask outlines for (default: :data:`DEFAULT_RADII`).
+    seed
+        Seed of the generator passed to ``generate``.
+    rtol
+        Tolerated relative error of the areas.
+
+    Returns
+    -------
+    ShapeBatch
+        The outlines generated for ``radii``, for further checks.
+
+    Examples
+    --------
+    >>> from regopack.plugins.octagon import OctagonConfig, RandomPolygon
+    >>> batch = check_shape_generator(RandomPolygon(OctagonConfig(psi=2.0)))
+    >>> len(batch)
+    41
+    """
+    who = _name(generator)
+    r = _as_array(radii, "radii").reshape(-1)
+    with _global_random_untouched(f"{who}.generate"):
+        empty = generator.generate(np.zeros(0), np.random.default_rng(seed))
+        _check_batch(empty, 0, f"{who} (no radii)")
+        batch = generator.generate(r.copy(), np.random.default_rng(seed))
+        again = generator.generate(r.copy(), np.random.default_rng(seed))
+    vertices, offsets = _check_batch(batch, r.shape[0], who)
+    for j in range(r.shape[0]):
+        _check_outline(vertices[offsets[j] : offsets[j + 1]], float(r[j]), j, who, rtol)
+    v2, o2 = _check_batch(again, r.shape[0], who)
+    same = (
+        np.array_equal(offsets, o2)
+        and np.array_equal(vertices, v2)
+        and np.array_equal(np.asarray(batch.orientation), np.asarray(again.orientation))
+    )
+    if not same:
+        raise AssertionError(
+            f"{who} is not deterministic: two calls with generators seeded {seed} gave "
+            "different outlines; draw random numbers only from the generator passed in"
+        )
+    return batch
+
+
+def check_size_distribution(
+    dist: SizeDistribution,
+    n: int = 100_000,
+    seed: int = 0,
+    rtol: float = 0.02,
+) -> FloatArray:
+    """Check the contract of a size distribution; raise :class:`AssertionError` if broken.
+
+    The rules checked:
+
+    - ``r_min`` and ``r_max`` are finite, ``0 < r_min <= r_max``;
+    - ``sample(n, rng)`` returns ``n`` finite radii within ``[r_min, r_max]``,
+      and an empty array for ``n = 0``;
+    - the mean particle area of the sample, mean(pi r^2), matches the declared
+      ``mean_area`` within ``rtol`` (relative);
+    - the same seed gives the same radii, and numpy's global random generator
+      is not used.
+
+    Parameters
+    ----------
+    dist
+        The size distribution to check.
+    n
+        Sample size. The statistical error of the sample's mean area shrinks as
+        ``1 / sqrt(n)``; raise ``n`` or ``rtol`` for very wide distributions.
+    seed
+        Seed of the generator passed to ``sample``.
+    rtol
+        Tolerated relative difference between the sample's mean area and
+        ``mean_area``.
+
+    Returns
+    -------
+    ndarray
+        The ``n`` radii drawn, for further checks.
+
+    Examples
+    --------
+    >>> from regopack.plugins.change5 import Change5, Change5Config
+    >>> radii = check_size_distribution(Change5(Change5Config()), n=20_000)
+    >>> radii.shape
+    (20000,)
+    """
+    who = _name(dist)
+    r_min, r_max = float(dist.r_min), float(dist.r_max)
+    if not (math.isfinite(r_min) and math.isfinite(r_max) and 0 < r_min <= r_max):
+        raise AssertionError(
+            f"{who}: r_min = {r_min:g} and r_max = {r_max:g} must be finite with 0 < r_min <= r_max"
+        )
+    declared = float(dist.mean_area)
+    if not (math.isfinite(declared) and declared > 0):
+        raise AssertionError(f"{who}: mean_area = {declared:g} must be finite and positive")
+    with _global_random_untouched(f"{who}.sample"):
+        empty = _as_array(dist.sample(0, np.random.default_rng(seed)), f"{who}.sample(0)")
+        radii = _as_array(dist.sample(n, np.random.default_rng(seed)), f"{who}.sample")
+        again = _as_array(dist.sample(n, np.random.default_rng(seed)), f"{who}.sample")
+    if empty.shape != (0,):
+        raise AssertionError(f"{who}.sample(0) returned shape {empty.shape}, expected (0,)")
+    if radii.shape != (n,):
+        raise AssertionError(f"{who}.sample({n}) returned shape {radii.shape}, expected ({n},)")
+    if not np.all(np.isfinite(radii)):
+        raise AssertionError(f"{who}.sample returned radii that are not finite")
+    slack = 1e-12 * r_max
+    low, high = int(np.argmin(radii)), int(np.argmax(radii))
+    if radii[low] < r_min - slack:
+        raise AssertionError(
+            f"{who}.sample returned radius {radii[low]:.9g} (sample {low}), below r_min = {r_min:g}"
+        )
+    if radii[high] > r_max + slack:
+        raise AssertionError(
+            f"{who}.sample returned radius {radii[high]:.9g} (sample {high}), above "
+            f"r_max = {r_max:g}"
+        )
+    areas = math.pi * radii**2
+    mean = float(np.mean(areas))
+    error = float(np.std(areas)) / math.sqrt(n)
+    if abs(mean - declared) > rtol * declared:
+        raise AssertionError(
+            f"{who}: the mean particle area of {n} samples is {mean:.6g}, but mean_area "
+            f"declares {declared:.6g} (relative difference {abs(mean - declared) / declared:.2e} "
+            f"> rtol {rtol:g}; the sample's standard error is {error / declared:.1e})"
+        )
+    if not np.array_equal(radii, again):
+        raise AssertionError(
+            f"{who} is not deterministic: two calls with generators seeded {seed} gave "
+            "different radii; draw random numbers only from the generator passed in"
+        )
+    return radii
+
+
+def _random_arcs(rng: np.random.Generator) -> FloatArray:
+    """Disjoint, sorted, unwrapped arcs of one candidate, as the inserter passes them."""
+    k = int(rng.integers(1, 6))
+    lo = float(rng.uniform(-2.0 * math.pi, 0.0))
+    ends = np.sort(rng.uniform(lo, lo + 2.0 * math.pi, 2 * k))
+    arcs = ends.reshape(k, 2)
+    return arcs[arcs[:, 1] > arcs[:, 0]]
+
+
+def _arc_cases(rng: np.random.Generator, trials: int) -> list[tuple[FloatArray, float, float]]:
+    fixed = [
+        np.zeros((0, 2)),
+        np.array([[-math.pi, math.pi]]),  # the whole circle
+        np.array([[0.0, 1e-9]]),  # a tiny arc
+        np.array([[2.5, 4.0]]),  # through pi: ends beyond [-pi, pi]
+        np.array([[-4.0, -3.5], [-1.0, 0.5], [1.0, 2.0]]),
+    ]
+    cases: list[tuple[FloatArray, float, float]] = []
+    for arcs in fixed:
+        for r_new, r_cand in ((1.0, 1.0), (0.5, 20.0), (20.0, 0.5)):
+            cases.append((arcs, r_new, r_cand))
+    for _ in range(trials):
+        r_new, r_cand = (float(x) for x in rng.uniform(0.05, 50.0, 2))
+        cases.append((_random_arcs(rng), r_new, r_cand))
+    return cases
+
+
+def _check_arcs(out: object, arcs: FloatArray, case: str, who: str) -> FloatArray:
+    result = _as_array(out, f"{who}.shrink({case})")
+    if result.ndim != 2 or result.shape[1] != 2:
+        raise AssertionError(f"{who}.shrink({case}) returned shape {result.shape}, expected (k, 2)")
+    if not np.all(np.isfinite(result)):
+        raise AssertionError(f"{who}.shrink({case}) returned arcs that are not finite")
+    if np.any(result[:, 1] <= result[:, 0]):
+        bad = result[result[:, 1] <= result[:, 0]][0]
+        raise AssertionError(
+            f"{who}.shrink({case}) returned the arc [{bad[0]:.9g}, {bad[1]:.9g}] of no "
+            "length; drop such arcs"
+        )
+    tol = 1e-12 * max(1.0, float(np.max(np.abs(arcs))) if arcs.size else 1.0)
+    used = np.zeros(arcs.shape[0])
+    for start, end in result:
+        inside = np.flatnonzero((arcs[:, 0] - tol <= start) & (end <= arcs[:, 1] + tol))
+        if inside.size == 0:
+            raise AssertionError(
+                f"{who}.shrink({case}) lengthened an arc: [{start:.9g}, {end:.9g}] is not "
+                f"inside any input arc {arcs.tolist()}"
+            )
+        used[inside[0]] += end - start
+    length = arcs[:, 1] - arcs[:, 0]
+    over = np.flatnonzero(used > length + tol)
+    if over.size:
+        i = int(over[0])
+        raise AssertionError(
+            f"{who}.shrink({case}) lengthened an arc: the arcs it returned inside "
+            f"[{arcs[i, 0]:.9g}, {arcs[i, 1]:.9g}] (length {length[i]:.9g}) add up to "
+            f"{used[i]:.9g}"
+        )
+    return result
+
+
+def check_density_controller(
+    controller: DensityController, seed: int = 0, *, trials: int = 200
+) -> None:
+    """Check the contract of a density controller; raise :class:`AssertionError` if broken.
+
+    ``shrink`` is called on fixed edge cases (no arcs, the whole circle, a
+    tiny arc, arcs with ends beyond ``[-pi, pi]``) and on ``trials`` random
+    sets of disjoint arcs with random radii. The rules checked:
+
+    - it returns a ``(k', 2)`` array of finite arcs of positive length;
+    - it never lengthens an arc: every arc returned lies inside one input arc,
+      and those inside one input arc are no longer than it, together;
+    - it does not change its input array;
+    - a controller with ``identity = True`` returns the arcs unchanged;
+    - the same seed gives the same arcs, and numpy's global random generator
+      is not used.
+
+    Parameters
+    ----------
+    controller
+        The density controller to check.
+    seed
+        Seed of the cases and of the generator passed to ``shrink``.
+    trials
+        Number of random cases.
+
+    Examples
+    --------
+    >>> from regopack.plugins.eta import EtaConfig, EtaController
+    >>> check_density_controller(EtaController(EtaConfig(eta=0)))
+    """
+    who = _name(controller)
+    cases = _arc_cases(np.random.default_rng([seed, 1]), trials)
+
+    def run() -> list[FloatArray]:
+        rng = np.random.default_rng(seed)
+        outputs = []
+        for arcs, r_new, r_cand in cases:
+            case = f"{arcs.shape[0]} arcs, r_new={r_new:.3g}, r_candidate={r_cand:.3g}"
+            given = arcs.copy()
+            out = controller.shrink(given, r_new, r_cand, rng)
+            if not np.array_equal(given, arcs):
+                raise AssertionError(
+                    f"{who}.shrink({case}) changed its input array; return a new array"
+                )
+            result = _check_arcs(out, arcs, case, who)
+            if getattr(controller, "identity", False) and not np.array_equal(result, arcs):
+                raise AssertionError(
+                    f"{who} declares identity = True but shrink({case}) changed the arcs"
+                )
+            outputs.append(result)
+        return outputs
+
+    with _global_random_untouched(f"{who}.shrink"):
+        first = run()
+        second = run()
+    for (arcs, r_new, r_cand), a, b in zip(cases, first, second, strict=True):
+        if not np.array_equal(a, b):
+            raise AssertionError(
+                f"{who} is not deterministic: shrink({arcs.shape[0]} arcs, r_new={r_new:.3g}, "
+                f"r_candidate={r_cand:.3g}) gave different arcs with generators seeded {seed}; "
+                "draw random numbers only from the generator passed in"
+            )

@@ -12,7 +12,9 @@ import regopack
 import regopack.manager
 from regopack.cli import main
 from regopack.packing import save
-from regopack.testing import packing_from_polygons
+from regopack.testing import make_registry, packing_from_polygons
+
+BUILTINS = ("regopack.plugins.eta",)
 
 
 @pytest.fixture(autouse=True)
@@ -170,3 +172,108 @@ def test_import_is_light():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     )
     assert result.stdout.split() == ["False", "False"]
+
+
+# ---------------------------------------------------------------------------
+# regopack plugins
+
+
+def test_plugins_lists_every_plugin_with_origin_and_fields(capsys, monkeypatch):
+    monkeypatch.setenv("COLUMNS", "200")
+    assert main(["plugins"]) == 0
+    out = capsys.readouterr().out
+    for name in ("change5", "octagon", "available-arc", "eta"):
+        assert name in out
+    assert "fakes" in out  # the module of the fake plugins
+    assert "d_min" in out and "smallest diameter" in out  # a field and its description
+    assert "number, > 0" in out  # its type with the bound
+    assert "required" not in out  # every fake field has a default
+
+
+def test_plugins_json(capsys):
+    assert main(["plugins", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["regopack"] == regopack.__version__
+    entries = {(e["kind"], e["name"]): e for e in data["plugins"]}
+    assert set(entries) == {
+        ("size", "change5"),
+        ("shape", "octagon"),
+        ("insertion", "available-arc"),
+        ("density", "eta"),
+    }
+    size = entries["size", "change5"]
+    assert size["module"] == "fakes"
+    assert size["distribution"] is None and size["version"] is None
+    assert size["description"] == "fake sizes"
+    assert [f["name"] for f in size["fields"]] == ["d_min", "d_max", "d0", "alpha"]
+    assert size["fields"][0] == {
+        "name": "d_min",
+        "type": "number, > 0",
+        "required": False,
+        "default": 2.0,
+        "description": "smallest diameter",
+        "schema": {
+            "default": 2.0,
+            "description": "smallest diameter",
+            "exclusiveMinimum": 0.0,
+            "title": "D Min",
+            "type": "number",
+        },
+    }
+
+
+def test_plugins_kind_filter(capsys):
+    assert main(["plugins", "--kind", "shape", "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert [(e["kind"], e["name"]) for e in data["plugins"]] == [("shape", "octagon")]
+    assert main(["plugins", "--kind", "analysis"]) == 0
+    assert "(none)" in capsys.readouterr().out
+
+
+def test_plugins_unknown_kind_is_a_usage_error(capsys):
+    assert main(["plugins", "--kind", "colour"]) == 2
+    assert "invalid choice: 'colour'" in one_error_line(capsys)
+
+
+def test_plugins_shows_the_distribution_of_builtin_plugins(capsys, monkeypatch):
+    monkeypatch.setattr(
+        regopack.manager, "default_registry", lambda **kw: make_registry(builtins=BUILTINS)
+    )
+    assert main(["plugins", "--kind", "density", "--json"]) == 0
+    [entry] = json.loads(capsys.readouterr().out)["plugins"]
+    assert (entry["module"], entry["distribution"], entry["version"]) == (
+        "regopack.plugins.eta",
+        "regopack",
+        regopack.__version__,
+    )
+    monkeypatch.setenv("COLUMNS", "200")
+    assert main(["plugins", "--kind", "density"]) == 0
+    assert f"regopack {regopack.__version__}" in capsys.readouterr().out
+
+
+# ---------------------------------------------------------------------------
+# regopack schema
+
+
+def test_schema_prints_json_schema(capsys):
+    assert main(["schema"]) == 0
+    schema = json.loads(capsys.readouterr().out)
+    assert schema["$schema"] == "https://json-schema.org/draft/2020-12/schema"
+    assert schema["title"] == "regopack scene"
+    assert schema["properties"]["density"]["properties"]["kind"]["enum"] == ["eta"]
+
+
+def test_schema_output_file(tmp_path, capsys):
+    target = tmp_path / "scene.schema.json"
+    assert main(["schema", "--output", str(target)]) == 0
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert str(target) in captured.err
+    assert json.loads(target.read_text())["title"] == "regopack scene"
+
+
+def test_schema_output_error_is_one_line(tmp_path, capsys):
+    target = tmp_path / "missing" / "scene.schema.json"
+    assert main(["schema", "--output", str(target)]) == 2
+    line = one_error_line(capsys)
+    assert f"cannot write the schema to {target}: No such file or directory" in line

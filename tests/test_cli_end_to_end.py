@@ -18,9 +18,16 @@ from regopack.testing import assert_valid_packing
 
 def test_default_registry_has_the_builtins():
     reg = default_registry(autoload=False)
-    assert reg.names("size") == ["change5"]
-    assert reg.names("shape") == ["octagon"]
-    assert reg.names("insertion") == ["available-arc"]
+    assert reg.names("size") == [
+        "change5",
+        "lognormal",
+        "monodisperse",
+        "rosin-rammler",
+        "tabulated",
+        "uniform",
+    ]
+    assert reg.names("shape") == ["octagon", "random-polygon", "regular", "template"]
+    assert reg.names("insertion") == ["available-arc", "rsa"]
     assert reg.names("density") == ["eta"]
     assert reg.origin("shape", "octagon") == "regopack.plugins.octagon"
     assert default_registry(autoload=False) is not reg

@@ -5,11 +5,15 @@
   models, has a description and is named in the scene format reference, in the
   section of its plugin or model;
 - every relative link in the Markdown documentation points to a file (and, for
-  links into Markdown files, to a heading) that exists.
+  links into Markdown files, to a heading) that exists;
+- every hook's section in the plugin guide has an example;
+- every command of the command line has a section in the CLI reference showing
+  its current usage.
 """
 
 from __future__ import annotations
 
+import argparse
 import re
 from pathlib import Path
 
@@ -17,6 +21,7 @@ import pytest
 from pydantic import BaseModel
 
 from regopack import hookspecs
+from regopack.cli import build_parser
 from regopack.manager import default_registry
 from regopack.plugin_types import KINDS
 from regopack.scene import Domain, Outputs, Phase, PluginRef, Scene
@@ -25,6 +30,7 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 PLUGIN_GUIDE = DOCS / "plugins" / "writing-plugins.md"
 SCENE_FORMAT = DOCS / "reference" / "scene-format.md"
+CLI_REFERENCE = DOCS / "reference" / "cli.md"
 
 CORE_MODELS: dict[type[BaseModel], str] = {
     Scene: "Top level",
@@ -127,6 +133,19 @@ def test_every_hook_has_a_section_in_the_plugin_guide(hook: str) -> None:
     assert body.strip(), f"the section of {hook} in the plugin guide is empty"
 
 
+@pytest.mark.parametrize("hook", hook_names())
+def test_every_hook_section_has_an_example(hook: str) -> None:
+    """An example is a code block in the section or a link to one of the guide's headings."""
+    text = PLUGIN_GUIDE.read_text(encoding="utf-8")
+    body = section(text, f"`{hook}`") or ""
+    links = [t.removeprefix("#") for t in INLINE_LINK.findall(body) if t.startswith("#")]
+    has_code = FENCE.search(body) is not None
+    assert has_code or any(a in anchors(PLUGIN_GUIDE) for a in links), (
+        f"the section of {hook} in the plugin guide has no example (a code block or a link "
+        "to an example in the guide)"
+    )
+
+
 # ---------------------------------------------------------------------------
 # (b) config fields
 
@@ -182,7 +201,36 @@ def test_every_core_scene_field_is_described_and_documented(model: type[BaseMode
 
 
 # ---------------------------------------------------------------------------
-# (c) links
+# (c) command line
+
+
+def subcommands() -> dict[str, argparse.ArgumentParser]:
+    parser = build_parser()
+    [action] = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    return dict(action.choices)
+
+
+def test_there_are_commands() -> None:
+    assert {"run", "plugins", "schema"} <= set(subcommands())
+
+
+@pytest.mark.parametrize("command", list(subcommands()))
+def test_every_command_is_in_the_cli_reference(command: str, monkeypatch) -> None:
+    monkeypatch.setenv("COLUMNS", "80")  # argparse wraps the usage to the terminal's width
+    text = CLI_REFERENCE.read_text(encoding="utf-8")
+    body = section(text, f"`regopack {command}`")
+    assert body is not None, f"{CLI_REFERENCE.name} needs a heading `regopack {command}`"
+    usage = subcommands()[command].format_usage().strip()
+    assert usage in body, f"the usage of regopack {command} changed; it is now:\n{usage}"
+
+
+def test_the_cli_reference_shows_the_current_help(monkeypatch) -> None:
+    monkeypatch.setenv("COLUMNS", "80")
+    assert build_parser().format_help().strip() in CLI_REFERENCE.read_text(encoding="utf-8")
+
+
+# ---------------------------------------------------------------------------
+# (d) links
 
 
 def relative_links(path: Path) -> list[str]:

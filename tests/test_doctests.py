@@ -15,6 +15,11 @@ MODULES = [
     "regopack.scene",
     "regopack.testing",
     "regopack.verify",
+    "regopack.plugins.change5",
+    "regopack.plugins.octagon",
+    "regopack.plugins.eta",
+    "regopack.plugins.rsa",
+    "regopack.plugins.analysis.segment",
 ]
 
 

@@ -32,6 +32,9 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.available_arc",
         "regopack.plugins.eta",
         "regopack.plugins.analysis",
+        "regopack.plugins.size_distributions",
+        "regopack.plugins.shapes",
+        "regopack.plugins.rsa",
     )
 
 
@@ -196,3 +199,39 @@ def test_entry_point_autoload(monkeypatch, env, autoload, expected):
         monkeypatch.setenv(DISABLE_AUTOLOAD_ENV, env)
     build_plugin_manager(autoload=autoload, builtins=())
     assert calls == (["regopack"] if expected else [])
+
+
+def test_info_of_builtin_plugins_names_regopack():
+    import regopack
+    from regopack.manager import PluginInfo
+
+    reg = Registry.from_manager(
+        build_plugin_manager(autoload=False, builtins=("regopack.plugins.eta",))
+    )
+    assert reg.info("density", "eta") == PluginInfo(
+        plugin="regopack.plugins.eta",
+        module="regopack.plugins.eta",
+        distribution="regopack",
+        version=regopack.__version__,
+    )
+    assert reg.info("density", "eta").package == f"regopack {regopack.__version__}"
+
+
+def test_info_of_a_plugin_object_without_a_distribution():
+    reg = fake_registry()
+    info = reg.info("shape", "octagon")
+    assert (info.module, info.distribution, info.version, info.package) == (
+        "fakes",
+        None,
+        None,
+        "-",
+    )
+    with pytest.raises(PluginError, match="unknown shape kind 'nope'"):
+        reg.info("shape", "nope")
+
+
+def test_info_defaults_to_the_origin_for_a_hand_made_registry():
+    spec = ShapeSpec("hexagon", ShapeConfig, lambda c: None)
+    reg = Registry({"shape": {"hexagon": (spec, "my-plugin")}})
+    info = reg.info("shape", "hexagon")
+    assert (info.plugin, info.module, info.distribution) == ("my-plugin", "my-plugin", None)
