@@ -22,6 +22,7 @@ import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba co
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import ShapeGenerator
 from regopack.plugin_types import ShapeSpec
+from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.population import ShapeBatch
 
 FloatArray = NDArray[np.float64]
@@ -87,22 +88,7 @@ def _true_support(s: FloatArray, nx: FloatArray, ny: FloatArray) -> FloatArray:
         px[3] = -big
         py[3] = big
         for k in range(m):
-            a, b, c = nx[k], ny[k], s[p, k]
-            out = 0
-            for j in range(cnt):
-                j2 = j + 1 if j + 1 < cnt else 0
-                f1 = c - (a * px[j] + b * py[j])
-                f2 = c - (a * px[j2] + b * py[j2])
-                if f1 >= 0.0:
-                    qx[out] = px[j]
-                    qy[out] = py[j]
-                    out += 1
-                if (f1 >= 0.0) != (f2 >= 0.0):
-                    u = f1 / (f1 - f2)
-                    qx[out] = px[j] + u * (px[j2] - px[j])
-                    qy[out] = py[j] + u * (py[j2] - py[j])
-                    out += 1
-            cnt = out
+            cnt = clip_halfplane(px, py, cnt, nx[k], ny[k], s[p, k], qx, qy)
             for j in range(cnt):
                 px[j] = qx[j]
                 py[j] = qy[j]

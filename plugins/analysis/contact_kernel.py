@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.halfplane_clip import clip_halfplane
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -308,21 +309,7 @@ def contact_regions(
             hx = nx[e]
             hy = ny[e]
             lim = hx * (vertices[e, 0] + ox) + hy * (vertices[e, 1] + oy) + s
-            out = 0
-            for q in range(cnt):
-                q2 = q + 1 if q + 1 < cnt else 0
-                f1 = lim - (hx * ax[q] + hy * ay[q])
-                f2 = lim - (hx * ax[q2] + hy * ay[q2])
-                if f1 >= 0.0:
-                    bx[out] = ax[q]
-                    by[out] = ay[q]
-                    out += 1
-                if (f1 >= 0.0) != (f2 >= 0.0):
-                    u = f1 / (f1 - f2)
-                    bx[out] = ax[q] + u * (ax[q2] - ax[q])
-                    by[out] = ay[q] + u * (ay[q2] - ay[q])
-                    out += 1
-            cnt = out
+            cnt = clip_halfplane(ax, ay, cnt, hx, hy, lim, bx, by)
             for q in range(cnt):
                 ax[q] = bx[q]
                 ay[q] = by[q]
