@@ -1,4 +1,4 @@
-"""Command line: ``regopack run | scenes | config | verify | analyze | plugins | schema``.
+"""Command line: ``regopack run | scenes | config | verify | analyze | export | plugins | schema``.
 
 A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
 TOML file, a missing file, a bad option) prints one line
@@ -194,6 +194,44 @@ def build_parser() -> argparse.ArgumentParser:
     analyze.add_argument("--no-figures", action="store_true", help="draw no figures")
     analyze.set_defaults(handler=_cmd_analyze)
 
+    export = sub.add_parser(
+        "export",
+        help="write a packing as CSV, JSON, SVG, VTK or a LAMMPS data file",
+        description=(
+            "Write a saved packing in another program's file format with an exporter "
+            "plugin (see 'regopack plugins --kind export')."
+        ),
+    )
+    export.add_argument("packing", type=Path, metavar="PACKING", help="packing file (.npz)")
+    export.add_argument(
+        "--to",
+        required=True,
+        metavar="FORMAT",
+        help="exporter name: csv, json, svg, vtk, lammps or one from a plugin",
+    )
+    export.add_argument(
+        "--out",
+        type=Path,
+        metavar="PATH",
+        help="output file, or a directory (default: the packing's name with the format's suffix)",
+    )
+    export.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="FIELD=VALUE",
+        help="set an exporter parameter, e.g. --set rounding=0.05 (repeatable)",
+    )
+    export.add_argument(
+        "--analyses",
+        action="append",
+        default=[],
+        metavar="NAME[,NAME...]",
+        help="run these analyzers first and pass their results on (vtk adds Z from coordination)",
+    )
+    export.set_defaults(handler=_cmd_export)
+
     plugins = sub.add_parser(
         "plugins",
         help="list the plugins with their origin and parameters",
@@ -257,6 +295,8 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     table.add_row("summary", str(outcome.summary_path))
     if outcome.analysis is not None:
         table.add_row("analysis", str(outcome.analysis.report))
+    for path in outcome.exports:
+        table.add_row("export", str(path))
     out.print(table)
     return EXIT_OK
 
@@ -362,12 +402,48 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
     return EXIT_OK
 
 
+def _exporter_params(overrides: Sequence[str]) -> dict[str, Any]:
+    """Return the exporter parameters given as ``--set FIELD=VALUE``."""
+    params: dict[str, Any] = {}
+    for text in overrides:
+        key, sep, raw = text.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"--set {text!r}: expected FIELD=VALUE, e.g. rounding=0.05")
+        try:
+            value = tomllib.loads("v = " + raw.strip())["v"]
+        except tomllib.TOMLDecodeError:
+            value = raw.strip()
+        params[key.strip()] = value
+    return params
+
+
+def _cmd_export(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.analysis import run_analyses
+    from regopack.export import build_exporter, export_packing, output_path
+    from regopack.manager import default_registry
+    from regopack.packing import load
+
+    registry = default_registry()
+    params = _exporter_params(args.overrides)
+    exporter = build_exporter(registry, args.to, params)
+    packing = load(args.packing)
+    names = _analyzer_names(args.analyses)
+    analyzers = run_analyses(packing, registry, [(n, {}) for n in names]) if names else None
+    path = output_path(exporter, args.packing, args.out)
+    written = export_packing(
+        packing, args.to, path, registry=registry, params=params, analyses=analyzers
+    )
+    out.print(f"wrote {written}", soft_wrap=True, markup=False, highlight=False)
+    return EXIT_OK
+
+
 KIND_TITLES: dict[str, str] = {
     "size": "size distribution, scene section [size]",
     "shape": "shape generator, scene key phases[].shape",
     "insertion": "insertion strategy, scene section [insertion]",
     "density": "density controller, scene section [density]",
     "analysis": "analyzer, scene key outputs.analyses",
+    "export": "exporter, scene key outputs.exports and regopack export --to",
 }
 """What each plugin kind is and where a scene selects it."""
 

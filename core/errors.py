@@ -25,3 +25,7 @@ class PackingFileError(RegopackError):
 
 class GeometryError(RegopackError):
     """A particle or domain geometry is invalid (e.g. a particle does not fit the domain)."""
+
+
+class ExportError(RegopackError):
+    """A packing cannot be exported, or an exported file cannot be read back."""

@@ -13,6 +13,7 @@ import pluggy
 from regopack.plugin_types import (
     AnalyzerSpec,
     DensityControllerSpec,
+    ExporterSpec,
     InserterSpec,
     ShapeSpec,
     SizeDistributionSpec,
@@ -105,5 +106,22 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
         @hookimpl
         def regopack_analyzers():
             return [AnalyzerSpec("density", DensityConfig, Density)]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_exporters() -> Iterable[ExporterSpec]:
+    """Return the exporters (file formats of ``regopack export``) this plugin provides.
+
+    Called once when the registry is built. Not ``firstresult``.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_exporters():
+            return [ExporterSpec("xyz", XyzConfig, XyzExporter)]
     """
     raise NotImplementedError

@@ -1,4 +1,4 @@
-"""Interfaces of the five plugin kinds.
+"""Interfaces of the six plugin kinds.
 
 A plugin supplies an implementation of one of these classes through a spec
 record (:mod:`regopack.plugin_types`). The core never depends on a concrete
@@ -10,6 +10,7 @@ from __future__ import annotations
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Self
 
 import numpy as np
@@ -157,3 +158,35 @@ class Analyzer(ABC):
         Columns of one table have equal length. The default has no tables.
         """
         return {}
+
+
+class Exporter(ABC):
+    """Writer of a packing in a file format that other programs read.
+
+    ``suffix`` is the file name suffix (with its dot, e.g. ``".vtp"``) of the
+    main file the exporter writes; the command line uses it to name the output.
+    """
+
+    suffix: str = ""
+
+    @abstractmethod
+    def export(
+        self,
+        packing: Packing,
+        path: Path,
+        *,
+        analyses: Mapping[str, Analyzer] | None = None,
+    ) -> Path:
+        """Write ``packing`` to ``path``; return the path of the main file written.
+
+        Parameters
+        ----------
+        packing
+            The packing to write.
+        path
+            Main output file. An exporter may write companion files beside it,
+            named after its stem.
+        analyses
+            Computed analyzers by name (e.g. ``"coordination"``); an exporter
+            may add their per-particle results to the file and ignores the rest.
+        """

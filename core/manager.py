@@ -7,7 +7,8 @@ autoloading is turned off), and rejects hook implementations that match no
 hook specification.
 
 :class:`Registry` calls every hook once and flattens the spec records by plugin
-kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``).
+kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``,
+``"export"``).
 """
 
 from __future__ import annotations
@@ -47,6 +48,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.size_distributions",
     "regopack.plugins.shapes",
     "regopack.plugins.rsa",
+    "regopack.plugins.exporters",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 
@@ -62,6 +64,7 @@ HOOK_OF_KIND: dict[str, str] = {
     "insertion": "regopack_inserters",
     "density": "regopack_density_controllers",
     "analysis": "regopack_analyzers",
+    "export": "regopack_exporters",
 }
 """Hook that provides each plugin kind (the keys of :data:`regopack.plugin_types.KINDS`)."""
 

@@ -16,6 +16,7 @@ from pydantic import BaseModel
 from regopack.interfaces import (
     Analyzer,
     DensityController,
+    Exporter,
     InsertionStrategy,
     ShapeGenerator,
     SizeDistribution,
@@ -70,11 +71,16 @@ class AnalyzerSpec(PluginSpec[Analyzer]):
     """Spec of an analyzer plugin."""
 
 
+class ExporterSpec(PluginSpec[Exporter]):
+    """Spec of an exporter plugin."""
+
+
 KINDS: dict[str, type[PluginSpec[Any]]] = {
     "size": SizeDistributionSpec,
     "shape": ShapeSpec,
     "insertion": InserterSpec,
     "density": DensityControllerSpec,
     "analysis": AnalyzerSpec,
+    "export": ExporterSpec,
 }
 """Plugin kinds by the scene section that selects them."""

@@ -12,10 +12,11 @@ from typing import Any
 import numpy as np
 
 from regopack.analysis import AnalysisFiles, run_analyses, write_analysis
-from regopack.errors import ConfigError, PluginError
+from regopack.errors import ConfigError, ExportError, PluginError
 from regopack.interfaces import (
     Analyzer,
     DensityController,
+    Exporter,
     InsertionResult,
     InsertionStrategy,
     ProgressCallback,
@@ -51,6 +52,8 @@ class RunOutcome:
     analysis
         The analysis files (under ``<out_dir>/analysis``), when the scene lists
         analyses and files were written.
+    exports
+        Files written by the exporters of ``outputs.exports``, in scene order.
     """
 
     packing: Packing
@@ -58,6 +61,7 @@ class RunOutcome:
     packing_path: Path | None = None
     summary_path: Path | None = None
     analysis: AnalysisFiles | None = None
+    exports: tuple[Path, ...] = ()
 
 
 def _build(plugin: ResolvedPlugin[Any], interface: type[Any], what: str) -> Any:
@@ -178,8 +182,10 @@ def run_scene(
     The analyzers in ``outputs.analyses`` (and those they require) run after
     packing; the summary holds the results of the listed ones, and
     :func:`regopack.analysis.write_analysis` writes all of them into
-    ``<out_dir>/analysis``. Files are written atomically: an interrupted run never leaves a partial
-    file in place of a previous one.
+    ``<out_dir>/analysis``. The exporters in ``outputs.exports`` then write
+    the packing beside the packing file, as ``<packing stem><suffix>``, with
+    the computed analyzers passed on. Files are written atomically: an
+    interrupted run never leaves a partial file in place of a previous one.
     """
     start = time.perf_counter()
     rng = np.random.default_rng(resolved.seed)
@@ -229,6 +235,7 @@ def run_scene(
 
     packing_path = summary_path = None
     analysis = None
+    exports: tuple[Path, ...] = ()
     if out_dir is not None:
         out = Path(out_dir)
         packing_path = out / resolved.scene.outputs.packing
@@ -247,7 +254,25 @@ def run_scene(
             analysis = write_analysis(
                 out / "analysis", packing, analyzers, figures=figures, packing_path=packing_path
             )
-    return RunOutcome(packing, summary, packing_path, summary_path, analysis)
+        exports = tuple(
+            _export(packing, plugin, packing_path, analyzers) for plugin in resolved.exports
+        )
+    return RunOutcome(packing, summary, packing_path, summary_path, analysis, exports)
+
+
+def _export(
+    packing: Packing,
+    plugin: ResolvedPlugin[Any],
+    packing_path: Path,
+    analyzers: Mapping[str, Analyzer],
+) -> Path:
+    """Write ``packing`` with one exporter of ``outputs.exports``, beside ``packing_path``."""
+    exporter: Exporter = _build(plugin, Exporter, "export")
+    path = packing_path.with_suffix(exporter.suffix)
+    try:
+        return exporter.export(packing, path, analyses=analyzers or None)
+    except OSError as err:
+        raise ExportError(f"cannot write {path}: {err.strerror or err}") from err
 
 
 def _params(plugin: ResolvedPlugin[Any]) -> dict[str, Any]:

@@ -128,6 +128,13 @@ class Outputs(BaseModel):
             "with its parameters, e.g. {kind = \"contacts\", tol = 0.1}."
         ),
     )
+    exports: list[Annotated[str, Field(min_length=1)] | PluginRef] = Field(
+        default_factory=list,
+        description=(
+            "Exporters to write after the run, beside the packing file: a name (defaults), "
+            "or an inline table with its parameters, e.g. {kind = \"lammps\", rounding = 0.05}."
+        ),
+    )
 
 
 class Scene(BaseModel):
@@ -490,6 +497,8 @@ class ResolvedScene:
         Phases in scene order.
     analyses
         Analyzers requested in ``outputs.analyses``.
+    exports
+        Exporters requested in ``outputs.exports``.
     registry
         Registry the plugins came from (to look up analyzers' requirements).
     """
@@ -501,6 +510,7 @@ class ResolvedScene:
     density: ResolvedPlugin[Any]
     analyses: tuple[ResolvedPlugin[Any], ...]
     registry: Registry
+    exports: tuple[ResolvedPlugin[Any], ...] = ()
 
     @property
     def name(self) -> str:
@@ -552,6 +562,10 @@ class ResolvedScene:
                 "analyses": [
                     a.kind if isinstance(item, str) else a.to_dict()
                     for a, item in zip(self.analyses, s.outputs.analyses, strict=True)
+                ],
+                "exports": [
+                    e.kind if isinstance(item, str) else e.to_dict()
+                    for e, item in zip(self.exports, s.outputs.exports, strict=True)
                 ],
             },
         }
@@ -619,6 +633,17 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
         )
         for i, item in enumerate(scene.outputs.analyses)
     )
+    exports = tuple(
+        _resolve_ref(
+            scene,
+            registry,
+            "export",
+            PluginRef(kind=item) if isinstance(item, str) else item,
+            ("outputs", "exports", i),
+            kind_loc=("outputs", "exports", i) if isinstance(item, str) else None,
+        )
+        for i, item in enumerate(scene.outputs.exports)
+    )
     return ResolvedScene(
         scene=scene,
         size=size,
@@ -627,4 +652,5 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
         density=density,
         analyses=analyses,
         registry=registry,
+        exports=exports,
     )

@@ -52,6 +52,7 @@ SECTION_TITLES: dict[str, str] = {
     "insertion": "insertion strategy",
     "density": "density controller",
     "analysis": "analyzer",
+    "export": "exporter",
 }
 """Words for each plugin kind, used in titles and descriptions."""
 
@@ -238,6 +239,13 @@ def scene_schema(registry: Registry) -> JsonObject:
     }
     by_name["enum"] = names
     analyses["items"] = {"anyOf": [by_name, sections["analysis"]]}
+    exports = defs["Outputs"]["properties"]["exports"]
+    exporter_by_name: JsonObject = {
+        "type": "string",
+        "description": "Name of an exporter, run with its default parameters.",
+        "enum": registry.names("export"),
+    }
+    exports["items"] = {"anyOf": [exporter_by_name, sections["export"]]}
 
     leftover = [n for n in _walk(schema) if n.get("$ref") == "#/$defs/PluginRef"]
     if leftover:  # pragma: no cover - a new plugin section must be handled above

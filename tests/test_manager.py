@@ -35,6 +35,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.size_distributions",
         "regopack.plugins.shapes",
         "regopack.plugins.rsa",
+        "regopack.plugins.exporters",
     )
 
 

@@ -340,7 +340,12 @@ def test_resolved_dict_has_all_defaults_and_round_trips(registry):
     assert d["insertion"]["tau"] == 0.65
     assert d["insertion"]["fail_after"] is None
     assert d["domain"] == {"kind": "rectangle", "width": 800.0, "height": 800.0, "center": [0, 0]}
-    assert d["outputs"] == {"packing": "packing.npz", "summary": "summary.json", "analyses": []}
+    assert d["outputs"] == {
+        "packing": "packing.npz",
+        "summary": "summary.json",
+        "analyses": [],
+        "exports": [],
+    }
     text = resolved.to_toml()
     back = tomllib.loads(text)
     # None values are left out of TOML; the model default fills them again
