@@ -277,11 +277,27 @@ def _resolve(args: argparse.Namespace) -> Any:
     return resolve_scene(scene, default_registry())
 
 
+def _kernels_not_cached() -> bool:
+    """Return whether the compiled-kernel cache folder holds no compiled code yet."""
+    import os
+    from pathlib import Path
+
+    from regopack.jit import kernel_cache_dir
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or kernel_cache_dir())
+    return not any(folder.rglob("*.nbi")) if folder.is_dir() else True
+
+
 def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     from regopack.run import default_out_dir, run_scene, summary_rows
 
     resolved = _resolve(args)
     out_dir = args.out if args.out is not None else default_out_dir(resolved)
+    if not args.quiet and _kernels_not_cached():
+        err.print(
+            "[dim]compiling the packing kernels (first run after an install or upgrade; "
+            "about 15-30 s, then cached)[/dim]"
+        )
     with _progress_bar(err, not args.quiet, f"packing {resolved.name}") as progress:
         outcome = run_scene(resolved, out_dir, progress=progress)
     if args.quiet:
