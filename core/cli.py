@@ -266,6 +266,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="write the schema to FILE instead of standard output",
     )
     schema.set_defaults(handler=_cmd_schema)
+
+    from regopack.sweep_cli import add_sweep_parser
+
+    add_sweep_parser(sub)
     return parser
 
 

@@ -1,0 +1,174 @@
+"""The ``regopack sweep`` command: run an experiment file (see :mod:`regopack.experiment`).
+
+``regopack sweep EXPERIMENT.toml [--out DIR] [--workers N] [--scheduler ADDR]``
+validates every run's scene, runs the grid with a progress display (runs
+finished out of the total, failures), and prints a table of the runs. It exits
+with status 0 when every run finished and 1 when some failed; a bad experiment
+file raises :class:`~regopack.errors.ConfigError` (one line, status 2 in
+:func:`regopack.cli.main`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+from rich.table import Table
+from rich.text import Text
+
+if TYPE_CHECKING:
+    from regopack.experiment import ExperimentResult
+
+__all__ = ["add_sweep_parser", "run_sweep_command"]
+
+EXIT_OK = 0
+EXIT_FAILED_RUNS = 1
+
+_TABLE_METRICS = 4
+"""Metric columns shown in the final table (all of them are in results.csv)."""
+
+
+def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
+    """Add the ``sweep`` command to the ``regopack`` sub-command parsers.
+
+    The parser's ``handler`` default is ``handler(args, out, err) -> int``, the
+    convention of :func:`regopack.cli.main`.
+    """
+    sweep = subparsers.add_parser(
+        "sweep",
+        help="run an experiment: a sweep of scene values, collected into results.csv",
+        description=(
+            "Run every combination of the scene values an experiment file lists, each "
+            "into its own folder, and collect the summaries into results.csv. Finished "
+            "runs are skipped when the sweep is started again."
+        ),
+    )
+    sweep.add_argument("experiment", type=Path, metavar="EXPERIMENT", help="experiment file (TOML)")
+    sweep.add_argument(
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output directory (default: runs/<experiment name>)",
+    )
+    sweep.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="local worker processes (default: the number of CPUs; 1 runs in-process)",
+    )
+    sweep.add_argument(
+        "--scheduler",
+        metavar="ADDR",
+        help="run on a Dask cluster, e.g. tcp://host:8786 (needs regopack[dask])",
+    )
+    sweep.add_argument("--quiet", action="store_true", help="print no progress and no table")
+    sweep.set_defaults(handler=_handler)
+
+
+def _handler(args: argparse.Namespace, out: Console, err: Console) -> int:
+    return run_sweep_command(args, out, err)
+
+
+def _fmt(value: Any) -> str:
+    if value is None:
+        return "n/a"
+    if isinstance(value, float):
+        return "n/a" if math.isnan(value) else f"{value:.4g}"
+    if isinstance(value, int) and not isinstance(value, bool):
+        return f"{value:,}"
+    return str(value)
+
+
+def _results_table(outcome: ExperimentResult) -> Table:
+    """One row per run: its id, status, the first metrics and the error of a failed run."""
+    metrics = list(outcome.metrics[:_TABLE_METRICS])
+    table = Table(title=f"regopack sweep: {outcome.experiment.experiment_name}")
+    table.add_column("run", style="bold")
+    table.add_column("status")
+    for name in metrics:
+        table.add_column(name, justify="right")
+    if outcome.failed:
+        table.add_column("error", overflow="fold")
+    for run in outcome.runs:
+        if run.ok:
+            status = Text("done (reused)" if run.reused else "done")
+            cells = [Text(_fmt(run.metrics.get(m))) for m in metrics]
+        else:
+            status = Text("failed", style="red")
+            cells = [Text("") for _ in metrics]
+        if outcome.failed:
+            cells.append(Text(run.error or ""))
+        table.add_row(Text(run.run_id), status, *cells)
+    return table
+
+
+def run_sweep_command(
+    args: argparse.Namespace, console: Console, progress_console: Console | None = None
+) -> int:
+    """Run ``regopack sweep`` with parsed arguments.
+
+    Parameters
+    ----------
+    args
+        Namespace with ``experiment``, ``out``, ``workers``, ``scheduler`` and
+        ``quiet`` (missing attributes take their defaults).
+    console
+        Where the final table goes.
+    progress_console
+        Where the progress display goes (default: ``console``).
+
+    Returns
+    -------
+    int
+        0 when every run finished, 1 when some failed.
+    """
+    from regopack.experiment import RunResult, run_experiment
+
+    quiet = bool(getattr(args, "quiet", False))
+    live = progress_console if progress_console is not None else console
+    columns = (
+        TextColumn("{task.description}"),
+        BarColumn(bar_width=30),
+        MofNCompleteColumn(),
+        TextColumn("runs, {task.fields[failed]} failed, {task.fields[reused]} reused"),
+        TimeElapsedColumn(),
+        TimeRemainingColumn(),
+    )
+    with Progress(*columns, console=live, transient=False, disable=quiet) as bar:
+        task = bar.add_task(f"sweep {args.experiment}", total=None, failed=0, reused=0)
+        failed = reused = 0
+
+        def update(result: RunResult, finished: int, total: int) -> None:
+            nonlocal failed, reused
+            failed += not result.ok
+            reused += result.reused
+            bar.update(task, completed=finished, total=total, failed=failed, reused=reused)
+
+        outcome = run_experiment(
+            args.experiment,
+            getattr(args, "out", None),
+            workers=getattr(args, "workers", None),
+            progress=update,
+            scheduler=getattr(args, "scheduler", None),
+        )
+    if not quiet:
+        console.print(_results_table(outcome))
+        done = len(outcome.runs) - len(outcome.failed)
+        console.print(
+            Text(
+                f"{done}/{len(outcome.runs)} runs done, {len(outcome.failed)} failed; "
+                f"results: {outcome.results_path}"
+            )
+        )
+    return EXIT_OK if outcome.ok else EXIT_FAILED_RUNS
