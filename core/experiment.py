@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
+import numpy as np
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -56,9 +57,11 @@ from pydantic import (
 from regopack import _toml
 from regopack.errors import ConfigError, RegopackError
 from regopack.manager import Registry, default_registry
-from regopack.packing import _atomic_file, write_json_atomic
+from regopack.packing import Packing, _atomic_file, write_json_atomic
 from regopack.run import run_scene
 from regopack.scene import ResolvedScene, builtin_scenes, load_scene, resolve_scene
+from regopack.verify import verify
+from regopack.voids import void_metrics
 
 __all__ = [
     "DEFAULT_METRICS",
@@ -73,6 +76,7 @@ __all__ = [
     "experiment_from_dict",
     "load_experiment",
     "run_experiment",
+    "verify_metrics",
 ]
 
 DEFAULT_METRICS: tuple[str, ...] = (
@@ -217,6 +221,21 @@ class Experiment(BaseModel):
     )
     figures: bool = Field(
         False, description="Draw the analysis figures of every run (slow for large sweeps)."
+    )
+    verify: bool = Field(
+        False,
+        description=(
+            "Check every packing (regopack.verify) and add verify.overlap_pairs, "
+            "verify.worst_overlap, verify.outside, verify.any_nan and verify.ok to its metrics."
+        ),
+    )
+    voids: bool = Field(
+        False,
+        description=(
+            "Rasterise the free space of every packing's interior window and add "
+            "voids.void_spans (the largest void cluster touches two opposite sides) and "
+            "voids.largest_void_fraction to its metrics (see regopack.voids)."
+        ),
     )
 
     _source: str | None = PrivateAttr(default=None)
@@ -661,6 +680,12 @@ def _collect(summary: Mapping[str, Any], metrics: Sequence[str] | None) -> dict[
     if metrics is not None:
         return {m: _lookup(summary, m) for m in metrics}
     out = {m: summary.get(m) for m in DEFAULT_METRICS}
+    for group in ("verify", "voids"):
+        values = summary.get(group)
+        if isinstance(values, Mapping):
+            for key, value in values.items():
+                if _is_scalar(value):
+                    out[f"{group}.{key}"] = value
     analyses = summary.get("analyses")
     if isinstance(analyses, Mapping):
         for name, results in analyses.items():
@@ -731,6 +756,33 @@ class _Job:
     overrides: tuple[str, ...]
     out_dir: str
     figures: bool
+    verify: bool = False
+    voids: bool = False
+
+
+def verify_metrics(packing: Packing) -> dict[str, Any]:
+    """Compute the ``verify`` metrics of one packing.
+
+    ``overlap_pairs`` and ``outside`` count the overlapping pairs and the
+    particles leaving the domain, ``worst_overlap`` is the largest overlap as a
+    fraction of the smaller area (0 when none), ``any_nan`` tells whether a
+    placed particle has a NaN centre or outline, and ``ok`` sums it up.
+    """
+    placed = packing.placed
+    any_nan = bool(
+        np.isnan(packing.centre[placed]).any()
+        or np.isnan(packing.vertices).any()
+        or np.isnan(packing.radius).any()
+    )
+    report = verify(packing)
+    worst = report.worst_overlap[2] if report.worst_overlap is not None else 0.0
+    return {
+        "overlap_pairs": report.n_overlapping_pairs,
+        "worst_overlap": float(worst),
+        "outside": report.n_outside,
+        "any_nan": any_nan,
+        "ok": bool(report.ok and not any_nan),
+    }
 
 
 def _one_line(exc: BaseException) -> str:
@@ -746,9 +798,17 @@ def _run_job(job: _Job) -> tuple[dict[str, Any] | None, str | None]:
         scene = load_scene(job.base, job.overrides)
         resolved = resolve_scene(scene, default_registry())
         outcome = run_scene(resolved, job.out_dir, figures=job.figures)
+        summary = outcome.summary
+        if job.verify or job.voids:
+            if job.verify:
+                summary["verify"] = verify_metrics(outcome.packing)
+            if job.voids:
+                summary["voids"] = void_metrics(outcome.packing)
+            if outcome.summary_path is not None:
+                write_json_atomic(outcome.summary_path, summary)
     except Exception as exc:  # a failed run is recorded; the others go on
         return None, _one_line(exc)
-    return outcome.summary, None
+    return summary, None
 
 
 def _submit_local(
@@ -966,6 +1026,8 @@ def run_experiment(
                 overrides=run.overrides,
                 out_dir=str(run_dir.resolve()),
                 figures=experiment.figures,
+                verify=experiment.verify,
+                voids=experiment.voids,
             )
         )
     _write_csv(results_path, experiment, finished)

@@ -1,8 +1,10 @@
 """The ``regopack sweep`` command: run an experiment file (see :mod:`regopack.experiment`).
 
 ``regopack sweep EXPERIMENT.toml [--out DIR] [--workers N] [--scheduler ADDR]``
-validates every run's scene, runs the grid with a progress display (runs
-finished out of the total, failures), and prints a table of the runs. It exits
+(or ``regopack sweep --builtin NAME``) validates every run's scene, runs the
+grid with a progress display (runs finished out of the total, failures),
+prints a table of the runs and draws the plots its results allow (see
+:mod:`regopack.experiment_plots`). It exits
 with status 0 when every run finished and 1 when some failed; a bad experiment
 file raises :class:`~regopack.errors.ConfigError` (one line, status 2 in
 :func:`regopack.cli.main`).
@@ -54,7 +56,23 @@ def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
             "runs are skipped when the sweep is started again."
         ),
     )
-    sweep.add_argument("experiment", type=Path, metavar="EXPERIMENT", help="experiment file (TOML)")
+    sweep.add_argument(
+        "experiment",
+        type=Path,
+        nargs="?",
+        metavar="EXPERIMENT",
+        help="experiment file (TOML); not with --builtin",
+    )
+    sweep.add_argument(
+        "--builtin",
+        metavar="NAME",
+        help="run a built-in experiment instead of a file (see --list-builtin)",
+    )
+    sweep.add_argument(
+        "--list-builtin",
+        action="store_true",
+        help="list the built-in experiments and exit",
+    )
     sweep.add_argument(
         "--out",
         type=Path,
@@ -73,6 +91,9 @@ def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
         help="run on a Dask cluster, e.g. tcp://host:8786 (needs regopack[dask])",
     )
     sweep.add_argument("--quiet", action="store_true", help="print no progress and no table")
+    sweep.add_argument(
+        "--no-plots", action="store_true", help="do not draw the plots into DIR/plots"
+    )
     sweep.set_defaults(handler=_handler)
 
 
@@ -121,8 +142,9 @@ def run_sweep_command(
     Parameters
     ----------
     args
-        Namespace with ``experiment``, ``out``, ``workers``, ``scheduler`` and
-        ``quiet`` (missing attributes take their defaults).
+        Namespace with ``experiment``, ``builtin``, ``list_builtin``, ``out``,
+        ``workers``, ``scheduler``, ``quiet`` and ``no_plots`` (missing
+        attributes take their defaults).
     console
         Where the final table goes.
     progress_console
@@ -133,8 +155,22 @@ def run_sweep_command(
     int
         0 when every run finished, 1 when some failed.
     """
+    from regopack.errors import ConfigError
     from regopack.experiment import RunResult, run_experiment
+    from regopack.experiments import builtin_experiment_path, builtin_experiments
 
+    if getattr(args, "list_builtin", False):
+        for name, description in builtin_experiments().items():
+            console.print(Text(f"{name:<10} {description}"), soft_wrap=True)
+        return EXIT_OK
+    builtin = getattr(args, "builtin", None)
+    experiment_path = getattr(args, "experiment", None)
+    if builtin is not None:
+        if experiment_path is not None:
+            raise ConfigError("give an experiment file or --builtin NAME, not both")
+        experiment_path = builtin_experiment_path(builtin)
+    elif experiment_path is None:
+        raise ConfigError("give an experiment file, --builtin NAME or --list-builtin")
     quiet = bool(getattr(args, "quiet", False))
     live = progress_console if progress_console is not None else console
     columns = (
@@ -146,7 +182,7 @@ def run_sweep_command(
         TimeRemainingColumn(),
     )
     with Progress(*columns, console=live, transient=False, disable=quiet) as bar:
-        task = bar.add_task(f"sweep {args.experiment}", total=None, failed=0, reused=0)
+        task = bar.add_task(f"sweep {builtin or experiment_path}", total=None, failed=0, reused=0)
         failed = reused = 0
 
         def update(result: RunResult, finished: int, total: int) -> None:
@@ -156,14 +192,21 @@ def run_sweep_command(
             bar.update(task, completed=finished, total=total, failed=failed, reused=reused)
 
         outcome = run_experiment(
-            args.experiment,
+            experiment_path,
             getattr(args, "out", None),
             workers=getattr(args, "workers", None),
             progress=update,
             scheduler=getattr(args, "scheduler", None),
         )
+    plots: list[Path] = []
+    if not getattr(args, "no_plots", False):
+        from regopack.experiment_plots import plot_experiment
+
+        plots = plot_experiment(outcome.out_dir)
     if not quiet:
         console.print(_results_table(outcome))
+        if plots:
+            console.print(Text(f"plots: {outcome.out_dir / 'plots'} ({len(plots)} files)"))
         done = len(outcome.runs) - len(outcome.failed)
         console.print(
             Text(
