@@ -126,3 +126,17 @@ def _value(value: Any) -> str:
     if hasattr(value, "item"):
         return _value(value.item())
     raise TypeError(f"cannot write a {type(value).__name__} as TOML")
+
+
+def first_comment(text: str) -> str:
+    """Return the text of a TOML document's leading comment line, or ``""``.
+
+    Only comment lines before the first non-blank, non-comment line count.
+    """
+    for line in text.splitlines():
+        stripped = line.strip()
+        if stripped.startswith("#"):
+            return stripped.lstrip("#").strip()
+        if stripped:
+            return ""
+    return ""

@@ -270,15 +270,8 @@ def builtin_scenes() -> dict[str, str]:
     for entry in sorted(resources.files("regopack.scenes").iterdir(), key=lambda e: e.name):
         if not entry.name.endswith(".toml"):
             continue
-        description = ""
-        for line in entry.read_text(encoding="utf-8").splitlines():
-            stripped = line.strip()
-            if stripped.startswith("#"):
-                description = stripped.lstrip("#").strip()
-                break
-            if stripped:
-                break
-        out[entry.name.removesuffix(".toml")] = description
+        text = entry.read_text(encoding="utf-8")
+        out[entry.name.removesuffix(".toml")] = _toml.first_comment(text)
     return out
 
 

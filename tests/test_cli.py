@@ -6,6 +6,7 @@ import sys
 import tomllib
 
 import pytest
+from cli_helpers import one_error_line
 from fakes import fake_registry
 
 import regopack
@@ -22,14 +23,6 @@ def fake_plugins(monkeypatch, tmp_path):
     """Every command sees the fake plugins and runs in a temporary directory."""
     monkeypatch.setattr(regopack.manager, "default_registry", lambda **kw: fake_registry())
     monkeypatch.chdir(tmp_path)
-
-
-def one_error_line(capsys) -> str:
-    captured = capsys.readouterr()
-    lines = captured.err.splitlines()
-    assert len(lines) == 1, captured.err
-    assert lines[0].startswith("regopack: error: ")
-    return lines[0]
 
 
 def test_version(capsys):

@@ -9,6 +9,8 @@ import pytest
 
 pytest.importorskip("regopack.plugins.available_arc")
 
+from cli_helpers import one_error_line
+
 from regopack.cli import main
 from regopack.manager import default_registry
 from regopack.packing import load, save
@@ -23,14 +25,6 @@ def packing_file(tmp_path_factory):
     path = tmp_path_factory.mktemp("run") / "packing.npz"
     save(run_scene(scene).packing, path)
     return path
-
-
-def one_error_line(capsys) -> str:
-    captured = capsys.readouterr()
-    lines = captured.err.splitlines()
-    assert len(lines) == 1, captured.err
-    assert lines[0].startswith("regopack: error: ")
-    return lines[0]
 
 
 @pytest.mark.parametrize(

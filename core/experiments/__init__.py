@@ -9,6 +9,7 @@ from __future__ import annotations
 from importlib import resources
 from pathlib import Path
 
+from regopack._toml import first_comment
 from regopack.errors import ConfigError
 
 __all__ = ["builtin_experiment_path", "builtin_experiments"]
@@ -29,15 +30,7 @@ def builtin_experiments() -> dict[str, str]:
         name = entry.name
         if not name.endswith(".toml") or name.endswith(_SCENE_SUFFIX):
             continue
-        description = ""
-        for line in entry.read_text(encoding="utf-8").splitlines():
-            stripped = line.strip()
-            if stripped.startswith("#"):
-                description = stripped.lstrip("#").strip()
-                break
-            if stripped:
-                break
-        out[name.removesuffix(".toml")] = description
+        out[name.removesuffix(".toml")] = first_comment(entry.read_text(encoding="utf-8"))
     return out
 
 
