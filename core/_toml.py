@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping, Sequence
+from pathlib import Path
 from typing import Any
 
 __all__ = ["dumps"]
@@ -140,3 +141,38 @@ def first_comment(text: str) -> str:
         if stripped:
             return ""
     return ""
+
+
+def parse_toml(text: str, source: str) -> dict[str, Any]:
+    """Parse a TOML document; a syntax error becomes one line naming ``source``."""
+    import tomllib
+
+    from regopack.errors import ConfigError
+
+    try:
+        return tomllib.loads(text)
+    except tomllib.TOMLDecodeError as err:
+        raise ConfigError(f"{source}: invalid TOML: {' '.join(str(err).split())}") from err
+
+
+def read_text_file(path: Path, what: str, missing_hint: str = "") -> str:
+    """Read a UTF-8 file; a missing or unreadable one is one line naming it.
+
+    ``what`` names the kind of file (``"scene"``, ``"experiment"``);
+    ``missing_hint`` is appended to the no-such-file message.
+    """
+    from regopack.errors import ConfigError
+
+    source = str(path)
+    if not path.is_file():
+        article = "an" if what[:1] in "aeiou" else "a"
+        problem = (
+            f"is a directory, not {article} {what} file"
+            if path.is_dir()
+            else f"no such {what} file"
+        )
+        raise ConfigError(f"{source}: {problem}{missing_hint}")
+    try:
+        return path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as err:
+        raise ConfigError(f"{source}: cannot read the {what} file: {err}") from err

@@ -33,7 +33,6 @@ import json
 import math
 import os
 import re
-import tomllib
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -347,17 +346,7 @@ def load_experiment(path: str | Path) -> Experiment:
     """
     path = Path(path)
     source = str(path)
-    if not path.is_file():
-        what = "is a directory, not an experiment file" if path.is_dir() else "no such file"
-        raise ConfigError(f"{source}: {what}")
-    try:
-        text = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as err:
-        raise ConfigError(f"{source}: cannot read the experiment file: {err}") from err
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ConfigError(f"{source}: invalid TOML: {' '.join(str(err).split())}") from err
+    data = _toml.parse_toml(_toml.read_text_file(path, "experiment"), source)
     return experiment_from_dict(data, source=source)
 
 

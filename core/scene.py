@@ -125,14 +125,14 @@ class Outputs(BaseModel):
         default_factory=list,
         description=(
             "Analyzers to run after packing: a name (defaults), or an inline table "
-            "with its parameters, e.g. {kind = \"contacts\", tol = 0.1}."
+            'with its parameters, e.g. {kind = "contacts", tol = 0.1}.'
         ),
     )
     exports: list[Annotated[str, Field(min_length=1)] | PluginRef] = Field(
         default_factory=list,
         description=(
             "Exporters to write after the run, beside the packing file: a name (defaults), "
-            "or an inline table with its parameters, e.g. {kind = \"lammps\", rounding = 0.05}."
+            'or an inline table with its parameters, e.g. {kind = "lammps", rounding = 0.05}.'
         ),
     )
 
@@ -384,18 +384,9 @@ def load_scene(
     else:
         path = Path(path_or_name)
         source = str(path)
-        if not path.is_file():
-            known = ", ".join(sorted(builtins))
-            what = "is a directory, not a scene file" if path.is_dir() else "no such scene file"
-            raise ConfigError(f"{source}: {what} (built-in scenes: {known})")
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as err:
-            raise ConfigError(f"{source}: cannot read the scene file: {err}") from err
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as err:
-        raise ConfigError(f"{source}: invalid TOML: {' '.join(str(err).split())}") from err
+        known = ", ".join(sorted(builtins))
+        text = _toml.read_text_file(path, "scene", f" (built-in scenes: {known})")
+    data = _toml.parse_toml(text, source)
     overridden = dict.fromkeys(apply_overrides(data, overrides), "--set")
     if seed is not None:
         data["seed"] = seed
@@ -615,28 +606,25 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
     )
     insertion = _resolve_ref(scene, registry, "insertion", scene.insertion, ("insertion",))
     density = _resolve_ref(scene, registry, "density", scene.density, ("density",))
-    analyses = tuple(
-        _resolve_ref(
-            scene,
-            registry,
-            "analysis",
-            PluginRef(kind=item) if isinstance(item, str) else item,
-            ("outputs", "analyses", i),
-            kind_loc=("outputs", "analyses", i) if isinstance(item, str) else None,
+
+    def resolve_list(
+        category: str, field: str, items: Sequence[str | PluginRef]
+    ) -> tuple[Any, ...]:
+        """Resolve ``outputs.<field>``: names (defaults) or inline tables with parameters."""
+        return tuple(
+            _resolve_ref(
+                scene,
+                registry,
+                category,
+                PluginRef(kind=item) if isinstance(item, str) else item,
+                ("outputs", field, i),
+                kind_loc=("outputs", field, i) if isinstance(item, str) else None,
+            )
+            for i, item in enumerate(items)
         )
-        for i, item in enumerate(scene.outputs.analyses)
-    )
-    exports = tuple(
-        _resolve_ref(
-            scene,
-            registry,
-            "export",
-            PluginRef(kind=item) if isinstance(item, str) else item,
-            ("outputs", "exports", i),
-            kind_loc=("outputs", "exports", i) if isinstance(item, str) else None,
-        )
-        for i, item in enumerate(scene.outputs.exports)
-    )
+
+    analyses = resolve_list("analysis", "analyses", scene.outputs.analyses)
+    exports = resolve_list("export", "exports", scene.outputs.exports)
     return ResolvedScene(
         scene=scene,
         size=size,
