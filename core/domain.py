@@ -1,15 +1,114 @@
-"""Packing domains (containers with walls)."""
+"""Packing domains: walled rectangles, convex polygons and circles, and periodic rectangles.
+
+Every domain answers the same questions: its area and bounding box, the
+window of its interior at a given distance from the walls, which points lie
+inside, how much of a set of particles lies inside, and how it is written to a
+packing file (:meth:`Domain.to_dict`, :func:`domain_from_dict`).
+
+A :class:`PeriodicRectangle` has no walls: particles may cross its sides and
+continue on the opposite side. Its interior window is the whole domain.
+"""
 
 from __future__ import annotations
 
+import itertools
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
+
+from regopack.errors import GeometryError
+
+__all__ = [
+    "DOMAIN_KINDS",
+    "Circle",
+    "ConvexPolygon",
+    "Domain",
+    "PeriodicRectangle",
+    "Rectangle",
+    "domain_from_dict",
+    "polygon_disk_area",
+]
+
+FloatArray = NDArray[np.float64]
+BoolArray = NDArray[np.bool_]
+
+
+class Domain(ABC):
+    """A container for a packing."""
+
+    kind: ClassVar[str] = ""
+    periodic: ClassVar[bool] = False
+    """True when particles wrap around the sides instead of meeting walls."""
+
+    @property
+    @abstractmethod
+    def area(self) -> float:
+        """Area of the domain."""
+
+    @abstractmethod
+    def bounds(self) -> FloatArray:
+        """Bounding box ``[xmin, xmax, ymin, ymax]`` as a float array."""
+
+    @property
+    def center(self) -> tuple[float, float]:
+        """Centre point of the domain (centre of the box, polygon centroid, circle centre)."""
+        b = self.bounds()
+        return (0.5 * float(b[0] + b[1]), 0.5 * float(b[2] + b[3]))
+
+    @property
+    def width(self) -> float:
+        """Extent of the bounding box along x."""
+        b = self.bounds()
+        return float(b[1] - b[0])
+
+    @property
+    def height(self) -> float:
+        """Extent of the bounding box along y."""
+        b = self.bounds()
+        return float(b[3] - b[2])
+
+    @abstractmethod
+    def interior(self, margin: float) -> Domain:
+        """Return the window of points farther than ``margin`` from every wall.
+
+        An empty window has zero area. A periodic domain has no walls and
+        returns itself.
+        """
+
+    @abstractmethod
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the ``(n, 2)`` points strictly inside the domain (NaN is outside)."""
+
+    @abstractmethod
+    def outline(self) -> FloatArray:
+        """``(k, 2)`` counter-clockwise boundary for drawing (a circle as a fine polygon)."""
+
+    @abstractmethod
+    def to_dict(self) -> dict[str, Any]:
+        """Return the domain as plain data, read back by :func:`domain_from_dict`."""
+
+    def covered_area(self, geoms: NDArray[np.object_]) -> float:
+        """Total area of the shapely polygons ``geoms`` that lies inside the domain."""
+        import shapely
+
+        if len(geoms) == 0:
+            return 0.0
+        window = shapely.Polygon(self.outline())
+        inside = shapely.contains_properly(window, geoms)
+        total = float(shapely.area(geoms[inside]).sum())
+        rest = ~inside
+        if rest.any():
+            total += float(shapely.area(shapely.intersection(geoms[rest], window)).sum())
+        return total
 
 
 @dataclass(frozen=True)
-class Rectangle:
+class Rectangle(Domain):
     """Axis-aligned rectangular domain with rigid walls.
 
     Parameters
@@ -17,6 +116,8 @@ class Rectangle:
     xmin, xmax, ymin, ymax
         Wall positions (any length unit; micrometres by convention).
     """
+
+    kind: ClassVar[str] = "rectangle"
 
     xmin: float
     xmax: float
@@ -51,7 +152,7 @@ class Rectangle:
         """Centre point of the domain."""
         return (0.5 * (self.xmin + self.xmax), 0.5 * (self.ymin + self.ymax))
 
-    def bounds(self) -> NDArray[np.float64]:
+    def bounds(self) -> FloatArray:
         """Return ``[xmin, xmax, ymin, ymax]`` as a float array."""
         return np.array([self.xmin, self.xmax, self.ymin, self.ymax], dtype=np.float64)
 
@@ -61,3 +162,395 @@ class Rectangle:
         hw = max(0.0, self.width / 2 - margin)
         hh = max(0.0, self.height / 2 - margin)
         return Rectangle(cx - hw, cx + hw, cy - hh, cy + hh)
+
+    def interior(self, margin: float) -> Domain:
+        """Return the rectangle inset by ``margin`` (see :meth:`shrunk`)."""
+        return self.shrunk(margin)
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the points strictly inside the rectangle."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        with np.errstate(invalid="ignore"):
+            out: BoolArray = (
+                (c[:, 0] > self.xmin)
+                & (c[:, 0] < self.xmax)
+                & (c[:, 1] > self.ymin)
+                & (c[:, 1] < self.ymax)
+            )
+        return out
+
+    def outline(self) -> FloatArray:
+        """Return the four corners, counter-clockwise from ``(xmin, ymin)``."""
+        return np.array(
+            [
+                [self.xmin, self.ymin],
+                [self.xmax, self.ymin],
+                [self.xmax, self.ymax],
+                [self.xmin, self.ymax],
+            ],
+            dtype=np.float64,
+        )
+
+    def covered_area(self, geoms: NDArray[np.object_]) -> float:
+        """Total area of ``geoms`` inside the rectangle, by exact clipping."""
+        import shapely
+
+        if len(geoms) == 0:
+            return 0.0
+        b = shapely.bounds(geoms)
+        inside = (
+            (b[:, 0] >= self.xmin)
+            & (b[:, 2] <= self.xmax)
+            & (b[:, 1] >= self.ymin)
+            & (b[:, 3] <= self.ymax)
+        )
+        away = (
+            (b[:, 2] <= self.xmin)
+            | (b[:, 0] >= self.xmax)
+            | (b[:, 3] <= self.ymin)
+            | (b[:, 1] >= self.ymax)
+        )
+        straddling = ~inside & ~away
+        total = float(shapely.area(geoms[inside]).sum())
+        if straddling.any():
+            box = shapely.box(self.xmin, self.ymin, self.xmax, self.ymax)
+            total += float(shapely.area(shapely.intersection(geoms[straddling], box)).sum())
+        return total
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "rectangle", "bounds": [xmin, xmax, ymin, ymax]}``."""
+        return {"kind": self.kind, "bounds": [self.xmin, self.xmax, self.ymin, self.ymax]}
+
+
+@dataclass(frozen=True)
+class PeriodicRectangle(Rectangle):
+    """Axis-aligned rectangle whose opposite sides are identified (no walls).
+
+    A particle's centre lies in ``[xmin, xmax) x [ymin, ymax)``; its outline
+    may cross a side and continue on the opposite one.
+    """
+
+    kind: ClassVar[str] = "periodic"
+    periodic: ClassVar[bool] = True
+
+    @classmethod
+    def centred(
+        cls, width: float, height: float, center: tuple[float, float] = (0.0, 0.0)
+    ) -> PeriodicRectangle:
+        """Build the periodic rectangle of the given size around ``center``."""
+        cx, cy = center
+        return cls(cx - width / 2, cx + width / 2, cy - height / 2, cy + height / 2)
+
+    @property
+    def period(self) -> tuple[float, float]:
+        """Lengths of the two periods ``(Lx, Ly)``."""
+        return (self.width, self.height)
+
+    def interior(self, margin: float) -> Domain:
+        """Return the whole domain: there are no walls to keep away from."""
+        return self
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the finite points (every point lies in some periodic image)."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        return np.asarray(np.isfinite(c).all(axis=1), dtype=np.bool_)
+
+    def wrap(self, points: ArrayLike) -> FloatArray:
+        """Map points into ``[xmin, xmax) x [ymin, ymax)``."""
+        c = np.array(points, dtype=np.float64).reshape(-1, 2)
+        lo = np.array([self.xmin, self.ymin])
+        period = np.array(self.period)
+        c = lo + np.mod(c - lo, period)
+        c = np.where(c >= lo + period, lo, c)  # rounding of mod at the upper side
+        return c
+
+    def minimum_image(self, delta: ArrayLike) -> FloatArray:
+        """Return the shortest periodic image of the displacements ``delta`` (``(n, 2)``)."""
+        d = np.array(delta, dtype=np.float64).reshape(-1, 2)
+        period = np.array(self.period)
+        out: FloatArray = d - period * np.round(d / period)
+        return out
+
+    def covered_area(self, geoms: NDArray[np.object_]) -> float:
+        """Total area of ``geoms``: every part of a particle lies in the torus once."""
+        import shapely
+
+        return float(shapely.area(geoms).sum()) if len(geoms) else 0.0
+
+
+@dataclass(frozen=True)
+class ConvexPolygon(Domain):
+    """Convex polygonal container with rigid walls.
+
+    Parameters
+    ----------
+    vertices
+        Corners in order (either orientation; stored counter-clockwise).
+
+    Raises
+    ------
+    GeometryError
+        When the corners are not finite, fewer than three, or not a strictly
+        convex polygon of positive area.
+    """
+
+    kind: ClassVar[str] = "polygon"
+
+    vertices: tuple[tuple[float, float], ...]
+
+    def __post_init__(self) -> None:
+        v = np.asarray(self.vertices, dtype=np.float64).reshape(-1, 2)
+        check_convex_polygon(v)
+        if _signed_area(v) < 0:
+            v = v[::-1]
+        object.__setattr__(self, "vertices", tuple((float(x), float(y)) for x, y in v))
+
+    @property
+    def array(self) -> FloatArray:
+        """The corners as an ``(k, 2)`` counter-clockwise array."""
+        return np.asarray(self.vertices, dtype=np.float64)
+
+    @property
+    def area(self) -> float:
+        """Area of the polygon."""
+        return _signed_area(self.array)
+
+    @property
+    def center(self) -> tuple[float, float]:
+        """Centroid of the polygon."""
+        v = self.array
+        w = np.roll(v, -1, axis=0)
+        cross = v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1]
+        a = 3.0 * cross.sum()
+        return (
+            float(((v[:, 0] + w[:, 0]) * cross).sum() / a),
+            float(((v[:, 1] + w[:, 1]) * cross).sum() / a),
+        )
+
+    def bounds(self) -> FloatArray:
+        """Bounding box ``[xmin, xmax, ymin, ymax]``."""
+        v = self.array
+        return np.array([v[:, 0].min(), v[:, 0].max(), v[:, 1].min(), v[:, 1].max()])
+
+    def halfplanes(self) -> tuple[FloatArray, FloatArray]:
+        """Outward unit normals ``(k, 2)`` and offsets ``(k,)``: inside is ``n . x <= b``."""
+        v = self.array
+        e = np.roll(v, -1, axis=0) - v
+        normal = np.column_stack([e[:, 1], -e[:, 0]])
+        normal /= np.hypot(normal[:, 0], normal[:, 1])[:, None]
+        offset = np.einsum("ij,ij->i", normal, v)
+        return normal, offset
+
+    def interior(self, margin: float) -> Domain:
+        """Return the polygon with every wall moved inward by ``margin`` (mitred, exact)."""
+        import shapely
+
+        inset = shapely.Polygon(self.array).buffer(
+            -float(margin), join_style="mitre", mitre_limit=1e6
+        )
+        if inset.is_empty or inset.area <= 0 or inset.geom_type != "Polygon":
+            return _empty_window(self.center)
+        ring = np.asarray(inset.exterior.coords)[:-1]
+        try:
+            return ConvexPolygon(tuple(map(tuple, ring)))
+        except GeometryError:
+            return _empty_window(self.center)
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the points strictly inside every wall."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        normal, offset = self.halfplanes()
+        with np.errstate(invalid="ignore"):
+            out: BoolArray = np.all(c @ normal.T < offset, axis=1)
+        return out
+
+    def outline(self) -> FloatArray:
+        """Return the corners, counter-clockwise."""
+        return self.array
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "polygon", "vertices": [[x, y], ...]}``."""
+        return {"kind": self.kind, "vertices": [list(p) for p in self.vertices]}
+
+
+@dataclass(frozen=True)
+class Circle(Domain):
+    """Circular container with a rigid wall.
+
+    Parameters
+    ----------
+    cx, cy
+        Centre.
+    radius
+        Radius of the wall.
+    """
+
+    kind: ClassVar[str] = "circle"
+
+    cx: float
+    cy: float
+    radius: float
+
+    OUTLINE_POINTS: ClassVar[int] = 512
+
+    @property
+    def area(self) -> float:
+        """Area of the disk."""
+        return math.pi * self.radius * self.radius
+
+    @property
+    def center(self) -> tuple[float, float]:
+        """Centre of the circle."""
+        return (self.cx, self.cy)
+
+    def bounds(self) -> FloatArray:
+        """Bounding box of the disk."""
+        r = self.radius
+        return np.array([self.cx - r, self.cx + r, self.cy - r, self.cy + r])
+
+    def interior(self, margin: float) -> Domain:
+        """Return the concentric disk of radius ``radius - margin`` (zero when negative)."""
+        return Circle(self.cx, self.cy, max(0.0, self.radius - float(margin)))
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the points strictly inside the circle."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        with np.errstate(invalid="ignore"):
+            out: BoolArray = np.hypot(c[:, 0] - self.cx, c[:, 1] - self.cy) < self.radius
+        return out
+
+    def outline(self) -> FloatArray:
+        """Return :attr:`OUTLINE_POINTS` corners on the circle, for drawing."""
+        t = np.linspace(0.0, 2.0 * math.pi, self.OUTLINE_POINTS, endpoint=False)
+        return np.column_stack(
+            [self.cx + self.radius * np.cos(t), self.cy + self.radius * np.sin(t)]
+        )
+
+    def covered_area(self, geoms: NDArray[np.object_]) -> float:
+        """Total area of ``geoms`` inside the disk, by exact polygon-disk intersection."""
+        import shapely
+
+        if len(geoms) == 0 or self.radius <= 0:
+            return 0.0
+        total = 0.0
+        for g in geoms:
+            ring = np.asarray(shapely.get_exterior_ring(g).coords)[:-1]
+            total += polygon_disk_area(ring, (self.cx, self.cy), self.radius)
+        return total
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "circle", "center": [x, y], "radius": r}``."""
+        return {"kind": self.kind, "center": [self.cx, self.cy], "radius": self.radius}
+
+
+def _empty_window(c: tuple[float, float]) -> Rectangle:
+    """Return a window of zero area at ``c`` (a domain narrower than twice the margin)."""
+    return Rectangle(c[0], c[0], c[1], c[1])
+
+
+DOMAIN_KINDS: dict[str, type[Domain]] = {
+    "rectangle": Rectangle,
+    "polygon": ConvexPolygon,
+    "circle": Circle,
+    "periodic": PeriodicRectangle,
+}
+"""Domain classes by their ``kind``."""
+
+
+def domain_from_dict(data: Mapping[str, Any]) -> Domain:
+    """Rebuild a domain written by :meth:`Domain.to_dict`.
+
+    Raises
+    ------
+    KeyError, TypeError, ValueError, GeometryError
+        When the record is incomplete or malformed.
+    """
+    kind = data.get("kind", "rectangle")
+    if kind in ("rectangle", "periodic"):
+        xmin, xmax, ymin, ymax = (float(b) for b in data["bounds"])
+        cls = PeriodicRectangle if kind == "periodic" else Rectangle
+        return cls(xmin, xmax, ymin, ymax)
+    if kind == "polygon":
+        return ConvexPolygon(tuple((float(x), float(y)) for x, y in data["vertices"]))
+    if kind == "circle":
+        cx, cy = (float(c) for c in data["center"])
+        return Circle(cx, cy, float(data["radius"]))
+    raise ValueError(f"unknown domain kind {kind!r}")
+
+
+def _signed_area(v: FloatArray) -> float:
+    w = np.roll(v, -1, axis=0)
+    return 0.5 * float(np.sum(v[:, 0] * w[:, 1] - w[:, 0] * v[:, 1]))
+
+
+def check_convex_polygon(v: FloatArray) -> None:
+    """Raise :class:`GeometryError` unless ``v`` is a strictly convex polygon of positive area.
+
+    Collinear corners and repeated corners are rejected, so that every corner
+    is a proper turn of the boundary.
+    """
+    if v.ndim != 2 or v.shape[0] < 3 or not np.all(np.isfinite(v)):
+        raise GeometryError("a polygon needs at least 3 finite corners")
+    e = np.roll(v, -1, axis=0) - v
+    f = np.roll(e, -1, axis=0)
+    cross = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
+    scale = float(np.max(np.abs(v - v.mean(axis=0)))) ** 2
+    if scale <= 0 or not (np.all(cross > 1e-12 * scale) or np.all(cross < -1e-12 * scale)):
+        raise GeometryError(
+            "the corners must form a strictly convex polygon (no repeated, collinear "
+            "or reflex corners), listed in order"
+        )
+    # a star polygon turns the same way at every corner but winds more than once
+    turn = np.arctan2(cross, np.einsum("ij,ij->i", e, f))
+    if abs(abs(float(turn.sum())) - 2.0 * math.pi) > 1e-6:
+        raise GeometryError("the corners must form a simple convex polygon, listed in order")
+
+
+def polygon_disk_area(ring: ArrayLike, center: Sequence[float], radius: float) -> float:
+    """Area of the intersection of a simple polygon with a disk, exactly.
+
+    The polygon is split into triangles with the disk centre; each triangle
+    meets the disk in straight pieces (inside) and circular sectors (outside),
+    whose signed areas add up.
+
+    Parameters
+    ----------
+    ring
+        ``(k, 2)`` corners of the polygon (either orientation; the result is positive).
+    center, radius
+        The disk.
+
+    Examples
+    --------
+    >>> round(polygon_disk_area([(-2, -2), (2, -2), (2, 2), (-2, 2)], (0, 0), 1.0), 12)
+    3.141592653590
+    """
+    v = np.asarray(ring, dtype=np.float64).reshape(-1, 2) - np.asarray(center, dtype=np.float64)
+    r2 = radius * radius
+    total = 0.0
+    k = v.shape[0]
+    for j in range(k):
+        a = v[j]
+        b = v[(j + 1) % k]
+        d = b - a
+        dd = float(d @ d)
+        ts = [0.0]
+        if dd > 0:
+            # |a + t d|^2 = r^2
+            p = float(a @ d) / dd
+            q = (float(a @ a) - r2) / dd
+            disc = p * p - q
+            if disc > 0:
+                s = math.sqrt(disc)
+                ts += [t for t in (-p - s, -p + s) if 0.0 < t < 1.0]
+        ts.append(1.0)
+        for t0, t1 in itertools.pairwise(ts):
+            p0 = a + t0 * d
+            p1 = a + t1 * d
+            mid = 0.5 * (p0 + p1)
+            cross = float(p0[0] * p1[1] - p0[1] * p1[0])
+            if float(mid @ mid) <= r2:
+                total += 0.5 * cross
+            else:
+                total += 0.5 * r2 * math.atan2(cross, float(p0 @ p1))
+    return abs(total)

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Self
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain
 from regopack.population import Population, ShapeBatch
 
 if TYPE_CHECKING:
@@ -125,7 +125,7 @@ class InsertionStrategy(ABC):
     def pack(
         self,
         population: Population,
-        domain: Rectangle,
+        domain: Domain,
         controller: DensityController,
         rng: np.random.Generator,
         progress: ProgressCallback | None = None,

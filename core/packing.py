@@ -21,8 +21,8 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from regopack.domain import Rectangle
-from regopack.errors import PackingFileError
+from regopack.domain import Domain, Rectangle, domain_from_dict
+from regopack.errors import GeometryError, PackingFileError
 
 if TYPE_CHECKING:
     from regopack.interfaces import InsertionResult
@@ -37,8 +37,13 @@ __all__ = [
     "write_json_atomic",
 ]
 
-FORMAT_VERSION = 1
-"""Version of the packing file format written by :func:`save`."""
+FORMAT_VERSION = 2
+"""Newest packing file format version; :func:`save` writes it for domains other than rectangles.
+
+Version 2 adds the domain kinds ``polygon``, ``circle`` and ``periodic``.
+Packings in a walled rectangle are written as version 1, which they fully
+fit, so that older readers keep reading them.
+"""
 
 FILE_MAGIC = "regopack-packing"
 """Value of ``meta["format"]`` identifying a regopack packing file."""
@@ -110,7 +115,7 @@ class Packing:
     orientation: FloatArray
     centre: FloatArray
     insertion_index: IntArray
-    domain: Rectangle
+    domain: Domain
     scene: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
     version: str = "0.0.0"
@@ -121,7 +126,7 @@ class Packing:
         cls,
         population: Population,
         result: InsertionResult,
-        domain: Rectangle,
+        domain: Domain,
         scene_dict: Mapping[str, Any],
         seed: int,
         stats: Mapping[str, float] | None = None,
@@ -340,10 +345,10 @@ def _meta(packing: Packing) -> dict[str, Any]:
     d = packing.domain
     return {
         "format": FILE_MAGIC,
-        "format_version": FORMAT_VERSION,
+        "format_version": 1 if type(d) is Rectangle else FORMAT_VERSION,
         "version": packing.version,
         "mineral_names": list(packing.mineral_names),
-        "domain": {"kind": "rectangle", "bounds": [d.xmin, d.xmax, d.ymin, d.ymax]},
+        "domain": d.to_dict(),
         "scene": packing.scene,
         "seed": packing.seed,
         "stats": packing.stats,
@@ -428,15 +433,15 @@ def load(path: str | Path) -> Packing:
     if not consistent:
         raise _bad(path, "array shapes are inconsistent")
     try:
-        xmin, xmax, ymin, ymax = (float(b) for b in meta["domain"]["bounds"])
+        domain = domain_from_dict(meta["domain"])
         mineral_names = tuple(str(m) for m in meta["mineral_names"])
-    except (KeyError, TypeError, ValueError) as err:
+    except (KeyError, TypeError, ValueError, GeometryError) as err:
         raise _bad(path, "incomplete 'meta' entry") from err
     stats = {str(k): (math.nan if v is None else v) for k, v in dict(meta.get("stats", {})).items()}
     return Packing(
         **arrays,
         mineral_names=mineral_names,
-        domain=Rectangle(xmin, xmax, ymin, ymax),
+        domain=domain,
         scene=dict(meta.get("scene") or {}),
         seed=int(meta.get("seed", 0)),
         version=str(meta.get("version", "unknown")),

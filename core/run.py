@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from regopack.analysis import AnalysisFiles, run_analyses, write_analysis
+from regopack.domain import Domain, Rectangle
 from regopack.errors import ConfigError, ExportError, PluginError
 from regopack.interfaces import (
     Analyzer,
@@ -120,29 +121,19 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     )
 
 
-def phi_in_window(packing: Packing, window_bounds: tuple[float, float, float, float]) -> float:
-    """Area fraction of the window ``(xmin, xmax, ymin, ymax)`` covered by placed particles.
+def phi_in_window(packing: Packing, window: Domain | tuple[float, float, float, float]) -> float:
+    """Area fraction of ``window`` covered by placed particles.
 
-    Particles are clipped exactly to the window. Returns NaN for an empty window.
+    ``window`` is a domain (e.g. ``packing.domain.interior(margin)``) or the
+    bounds ``(xmin, xmax, ymin, ymax)`` of a rectangle. Particles are clipped
+    exactly to the window. Returns NaN for an empty window.
     """
-    import shapely
-
-    xmin, xmax, ymin, ymax = window_bounds
-    window_area = (xmax - xmin) * (ymax - ymin)
-    if not window_area > 0:
+    if not isinstance(window, Domain):
+        window = Rectangle(*(float(v) for v in window))
+    if not window.area > 0:
         return math.nan
     geoms = packing.to_shapely()
-    if len(geoms) == 0:
-        return 0.0
-    b = shapely.bounds(geoms)
-    inside = (b[:, 0] >= xmin) & (b[:, 2] <= xmax) & (b[:, 1] >= ymin) & (b[:, 3] <= ymax)
-    away = (b[:, 2] <= xmin) | (b[:, 0] >= xmax) | (b[:, 3] <= ymin) | (b[:, 1] >= ymax)
-    straddling = ~inside & ~away
-    total = float(shapely.area(geoms[inside]).sum())
-    if straddling.any():
-        box = shapely.box(xmin, ymin, xmax, ymax)
-        total += float(shapely.area(shapely.intersection(geoms[straddling], box)).sum())
-    return total / window_area
+    return window.covered_area(geoms) / window.area
 
 
 def default_out_dir(scene: ResolvedScene) -> Path:
@@ -203,9 +194,8 @@ def run_scene(
     )
     n_placed = packing.n_placed
     margin = 2.0 * float(size_dist.r_max)
-    window = domain.shrunk(margin)
     phi_domain = float(packing.area()[packing.placed].sum()) / domain.area
-    phi_interior = phi_in_window(packing, (window.xmin, window.xmax, window.ymin, window.ymax))
+    phi_interior = phi_in_window(packing, domain.interior(margin))
 
     summary: dict[str, Any] = {
         "scene": resolved.name,

@@ -21,15 +21,24 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from importlib import resources
 from pathlib import Path
-from typing import Annotated, Any, Generic, Literal, TypeVar
+from typing import Annotated, Any, ClassVar, Generic, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
+    PrivateAttr,
+    ValidationError,
+    field_validator,
+    model_validator,
+)
 
 from regopack import _toml
-from regopack.domain import Rectangle
-from regopack.errors import ConfigError, PluginError
+from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, Rectangle
+from regopack.domain import Domain as DomainGeometry
+from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.manager import Registry
 from regopack.plugin_types import PluginSpec
 
@@ -61,26 +70,99 @@ FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 
 
 class Domain(BaseModel):
-    """The container: a rectangle with rigid walls."""
+    """The container: a walled rectangle, convex polygon or circle, or a periodic rectangle.
+
+    ``kind = "rectangle"`` (the default) and ``"periodic"`` use ``width``,
+    ``height`` and ``center``; ``"circle"`` uses ``radius`` and ``center``;
+    ``"polygon"`` uses ``vertices``. A field that does not belong to the kind
+    is an error.
+    """
 
     model_config = ConfigDict(extra="forbid")
 
-    kind: Literal["rectangle"] = Field(
-        "rectangle", description="Shape of the container; only 'rectangle' exists."
+    kind: Literal["rectangle", "periodic", "polygon", "circle"] = Field(
+        "rectangle",
+        description=(
+            "Shape of the container: 'rectangle' (walls), 'periodic' (a rectangle whose "
+            "opposite sides are identified), 'polygon' (convex, walls) or 'circle' (wall)."
+        ),
     )
     width: float = Field(
-        800.0, gt=0, allow_inf_nan=False, description="Extent along x (micrometres)."
+        800.0,
+        gt=0,
+        allow_inf_nan=False,
+        description="Extent along x (micrometres); rectangle and periodic.",
     )
     height: float = Field(
-        800.0, gt=0, allow_inf_nan=False, description="Extent along y (micrometres)."
+        800.0,
+        gt=0,
+        allow_inf_nan=False,
+        description="Extent along y (micrometres); rectangle and periodic.",
     )
     center: tuple[FiniteFloat, FiniteFloat] = Field(
-        (0.0, 0.0), description="Centre of the rectangle (micrometres)."
+        (0.0, 0.0), description="Centre (micrometres); rectangle, periodic and circle."
+    )
+    radius: float | None = Field(
+        None, gt=0, allow_inf_nan=False, description="Radius of the circle (micrometres)."
+    )
+    vertices: list[tuple[FiniteFloat, FiniteFloat]] | None = Field(
+        None,
+        min_length=3,
+        description="Corners of the convex polygon in order, either orientation (micrometres).",
     )
 
-    def to_rectangle(self) -> Rectangle:
-        """Return the domain as a :class:`regopack.domain.Rectangle`."""
+    _FIELDS: ClassVar[dict[str, tuple[str, ...]]] = {
+        "rectangle": ("width", "height", "center"),
+        "periodic": ("width", "height", "center"),
+        "circle": ("radius", "center"),
+        "polygon": ("vertices",),
+    }
+    _REQUIRED: ClassVar[dict[str, tuple[str, ...]]] = {
+        "circle": ("radius",),
+        "polygon": ("vertices",),
+    }
+
+    @model_validator(mode="after")
+    def _check_kind_fields(self) -> Domain:
+        allowed = self._FIELDS[self.kind]
+        for name in sorted(self.model_fields_set - {"kind"}):
+            if name not in allowed:
+                raise ValueError(
+                    f"{name} does not apply to kind {self.kind!r}, which takes {', '.join(allowed)}"
+                )
+        for name in self._REQUIRED.get(self.kind, ()):
+            if getattr(self, name) is None:
+                raise ValueError(f"kind {self.kind!r} needs {name}")
+        if self.kind == "polygon":
+            try:
+                self.to_domain()
+            except GeometryError as err:
+                raise ValueError(f"vertices: {err}") from err
+        return self
+
+    def to_domain(self) -> DomainGeometry:
+        """Return the container as a :class:`regopack.domain.Domain`."""
+        if self.kind == "circle":
+            assert self.radius is not None
+            return Circle(self.center[0], self.center[1], self.radius)
+        if self.kind == "polygon":
+            assert self.vertices is not None
+            return ConvexPolygon(tuple(self.vertices))
+        if self.kind == "periodic":
+            return PeriodicRectangle.centred(self.width, self.height, self.center)
         return Rectangle.centred(self.width, self.height, self.center)
+
+    def to_rectangle(self) -> Rectangle:
+        """Return a rectangular domain as a :class:`regopack.domain.Rectangle`."""
+        domain = self.to_domain()
+        if not isinstance(domain, Rectangle):
+            raise GeometryError(f"the domain is a {self.kind}, not a rectangle")
+        return domain
+
+    def resolved_dict(self) -> dict[str, Any]:
+        """``kind`` and the fields of that kind, defaults filled in (plain data)."""
+        data = self.model_dump(mode="json")
+        return {"kind": self.kind, **{k: data[k] for k in self._FIELDS[self.kind]}}
 
 
 class PluginRef(BaseModel):
@@ -507,9 +589,9 @@ class ResolvedScene:
         return self.scene.seed
 
     @property
-    def domain(self) -> Rectangle:
+    def domain(self) -> DomainGeometry:
         """The container."""
-        return self.scene.domain.to_rectangle()
+        return self.scene.domain.to_domain()
 
     @property
     def phase_names(self) -> tuple[str, ...]:
@@ -532,7 +614,7 @@ class ResolvedScene:
             "name": s.name,
             "seed": s.seed,
             "count": s.count,
-            "domain": s.domain.model_dump(mode="json"),
+            "domain": s.domain.resolved_dict(),
             "size": self.size.to_dict(),
             "phases": [
                 {"name": p.name, "fraction": p.fraction, "shape": p.shape.to_dict()}

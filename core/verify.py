@@ -11,16 +11,23 @@ flags is therefore measured again in a frame centred on the particle and
 scaled to its size, with a snap-rounding overlay on a grid of
 :data:`CONFIRM_GRID` particle sizes, which is robust; only violations confirmed
 that way are reported.
+
+In a periodic domain a particle may cross a side; pairs are then compared
+through the nearest periodic image of the second particle, and nothing can
+leave the domain. In a circular container the area outside the wall is
+measured by exact polygon-disk intersection.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import shapely
 from numpy.typing import NDArray
 
+from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, polygon_disk_area
 from regopack.packing import Packing
 
 __all__ = ["CONFIRM_GRID", "VerifyReport", "assert_valid_packing", "verify"]
@@ -100,17 +107,33 @@ def _polygons(
     return np.asarray(shapely.polygons(rings), dtype=object)
 
 
+def _image_shift(
+    packing: Packing, i: NDArray[np.int64], j: NDArray[np.int64]
+) -> NDArray[np.float64]:
+    """Return the shift that brings particle ``j`` to its periodic image nearest to ``i``.
+
+    Zero in a walled domain.
+    """
+    dom = packing.domain
+    if not isinstance(dom, PeriodicRectangle):
+        return np.zeros((len(i), 2))
+    delta = packing.centre[j] - packing.centre[i]
+    out: NDArray[np.float64] = dom.minimum_image(delta) - delta
+    return out
+
+
 def _confirm_overlaps(
     packing: Packing, i: NDArray[np.int64], j: NDArray[np.int64], size: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """Overlap of pairs ``(i, j)`` relative to the smaller area, measured robustly.
 
     Both particles are expressed in a frame centred on particle ``i`` and
-    scaled by ``size`` (the square root of the smaller area).
+    scaled by ``size`` (the square root of the smaller area); ``j`` is taken at
+    its periodic image nearest to ``i``.
     """
     origin = packing.centre[i]
     gi = _polygons(packing, i, origin, size)
-    gj = _polygons(packing, j, origin, size)
+    gj = _polygons(packing, j, origin - _image_shift(packing, i, j), size)
     inter = shapely.area(shapely.intersection(gi, gj, grid_size=CONFIRM_GRID))
     smaller = np.minimum(shapely.area(gi), shapely.area(gj))
     out: NDArray[np.float64] = inter / smaller
@@ -121,9 +144,31 @@ def _confirm_outside(
     packing: Packing, k: NDArray[np.int64], size: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """Area of particles ``k`` outside the domain relative to their area, measured robustly."""
-    dom = packing.domain
+    dom: Any = packing.domain
     origin = packing.centre[k]
     geoms = _polygons(packing, k, origin, size)
+    if isinstance(dom, Circle):
+        outside = np.empty(len(k))
+        for n, g in enumerate(geoms):
+            ring = np.asarray(shapely.get_exterior_ring(g).coords)[:-1]
+            centre = (np.array([dom.cx, dom.cy]) - origin[n]) / size[n]
+            area = float(shapely.area(g))
+            outside[n] = (area - polygon_disk_area(ring, centre, dom.radius / size[n])) / area
+        return outside
+    if isinstance(dom, ConvexPolygon):
+        # the container near each particle only (see the rectangle below)
+        near = 2.0 * np.abs(shapely.bounds(geoms)).max(axis=1) + 1.0
+        walls = shapely.intersection(
+            np.asarray(
+                [shapely.Polygon((dom.array - origin[n]) / size[n]) for n in range(len(k))],
+                dtype=object,
+            ),
+            shapely.box(-near, -near, near, near),
+        )
+        inside = shapely.area(shapely.intersection(geoms, walls, grid_size=CONFIRM_GRID))
+        areas = shapely.area(geoms)
+        frac: NDArray[np.float64] = (areas - inside) / areas
+        return frac
     # clip the (possibly huge) domain box to the particle's neighbourhood, so the
     # snap-rounding grid stays far above the rounding error of the coordinates
     reach = 2.0 * np.abs(shapely.bounds(geoms)).max(axis=1) + 1.0
@@ -176,14 +221,11 @@ def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
     areas = shapely.area(geoms)
 
     # overlaps between pairs
-    tree = shapely.STRtree(geoms)
-    a, b = tree.query(geoms, predicate="intersects")
-    keep = a < b
-    a, b = a[keep], b[keep]
+    a, b, shifted = _candidate_pairs(packing, idx, geoms, scale)
     worst_overlap: tuple[int, int, float] | None = None
     n_pairs = 0
     if len(a):
-        inter = shapely.area(shapely.intersection(geoms[a], geoms[b]))
+        inter = shapely.area(shapely.intersection(geoms[a], shifted))
         smaller = np.minimum(areas[a], areas[b])
         flagged = ~(inter <= rel_tol * smaller)
         if flagged.any():
@@ -197,7 +239,121 @@ def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
                 i, j = sorted((int(idx[a[k]]), int(idx[b[k]])))
                 worst_overlap = (i, j, float(frac[k]))
 
-    # particles leaving the domain
+    n_outside, worst_outside = _outside(packing, idx, geoms, areas, scale, rel_tol)
+    return VerifyReport(
+        ok=n_pairs == 0 and n_outside == 0,
+        n_checked=n,
+        n_overlapping_pairs=n_pairs,
+        worst_overlap=worst_overlap,
+        n_outside=n_outside,
+        worst_outside=worst_outside,
+        rel_tol=rel_tol,
+    )
+
+
+def _candidate_pairs(
+    packing: Packing, idx: NDArray[np.int64], geoms: NDArray[np.object_], scale: float
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.object_]]:
+    """Pairs ``a < b`` (positions in ``idx``) whose outlines meet, and ``b``'s outline as met.
+
+    In a periodic domain, ``b`` is taken at its periodic image nearest to ``a``.
+    """
+    dom = packing.domain
+    tree = shapely.STRtree(geoms)
+    if not isinstance(dom, PeriodicRectangle):
+        a, b = tree.query(geoms, predicate="intersects")
+        keep = a < b
+        return a[keep], b[keep], geoms[b[keep]]
+    # every image of every particle that reaches into the domain, found by a box query
+    lx, ly = dom.width / scale, dom.height / scale
+    pa: list[NDArray[np.int64]] = []
+    pb: list[NDArray[np.int64]] = []
+    for sx in (-lx, 0.0, lx):
+        for sy in (-ly, 0.0, ly):
+            moved = shapely.transform(geoms, lambda c, sx=sx, sy=sy: c + (sx, sy))
+            q, t = tree.query(moved, predicate="intersects")
+            pa.append(t)
+            pb.append(q)
+    a = np.concatenate(pa)
+    b = np.concatenate(pb)
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    keep = lo < hi
+    pairs = np.unique(np.column_stack([lo[keep], hi[keep]]), axis=0)
+    a, b = pairs[:, 0], pairs[:, 1]
+    shift = _image_shift(packing, idx[a], idx[b]) / scale
+    shifted = np.asarray(
+        [shapely.transform(g, lambda c, d=d: c + d) for g, d in zip(geoms[b], shift, strict=True)],
+        dtype=object,
+    )
+    return a, b, shifted
+
+
+def _outside(
+    packing: Packing,
+    idx: NDArray[np.int64],
+    geoms: NDArray[np.object_],
+    areas: NDArray[np.float64],
+    scale: float,
+    rel_tol: float,
+) -> tuple[int, tuple[int, float] | None]:
+    """Count the particles outside the walls; return the count and the worst one."""
+    dom = packing.domain
+    if isinstance(dom, PeriodicRectangle):
+        return 0, None
+    cx, cy = dom.center
+    if isinstance(dom, Circle | ConvexPolygon):
+        crossing = np.flatnonzero(~_vertices_inside(packing, idx))
+        outside_fast = None
+    else:
+        crossing, outside_fast = _crossing_box(dom, geoms, areas, cx, cy, scale)
+    worst_outside: tuple[int, float] | None = None
+    n_outside = 0
+    if len(crossing):
+        if outside_fast is not None:
+            flagged = ~(outside_fast <= rel_tol * areas[crossing])  # NaN counts as flagged
+            crossing = crossing[flagged]
+        if len(crossing):
+            size = np.sqrt(areas[crossing]) * scale
+            frac = _confirm_outside(packing, idx[crossing], size)
+            bad = ~(frac <= rel_tol)
+            n_outside = int(np.count_nonzero(bad))
+            if n_outside:
+                k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
+                worst_outside = (int(idx[crossing[k]]), float(frac[k]))
+    return n_outside, worst_outside
+
+
+def _vertices_inside(packing: Packing, idx: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Whether every vertex of each particle lies inside (or on) a convex container's wall.
+
+    A convex particle lies inside a convex container exactly when its vertices do.
+    """
+    dom = packing.domain
+    counts = packing.offsets[idx + 1] - packing.offsets[idx]
+    starts = np.repeat(packing.offsets[idx], counts)
+    within = np.arange(int(counts.sum())) - np.repeat(np.cumsum(counts) - counts, counts)
+    pts = packing.vertices[starts + within] + np.repeat(packing.centre[idx], counts, axis=0)
+    if isinstance(dom, Circle):
+        ok = np.hypot(pts[:, 0] - dom.cx, pts[:, 1] - dom.cy) <= dom.radius
+    else:
+        assert isinstance(dom, ConvexPolygon)
+        normal, offset = dom.halfplanes()
+        ok = np.all(pts @ normal.T <= offset, axis=1)
+    owner = np.repeat(np.arange(len(idx)), counts)
+    bad = np.bincount(owner[~ok], minlength=len(idx))
+    out: NDArray[np.bool_] = bad == 0
+    return out
+
+
+def _crossing_box(
+    dom: Any,
+    geoms: NDArray[np.object_],
+    areas: NDArray[np.float64],
+    cx: float,
+    cy: float,
+    scale: float,
+) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+    """Particles whose box crosses a rectangle's walls, and their area outside (fast pass)."""
     lo_x, hi_x = (dom.xmin - cx) / scale, (dom.xmax - cx) / scale
     lo_y, hi_y = (dom.ymin - cy) / scale, (dom.ymax - cy) / scale
     bounds = shapely.bounds(geoms)
@@ -209,32 +365,11 @@ def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
             & (bounds[:, 3] <= hi_y)
         )
     )
-    worst_outside: tuple[int, float] | None = None
-    n_outside = 0
-    if len(crossing):
-        box = shapely.box(lo_x, lo_y, hi_x, hi_y)
-        inside = shapely.area(shapely.intersection(geoms[crossing], box))
-        outside = areas[crossing] - inside
-        flagged = ~(outside <= rel_tol * areas[crossing])  # NaN geometry counts as flagged
-        if flagged.any():
-            crossing = crossing[flagged]
-            size = np.sqrt(areas[crossing]) * scale
-            frac = _confirm_outside(packing, idx[crossing], size)
-            bad = ~(frac <= rel_tol)
-            n_outside = int(np.count_nonzero(bad))
-            if n_outside:
-                k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
-                worst_outside = (int(idx[crossing[k]]), float(frac[k]))
-
-    return VerifyReport(
-        ok=n_pairs == 0 and n_outside == 0,
-        n_checked=n,
-        n_overlapping_pairs=n_pairs,
-        worst_overlap=worst_overlap,
-        n_outside=n_outside,
-        worst_outside=worst_outside,
-        rel_tol=rel_tol,
-    )
+    if not len(crossing):
+        return crossing, np.zeros(0)
+    box = shapely.box(lo_x, lo_y, hi_x, hi_y)
+    inside = shapely.area(shapely.intersection(geoms[crossing], box))
+    return crossing, areas[crossing] - inside
 
 
 def assert_valid_packing(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:

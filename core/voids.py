@@ -21,6 +21,8 @@ from matplotlib.path import Path as MplPath
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from regopack.domain import Rectangle
+from regopack.errors import GeometryError
 from regopack.packing import Packing
 
 __all__ = ["MAX_PIXELS_PER_SIDE", "free_space_mask", "spans", "void_metrics"]
@@ -123,7 +125,12 @@ def void_metrics(
     placed = np.flatnonzero(packing.placed)
     if window is None:
         d_max = 2.0 * float(packing.radius.max()) if packing.radius.size else 0.0
-        w = packing.domain.shrunk(d_max)
+        w = packing.domain.interior(d_max)
+        if not isinstance(w, Rectangle):
+            raise GeometryError(
+                f"voids are measured in a rectangular window; the domain is a "
+                f"{packing.domain.kind}: pass window=(xmin, xmax, ymin, ymax)"
+            )
         window = (w.xmin, w.xmax, w.ymin, w.ymax)
     if placed.size:
         d_min = 2.0 * float(packing.radius[placed].min())

@@ -31,8 +31,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain import Rectangle
-from regopack.errors import ExportError
+from regopack.domain import Circle, Rectangle, domain_from_dict
+from regopack.errors import ExportError, GeometryError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing, _atomic_file, _finite_or_none
@@ -99,10 +99,6 @@ def _write_text(path: Path, text: str) -> None:
         raise ExportError(f"cannot write {path}: {why}") from err
 
 
-def _domain_dict(domain: Rectangle) -> dict[str, Any]:
-    return {"kind": "rectangle", "bounds": [domain.xmin, domain.xmax, domain.ymin, domain.ymax]}
-
-
 def _header(packing: Packing, fmt: str) -> dict[str, Any]:
     """Return what a CSV or JSON export stores besides the particles."""
     return {
@@ -111,7 +107,7 @@ def _header(packing: Packing, fmt: str) -> dict[str, Any]:
         "version": packing.version,
         "seed": packing.seed,
         "mineral_names": list(packing.mineral_names),
-        "domain": _domain_dict(packing.domain),
+        "domain": packing.domain.to_dict(),
         "scene": packing.scene,
         "stats": packing.stats,
     }
@@ -134,9 +130,9 @@ def _packing_from(
     header: Mapping[str, Any], arrays: Mapping[str, NDArray[Any]], path: Path
 ) -> Packing:
     try:
-        xmin, xmax, ymin, ymax = (float(b) for b in header["domain"]["bounds"])
+        domain = domain_from_dict(header["domain"])
         names = tuple(str(m) for m in header["mineral_names"])
-    except (KeyError, TypeError, ValueError) as err:
+    except (KeyError, TypeError, ValueError, GeometryError) as err:
         raise ExportError(f"{path}: incomplete header ({err})") from err
     stats = {
         str(k): (math.nan if v is None else v) for k, v in dict(header.get("stats") or {}).items()
@@ -150,7 +146,7 @@ def _packing_from(
         orientation=np.asarray(arrays["orientation"], dtype=np.float64),
         centre=np.asarray(arrays["centre"], dtype=np.float64).reshape(-1, 2),
         insertion_index=np.asarray(arrays["insertion_index"], dtype=np.int64),
-        domain=Rectangle(xmin, xmax, ymin, ymax),
+        domain=domain,
         scene=dict(header.get("scene") or {}),
         seed=int(header.get("seed", 0)),
         version=str(header.get("version", "unknown")),
@@ -433,7 +429,8 @@ class SvgExporter(Exporter):
     The ``viewBox`` is in the scene's length unit and the y axis points up (the
     drawing is flipped with ``scale(1,-1)``). Particles are ``<polygon>``
     elements grouped by mineral (one ``<g>`` per mineral, with the colours of
-    the analysis figures); the domain is a ``<rect>``.
+    the analysis figures); the domain is a ``<rect>`` (rectangles), ``<circle>``
+    or ``<polygon>``.
     """
 
     suffix = ".svg"
@@ -450,13 +447,14 @@ class SvgExporter(Exporter):
         cfg = self.config
         path = Path(path)
         d = packing.domain
-        width, height = d.xmax - d.xmin, d.ymax - d.ymin
+        xmin, xmax, ymin, ymax = (float(v) for v in d.bounds())
+        width, height = xmax - xmin, ymax - ymin
 
         def num(x: float) -> str:
             return format(float(x), f".{cfg.digits}g")
 
         height_px = max(1, round(cfg.width_px * height / width)) if width > 0 else cfg.width_px
-        view = " ".join(num(v) for v in (d.xmin, -d.ymax, width, height))
+        view = " ".join(num(v) for v in (xmin, -ymax, width, height))
         title = f"regopack packing: {packing.scene.get('name', '?')}, seed {packing.seed}"
         lines = [
             '<?xml version="1.0" encoding="UTF-8"?>',
@@ -467,10 +465,20 @@ class SvgExporter(Exporter):
         ]
         if cfg.domain_outline:
             line = num(0.002 * max(width, height))
-            lines.append(
-                f'<rect class="domain" x="{num(d.xmin)}" y="{num(d.ymin)}" width="{num(width)}" '
-                f'height="{num(height)}" fill="none" stroke="#000000" stroke-width="{line}"/>'
-            )
+            style = f'fill="none" stroke="#000000" stroke-width="{line}"'
+            if isinstance(d, Rectangle):
+                lines.append(
+                    f'<rect class="domain" x="{num(xmin)}" y="{num(ymin)}" width="{num(width)}" '
+                    f'height="{num(height)}" {style}/>'
+                )
+            elif isinstance(d, Circle):
+                lines.append(
+                    f'<circle class="domain" cx="{num(d.cx)}" cy="{num(d.cy)}" '
+                    f'r="{num(d.radius)}" {style}/>'
+                )
+            else:
+                corners = " ".join(f"{num(x)},{num(y)}" for x, y in d.outline())
+                lines.append(f'<polygon class="domain" points="{corners}" {style}/>')
         colours = mineral_colours(packing.mineral_names)
         idx = np.flatnonzero(packing.placed)
         polygons = packing.polygons(idx)
@@ -674,7 +682,7 @@ class LammpsExporter(Exporter):
         cfg = self.config
         path = Path(path)
         idx = np.flatnonzero(packing.placed)
-        d = packing.domain
+        xmin, xmax, ymin, ymax = (float(v) for v in packing.domain.bounds())
         n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
         atoms: list[str] = []
         bodies: list[str] = []
@@ -709,8 +717,8 @@ class LammpsExporter(Exporter):
             f"{len(idx)} bodies",
             f"{n_types} atom types",
             "",
-            f"{_num(d.xmin)} {_num(d.xmax)} xlo xhi",
-            f"{_num(d.ymin)} {_num(d.ymax)} ylo yhi",
+            f"{_num(xmin)} {_num(xmax)} xlo xhi",
+            f"{_num(ymin)} {_num(ymax)} ylo yhi",
             "-0.5 0.5 zlo zhi",
             "",
             "Atoms # body",

@@ -1,7 +1,10 @@
 """Random sequential addition (RSA), the classic baseline for comparing packings.
 
 Each particle, in population order, gets up to ``max_attempts`` centres drawn
-uniformly in the closed box of centres that keep it inside the walls, with
+uniformly in the closed box of centres that keep it inside the domain's
+bounding box (in a polygon or circle, a centre whose outline crosses the wall
+counts as a rejected attempt; in a periodic rectangle, centres are drawn in the
+whole domain and overlaps are tested against the periodic images), with
 its outline and orientation as generated (no rotation). The first centre where
 its interior meets no placed particle's interior is kept (touching is
 allowed); when every attempt fails the particle is not placed and the next one
@@ -32,7 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-from regopack.domain import Rectangle
+from regopack.domain import Domain
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
     DensityController,
@@ -41,6 +44,13 @@ from regopack.interfaces import (
     ProgressCallback,
 )
 from regopack.plugin_types import InserterSpec
+from regopack.plugins.walls import (
+    WALL_BOX,
+    WALL_PERIODIC,
+    check_periodic_size,
+    point_fits,
+    wall_arrays,
+)
 from regopack.population import Population
 
 __all__ = [
@@ -60,8 +70,19 @@ MAX_ATTEMPTS_LIMIT = 10_000_000
 """Largest allowed ``max_attempts``."""
 
 # counters and flags of a run (``Grid.ipar``)
-I_GNX, I_GNY, I_GUSED, I_GEN, I_ATTEMPTS, I_REJECTED, I_RUN, I_STOPPED, I_STOP_AT = range(9)
-N_IPAR = 9
+(
+    I_GNX,
+    I_GNY,
+    I_GUSED,
+    I_GEN,
+    I_ATTEMPTS,
+    I_REJECTED,
+    I_RUN,
+    I_STOPPED,
+    I_STOP_AT,
+    I_WALLMODE,
+) = range(10)
+N_IPAR = 10
 
 
 class RsaConfig(BaseModel):
@@ -109,8 +130,11 @@ class Grid(NamedTuple):
     item: IntArray
     stamp: IntArray
     fpar: FloatArray
-    """``[xmin, xmax, ymin, ymax, cell]``: the walls and the cell size (grid origin xmin, ymin)."""
+    """``[xmin, xmax, ymin, ymax, cell, reach]``: the domain's box, the cell size (grid
+    origin xmin, ymin) and the largest circumradius."""
     ipar: IntArray
+    walls: FloatArray
+    """Wall array of :func:`regopack.plugins.walls.wall_arrays`."""
 
 
 # ---------------------------------------------------------------------------
@@ -205,7 +229,7 @@ def convex_polygons_overlap(
 # neighbour grid
 
 
-def _grid_layout(domain: Rectangle, circum: FloatArray) -> tuple[float, int, int, int]:
+def _grid_layout(domain: Domain, circum: FloatArray) -> tuple[float, int, int, int]:
     """Cell size, cells along x and y, and an upper bound on the registrations."""
     width, height = domain.width, domain.height
     n = max(int(circum.shape[0]), 1)
@@ -226,8 +250,8 @@ def _cells(lo: float, hi: float, origin: float, cell: float, count: int) -> tupl
     """Inclusive range of the cell indices that ``[lo, hi]`` overlaps along one axis."""
     a = math.floor((lo - origin) / cell)
     b = math.floor((hi - origin) / cell)
-    a = max(a, 0)
-    b = min(b, count - 1)
+    a = min(max(a, 0), count - 1)  # an interval beyond a side maps to that side's cells
+    b = min(max(b, 0), count - 1)
     return int(a), int(b)
 
 
@@ -252,14 +276,36 @@ def _register(p: int, g: Outlines, s: Grid) -> None:
 @numba.njit(cache=True)
 def _hits(i: int, x: float, y: float, g: Outlines, s: Grid) -> bool:
     """Return whether particle ``i`` centred at ``(x, y)`` overlaps a placed particle."""
+    ai, aj = g.offsets[i], g.offsets[i + 1]
+    ax, ay = g.vx[ai:aj], g.vy[ai:aj]
+    if s.ipar[I_WALLMODE] != WALL_PERIODIC:
+        return _hits_near(i, x, y, ax, ay, g, s)
+    # the images one period away of the particles near (x, y)
+    lx = s.fpar[1] - s.fpar[0]
+    ly = s.fpar[3] - s.fpar[2]
+    span = g.circum[i] + s.fpar[5]
+    for sx in (0.0, lx, -lx):
+        if (sx > 0.0 and x - span >= s.fpar[0]) or (sx < 0.0 and x + span <= s.fpar[1]):
+            continue
+        for sy in (0.0, ly, -ly):
+            if (sy > 0.0 and y - span >= s.fpar[2]) or (sy < 0.0 and y + span <= s.fpar[3]):
+                continue
+            if _hits_near(i, x + sx, y + sy, ax, ay, g, s):
+                return True
+    return False
+
+
+@numba.njit(cache=True)
+def _hits_near(
+    i: int, x: float, y: float, ax: FloatArray, ay: FloatArray, g: Outlines, s: Grid
+) -> bool:
+    """Return whether outline ``a`` of particle ``i`` at ``(x, y)`` overlaps a registered one."""
     reach = g.circum[i]
     nx, ny = s.ipar[I_GNX], s.ipar[I_GNY]
     ia, ib = _cells(x - reach, x + reach, s.fpar[0], s.fpar[4], nx)
     ja, jb = _cells(y - reach, y + reach, s.fpar[2], s.fpar[4], ny)
     gen = s.ipar[I_GEN] + 1
     s.ipar[I_GEN] = gen
-    ai, aj = g.offsets[i], g.offsets[i + 1]
-    ax, ay = g.vx[ai:aj], g.vy[ai:aj]
     for j in range(ja, jb + 1):
         for ic in range(ia, ib + 1):
             e = s.head[j * nx + ic]
@@ -308,18 +354,29 @@ def _pack_range(
     (``ipar[I_STOPPED]`` is set and ``ipar[I_STOP_AT]`` is the first particle not tried).
     """
     ipar = s.ipar
+    mode = ipar[I_WALLMODE]
     placed = 0
     for i in range(begin, end):
-        x0 = s.fpar[0] - g.box[i, 0]
-        x1 = s.fpar[1] - g.box[i, 1]
-        y0 = s.fpar[2] - g.box[i, 2]
-        y1 = s.fpar[3] - g.box[i, 3]
+        if mode == WALL_PERIODIC:
+            x0, x1, y0, y1 = s.fpar[0], s.fpar[1], s.fpar[2], s.fpar[3]
+        else:
+            x0 = s.fpar[0] - g.box[i, 0]
+            x1 = s.fpar[1] - g.box[i, 1]
+            y0 = s.fpar[2] - g.box[i, 2]
+            y1 = s.fpar[3] - g.box[i, 3]
         ok = False
         if x0 <= x1 and y0 <= y1:
             for _ in range(max_attempts):
                 x = min(x0 + rng.random() * (x1 - x0), x1)
                 y = min(y0 + rng.random() * (y1 - y0), y1)
                 ipar[I_ATTEMPTS] += 1
+                if mode == WALL_PERIODIC and (x >= x1 or y >= y1):
+                    ipar[I_REJECTED] += 1  # the upper sides are the lower ones
+                    continue
+                a, b = g.offsets[i], g.offsets[i + 1]
+                if mode != WALL_BOX and not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+                    ipar[I_REJECTED] += 1
+                    continue
                 if _hits(i, x, y, g, s):
                     ipar[I_REJECTED] += 1
                     continue
@@ -341,7 +398,7 @@ def _pack_range(
     return placed
 
 
-def _prepare(population: Population, domain: Rectangle) -> tuple[Outlines, Grid]:
+def _prepare(population: Population, domain: Domain) -> tuple[Outlines, Grid]:
     """Build the static outlines and an empty grid."""
     n = len(population)
     offsets = np.ascontiguousarray(population.shapes.offsets, dtype=np.int64)
@@ -358,9 +415,13 @@ def _prepare(population: Population, domain: Rectangle) -> tuple[Outlines, Grid]
         box[full, 1] = np.maximum.reduceat(vx, starts)
         box[full, 2] = np.minimum.reduceat(vy, starts)
         box[full, 3] = np.maximum.reduceat(vy, starts)
+    check_periodic_size(domain, circum)
+    mode, walls = wall_arrays(domain)
     cell, gnx, gny, capacity = _grid_layout(domain, circum)
-    fpar = np.array([domain.xmin, domain.xmax, domain.ymin, domain.ymax, cell], dtype=np.float64)
+    reach = float(circum.max()) if n else 0.0
+    fpar = np.array([*domain.bounds(), cell, reach], dtype=np.float64)
     ipar = np.zeros(N_IPAR, dtype=np.int64)
+    ipar[I_WALLMODE] = mode
     ipar[I_GNX] = gnx
     ipar[I_GNY] = gny
     outlines = Outlines(vx=vx, vy=vy, offsets=offsets, circum=circum, box=box)
@@ -374,6 +435,7 @@ def _prepare(population: Population, domain: Rectangle) -> tuple[Outlines, Grid]
         stamp=np.zeros(n, dtype=np.int64),
         fpar=fpar,
         ipar=ipar,
+        walls=walls,
     )
     return outlines, grid
 
@@ -403,7 +465,7 @@ class RandomSequentialAddition(InsertionStrategy):
     def pack(
         self,
         population: Population,
-        domain: Rectangle,
+        domain: Domain,
         controller: DensityController,
         rng: np.random.Generator,
         progress: ProgressCallback | None = None,

@@ -254,8 +254,9 @@ def test_bad_overrides(override, message):
         ("seed = 1", "seed = 1.5", "scene.toml: seed = 1.5: Input should be a valid integer"),
         (
             'kind = "rectangle"',
-            'kind = "circle"',
-            "scene.toml: domain.kind = \"circle\": Input should be 'rectangle'",
+            'kind = "hexagon"',
+            "scene.toml: domain.kind = \"hexagon\": Input should be 'rectangle', 'periodic', "
+            "'polygon' or 'circle'",
         ),
         (
             "center = [0.0, 0.0]",

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain
 from regopack.packing import Packing
 
 
@@ -29,17 +29,14 @@ def interior_margin(packing: Packing, margin: float | None = None) -> float:
     return 2.0 * float(np.max(packing.radius)) if packing.n_particles else 0.0
 
 
-def interior_window(packing: Packing, margin: float) -> Rectangle:
-    """Return the domain inset by ``margin`` from every wall."""
-    return packing.domain.shrunk(margin)
+def interior_window(packing: Packing, margin: float) -> Domain:
+    """Return the domain inset by ``margin`` from every wall (a periodic domain: all of it)."""
+    return packing.domain.interior(margin)
 
 
 def interior_mask(packing: Packing, margin: float) -> NDArray[np.bool_]:
     """Placed particles whose centre lies farther than ``margin`` from every wall."""
-    w = interior_window(packing, margin)
-    c = packing.centre
-    with np.errstate(invalid="ignore"):
-        inside = (c[:, 0] > w.xmin) & (c[:, 0] < w.xmax) & (c[:, 1] > w.ymin) & (c[:, 1] < w.ymax)
+    inside = interior_window(packing, margin).contains(packing.centre)
     return inside & packing.placed
 
 

@@ -185,18 +185,10 @@ def candidate_pairs(
     lo_y = np.empty(n, dtype=np.int64)
     hi_y = np.empty(n, dtype=np.int64)
     for p in range(n):
-        lo_x[p] = min(
-            max(math.floor((centre[p, 0] - reach[p] - bounds[0]) / cell), 0), gnx - 1
-        )
-        hi_x[p] = min(
-            max(math.floor((centre[p, 0] + reach[p] - bounds[0]) / cell), 0), gnx - 1
-        )
-        lo_y[p] = min(
-            max(math.floor((centre[p, 1] - reach[p] - bounds[2]) / cell), 0), gny - 1
-        )
-        hi_y[p] = min(
-            max(math.floor((centre[p, 1] + reach[p] - bounds[2]) / cell), 0), gny - 1
-        )
+        lo_x[p] = min(max(math.floor((centre[p, 0] - reach[p] - bounds[0]) / cell), 0), gnx - 1)
+        hi_x[p] = min(max(math.floor((centre[p, 0] + reach[p] - bounds[0]) / cell), 0), gnx - 1)
+        lo_y[p] = min(max(math.floor((centre[p, 1] - reach[p] - bounds[2]) / cell), 0), gny - 1)
+        hi_y[p] = min(max(math.floor((centre[p, 1] + reach[p] - bounds[2]) / cell), 0), gny - 1)
         for gy in range(lo_y[p], hi_y[p] + 1):
             for gx in range(lo_x[p], hi_x[p] + 1):
                 counts[gy * gnx + gx + 1] += 1

@@ -40,9 +40,7 @@ class Density(Analyzer):
         area = packing.area()[packing.placed]
         self._results = {
             "phi_domain": float(area.sum()) / packing.domain.area,
-            "phi_interior": phi_in_window(
-                packing, (window.xmin, window.xmax, window.ymin, window.ymax)
-            ),
+            "phi_interior": phi_in_window(packing, window),
             "interior_margin": margin,
             "n_placed": packing.n_placed,
             "eta": eta_of(packing),

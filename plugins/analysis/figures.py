@@ -150,7 +150,7 @@ def _polygons(
 
 
 def _frame(ax: Axes, bounds: Sequence[float]) -> None:
-    xmin, xmax, ymin, ymax = bounds
+    xmin, xmax, ymin, ymax = (float(b) for b in bounds)
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
@@ -236,7 +236,7 @@ def draw_packing(packing: Packing) -> Figure:
     ax, zoom = fig.subplots(1, 2)
     placed = np.flatnonzero(packing.placed).astype(np.int64)
     ax.add_collection(_polygons(packing, placed, colours, linewidths=0.0))
-    _frame(ax, (dom.xmin, dom.xmax, dom.ymin, dom.ymax))
+    _frame(ax, dom.bounds().tolist())
     ax.set_title(_title(packing))
     window = _zoom_window(packing)
     near = _in_window(packing, window)
@@ -291,7 +291,7 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
         )
         lines.set_rasterized(int(sel.sum()) > RASTERISE_ABOVE)
         target.add_collection(lines)
-    _frame(ax, (dom.xmin, dom.xmax, dom.ymin, dom.ymax))
+    _frame(ax, dom.bounds().tolist())
     _frame(zoom, window)
     ax.set_title(f"{len(area):,} contacts at tol = {contacts.config.tol:g} µm")
     widths_note = f" (widths × {factor:.2g})" if factor > 1.05 else ""

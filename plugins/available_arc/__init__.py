@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
     DensityController,
@@ -86,7 +86,7 @@ class AvailableArc(InsertionStrategy):
     def pack(
         self,
         population: Population,
-        domain: Rectangle,
+        domain: Domain,
         controller: DensityController,
         rng: np.random.Generator,
         progress: ProgressCallback | None = None,

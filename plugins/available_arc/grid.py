@@ -51,13 +51,15 @@ def grid_layout(bounds: FloatArray, reach: FloatArray) -> tuple[float, int, int,
 
 @numba.njit(cache=True)
 def cell_range(lo: float, hi: float, origin: float, cell: float, count: int) -> tuple[int, int]:
-    """Inclusive index range of the cells that ``[lo, hi]`` overlaps along one axis."""
+    """Inclusive index range of the cells that ``[lo, hi]`` overlaps along one axis.
+
+    Indices are clamped to the grid, so an interval beyond one side maps to
+    the cells on that side (registrations are clamped the same way).
+    """
     a = math.floor((lo - origin) / cell)
     b = math.floor((hi - origin) / cell)
-    if a < 0:
-        a = 0
-    if b > count - 1:
-        b = count - 1
+    a = min(max(a, 0), count - 1)
+    b = min(max(b, 0), count - 1)
     return int(a), int(b)
 
 

@@ -31,13 +31,40 @@ from regopack.plugins.available_arc.geometry import (
     reflect_outline,
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
+from regopack.plugins.walls import (
+    WALL_BOX,
+    WALL_CIRCLE,
+    WALL_HALFPLANES,
+    WALL_PERIODIC,
+    clip_closed_circle,
+    clip_closed_halfplanes,
+    particle_offsets,
+    point_fits,
+    wrap_periodic,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 # fpar: scalar float parameters
-F_T, F_TAU, F_XMIN, F_XMAX, F_YMIN, F_YMAX, F_GX0, F_GY0, F_GCELL, F_ETA = range(10)
-N_FPAR = 10
+# (F_XMIN..F_YMAX: the domain's bounding box; F_CX, F_CY: its centre;
+# F_REACH: the largest registration radius in the grid)
+(
+    F_T,
+    F_TAU,
+    F_XMIN,
+    F_XMAX,
+    F_YMIN,
+    F_YMAX,
+    F_GX0,
+    F_GY0,
+    F_GCELL,
+    F_ETA,
+    F_CX,
+    F_CY,
+    F_REACH,
+) = range(13)
+N_FPAR = 13
 # ipar: scalar integer parameters and counters
 (
     I_TAUMODE,
@@ -53,8 +80,11 @@ N_FPAR = 10
     I_GEN,
     I_CUSED,
     I_FIRSTRANDOM,
-) = range(13)
-N_IPAR = 13
+    I_WALLMODE,
+) = range(14)
+N_IPAR = 14
+FIRST_RANDOM_TRIES = 10_000
+"""Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
 
 
@@ -85,6 +115,7 @@ class Packed(NamedTuple):
     stamp: IntArray
     fpar: FloatArray
     ipar: IntArray
+    walls: FloatArray
 
 
 class Work(NamedTuple):
@@ -108,6 +139,7 @@ class Work(NamedTuple):
     cache_ey: FloatArray
     cache_n: IntArray
     cache_rad: FloatArray
+    woff: FloatArray
 
 
 @numba.njit(cache=True)
@@ -134,6 +166,9 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
     """Place particle ``i`` at ``(x, y)``; return its insertion index."""
     ipar = s.ipar
     k = ipar[I_COUNT]
+    if ipar[I_WALLMODE] == WALL_PERIODIC:
+        x = wrap_periodic(x, s.fpar[F_XMIN], s.fpar[F_XMAX])
+        y = wrap_periodic(y, s.fpar[F_YMIN], s.fpar[F_YMAX])
     s.cx[i] = x
     s.cy[i] = y
     s.order[k] = i
@@ -193,6 +228,8 @@ def begin_particle(i: int, g: Outlines, s: Packed, w: Work) -> int:
     )
     s.ipar[I_GEN] += 1
     s.ipar[I_CUSED] = 0
+    if s.ipar[I_WALLMODE] == WALL_HALFPLANES:
+        particle_offsets(g.vx, g.vy, g.offsets[i], g.offsets[i + 1], s.walls, w.woff)
     return mq
 
 
@@ -244,39 +281,73 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
         qrad = (g.req[pk] + 2.0 * g.req[i]) / tau
     else:
         qrad = g.circum[pk] + 2.0 * g.circum[i]
-    token = ipar[I_STAMP] + 1
-    ipar[I_STAMP] = token
-    ia, ib = cell_range(pcx - qrad, pcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
-    ja, jb = cell_range(pcy - qrad, pcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
+    mode = ipar[I_WALLMODE]
+    periodic = mode == WALL_PERIODIC
+    lx = fpar[F_XMAX] - fpar[F_XMIN]
+    ly = fpar[F_YMAX] - fpar[F_YMIN]
+    # query boxes: the one about pk and, in a periodic domain, its images one
+    # period away when an interferer's image could lie across a side (within
+    # qrad plus the largest reach). Each image query finds the particles near
+    # that image of pk, i.e. the periodic images of particles near pk: one
+    # interferer entry per image.
+    shift_x = np.zeros(3)
+    shift_y = np.zeros(3)
+    nsx = 1
+    nsy = 1
+    if periodic:
+        span = qrad + fpar[F_REACH]
+        if pcx - span < fpar[F_XMIN]:
+            shift_x[nsx] = lx
+            nsx += 1
+        if pcx + span > fpar[F_XMAX]:
+            shift_x[nsx] = -lx
+            nsx += 1
+        if pcy - span < fpar[F_YMIN]:
+            shift_y[nsy] = ly
+            nsy += 1
+        if pcy + span > fpar[F_YMAX]:
+            shift_y[nsy] = -ly
+            nsy += 1
     gnx = ipar[I_GNX]
     found = np.empty(32, dtype=np.int64)
+    found_q = np.empty(32, dtype=np.int64)
     nf = 0
     stamp = s.stamp
-    stamp[pk] = token
-    for gj in range(ja, jb + 1):
-        for gi in range(ia, ib + 1):
-            e = s.head[gj * gnx + gi]
-            while e >= 0:
-                o = s.item[e]
-                e = s.nxt[e]
-                if stamp[o] == token:
-                    continue
-                stamp[o] = token
-                ddx = cx[o] - pcx
-                ddy = cy[o] - pcy
-                d2 = ddx * ddx + ddy * ddy
-                if tau_mode:
-                    lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
-                else:
-                    lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
-                hit = d2 < lim * lim
-                if hit and tau_mode:
-                    hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
-                if hit:
-                    if nf == found.shape[0]:
-                        found = _grow_int(found, nf)
-                    found[nf] = o
-                    nf += 1
+    for qs in range(nsx * nsy):
+        token = ipar[I_STAMP] + 1
+        ipar[I_STAMP] = token
+        if qs == 0:
+            stamp[pk] = token
+        qcx = pcx + shift_x[qs % nsx]
+        qcy = pcy + shift_y[qs // nsx]
+        ia, ib = cell_range(qcx - qrad, qcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
+        ja, jb = cell_range(qcy - qrad, qcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
+        for gj in range(ja, jb + 1):
+            for gi in range(ia, ib + 1):
+                e = s.head[gj * gnx + gi]
+                while e >= 0:
+                    o = s.item[e]
+                    e = s.nxt[e]
+                    if stamp[o] == token:
+                        continue
+                    stamp[o] = token
+                    ddx = cx[o] - qcx
+                    ddy = cy[o] - qcy
+                    d2 = ddx * ddx + ddy * ddy
+                    if tau_mode:
+                        lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
+                    else:
+                        lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
+                    hit = d2 < lim * lim
+                    if hit and tau_mode:
+                        hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
+                    if hit:
+                        if nf == found.shape[0]:
+                            found = _grow_int(found, nf)
+                            found_q = _grow_int(found_q, nf)
+                        found[nf] = o
+                        found_q[nf] = qs
+                        nf += 1
 
     # ---- interferer envelopes (cached per new particle), relative to their centres
     ncache = w.cache_n.shape[0]
@@ -304,8 +375,8 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
     ody = np.empty(nf)
     for f in range(nf):
         o = found[f]
-        odx[f] = cx[o] - pcx
-        ody[f] = cy[o] - pcy
+        odx[f] = cx[o] - (pcx + shift_x[found_q[f] % nsx])
+        ody[f] = cy[o] - (pcy + shift_y[found_q[f] // nsx])
         if nf <= ncache:
             if w.ckey[o] == gen:
                 slot[f] = w.cslot[o]
@@ -397,7 +468,16 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
         if full:
             continue
         ni = 0
-        slo, shi = clip_closed_box(ax, ay, dx, dy, bx0, bx1, by0, by1)
+        if mode == WALL_BOX:
+            slo, shi = clip_closed_box(ax, ay, dx, dy, bx0, bx1, by0, by1)
+        elif mode == WALL_HALFPLANES:
+            slo, shi = clip_closed_halfplanes(ax + pcx, ay + pcy, dx, dy, s.walls, w.woff)
+        elif mode == WALL_CIRCLE:
+            slo, shi = clip_closed_circle(
+                ax + pcx, ay + pcy, dx, dy, w.rx, w.ry, mq, -1.0, g.circum[i], s.walls
+            )
+        else:
+            slo, shi = -np.inf, np.inf
         if slo > shi:
             continue
         if slo > 0.0:
@@ -627,20 +707,46 @@ def eta_shrink(
 
 @numba.njit(cache=True)
 def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> bool:
-    """Place the first particle at the domain centre (or a random feasible point)."""
-    x0, x1, y0, y1 = centre_box(i, g, s.fpar)
-    if x0 > x1 or y0 > y1:
-        return False
-    if s.ipar[I_FIRSTRANDOM] == 1:
-        x = x0 + rng.random() * (x1 - x0)
-        y = y0 + rng.random() * (y1 - y0)
-    else:
-        x = 0.5 * (s.fpar[F_XMIN] + s.fpar[F_XMAX])
-        y = 0.5 * (s.fpar[F_YMIN] + s.fpar[F_YMAX])
-        x = min(max(x, x0), x1)
-        y = min(max(y, y0), y1)
-    insert_particle(i, x, y, g, s)
-    return True
+    """Place the first particle at the domain centre (or a random feasible point).
+
+    In a walled rectangle a centre that does not fit is moved to the nearest
+    feasible one. In a polygon or circle the centre (or, with the random
+    option, one of :data:`FIRST_RANDOM_TRIES` uniform draws in the domain's
+    box) must fit as it is; otherwise the particle is not placed.
+    """
+    fpar = s.fpar
+    mode = s.ipar[I_WALLMODE]
+    random = s.ipar[I_FIRSTRANDOM] == 1
+    if mode == WALL_BOX:
+        x0, x1, y0, y1 = centre_box(i, g, fpar)
+        if x0 > x1 or y0 > y1:
+            return False
+        if random:
+            x = x0 + rng.random() * (x1 - x0)
+            y = y0 + rng.random() * (y1 - y0)
+        else:
+            x = 0.5 * (fpar[F_XMIN] + fpar[F_XMAX])
+            y = 0.5 * (fpar[F_YMIN] + fpar[F_YMAX])
+            x = min(max(x, x0), x1)
+            y = min(max(y, y0), y1)
+        insert_particle(i, x, y, g, s)
+        return True
+    a = g.offsets[i]
+    b = g.offsets[i + 1]
+    if not random:
+        x = fpar[F_CX]
+        y = fpar[F_CY]
+        if not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+            return False
+        insert_particle(i, x, y, g, s)
+        return True
+    for _ in range(FIRST_RANDOM_TRIES):
+        x = fpar[F_XMIN] + rng.random() * (fpar[F_XMAX] - fpar[F_XMIN])
+        y = fpar[F_YMIN] + rng.random() * (fpar[F_YMAX] - fpar[F_YMIN])
+        if point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+            insert_particle(i, x, y, g, s)
+            return True
+    return False
 
 
 @numba.njit(cache=True)

@@ -5,11 +5,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain
 from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.candidates import tree_size
 from regopack.plugins.available_arc.geometry import prepare_outlines
 from regopack.plugins.available_arc.grid import grid_layout
+from regopack.plugins.walls import WALL_HALFPLANES, check_periodic_size, wall_arrays
 from regopack.population import Population
 
 FloatArray = NDArray[np.float64]
@@ -23,7 +24,7 @@ class ArcState:
     population
         The particles to insert.
     domain
-        The walled rectangle.
+        The container (any kind of :mod:`regopack.domain`).
     t
         Screening coefficient.
     tau
@@ -39,7 +40,7 @@ class ArcState:
     def __init__(
         self,
         population: Population,
-        domain: Rectangle,
+        domain: Domain,
         *,
         t: float,
         tau: float | None,
@@ -54,6 +55,8 @@ class ArcState:
         req = np.ascontiguousarray(population.radius, dtype=np.float64)
         self.outlines = kernel.Outlines(vx, vy, ex, ey, ang, offsets, circum, req, box)
 
+        check_periodic_size(domain, circum)
+        mode, walls = wall_arrays(domain)
         reach = np.maximum(circum, req / tau) if tau is not None else circum
         bounds = domain.bounds()
         cell, gnx, gny, capacity = grid_layout(bounds, reach)
@@ -66,6 +69,8 @@ class ArcState:
         fpar[kernel.F_GY0] = bounds[2]
         fpar[kernel.F_GCELL] = cell
         fpar[kernel.F_ETA] = eta
+        fpar[kernel.F_CX], fpar[kernel.F_CY] = domain.center
+        fpar[kernel.F_REACH] = float(reach.max()) if n else 0.0
         ipar = np.zeros(kernel.N_IPAR, dtype=np.int64)
         ipar[kernel.I_TAUMODE] = 0 if tau is None else 1
         ipar[kernel.I_LINEAR] = 1 if linear else 0
@@ -73,6 +78,7 @@ class ArcState:
         ipar[kernel.I_GNX] = gnx
         ipar[kernel.I_GNY] = gny
         ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
+        ipar[kernel.I_WALLMODE] = mode
         self.packed = kernel.Packed(
             cx=np.full(n, np.nan),
             cy=np.full(n, np.nan),
@@ -84,6 +90,7 @@ class ArcState:
             stamp=np.zeros(n, dtype=np.int64),
             fpar=fpar,
             ipar=ipar,
+            walls=walls,
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax
@@ -107,6 +114,7 @@ class ArcState:
             cache_ey=np.empty((slots, width)),
             cache_n=np.zeros(slots, dtype=np.int64),
             cache_rad=np.zeros(slots),
+            woff=np.zeros(walls.shape[0] if mode == WALL_HALFPLANES else 1),
         )
 
     @property
