@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain, Rectangle
 from regopack.interfaces import DensityController, ShapeGenerator, SizeDistribution
 from regopack.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
 from regopack.packing import Packing
@@ -72,7 +72,7 @@ def make_registry(*plugins: object, builtins: Sequence[str] = BUILTIN_PLUGINS) -
 
 def packing_from_polygons(
     polygons: Sequence[ArrayLike],
-    domain: Rectangle | tuple[float, float, float, float] | None = None,
+    domain: Domain | tuple[float, float, float, float] | None = None,
     *,
     placed: Sequence[bool] | None = None,
 ) -> Packing:
@@ -86,7 +86,8 @@ def packing_from_polygons(
     polygons
         One ``(k, 2)`` array of counter-clockwise vertices per particle.
     domain
-        The container as a rectangle or ``(xmin, xmax, ymin, ymax)``; by
+        The container (any :class:`~regopack.domain.Domain`) or the rectangle
+        ``(xmin, xmax, ymin, ymax)``; by
         default the bounding box of the polygons.
     placed
         Which particles count as placed (default: all), in order.
@@ -101,7 +102,7 @@ def packing_from_polygons(
             float(allv[:, 1].min()),
             float(allv[:, 1].max()),
         )
-    elif not isinstance(domain, Rectangle):
+    elif not isinstance(domain, Domain):
         domain = Rectangle(*(float(v) for v in domain))
     centre = np.array([o.mean(axis=0) for o in outlines]).reshape(n, 2)
     counts = np.array([len(o) for o in outlines], dtype=np.int64)

@@ -180,3 +180,37 @@ def test_large_packing_is_fast():
     assert report.ok
     assert report.n_checked == 40_000
     assert elapsed < 20
+
+
+@pytest.mark.parametrize(
+    ("shift", "ok"), [(0.0, True), (0.25, False), (-0.25, True)], ids=["tangent", "overlap", "gap"]
+)
+def test_periodic_pairs_are_compared_through_the_side(shift, ok) -> None:
+    from regopack.domain import PeriodicRectangle
+
+    domain = PeriodicRectangle(0.0, 10.0, 0.0, 10.0)
+    sq = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    # centres at 0.5 and 9.5 + shift (wrapped): the squares meet across x = 0 = 10
+    right = domain.wrap([[9.5 + shift, 5.2]])[0]
+    p = packing_from_polygons([sq + (0.5, 5.0), sq + right], domain=domain)
+    report = verify(p)
+    assert report.ok is ok, str(report)
+    assert report.n_outside == 0
+
+
+@pytest.mark.parametrize(
+    ("centre", "ok"), [((2.0, 0.0), True), ((2.2, 0.0), False)], ids=["inside", "across"]
+)
+def test_circle_and_polygon_walls(centre, ok) -> None:
+    from regopack.domain import Circle, ConvexPolygon
+
+    sq = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    # the corner (2.5, 0.5) lies inside radius 2.55 at x = 2; at x = 2.2 it pokes out
+    circle = Circle(0.0, 0.0, float(np.hypot(2.5, 0.5)) + 1e-12)
+    report = verify(packing_from_polygons([sq + centre], domain=circle))
+    assert report.ok is ok, str(report)
+    tri = ConvexPolygon(((-5.0, -5.0), (2.5, -5.0), (2.5, 5.0)))  # wall x = 2.5
+    report = verify(packing_from_polygons([sq + (2.0, -2.0), sq + (2.2, -3.0)], domain=tri))
+    assert report.n_outside == 1 and report.worst_outside is not None
+    assert report.worst_outside[0] == 1
+    assert report.worst_outside[1] == pytest.approx(0.2)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -45,3 +46,56 @@ def eta_of(packing: Packing) -> float | None:
     density = packing.scene.get("density", {}) if isinstance(packing.scene, dict) else {}
     value = density.get("eta") if isinstance(density, dict) else None
     return float(value) if value is not None else None
+
+
+def periodic_images(packing: Packing, pad: float) -> tuple[Packing, NDArray[np.int64]]:
+    """Return the packing with ghost copies of the placed particles within ``pad`` of a side.
+
+    Each ghost is its particle translated by one period along x, y or both,
+    towards the inside of the domain; ghosts follow the particles (indices
+    ``>= n``). Returns the extended packing and ``origin``, the original index
+    of every particle and ghost. The domain must be periodic.
+    """
+    dom: Any = packing.domain
+    lx, ly = dom.width, dom.height
+    idx = np.flatnonzero(packing.placed)
+    c = packing.centre[idx]
+    near_lo_x = c[:, 0] < dom.xmin + pad
+    near_hi_x = c[:, 0] > dom.xmax - pad
+    near_lo_y = c[:, 1] < dom.ymin + pad
+    near_hi_y = c[:, 1] > dom.ymax - pad
+    ghosts: list[NDArray[np.int64]] = []
+    shifts: list[NDArray[np.float64]] = []
+    for sx, mx in ((0.0, None), (lx, near_lo_x), (-lx, near_hi_x)):
+        for sy, my in ((0.0, None), (ly, near_lo_y), (-ly, near_hi_y)):
+            if mx is None and my is None:
+                continue
+            sel = np.ones(len(idx), dtype=bool)
+            if mx is not None:
+                sel &= mx
+            if my is not None:
+                sel &= my
+            ghosts.append(idx[sel])
+            shifts.append(np.tile([sx, sy], (int(sel.sum()), 1)))
+    g = np.concatenate(ghosts).astype(np.int64)
+    shift = np.concatenate(shifts).reshape(-1, 2)
+    n = packing.n_particles
+    origin = np.concatenate([np.arange(n, dtype=np.int64), g])
+    counts = np.diff(packing.offsets)
+    ext_counts = np.concatenate([counts, counts[g]])
+    offsets = np.zeros(len(origin) + 1, dtype=np.int64)
+    np.cumsum(ext_counts, out=offsets[1:])
+    starts = np.repeat(packing.offsets[origin], ext_counts)
+    within = np.arange(int(offsets[-1])) - np.repeat(offsets[:-1], ext_counts)
+    index = np.concatenate([packing.insertion_index, np.arange(len(g)) + n])
+    ext = replace(
+        packing,
+        radius=packing.radius[origin],
+        mineral=packing.mineral[origin],
+        vertices=packing.vertices[starts + within],
+        offsets=offsets,
+        orientation=packing.orientation[origin],
+        centre=np.concatenate([packing.centre, packing.centre[g] + shift]),
+        insertion_index=index.astype(np.int64),
+    )
+    return ext, origin

@@ -11,7 +11,12 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
-from regopack.plugins.analysis.common import eta_of, interior_margin, interior_mask
+from regopack.plugins.analysis.common import (
+    eta_of,
+    interior_margin,
+    interior_mask,
+    periodic_images,
+)
 from regopack.plugins.analysis.segment import equivalent_segment
 
 FloatArray = NDArray[np.float64]
@@ -48,6 +53,25 @@ class ContactsConfig(BaseModel):
         return self
 
 
+def _one_image_per_pair(
+    pi: IntArray, pj: IntArray, origin: IntArray, n: int
+) -> tuple[IntArray, IntArray]:
+    """Keep one candidate pair per pair of original particles, with the first one real.
+
+    ``pi, pj`` index particles and their ghosts (``>= n``); the pair kept for
+    ``(a, b)``, ``a < b``, has ``a`` real and ``b`` real or a ghost of ``b``.
+    """
+    oi, oj = origin[pi], origin[pj]
+    swap = oi > oj
+    pi, pj = np.where(swap, pj, pi), np.where(swap, pi, pj)
+    oi, oj = np.minimum(oi, oj), np.maximum(oi, oj)
+    keep = (oi != oj) & (pi < n)
+    pi, pj, oi, oj = pi[keep], pj[keep], oi[keep], oj[keep]
+    _, first = np.unique(oi * n + oj, return_index=True)
+    first.sort()
+    return pi[first], pj[first]
+
+
 class Contacts(Analyzer):
     """Contact pairs, their thresholds, and the bow model of every contact at ``tol``.
 
@@ -71,28 +95,42 @@ class Contacts(Analyzer):
 
         cfg = self.config
         self.packing = packing
-        placed = np.flatnonzero(packing.placed)
-        offsets = np.ascontiguousarray(packing.offsets, dtype=np.int64)
-        vertices = np.ascontiguousarray(packing.vertices, dtype=np.float64)
-        nx, ny, mx, my, mitre = ck.edge_normals_and_mitres(vertices, offsets)
-        circum = np.ascontiguousarray(packing.circumradius, dtype=np.float64)
-        centre = np.ascontiguousarray(np.nan_to_num(packing.centre), dtype=np.float64)
         s_max = 0.5 * cfg.tol_max
+        # in a periodic domain the particles near a side get ghost copies one
+        # period away; ``origin`` maps every (ghost) particle to its original
+        work, origin = packing, np.arange(packing.n_particles, dtype=np.int64)
+        if packing.domain.periodic and packing.n_placed:
+            pad = 2.0 * float(np.max(packing.circumradius[packing.placed]) + 2.0 * s_max)
+            work, origin = periodic_images(packing, pad)
+        placed = np.flatnonzero(work.placed)
+        offsets = np.ascontiguousarray(work.offsets, dtype=np.int64)
+        vertices = np.ascontiguousarray(work.vertices, dtype=np.float64)
+        nx, ny, mx, my, mitre = ck.edge_normals_and_mitres(vertices, offsets)
+        circum = np.ascontiguousarray(work.circumradius, dtype=np.float64)
+        centre = np.ascontiguousarray(np.nan_to_num(work.centre), dtype=np.float64)
         reach = circum[placed] + s_max * mitre[placed]
-        bounds = packing.domain.bounds()
+        bounds = work.domain.bounds()
+        if work is not packing:
+            bounds = bounds + np.array([-1.0, 1.0, -1.0, 1.0]) * pad
         li, lj = ck.candidate_pairs(np.ascontiguousarray(centre[placed]), reach, bounds)
         pi = placed[li]
         pj = placed[lj]
+        if work is not packing:
+            pi, pj = _one_image_per_pair(pi, pj, origin, packing.n_particles)
         thr = ck.thresholds(pi, pj, centre, vertices, offsets, nx, ny, mx, my, circum)
         keep = thr < s_max
-        self.pairs = np.column_stack([pi[keep], pj[keep]]).astype(np.int64)
+        pi, pj = pi[keep], pj[keep]
+        self.pairs = np.column_stack([origin[pi], origin[pj]]).astype(np.int64)
         self.threshold = 2.0 * thr[keep]  # as a tolerance
         at_tol = self.threshold < cfg.tol
-        ci = self.pairs[at_tol, 0].copy()
-        cj = self.pairs[at_tol, 1].copy()
+        ci = pi[at_tol].copy()
+        cj = pj[at_tol].copy()
         area, width, px, py, unx, uny = ck.contact_regions(
             ci, cj, 0.5 * cfg.tol, centre, vertices, offsets, nx, ny, mx, my
         )
+        ci, cj = origin[ci], origin[cj]
+        if work is not packing:
+            px, py = packing.domain.wrap(np.column_stack([px, py])).T  # type: ignore[attr-defined]
         ok = (area > 0.0) & (width > 0.0)
         theta = np.zeros_like(area)
         radius = np.zeros_like(area)

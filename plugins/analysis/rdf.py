@@ -1,10 +1,19 @@
 """Radial distribution function of particle centres (SPEC §6).
 
-``g(r)`` over the interior window ``W`` (``a x b``) with the translation edge
-correction: every pair at separation ``(dx, dy)`` is weighted by
-``|W| / ((a - |dx|)(b - |dy|))``, so that ``g -> 1`` for an uncorrelated
-pattern at every ``r < min(a, b)``. Per mineral pair ``(A, B)`` the
-normalisation uses ``N_A N_B`` (``N_A (N_A - 1)`` when ``A = B``).
+``g(r)`` over the interior window ``W`` with an edge correction, so that
+``g -> 1`` for an uncorrelated pattern at every ``r`` the window admits:
+
+- a rectangle ``a x b``: the translation correction, every pair at separation
+  ``(dx, dy)`` weighted by ``|W| / ((a - |dx|)(b - |dy|))`` (``r < min(a, b)``);
+- a circle or convex polygon: the isotropic covariogram correction, every pair
+  at distance ``r`` weighted by ``|W| / gamma(r)``, with ``gamma(r)`` the mean
+  area of ``W ∩ (W + r u)`` over directions ``u`` (exact for the circle;
+  :data:`COVARIOGRAM_DIRECTIONS` directions for a polygon);
+- a periodic rectangle: no edges; pairs are counted through the nearest
+  periodic image (``r < min(a, b) / 2``).
+
+Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
+(``N_A (N_A - 1)`` when ``A = B``).
 """
 
 from __future__ import annotations
@@ -16,11 +25,21 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
-from regopack.plugins.analysis.common import eta_of, interior_margin, interior_mask, interior_window
+from regopack.plugins.analysis.common import (
+    eta_of,
+    interior_margin,
+    interior_mask,
+    interior_window,
+    periodic_images,
+)
 
 FloatArray = NDArray[np.float64]
+
+COVARIOGRAM_DIRECTIONS = 90
+"""Directions over which a polygon window's covariogram is averaged."""
 
 
 class RdfConfig(BaseModel):
@@ -62,8 +81,14 @@ def rdf_histogram(
     bins: int,
     a: float,
     b: float,
+    window: Domain | None = None,
+    n_real: int | None = None,
 ) -> tuple[FloatArray, FloatArray]:
-    """Translation-corrected ``g(r)`` of an ``a x b`` window, total and per kind pair.
+    """Edge-corrected ``g(r)`` of the points in ``window``, total and per kind pair.
+
+    ``window`` defaults to the ``a x b`` rectangle (translation correction).
+    For a periodic window the points from index ``n_real`` on are ghost
+    images of the first ``n_real`` (see :func:`periodic_images`).
 
     Returns
     -------
@@ -73,11 +98,26 @@ def rdf_histogram(
     """
     from regopack.plugins.analysis.rdf_kernel import weighted_pair_histogram
 
-    hist = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b)
     edges = r_lo + width * np.arange(bins + 1)
+    if isinstance(window, PeriodicRectangle):
+        assert n_real is not None
+        hist = weighted_pair_histogram(
+            x, y, kind, n_kinds, r_lo, width, bins, a, b, False, n_real
+        ) / (a * b)
+        area = a * b
+        x, kind = x[:n_real], kind[:n_real]
+    elif isinstance(window, Circle | ConvexPolygon):
+        counts_r = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b, False)
+        gamma = covariogram(window, 0.5 * (edges[:-1] + edges[1:]))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            hist = np.where(gamma > 0, counts_r / gamma, np.nan)
+        area = window.area
+    else:
+        hist = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b)
+        area = a * b
     shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
     counts = np.bincount(kind, minlength=n_kinds).astype(np.float64)
-    area2 = (a * b) ** 2
+    area2 = area**2
     n = float(len(x))
     total = hist.sum(axis=(0, 1)) * area2 / (max(n * (n - 1.0) / 2.0, 1e-300) * shell)
     per = np.full_like(hist, np.nan)
@@ -88,6 +128,30 @@ def rdf_histogram(
                 per[p, q] = hist[p, q] * area2 / (norm * shell)
                 per[q, p] = per[p, q]
     return total, per
+
+
+def covariogram(window: Domain, r: FloatArray) -> FloatArray:
+    """Isotropised set covariogram: mean area of ``W ∩ (W + r u)`` over directions ``u``.
+
+    Exact for a circle; for a polygon the mean over
+    :data:`COVARIOGRAM_DIRECTIONS` directions in ``[0, pi)`` (the area is even in ``u``).
+    """
+    r = np.asarray(r, dtype=np.float64)
+    if isinstance(window, Circle):
+        big = window.radius
+        q = np.clip(r / (2.0 * big), 0.0, 1.0)
+        return np.asarray(
+            2.0 * big * big * (np.arccos(q) - q * np.sqrt(1.0 - q * q)), dtype=np.float64
+        )
+    import shapely
+
+    poly = shapely.Polygon(window.outline())
+    t = (np.arange(COVARIOGRAM_DIRECTIONS) + 0.5) * np.pi / COVARIOGRAM_DIRECTIONS
+    out = np.empty(r.shape[0])
+    for k, rk in enumerate(r):
+        moved = [shapely.affinity.translate(poly, rk * np.cos(a), rk * np.sin(a)) for a in t]
+        out[k] = float(np.mean(shapely.area(shapely.intersection(poly, moved))))
+    return out
 
 
 class Rdf(Analyzer):
@@ -108,7 +172,16 @@ class Rdf(Analyzer):
         sel = interior_mask(packing, margin)
         pts = packing.centre[sel]
         kinds = packing.mineral[sel].astype(np.int64)
+        n_real: int | None = None
         limit = min(a, b)
+        if isinstance(w, PeriodicRectangle):
+            limit = 0.5 * min(a, b)
+            reach = min(limit, max(cfg.near[1], cfg.far[1]))
+            ext, origin = periodic_images(packing, reach)
+            ghosts = np.arange(packing.n_particles, len(origin))
+            n_real = len(pts)
+            pts = np.concatenate([pts, ext.centre[ghosts]])
+            kinds = np.concatenate([kinds, packing.mineral[origin[ghosts]]]).astype(np.int64)
         self.curves: dict[str, dict[str, FloatArray]] = {}
         notes = []
         for field_name, (lo, hi), width in (
@@ -133,6 +206,8 @@ class Rdf(Analyzer):
                 bins,
                 a,
                 b,
+                window=w,
+                n_real=n_real,
             )
             centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
             curves: dict[str, FloatArray] = {"r": centres, "total": total}
@@ -150,6 +225,7 @@ class Rdf(Analyzer):
             "eta": eta_of(packing),
             "interior_margin": margin,
             "n_points": int(sel.sum()),
+            "window_kind": w.kind,
             "window": [a, b],
             "first_peak_r": peak,
             "far_mean": float(np.nanmean(far["total"])) if far is not None else None,

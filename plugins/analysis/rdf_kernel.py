@@ -25,12 +25,17 @@ def weighted_pair_histogram(
     bins: int,
     a: float,
     b: float,
+    translation: bool = True,
+    n_real: int = -1,
 ) -> FloatArray:
     """Pair-distance histogram weighted by the translation correction ``1/((a-|dx|)(b-|dy|))``.
 
     Bins are ``[r_lo + k width, r_lo + (k + 1) width)``. Unordered pairs are
     counted once, in cell ``[min(kind), max(kind)]`` of the result, whose shape
-    is ``(n_kinds, n_kinds, bins)``.
+    is ``(n_kinds, n_kinds, bins)``. With ``translation`` false every pair
+    weighs 1. Points from index ``n_real`` on (``-1``: none) are periodic
+    ghosts: a pair of two ghosts is not counted and a pair of a point and a
+    ghost weighs half (it is found once from each side).
     """
     out = np.zeros((n_kinds, n_kinds, bins))
     r_hi = r_lo + width * bins
@@ -41,10 +46,12 @@ def weighted_pair_histogram(
     xs = x[order]
     ys = y[order]
     ks = kind[order]
+    ghost = order >= n_real if n_real >= 0 else np.zeros(n, dtype=np.bool_)
     for p in range(n):
         xp = xs[p]
         yp = ys[p]
         kp = ks[p]
+        gp = ghost[p]
         for q in range(p + 1, n):
             dx = xs[q] - xp
             if dx >= r_hi:
@@ -56,7 +63,11 @@ def weighted_pair_histogram(
             k = int((math.sqrt(d2) - r_lo) / width)
             if k >= bins:
                 k = bins - 1
-            w = 1.0 / ((a - dx) * (b - abs(dy)))
+            if gp and ghost[q]:
+                continue
+            w = 1.0 / ((a - dx) * (b - abs(dy))) if translation else 1.0
+            if gp or ghost[q]:
+                w *= 0.5
             kq = ks[q]
             if kp <= kq:
                 out[kp, kq, k] += w

@@ -162,3 +162,27 @@ def test_tangent_polygons_are_in_contact_at_any_tolerance() -> None:
     )
     c = Contacts(ContactsConfig(tol=1e-9, tol_max=1e-9, margin=0.0)).compute(packing, {})
     assert len(c.area) == 1 and c.depth[0] == pytest.approx(1.5e-9, rel=1e-3)
+
+
+def test_periodic_contacts_cross_the_sides_like_an_unwrapped_copy() -> None:
+    from regopack.domain import PeriodicRectangle
+
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    domain = PeriodicRectangle(0.0, 10.0, 0.0, 10.0)
+    # a row of squares through the side x = 0 = 10, and a column through y = 0 = 10
+    row = [sq + (x, 4.5) for x in (-0.5, 0.5, 1.5, 8.5)]  # 8.5..9.5 touches -0.5 via the side
+    col = [sq + (6.0, y) for y in (9.3, 0.3 + 0.01)]  # 9.3..10.3 and 0.31..1.31, gap 0.01
+    polys = row + col
+    # the packing stores centres inside the domain, outlines unwrapped about them
+    centres = [p.mean(axis=0) for p in polys]
+    wrapped = domain.wrap(centres)
+    polys = [p - c + w for p, c, w in zip(polys, centres, wrapped, strict=True)]
+    packing = packing_from_polygons(polys, domain=domain)
+    contacts = Contacts(ContactsConfig(tol=0.05)).compute(packing, {})
+    pairs = {tuple(sorted(p)) for p in zip(contacts.i.tolist(), contacts.j.tolist(), strict=True)}
+    assert pairs == {(0, 1), (1, 2), (0, 3), (4, 5)}
+    k = [tuple(sorted(p)) for p in zip(contacts.i.tolist(), contacts.j.tolist(), strict=True)]
+    across = k.index((0, 3))
+    assert contacts.width[across] == pytest.approx(np.hypot(1.05, 0.05))  # the diagonal
+    assert domain.contains(contacts.point).all()
+    assert np.all((contacts.point >= 0.0) & (contacts.point < 10.0))

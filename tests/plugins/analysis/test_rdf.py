@@ -5,7 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from regopack.plugins.analysis.rdf import Rdf, RdfConfig, rdf_histogram
+from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle
+from regopack.plugins.analysis.rdf import Rdf, RdfConfig, covariogram, rdf_histogram
+from regopack.testing import packing_from_polygons
 
 
 def test_uniform_points_give_one_at_every_r() -> None:
@@ -64,3 +66,79 @@ def test_packing_rdf_has_a_contact_peak() -> None:
 def test_bad_range_names_field() -> None:
     with pytest.raises(ValueError, match="near"):
         RdfConfig(near=(5.0, 1.0))
+
+
+def _uniform_in(domain, n, rng):
+    """``n`` uniform points inside ``domain`` (rejection from its box)."""
+    b = domain.bounds()
+    pts = np.empty((0, 2))
+    while len(pts) < n:
+        cand = rng.uniform([b[0], b[2]], [b[1], b[3]], size=(2 * n, 2))
+        pts = np.concatenate([pts, cand[domain.contains(cand)]])
+    return pts[:n]
+
+
+@pytest.mark.parametrize(
+    "domain",
+    [
+        Circle(3.0, -2.0, 150.0),
+        ConvexPolygon(((-150.0, -100.0), (160.0, -120.0), (120.0, 130.0), (-130.0, 90.0))),
+    ],
+    ids=["circle", "polygon"],
+)
+def test_uniform_points_give_one_in_circle_and_polygon_windows(domain) -> None:
+    curves = []
+    for seed in range(6):
+        pts = _uniform_in(domain, 4000, np.random.default_rng(seed))
+        n = len(pts)
+        total, _ = rdf_histogram(
+            pts[:, 0].copy(),
+            pts[:, 1].copy(),
+            np.zeros(n, dtype=np.int64),
+            1,
+            0.0,
+            10.0,
+            24,
+            domain.width,
+            domain.height,
+            window=domain,
+        )
+        curves.append(total)
+    mean = np.mean(curves, axis=0)
+    err = np.std(curves, axis=0, ddof=1) / np.sqrt(len(curves))
+    assert np.all(np.abs(mean - 1.0) < 4 * err + 0.01)
+
+
+def test_circle_covariogram_is_exact_and_polygon_covariogram_matches_shapely() -> None:
+    c = Circle(0.0, 0.0, 2.0)
+    assert covariogram(c, np.array([0.0]))[0] == pytest.approx(c.area)
+    assert covariogram(c, np.array([4.0]))[0] == pytest.approx(0.0, abs=1e-12)
+    sq = ConvexPolygon(((0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)))
+    # unit square: mean of (1 - r|cos|)(1 - r|sin|) over directions = 1 - 4r/pi + r^2/pi
+    r = 0.3
+    assert covariogram(sq, np.array([r]))[0] == pytest.approx(
+        1 - 4 * r / np.pi + r**2 / np.pi, rel=1e-3
+    )
+
+
+def test_periodic_window_counts_pairs_through_the_sides() -> None:
+    domain = PeriodicRectangle(0.0, 100.0, 0.0, 80.0)
+    rng = np.random.default_rng(3)
+    n = 3000
+    centres = rng.uniform([0, 0], [100, 80], size=(n, 2))
+    sq = 0.01 * np.array([[-1, -1], [1, -1], [1, 1], [-1, 1]])
+    packing = packing_from_polygons([sq + c for c in centres], domain=domain)
+    rdf = Rdf(
+        RdfConfig(near=(0.0, 30.0), near_bin=2.0, far=(30.0, 39.0), far_bin=3.0, per_mineral=False)
+    )
+    rdf.compute(packing, {})
+    g = rdf.curves["near"]["total"]
+    assert np.all(np.abs(g - 1.0) < 0.08)
+    # a pair straddling a side is at its short distance
+    two = packing_from_polygons([sq + (1.0, 40.0), sq + (99.0, 40.0)], domain=domain)
+    rdf = Rdf(
+        RdfConfig(near=(0.0, 4.0), near_bin=1.0, far=(4.0, 5.0), far_bin=1.0, per_mineral=False)
+    )
+    rdf.compute(two, {})
+    g = rdf.curves["near"]["total"]
+    assert g[2] > 0 and np.count_nonzero(g) == 1
