@@ -126,10 +126,10 @@ def void_metrics(
     if window is None:
         d_max = 2.0 * float(packing.radius.max()) if packing.radius.size else 0.0
         w = packing.domain.interior(d_max)
-        if not isinstance(w, Rectangle):
+        if not isinstance(w, Rectangle) or packing.domain.periodic:
             raise GeometryError(
-                f"voids are measured in a rectangular window; the domain is a "
-                f"{packing.domain.kind}: pass window=(xmin, xmax, ymin, ymax)"
+                f"voids are measured in the interior window of a walled rectangle; the "
+                f"domain is a {packing.domain.kind}: pass window=(xmin, xmax, ymin, ymax)"
             )
         window = (w.xmin, w.xmax, w.ymin, w.ymax)
     if placed.size:

@@ -234,6 +234,31 @@ def begin_particle(i: int, g: Outlines, s: Packed, w: Work) -> int:
 
 
 @numba.njit(cache=True)
+def _clip_walls(
+    mode: int,
+    ax: float,
+    ay: float,
+    dx: float,
+    dy: float,
+    i: int,
+    mq: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+) -> tuple[float, float]:
+    """Interval of centres ``a + s d`` (absolute) that keep particle ``i`` inside its walls.
+
+    For polygon and circular walls; a periodic domain admits everything. Kept
+    out of :func:`analyze_candidate` so that the walled rectangle's loop stays small.
+    """
+    if mode == WALL_HALFPLANES:
+        return clip_closed_halfplanes(ax, ay, dx, dy, s.walls, w.woff)
+    if mode == WALL_CIRCLE:
+        return clip_closed_circle(ax, ay, dx, dy, w.rx, w.ry, mq, -1.0, g.circum[i], s.walls)
+    return -np.inf, np.inf
+
+
+@numba.njit(cache=True)
 def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work) -> FloatArray:
     """Available arcs of candidate particle ``pk`` for the new particle ``i``.
 
@@ -290,36 +315,47 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
     # qrad plus the largest reach). Each image query finds the particles near
     # that image of pk, i.e. the periodic images of particles near pk: one
     # interferer entry per image.
-    shift_x = np.zeros(3)
-    shift_y = np.zeros(3)
+    # shifts of the image queries: index 1 and 2 along each axis (0 is no shift)
+    sx1 = sx2 = sy1 = sy2 = 0.0
     nsx = 1
     nsy = 1
     if periodic:
         span = qrad + fpar[F_REACH]
         if pcx - span < fpar[F_XMIN]:
-            shift_x[nsx] = lx
+            sx1 = lx
             nsx += 1
         if pcx + span > fpar[F_XMAX]:
-            shift_x[nsx] = -lx
+            if nsx == 1:
+                sx1 = -lx
+            else:
+                sx2 = -lx
             nsx += 1
         if pcy - span < fpar[F_YMIN]:
-            shift_y[nsy] = ly
+            sy1 = ly
             nsy += 1
         if pcy + span > fpar[F_YMAX]:
-            shift_y[nsy] = -ly
+            if nsy == 1:
+                sy1 = -ly
+            else:
+                sy2 = -ly
             nsy += 1
     gnx = ipar[I_GNX]
     found = np.empty(32, dtype=np.int64)
-    found_q = np.empty(32, dtype=np.int64)
+    found_q = np.empty(32 if periodic else 0, dtype=np.int64)
     nf = 0
     stamp = s.stamp
     for qs in range(nsx * nsy):
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
+        qcx = pcx
+        qcy = pcy
         if qs == 0:
             stamp[pk] = token
-        qcx = pcx + shift_x[qs % nsx]
-        qcy = pcy + shift_y[qs // nsx]
+        else:
+            qx = qs % nsx
+            qy = qs // nsx
+            qcx += 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
+            qcy += 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
         ia, ib = cell_range(qcx - qrad, qcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
         ja, jb = cell_range(qcy - qrad, qcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
         for gj in range(ja, jb + 1):
@@ -344,9 +380,11 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
                     if hit:
                         if nf == found.shape[0]:
                             found = _grow_int(found, nf)
-                            found_q = _grow_int(found_q, nf)
+                            if periodic:
+                                found_q = _grow_int(found_q, nf)
                         found[nf] = o
-                        found_q[nf] = qs
+                        if periodic:
+                            found_q[nf] = qs
                         nf += 1
 
     # ---- interferer envelopes (cached per new particle), relative to their centres
@@ -375,8 +413,13 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
     ody = np.empty(nf)
     for f in range(nf):
         o = found[f]
-        odx[f] = cx[o] - (pcx + shift_x[found_q[f] % nsx])
-        ody[f] = cy[o] - (pcy + shift_y[found_q[f] // nsx])
+        odx[f] = cx[o] - pcx
+        ody[f] = cy[o] - pcy
+        if periodic and found_q[f] > 0:
+            qx = found_q[f] % nsx
+            qy = found_q[f] // nsx
+            odx[f] -= 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
+            ody[f] -= 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
         if nf <= ncache:
             if w.ckey[o] == gen:
                 slot[f] = w.cslot[o]
@@ -470,14 +513,8 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
         ni = 0
         if mode == WALL_BOX:
             slo, shi = clip_closed_box(ax, ay, dx, dy, bx0, bx1, by0, by1)
-        elif mode == WALL_HALFPLANES:
-            slo, shi = clip_closed_halfplanes(ax + pcx, ay + pcy, dx, dy, s.walls, w.woff)
-        elif mode == WALL_CIRCLE:
-            slo, shi = clip_closed_circle(
-                ax + pcx, ay + pcy, dx, dy, w.rx, w.ry, mq, -1.0, g.circum[i], s.walls
-            )
         else:
-            slo, shi = -np.inf, np.inf
+            slo, shi = _clip_walls(mode, ax + pcx, ay + pcy, dx, dy, i, mq, g, s, w)
         if slo > shi:
             continue
         if slo > 0.0:
