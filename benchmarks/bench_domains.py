@@ -8,6 +8,8 @@ the verification time. Run from the repository root:
 
     python benchmarks/bench_domains.py
     python benchmarks/bench_domains.py --side 400 --inserter rsa
+    python benchmarks/bench_domains.py --shape disk      # every particle an exact disk
+    python benchmarks/bench_domains.py --shape mixed     # pyroxene, glass, ilmenite as disks
 """
 
 from __future__ import annotations
@@ -46,15 +48,19 @@ def main() -> None:
     parser.add_argument("--side", type=float, default=800.0)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--inserter", choices=["available-arc", "rsa"], default="available-arc")
+    parser.add_argument("--shape", choices=["octagon", "disk", "mixed"], default="octagon")
     args = parser.parse_args()
     registry = default_registry()
     extra = [] if args.inserter == "available-arc" else ["insertion={kind = 'rsa'}"]
+    disks = {"octagon": (), "disk": range(6), "mixed": (0, 2, 4)}[args.shape]
+    extra += [f"phases.{p}.shape={{kind = 'disk'}}" for p in disks]
     # compile (or load the cached kernels) outside the timed runs
     for value in domains(60.0).values():
         run_scene(resolve_scene(load_scene("table1", [value, *extra]), registry), None)
     print(
         f"machine: {platform.machine()}, {platform.python_implementation()} "
-        f"{platform.python_version()}; inserter {args.inserter}; area {args.side:g}^2 um^2"
+        f"{platform.python_version()}; inserter {args.inserter}; shapes {args.shape}; "
+        f"area {args.side:g}^2 um^2"
     )
     print(
         f"{'kind':<10} {'tried':>7} {'placed':>7} {'pack s':>8} {'part/s':>9} "

@@ -47,6 +47,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.analysis",
     "regopack.plugins.size_distributions",
     "regopack.plugins.shapes",
+    "regopack.plugins.disk",
     "regopack.plugins.rsa",
     "regopack.plugins.exporters",
 )

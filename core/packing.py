@@ -40,10 +40,14 @@ __all__ = [
 FORMAT_VERSION = 2
 """Newest packing file format version; :func:`save` writes it for domains other than rectangles.
 
-Version 2 adds the domain kinds ``polygon``, ``circle`` and ``periodic``.
-Packings in a walled rectangle are written as version 1, which they fully
+Version 2 adds the domain kinds ``polygon``, ``circle`` and ``periodic`` and
+the optional array ``rounding`` (disks, rounded polygons). Packings of sharp
+polygons in a walled rectangle are written as version 1, which they fully
 fit, so that older readers keep reading them.
 """
+
+ROUNDED_SEGMENTS = 128
+"""Segments per full turn when a rounded outline is drawn as a polygon (shapely, figures)."""
 
 FILE_MAGIC = "regopack-packing"
 """Value of ``meta["format"]`` identifying a regopack packing file."""
@@ -105,6 +109,10 @@ class Packing:
         regopack version that produced the packing.
     stats
         Counters and timings of the run.
+    rounding
+        ``(n,)`` radius of the disk that rounds each outline (a disk is one
+        vertex at its centre rounded by its radius), or ``None`` when every
+        particle is a sharp polygon.
     """
 
     radius: FloatArray
@@ -120,6 +128,7 @@ class Packing:
     seed: int = 0
     version: str = "0.0.0"
     stats: dict[str, float] = field(default_factory=dict)
+    rounding: FloatArray | None = None
 
     @classmethod
     def from_parts(
@@ -154,6 +163,7 @@ class Packing:
             seed=int(seed),
             version=__version__,
             stats=dict(result.stats if stats is None else stats),
+            rounding=population.shapes.rounding,
         )
 
     # -- counts and masks ---------------------------------------------------
@@ -184,6 +194,18 @@ class Packing:
         return idx[np.argsort(self.insertion_index[idx], kind="stable")].astype(np.int64)
 
     # -- geometry ---------------------------------------------------------------
+
+    @property
+    def rounding_radius(self) -> FloatArray:
+        """Rounding radius of every particle (zeros for sharp polygons)."""
+        if self.rounding is None:
+            return np.zeros(self.n_particles, dtype=np.float64)
+        return np.asarray(self.rounding, dtype=np.float64)
+
+    @property
+    def rounded(self) -> bool:
+        """True when some particle is rounded (a disk or a rounded polygon)."""
+        return self.rounding is not None and bool(np.any(self.rounding > 0))
 
     def _select(self, indices: ArrayLike | None) -> IntArray:
         if indices is None:
@@ -216,6 +238,9 @@ class Packing:
             (``np.flatnonzero(packing.placed)``).
         """
         idx = self._select(indices)
+        if self.rounded:
+            geoms = self.to_shapely(idx)
+            return [np.asarray(g.exterior.coords)[:-1] for g in geoms]
         coords, counts = self._absolute(idx)
         return np.split(coords, np.cumsum(counts)[:-1]) if len(idx) else []
 
@@ -236,11 +261,20 @@ class Packing:
             return np.empty(0, dtype=object)
         coords, counts = self._absolute(idx)
         ring_of_vertex = np.repeat(np.arange(len(idx)), counts)
-        rings = shapely.linearrings(coords, indices=ring_of_vertex)
-        return np.asarray(shapely.polygons(rings), dtype=object)
+        if not self.rounded:
+            rings = shapely.linearrings(coords, indices=ring_of_vertex)
+            return np.asarray(shapely.polygons(rings), dtype=object)
+        # rounded outlines: the core (point, segment or polygon) grown by its radius,
+        # drawn with ROUNDED_SEGMENTS segments per full turn
+        cores = shapely.convex_hull(shapely.multipoints(coords, indices=ring_of_vertex))
+        rho = self.rounding_radius[idx]
+        out = np.asarray(cores, dtype=object)
+        grow = rho > 0
+        out[grow] = shapely.buffer(cores[grow], rho[grow], quad_segs=ROUNDED_SEGMENTS // 4)
+        return out
 
     def area(self) -> FloatArray:
-        """Polygon area of every particle (shoelace formula)."""
+        """Area of every particle, exactly (shoelace; plus the rounding's strips and disk)."""
         v = self.vertices
         if v.shape[0] == 0:
             return np.zeros(self.n_particles, dtype=np.float64)
@@ -249,13 +283,20 @@ class Packing:
         ends = self.offsets[1:][counts > 0] - 1
         nxt[ends] = self.offsets[:-1][counts > 0]
         cross = v[:, 0] * v[nxt, 1] - v[nxt, 0] * v[:, 1]
-        return 0.5 * _segment_reduce(np.add, cross, self.offsets)
+        area = 0.5 * _segment_reduce(np.add, cross, self.offsets)
+        if self.rounded:
+            rho = self.rounding_radius
+            edge = np.hypot(v[nxt, 0] - v[:, 0], v[nxt, 1] - v[:, 1])
+            perimeter = _segment_reduce(np.add, edge, self.offsets)
+            area = area + perimeter * rho + np.pi * rho * rho
+        return area
 
     @property
     def circumradius(self) -> FloatArray:
         """Largest distance from each particle's centre to its outline."""
         d = np.hypot(self.vertices[:, 0], self.vertices[:, 1])
-        return _segment_reduce(np.maximum, d, self.offsets)
+        out = _segment_reduce(np.maximum, d, self.offsets)
+        return out + self.rounding_radius if self.rounded else out
 
     def __repr__(self) -> str:
         return (
@@ -345,7 +386,7 @@ def _meta(packing: Packing) -> dict[str, Any]:
     d = packing.domain
     return {
         "format": FILE_MAGIC,
-        "format_version": 1 if type(d) is Rectangle else FORMAT_VERSION,
+        "format_version": 1 if type(d) is Rectangle and not packing.rounded else FORMAT_VERSION,
         "version": packing.version,
         "mineral_names": list(packing.mineral_names),
         "domain": d.to_dict(),
@@ -363,6 +404,8 @@ def save(packing: Packing, path: str | Path) -> None:
     previous file untouched. The name is used as given (no ``.npz`` is added).
     """
     arrays: dict[str, Any] = {name: getattr(packing, name) for name in _ARRAYS}
+    if packing.rounded:
+        arrays["rounding"] = packing.rounding_radius
     meta = json.dumps(_meta(packing), default=_json_default)
     savez: Callable[..., None] = np.savez
     with _atomic_file(Path(path)) as fh:
@@ -438,6 +481,11 @@ def load(path: str | Path) -> Packing:
     except (KeyError, TypeError, ValueError, GeometryError) as err:
         raise _bad(path, "incomplete 'meta' entry") from err
     stats = {str(k): (math.nan if v is None else v) for k, v in dict(meta.get("stats", {})).items()}
+    rounding = None
+    if "rounding" in contents:
+        rounding = np.asarray(contents["rounding"], dtype=np.float64)
+        if rounding.shape != (n,) or not np.all(np.isfinite(rounding) & (rounding >= 0)):
+            raise _bad(path, "array 'rounding' is not one finite radius >= 0 per particle")
     return Packing(
         **arrays,
         mineral_names=mineral_names,
@@ -446,4 +494,5 @@ def load(path: str | Path) -> Packing:
         seed=int(meta.get("seed", 0)),
         version=str(meta.get("version", "unknown")),
         stats=stats,
+        rounding=rounding,
     )

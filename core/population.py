@@ -25,11 +25,17 @@ class ShapeBatch:
         is ``offsets[j + 1]``.
     orientation
         ``(n,)`` orientation angle of each particle in radians.
+    rounding
+        ``(n,)`` radius of the disk that rounds each outline (the particle is
+        the outline's Minkowski sum with that disk), or ``None`` for sharp
+        polygons. A disk of radius ``r`` is the single vertex ``(0, 0)``
+        rounded by ``r``.
     """
 
     vertices: FloatArray
     offsets: IntArray
     orientation: FloatArray
+    rounding: FloatArray | None = None
 
     def __len__(self) -> int:
         return int(self.offsets.shape[0] - 1)
@@ -37,6 +43,13 @@ class ShapeBatch:
     def outline(self, j: int) -> FloatArray:
         """Vertices of particle ``j`` relative to its reference point."""
         return self.vertices[self.offsets[j] : self.offsets[j + 1]]
+
+    @property
+    def rounding_radius(self) -> FloatArray:
+        """Rounding radius of every particle (zeros for sharp polygons)."""
+        if self.rounding is None:
+            return np.zeros(len(self), dtype=np.float64)
+        return np.asarray(self.rounding, dtype=np.float64)
 
 
 @dataclass(frozen=True)
@@ -72,6 +85,8 @@ class Population:
         out = np.zeros(len(self), dtype=np.float64)
         nonempty = counts > 0
         out[nonempty] = np.maximum.reduceat(d, self.shapes.offsets[:-1][nonempty])
+        if self.shapes.rounding is not None:
+            out += self.shapes.rounding
         return out
 
 
@@ -88,9 +103,13 @@ def concat_shapes(parts: list[tuple[IntArray, ShapeBatch]], n: int) -> ShapeBatc
     """
     counts = np.zeros(n, dtype=np.int64)
     orientation = np.zeros(n, dtype=np.float64)
+    rounded = any(batch.rounding is not None for _, batch in parts)
+    rounding = np.zeros(n, dtype=np.float64) if rounded else None
     for idx, batch in parts:
         counts[idx] = np.diff(batch.offsets)
         orientation[idx] = batch.orientation
+        if rounding is not None:
+            rounding[idx] = batch.rounding_radius
     offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     vertices = np.empty((int(offsets[-1]), 2), dtype=np.float64)
@@ -102,4 +121,6 @@ def concat_shapes(parts: list[tuple[IntArray, ShapeBatch]], n: int) -> ShapeBatc
         starts = offsets[idx]
         dest = np.repeat(starts - batch.offsets[:-1], src_counts) + np.arange(batch.offsets[-1])
         vertices[dest] = batch.vertices
-    return ShapeBatch(vertices=vertices, offsets=offsets, orientation=orientation)
+    return ShapeBatch(
+        vertices=vertices, offsets=offsets, orientation=orientation, rounding=rounding
+    )

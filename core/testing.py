@@ -199,13 +199,26 @@ def _check_batch(batch: object, n: int, who: str) -> tuple[FloatArray, NDArray[n
     return vertices, offsets
 
 
-def _check_outline(v: FloatArray, r: float, j: int, who: str, rtol: float) -> None:
+def _check_outline(
+    v: FloatArray, r: float, j: int, who: str, rtol: float, rho: float = 0.0
+) -> None:
     where = f"{who}: outline {j} (radius {r:g})"
+    expected = math.pi * r * r
+    if rho < 0 or not math.isfinite(rho):
+        raise AssertionError(f"{where} has the rounding radius {rho:g}; it must be >= 0")
+    if rho > 0 and v.shape[0] == 1:  # a disk: one vertex, the reference point
+        if np.any(v != 0.0):
+            raise AssertionError(f"{where}: a disk's single vertex must be (0, 0), not {v[0]}")
+        if abs(math.pi * rho * rho - expected) > rtol * expected:
+            raise AssertionError(f"{where}: a disk of radius {rho:.9g} has not the area pi r^2")
+        return
     if v.shape[0] < 3:
         raise AssertionError(f"{where} has {v.shape[0]} vertices; a polygon needs at least 3")
     edges = np.roll(v, -1, axis=0) - v
     signed = 0.5 * float(np.sum(v[:, 0] * edges[:, 1] - v[:, 1] * edges[:, 0]))
-    expected = math.pi * r * r
+    if rho > 0:  # the rounding adds strips along the edges and a disk at the corners
+        perimeter = float(np.sum(np.hypot(edges[:, 0], edges[:, 1])))
+        signed += perimeter * rho + math.pi * rho * rho
     if signed <= 0:
         raise AssertionError(
             f"{where} is not counter-clockwise (signed area {signed:.6g}); list the "
@@ -259,7 +272,8 @@ def check_shape_generator(
       values, also for an empty array of radii;
     - every outline has at least three vertices, is counter-clockwise and convex
       (edges of zero length are allowed) and has the area ``pi r^2`` within
-      ``rtol``;
+      ``rtol``, counting its rounding (``ShapeBatch.rounding``); a rounded
+      outline may instead be the single vertex ``(0, 0)``, a disk;
     - the reference point ``(0, 0)`` lies strictly inside every outline;
     - the same seed gives the same outlines, and numpy's global random
       generator is not used.
@@ -295,8 +309,12 @@ def check_shape_generator(
         batch = generator.generate(r.copy(), np.random.default_rng(seed))
         again = generator.generate(r.copy(), np.random.default_rng(seed))
     vertices, offsets = _check_batch(batch, r.shape[0], who)
+    rounding = batch.rounding_radius
+    if rounding.shape != (r.shape[0],):
+        raise AssertionError(f"{who}: rounding has shape {rounding.shape}, expected ({len(r)},)")
     for j in range(r.shape[0]):
-        _check_outline(vertices[offsets[j] : offsets[j + 1]], float(r[j]), j, who, rtol)
+        outline = vertices[offsets[j] : offsets[j + 1]]
+        _check_outline(outline, float(r[j]), j, who, rtol, float(rounding[j]))
     v2, o2 = _check_batch(again, r.shape[0], who)
     same = (
         np.array_equal(offsets, o2)

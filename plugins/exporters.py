@@ -100,8 +100,14 @@ def _write_text(path: Path, text: str) -> None:
 
 
 def _header(packing: Packing, fmt: str) -> dict[str, Any]:
-    """Return what a CSV or JSON export stores besides the particles."""
+    """Return what a CSV or JSON export stores besides the particles.
+
+    ``rounding`` (one radius per particle) is present only when some particle
+    is rounded (a disk).
+    """
+    extra = {"rounding": packing.rounding_radius.tolist()} if packing.rounded else {}
     return {
+        **extra,
         "format": fmt,
         "format_version": EXPORT_FORMAT_VERSION,
         "version": packing.version,
@@ -132,6 +138,11 @@ def _packing_from(
     try:
         domain = domain_from_dict(header["domain"])
         names = tuple(str(m) for m in header["mineral_names"])
+        rounding = header.get("rounding")
+        if rounding is not None:
+            rounding = np.asarray([float(r) for r in rounding], dtype=np.float64)
+            if rounding.shape != np.shape(arrays["radius"]):
+                raise ValueError("one rounding radius per particle expected")
     except (KeyError, TypeError, ValueError, GeometryError) as err:
         raise ExportError(f"{path}: incomplete header ({err})") from err
     stats = {
@@ -151,6 +162,7 @@ def _packing_from(
         seed=int(header.get("seed", 0)),
         version=str(header.get("version", "unknown")),
         stats=stats,
+        rounding=rounding,
     )
 
 
@@ -682,6 +694,11 @@ class LammpsExporter(Exporter):
         cfg = self.config
         path = Path(path)
         idx = np.flatnonzero(packing.placed)
+        if packing.rounded:
+            raise ExportError(
+                "the lammps export takes sharp polygons only; this packing has rounded "
+                "particles (disks)"
+            )
         xmin, xmax, ymin, ymax = (float(v) for v in packing.domain.bounds())
         n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
         atoms: list[str] = []

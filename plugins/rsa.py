@@ -117,6 +117,8 @@ class Outlines(NamedTuple):
     offsets: IntArray
     circum: FloatArray
     box: FloatArray
+    rho: FloatArray
+    """Rounding radius of every outline (zero for sharp polygons)."""
 
 
 class Grid(NamedTuple):
@@ -329,9 +331,56 @@ def _hits_near(
                 ):
                     continue
                 bi, bj = g.offsets[p], g.offsets[p + 1]
-                if _overlap(ax, ay, g.vx[bi:bj], g.vy[bi:bj], dx, dy):
+                bx, by = g.vx[bi:bj], g.vy[bi:bj]
+                rr = g.rho[i] + g.rho[p]
+                if rr == 0.0:
+                    if _overlap(ax, ay, bx, by, dx, dy):
+                        return True
+                elif _core_distance(ax, ay, bx, by, dx, dy) < rr:
                     return True
     return False
+
+
+@numba.njit(cache=True)
+def _point_segment2(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    """Squared distance from ``p`` to the segment ``a b``."""
+    dx = bx - ax
+    dy = by - ay
+    ll = dx * dx + dy * dy
+    t = 0.0
+    if ll > 0.0:
+        t = min(max(((px - ax) * dx + (py - ay) * dy) / ll, 0.0), 1.0)
+    ex = ax + t * dx - px
+    ey = ay + t * dy - py
+    return ex * ex + ey * ey
+
+
+@numba.njit(cache=True)
+def _core_distance(
+    ax: FloatArray, ay: FloatArray, bx: FloatArray, by: FloatArray, dx: float, dy: float
+) -> float:
+    """Distance between the convex cores ``a`` and ``b + (dx, dy)`` (0 when they overlap).
+
+    A core is a single point or a convex polygon; a point inside the other
+    core, or two polygons whose interiors meet, are at distance 0.
+    """
+    m = ax.shape[0]
+    k = bx.shape[0]
+    if m + k > 2 and not _separated_along_edges(ax, ay, bx, by, dx, dy):
+        if not _separated_along_edges(bx, by, ax, ay, -dx, -dy):
+            return 0.0
+    best = np.inf
+    for j in range(m):
+        for q in range(k):
+            q2 = q + 1 if q + 1 < k else 0
+            d2 = _point_segment2(ax[j], ay[j], bx[q] + dx, by[q] + dy, bx[q2] + dx, by[q2] + dy)
+            best = min(best, d2)
+    for q in range(k):
+        for j in range(m):
+            j2 = j + 1 if j + 1 < m else 0
+            d2 = _point_segment2(bx[q] + dx, by[q] + dy, ax[j], ay[j], ax[j2], ay[j2])
+            best = min(best, d2)
+    return math.sqrt(best)
 
 
 # ---------------------------------------------------------------------------
@@ -374,7 +423,9 @@ def _pack_range(
                     ipar[I_REJECTED] += 1  # the upper sides are the lower ones
                     continue
                 a, b = g.offsets[i], g.offsets[i + 1]
-                if mode != WALL_BOX and not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+                if mode != WALL_BOX and not point_fits(
+                    x, y, g.vx, g.vy, a, b, mode, s.walls, g.rho[i]
+                ):
                     ipar[I_REJECTED] += 1
                     continue
                 if _hits(i, x, y, g, s):
@@ -406,6 +457,7 @@ def _prepare(population: Population, domain: Domain) -> tuple[Outlines, Grid]:
     vx = np.ascontiguousarray(verts[:, 0])
     vy = np.ascontiguousarray(verts[:, 1])
     circum = np.ascontiguousarray(population.circumradius, dtype=np.float64)
+    rho = np.ascontiguousarray(population.shapes.rounding_radius, dtype=np.float64)
     box = np.zeros((n, 4), dtype=np.float64)
     counts = np.diff(offsets)
     full = counts > 0
@@ -415,6 +467,7 @@ def _prepare(population: Population, domain: Domain) -> tuple[Outlines, Grid]:
         box[full, 1] = np.maximum.reduceat(vx, starts)
         box[full, 2] = np.minimum.reduceat(vy, starts)
         box[full, 3] = np.maximum.reduceat(vy, starts)
+    box += rho[:, None] * np.array([-1.0, 1.0, -1.0, 1.0])
     check_periodic_size(domain, circum)
     mode, walls = wall_arrays(domain)
     cell, gnx, gny, capacity = _grid_layout(domain, circum)
@@ -424,7 +477,7 @@ def _prepare(population: Population, domain: Domain) -> tuple[Outlines, Grid]:
     ipar[I_WALLMODE] = mode
     ipar[I_GNX] = gnx
     ipar[I_GNY] = gny
-    outlines = Outlines(vx=vx, vy=vy, offsets=offsets, circum=circum, box=box)
+    outlines = Outlines(vx=vx, vy=vy, offsets=offsets, circum=circum, box=box, rho=rho)
     grid = Grid(
         cx=np.full(n, np.nan),
         cy=np.full(n, np.nan),

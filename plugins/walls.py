@@ -94,22 +94,31 @@ def point_fits(
     stop: int,
     mode: int,
     walls: FloatArray,
+    rho: float = 0.0,
 ) -> bool:
-    """Return whether the outline ``v[start:stop]`` centred at ``(x, y)`` lies inside the walls."""
+    """Return whether the outline ``v[start:stop]`` centred at ``(x, y)`` lies inside the walls.
+
+    ``rho`` rounds the outline (its Minkowski sum with a disk of that radius).
+    """
     if mode == WALL_PERIODIC:
         return True
     for j in range(start, stop):
         px = x + vx[j]
         py = y + vy[j]
         if mode == WALL_BOX:
-            if px < walls[0, 0] or px > walls[0, 1] or py < walls[0, 2] or py > walls[0, 3]:
+            if (
+                px - rho < walls[0, 0]
+                or px + rho > walls[0, 1]
+                or py - rho < walls[0, 2]
+                or py + rho > walls[0, 3]
+            ):
                 return False
         elif mode == WALL_HALFPLANES:
             for e in range(walls.shape[0]):
-                if walls[e, 0] * px + walls[e, 1] * py > walls[e, 2]:
+                if walls[e, 0] * px + walls[e, 1] * py + rho > walls[e, 2]:
                     return False
         else:
-            if math.hypot(px - walls[0, 0], py - walls[0, 1]) > walls[0, 2]:
+            if math.hypot(px - walls[0, 0], py - walls[0, 1]) + rho > walls[0, 2]:
                 return False
     return True
 

@@ -26,7 +26,7 @@ def test_default_registry_has_the_builtins():
         "tabulated",
         "uniform",
     ]
-    assert reg.names("shape") == ["octagon", "random-polygon", "regular", "template"]
+    assert reg.names("shape") == ["disk", "octagon", "random-polygon", "regular", "template"]
     assert reg.names("insertion") == ["available-arc", "rsa"]
     assert reg.names("density") == ["eta"]
     assert reg.names("export") == ["csv", "json", "lammps", "svg", "vtk"]

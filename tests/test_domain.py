@@ -114,7 +114,8 @@ def test_polygon_disk_area_matches_a_fine_shapely_disk(cx, cy, r, k, scale) -> N
     exact = polygon_disk_area(ring * scale, (cx * scale, cy * scale), r * scale)
     disk = shapely.Point(cx, cy).buffer(r, quad_segs=2048)
     approx = shapely.Polygon(ring).intersection(disk).area
-    assert exact / scale**2 == pytest.approx(approx, rel=1e-5, abs=1e-9)
+    # the 8192-gon is off by about 1e-9 r^2 on slivers; the exact value does not move with scale
+    assert exact / scale**2 == pytest.approx(approx, rel=1e-5, abs=1e-8 * r * r)
 
 
 def test_circle_covered_area_is_exact_for_a_square_inside_and_across() -> None:

@@ -34,6 +34,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.analysis",
         "regopack.plugins.size_distributions",
         "regopack.plugins.shapes",
+        "regopack.plugins.disk",
         "regopack.plugins.rsa",
         "regopack.plugins.exporters",
     )

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from typing import Any
 
@@ -99,3 +100,46 @@ def periodic_images(packing: Packing, pad: float) -> tuple[Packing, NDArray[np.i
         insertion_index=index.astype(np.int64),
     )
     return ext, origin
+
+
+ROUNDED_CONTACT_ERROR = 0.01
+"""Largest radial error of a rounded outline's polygon in the contact analysis, per unit tol."""
+
+
+def rounded_as_polygons(packing: Packing, error: float) -> Packing:
+    """Return the packing with every rounded outline replaced by a circumscribed polygon.
+
+    The polygon of a particle rounded by ``rho`` is its core grown by
+    ``rho / cos(pi / k)`` with ``k`` segments per full turn, chosen so that the
+    polygon lies outside the rounded outline by at most ``error`` (and touches
+    it at the middle of every edge). Sharp particles are unchanged.
+    """
+    import shapely
+
+    if not packing.rounded:
+        return packing
+    rho = packing.rounding_radius
+    n = packing.n_particles
+    outlines: list[NDArray[np.float64]] = []
+    for j in range(n):
+        local = packing.vertices[packing.offsets[j] : packing.offsets[j + 1]]
+        if rho[j] <= 0.0:
+            outlines.append(local)
+            continue
+        k = max(16, 4 * math.ceil(math.pi * math.sqrt(rho[j] / (2.0 * error)) / 4.0))
+        grown = shapely.buffer(
+            shapely.convex_hull(shapely.multipoints(local)),
+            rho[j] / math.cos(math.pi / k),
+            quad_segs=k // 4,
+        )
+        ring = np.asarray(shapely.get_exterior_ring(shapely.orient_polygons(grown)).coords)[:-1]
+        outlines.append(ring)
+    counts = np.array([len(o) for o in outlines], dtype=np.int64)
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(counts, out=offsets[1:])
+    return replace(
+        packing,
+        vertices=np.concatenate(outlines) if n else np.zeros((0, 2)),
+        offsets=offsets,
+        rounding=None,
+    )

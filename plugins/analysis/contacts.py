@@ -12,10 +12,12 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import (
+    ROUNDED_CONTACT_ERROR,
     eta_of,
     interior_margin,
     interior_mask,
     periodic_images,
+    rounded_as_polygons,
 )
 from regopack.plugins.analysis.segment import equivalent_segment
 
@@ -51,6 +53,32 @@ class ContactsConfig(BaseModel):
         if self.tol_max < self.tol:
             raise ValueError(f"tol_max ({self.tol_max}) must be at least tol ({self.tol})")
         return self
+
+
+def _disk_mask(packing: Packing) -> NDArray[np.bool_]:
+    """Particles that are disks: one vertex at the centre, rounded."""
+    counts = np.diff(packing.offsets)
+    return np.asarray((counts == 1) & (packing.rounding_radius > 0), dtype=np.bool_)
+
+
+def _lens(
+    ci: FloatArray, cj: FloatArray, ri: FloatArray, rj: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Overlap of two disks, exactly: area, common chord, chord midpoint, unit normal i -> j."""
+    delta = cj - ci
+    d = np.hypot(delta[:, 0], delta[:, 1])
+    u = delta / d[:, None]
+    # distance from centre i to the chord, and half the chord
+    a = (d * d + ri * ri - rj * rj) / (2.0 * d)
+    half = np.sqrt(np.maximum(ri * ri - a * a, 0.0))
+    area = (
+        ri * ri * np.arccos(np.clip(a / ri, -1.0, 1.0))
+        - a * half
+        + rj * rj * np.arccos(np.clip((d - a) / rj, -1.0, 1.0))
+        - (d - a) * half
+    )
+    mid = ci + a[:, None] * u
+    return area, 2.0 * half, mid[:, 0], mid[:, 1], u[:, 0], u[:, 1]
 
 
 def _one_image_per_pair(
@@ -98,10 +126,13 @@ class Contacts(Analyzer):
         s_max = 0.5 * cfg.tol_max
         # in a periodic domain the particles near a side get ghost copies one
         # period away; ``origin`` maps every (ghost) particle to its original
-        work, origin = packing, np.arange(packing.n_particles, dtype=np.int64)
+        # rounded outlines (disks) are measured on circumscribed polygons within
+        # ROUNDED_CONTACT_ERROR * tol of the true outline
+        sharp = rounded_as_polygons(packing, ROUNDED_CONTACT_ERROR * cfg.tol)
+        work, origin = sharp, np.arange(packing.n_particles, dtype=np.int64)
         if packing.domain.periodic and packing.n_placed:
-            pad = 2.0 * float(np.max(packing.circumradius[packing.placed]) + 2.0 * s_max)
-            work, origin = periodic_images(packing, pad)
+            pad = 2.0 * float(np.max(sharp.circumradius[packing.placed]) + 2.0 * s_max)
+            work, origin = periodic_images(sharp, pad)
         placed = np.flatnonzero(work.placed)
         offsets = np.ascontiguousarray(work.offsets, dtype=np.int64)
         vertices = np.ascontiguousarray(work.vertices, dtype=np.float64)
@@ -110,14 +141,21 @@ class Contacts(Analyzer):
         centre = np.ascontiguousarray(np.nan_to_num(work.centre), dtype=np.float64)
         reach = circum[placed] + s_max * mitre[placed]
         bounds = work.domain.bounds()
-        if work is not packing:
+        if work is not sharp:
             bounds = bounds + np.array([-1.0, 1.0, -1.0, 1.0]) * pad
         li, lj = ck.candidate_pairs(np.ascontiguousarray(centre[placed]), reach, bounds)
         pi = placed[li]
         pj = placed[lj]
-        if work is not packing:
+        if work is not sharp:
             pi, pj = _one_image_per_pair(pi, pj, origin, packing.n_particles)
         thr = ck.thresholds(pi, pj, centre, vertices, offsets, nx, ny, mx, my, circum)
+        # two disks: the exact half gap between the circles
+        disk = _disk_mask(packing)
+        both = disk[origin[pi]] & disk[origin[pj]]
+        rho = packing.rounding_radius
+        if both.any():
+            d = np.hypot(*(centre[pj[both]] - centre[pi[both]]).T)
+            thr[both] = 0.5 * (d - rho[origin[pi[both]]] - rho[origin[pj[both]]])
         keep = thr < s_max
         pi, pj = pi[keep], pj[keep]
         self.pairs = np.column_stack([origin[pi], origin[pj]]).astype(np.int64)
@@ -128,8 +166,16 @@ class Contacts(Analyzer):
         area, width, px, py, unx, uny = ck.contact_regions(
             ci, cj, 0.5 * cfg.tol, centre, vertices, offsets, nx, ny, mx, my
         )
+        lens = disk[origin[ci]] & disk[origin[cj]]
+        if lens.any():
+            area[lens], width[lens], px[lens], py[lens], unx[lens], uny[lens] = _lens(
+                centre[ci[lens]],
+                centre[cj[lens]],
+                rho[origin[ci[lens]]] + 0.5 * cfg.tol,
+                rho[origin[cj[lens]]] + 0.5 * cfg.tol,
+            )
         ci, cj = origin[ci], origin[cj]
-        if work is not packing:
+        if work is not sharp:
             px, py = packing.domain.wrap(np.column_stack([px, py])).T  # type: ignore[attr-defined]
         ok = (area > 0.0) & (width > 0.0)
         theta = np.zeros_like(area)

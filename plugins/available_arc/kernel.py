@@ -31,6 +31,7 @@ from regopack.plugins.available_arc.geometry import (
     reflect_outline,
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
+from regopack.plugins.available_arc.rounded import rounded_arcs, rounded_locate
 from regopack.plugins.walls import (
     WALL_BOX,
     WALL_CIRCLE,
@@ -81,8 +82,9 @@ N_FPAR = 13
     I_CUSED,
     I_FIRSTRANDOM,
     I_WALLMODE,
-) = range(14)
-N_IPAR = 14
+    I_ROUNDED,
+) = range(15)
+N_IPAR = 15
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -100,6 +102,7 @@ class Outlines(NamedTuple):
     circum: FloatArray
     req: FloatArray
     box: FloatArray
+    rho: FloatArray
 
 
 class Packed(NamedTuple):
@@ -230,6 +233,8 @@ def begin_particle(i: int, g: Outlines, s: Packed, w: Work) -> int:
     s.ipar[I_CUSED] = 0
     if s.ipar[I_WALLMODE] == WALL_HALFPLANES:
         particle_offsets(g.vx, g.vy, g.offsets[i], g.offsets[i + 1], s.walls, w.woff)
+        for e in range(w.woff.shape[0]):
+            w.woff[e] -= g.rho[i]
     return mq
 
 
@@ -457,6 +462,19 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
                 rr = d2
         orad[sl] = math.sqrt(rr)
 
+    if ipar[I_ROUNDED] == 1:
+        orho = np.empty(nf)
+        for f in range(nf):
+            orho[f] = g.rho[found[f]] + g.rho[i]
+        box = np.empty(4)
+        box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
+        inner = s.walls[0, 2] - g.rho[i] if mode == WALL_CIRCLE else 0.0
+        return rounded_arcs(
+            wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy,
+            nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho,
+            mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner,
+        )  # fmt: skip
+
     # ---- walls: closed box of admissible centres, relative to pk
     bx0, bx1, by0, by1 = centre_box(i, g, fpar)
     bx0 -= pcx
@@ -667,6 +685,9 @@ def locate(
         w.wex,
         w.wey,
     )
+    if s.ipar[I_ROUNDED] == 1:
+        x, y = rounded_locate(wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], angle)
+        return s.cx[pk] + x, s.cy[pk] + y
     va = w.va
     _vertex_angles(wx, wy, n, va)
     period = va[n] - va[0]
@@ -773,14 +794,14 @@ def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> boo
     if not random:
         x = fpar[F_CX]
         y = fpar[F_CY]
-        if not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+        if not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls, g.rho[i]):
             return False
         insert_particle(i, x, y, g, s)
         return True
     for _ in range(FIRST_RANDOM_TRIES):
         x = fpar[F_XMIN] + rng.random() * (fpar[F_XMAX] - fpar[F_XMIN])
         y = fpar[F_YMIN] + rng.random() * (fpar[F_YMAX] - fpar[F_YMIN])
-        if point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls):
+        if point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls, g.rho[i]):
             insert_particle(i, x, y, g, s)
             return True
     return False

@@ -53,7 +53,12 @@ class ArcState:
         verts = np.ascontiguousarray(population.shapes.vertices, dtype=np.float64)
         vx, vy, ex, ey, ang, circum, box = prepare_outlines(verts, offsets)
         req = np.ascontiguousarray(population.radius, dtype=np.float64)
-        self.outlines = kernel.Outlines(vx, vy, ex, ey, ang, offsets, circum, req, box)
+        rho = np.ascontiguousarray(population.shapes.rounding_radius, dtype=np.float64)
+        rounded = bool(np.any(rho > 0))
+        if rounded:  # the circumradius and the local box of the rounded outlines
+            circum = circum + rho
+            box = box + rho[:, None] * np.array([-1.0, 1.0, -1.0, 1.0])
+        self.outlines = kernel.Outlines(vx, vy, ex, ey, ang, offsets, circum, req, box, rho)
 
         check_periodic_size(domain, circum)
         mode, walls = wall_arrays(domain)
@@ -79,6 +84,7 @@ class ArcState:
         ipar[kernel.I_GNY] = gny
         ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
         ipar[kernel.I_WALLMODE] = mode
+        ipar[kernel.I_ROUNDED] = 1 if rounded else 0
         self.packed = kernel.Packed(
             cx=np.full(n, np.nan),
             cy=np.full(n, np.nan),

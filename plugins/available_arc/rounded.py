@@ -1,0 +1,582 @@
+"""Compiled available-arc analysis for rounded particles (disks and rounded polygons).
+
+A rounded particle is a convex core outline (a single vertex for a disk)
+grown by a disk of radius ``rho``. The envelope of two of them is the
+Minkowski sum of the cores (the merge of :mod:`geometry`) grown by the sum of
+the radii, so its boundary alternates circular arcs (about the core's
+vertices, between the normals of the adjacent edges) and straight edges (the
+core's edges moved out by the radius). Arcs wider than a quarter turn are
+split, so that every piece subtends less than pi as seen from the candidate's
+centre (which lies in the envelope's core).
+
+Every piece is parametrised by ``u`` in ``[0, 1]``. The points where a piece
+crosses the boundary of an interferer's envelope or a wall split it; the
+middle of each sub-interval decides whether it is covered (inside the open
+interior of an interferer's envelope, or outside the walls). Touching is
+free, as for polygons.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+
+FloatArray = NDArray[np.float64]
+
+QUARTER = 0.5 * math.pi
+SLACK = 1e-9
+"""Relative widening of the parameter ranges in which crossings are accepted."""
+
+
+@numba.njit(cache=True)
+def envelope_pieces(
+    wx: FloatArray, wy: FloatArray, wex: FloatArray, wey: FloatArray, n: int, rho: float
+) -> FloatArray:
+    """Boundary pieces of the core polygon ``w`` grown by ``rho``, counter-clockwise.
+
+    Returns ``(k, 6)`` rows ``[kind, a, b, c, d, e]``: a segment (kind 0)
+    from ``(a, b)`` to ``(c, d)``; an arc (kind 1) about ``(a, b)`` of radius
+    ``c`` from angle ``d`` to angle ``e`` (``d <= e``). Pieces of zero length
+    are left out. With ``rho = 0`` only the core's edges remain.
+    """
+    out = np.empty((5 * n + 4, 6))
+    k = 0
+    # outward normal angle of edge j: direction angle minus a quarter turn
+    prev = math.atan2(wey[n - 1], wex[n - 1]) - QUARTER
+    for j in range(n):
+        beta = math.atan2(wey[j], wex[j]) - QUARTER
+        if rho > 0.0:
+            span = beta - prev
+            span -= 2.0 * math.pi * math.floor(span / (2.0 * math.pi))
+            if span > 2.0 * math.pi - 1e-9:
+                span = 0.0  # parallel edges whose angles round the wrong way
+            if n == 1 or (span == 0.0 and _all_same(wx, wy, n)):
+                span = 2.0 * math.pi  # a point core: the whole circle
+            if span > 0.0:
+                parts = math.ceil(span / QUARTER)
+                step = span / parts
+                for p in range(parts):
+                    out[k, 0] = 1.0
+                    out[k, 1] = wx[j]
+                    out[k, 2] = wy[j]
+                    out[k, 3] = rho
+                    out[k, 4] = prev + p * step
+                    out[k, 5] = prev + (p + 1) * step if p + 1 < parts else prev + span
+                    k += 1
+        j2 = j + 1 if j + 1 < n else 0
+        nx = math.cos(beta)
+        ny = math.sin(beta)
+        ax = wx[j] + rho * nx
+        ay = wy[j] + rho * ny
+        bx = wx[j2] + rho * nx
+        by = wy[j2] + rho * ny
+        if ax != bx or ay != by:
+            out[k, 0] = 0.0
+            out[k, 1] = ax
+            out[k, 2] = ay
+            out[k, 3] = bx
+            out[k, 4] = by
+            out[k, 5] = 0.0
+            k += 1
+        prev = beta
+    return out[:k]
+
+
+@numba.njit(cache=True)
+def _all_same(wx: FloatArray, wy: FloatArray, n: int) -> bool:
+    for j in range(1, n):
+        if wx[j] != wx[0] or wy[j] != wy[0]:
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def piece_point(piece: FloatArray, u: float) -> tuple[float, float]:
+    """Point at parameter ``u`` of a piece."""
+    if piece[0] == 0.0:
+        return piece[1] + u * (piece[3] - piece[1]), piece[2] + u * (piece[4] - piece[2])
+    phi = piece[4] + u * (piece[5] - piece[4])
+    return piece[1] + piece[3] * math.cos(phi), piece[2] + piece[3] * math.sin(phi)
+
+
+@numba.njit(cache=True)
+def _on_arc(phi: float, lo: float, hi: float) -> float:
+    """Parameter of angle ``phi`` on the arc ``[lo, hi]``, or -1 when it is off the arc."""
+    span = hi - lo
+    d = phi - lo
+    d -= 2.0 * math.pi * math.floor(d / (2.0 * math.pi))
+    slack = SLACK * max(span, 1e-300) + 1e-15
+    if d > span + slack:
+        if d > 2.0 * math.pi - slack:  # just below lo
+            return 0.0
+        return -1.0
+    return min(d / span, 1.0) if span > 0.0 else 0.0
+
+
+@numba.njit(cache=True)
+def _line_circle(
+    ax: float, ay: float, dx: float, dy: float, cx: float, cy: float, r: float
+) -> tuple[int, float, float]:
+    """Parameters ``t`` where ``a + t d`` meets the circle; their count first."""
+    aa = dx * dx + dy * dy
+    if aa == 0.0:
+        return 0, 0.0, 0.0
+    px = ax - cx
+    py = ay - cy
+    b = px * dx + py * dy
+    c = px * px + py * py - r * r
+    disc = b * b - aa * c
+    if disc < 0.0:
+        return 0, 0.0, 0.0
+    root = math.sqrt(disc)
+    q = -(b + root) if b >= 0.0 else -(b - root)
+    if q == 0.0:
+        return 1, 0.0, 0.0
+    return 2, q / aa, c / q
+
+
+@numba.njit(cache=True)
+def crossings(piece: FloatArray, other: FloatArray, out: FloatArray, k: int) -> int:
+    """Append to ``out[k:]`` the parameters on ``piece`` where it meets ``other``.
+
+    ``other`` is a piece (segment, arc) or a line (kind 2: point ``(a, b)``,
+    direction ``(c, d)``) or a full circle (kind 3: centre ``(a, b)``, radius
+    ``c``). Parameters strictly between 0 and 1 are kept; returns the new count.
+    """
+    lo = SLACK
+    hi = 1.0 - SLACK
+    if piece[0] == 0.0:
+        ax = piece[1]
+        ay = piece[2]
+        dx = piece[3] - ax
+        dy = piece[4] - ay
+        if other[0] == 0.0 or other[0] == 2.0:
+            ox = other[1]
+            oy = other[2]
+            if other[0] == 0.0:
+                fx = other[3] - ox
+                fy = other[4] - oy
+            else:
+                fx = other[3]
+                fy = other[4]
+            det = dx * fy - dy * fx
+            if det == 0.0:
+                return k
+            gx = ox - ax
+            gy = oy - ay
+            t = (gx * fy - gy * fx) / det
+            s = (gx * dy - gy * dx) / det
+            if other[0] == 0.0 and (s < -SLACK or s > 1.0 + SLACK):
+                return k
+            if lo < t < hi:
+                out[k] = t
+                k += 1
+            return k
+        cnt, t1, t2 = _line_circle(ax, ay, dx, dy, other[1], other[2], other[3])
+        for c in range(cnt):
+            t = t1 if c == 0 else t2
+            if not lo < t < hi:
+                continue
+            if other[0] == 1.0:
+                px = ax + t * dx - other[1]
+                py = ay + t * dy - other[2]
+                if _on_arc(math.atan2(py, px), other[4], other[5]) < 0.0:
+                    continue
+            out[k] = t
+            k += 1
+        return k
+    # piece is an arc about (cx, cy) of radius r
+    cx = piece[1]
+    cy = piece[2]
+    r = piece[3]
+    if other[0] == 0.0 or other[0] == 2.0:
+        ox = other[1]
+        oy = other[2]
+        if other[0] == 0.0:
+            fx = other[3] - ox
+            fy = other[4] - oy
+        else:
+            fx = other[3]
+            fy = other[4]
+        cnt, s1, s2 = _line_circle(ox, oy, fx, fy, cx, cy, r)
+        for c in range(cnt):
+            s = s1 if c == 0 else s2
+            if other[0] == 0.0 and (s < -SLACK or s > 1.0 + SLACK):
+                continue
+            u = _on_arc(math.atan2(oy + s * fy - cy, ox + s * fx - cx), piece[4], piece[5])
+            if lo < u < hi:
+                out[k] = u
+                k += 1
+        return k
+    # circle-circle
+    ox = other[1] - cx
+    oy = other[2] - cy
+    r2 = other[3]
+    d = math.hypot(ox, oy)
+    if d == 0.0 or d > r + r2 or d < abs(r - r2):
+        return k
+    a = (r * r - r2 * r2 + d * d) / (2.0 * d)
+    h2 = r * r - a * a
+    h = math.sqrt(h2) if h2 > 0.0 else 0.0
+    mx = a * ox / d
+    my = a * oy / d
+    for c in range(2):
+        sg = 1.0 if c == 0 else -1.0
+        px = mx - sg * h * oy / d
+        py = my + sg * h * ox / d
+        if other[0] == 1.0:
+            if _on_arc(math.atan2(py + cy - other[2], px + cx - other[1]), other[4], other[5]) < 0:
+                continue
+        u = _on_arc(math.atan2(py, px), piece[4], piece[5])
+        if lo < u < hi:
+            out[k] = u
+            k += 1
+    return k
+
+
+@numba.njit(cache=True)
+def inside_rounded(
+    px: float,
+    py: float,
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+    n: int,
+    rho: float,
+) -> bool:
+    """Return whether ``p`` lies in the open interior of core polygon ``w`` grown by ``rho``."""
+    inside = True
+    for j in range(n):
+        if wex[j] * (py - wy[j]) - wey[j] * (px - wx[j]) <= 0.0:
+            inside = False
+            break
+    if inside:
+        return True
+    if rho <= 0.0:
+        return False
+    r2 = rho * rho
+    for j in range(n):
+        j2 = j + 1 if j + 1 < n else 0
+        ax = wx[j]
+        ay = wy[j]
+        dx = wx[j2] - ax
+        dy = wy[j2] - ay
+        ll = dx * dx + dy * dy
+        t = 0.0
+        if ll > 0.0:
+            t = ((px - ax) * dx + (py - ay) * dy) / ll
+            t = min(max(t, 0.0), 1.0)
+        ex = ax + t * dx - px
+        ey = ay + t * dy - py
+        if ex * ex + ey * ey < r2:
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def piece_angles(pieces: FloatArray, out: FloatArray) -> None:
+    """Unwrapped polar angle of the start of every piece (``out[k]`` closes the loop).
+
+    Every piece subtends less than pi from the origin, which lies in the core.
+    """
+    k = pieces.shape[0]
+    x0, y0 = piece_point(pieces[0], 0.0)
+    out[0] = math.atan2(y0, x0)
+    for p in range(k):
+        xa, ya = piece_point(pieces[p], 0.0)
+        q = p + 1 if p + 1 < k else 0
+        xb, yb = piece_point(pieces[q], 0.0)
+        out[p + 1] = out[p] + math.atan2(xa * yb - ya * xb, xa * xb + ya * yb)
+
+
+@numba.njit(cache=True)
+def angle_on_piece(pieces: FloatArray, va: FloatArray, p: int, u: float) -> float:
+    """Polar angle of the point at parameter ``u`` of piece ``p``."""
+    if u <= 0.0:
+        return va[p]
+    if u >= 1.0:
+        return va[p + 1]
+    xa, ya = piece_point(pieces[p], 0.0)
+    x, y = piece_point(pieces[p], u)
+    return va[p] + math.atan2(xa * y - ya * x, xa * x + ya * y)
+
+
+@numba.njit(cache=True)
+def ray_hit(piece: FloatArray, angle: float) -> tuple[float, float]:
+    """Where the ray from the origin at polar ``angle`` meets the piece (its nearest point)."""
+    ux = math.cos(angle)
+    uy = math.sin(angle)
+    if piece[0] == 0.0:
+        ax = piece[1]
+        ay = piece[2]
+        ex = piece[3] - ax
+        ey = piece[4] - ay
+        den = ux * ey - uy * ex
+        t = 0.0
+        if den != 0.0:
+            t = (ax * uy - ay * ux) / den
+        t = min(max(t, 0.0), 1.0)
+        return ax + t * ex, ay + t * ey
+    cnt, t1, t2 = _line_circle(0.0, 0.0, ux, uy, piece[1], piece[2], piece[3])
+    if cnt == 0:  # rounding at a tangent ray: the foot of the perpendicular
+        t = ux * piece[1] + uy * piece[2]
+        return t * ux, t * uy
+    t = max(t1, t2)
+    px = t * ux
+    py = t * uy
+    u = _on_arc(math.atan2(py - piece[2], px - piece[1]), piece[4], piece[5])
+    if u < 0.0:  # off the arc by rounding: the nearer end
+        xa, ya = piece_point(piece, 0.0)
+        xb, yb = piece_point(piece, 1.0)
+        if (xa - px) ** 2 + (ya - py) ** 2 <= (xb - px) ** 2 + (yb - py) ** 2:
+            return xa, ya
+        return xb, yb
+    return px, py
+
+
+WALL_BOX, WALL_HALFPLANES, WALL_CIRCLE, WALL_PERIODIC = range(4)  # as in regopack.plugins.walls
+
+
+@numba.njit(cache=True)
+def _fits(
+    x: float,
+    y: float,
+    mode: int,
+    walls: FloatArray,
+    box: FloatArray,
+    woff: FloatArray,
+    qx: FloatArray,
+    qy: FloatArray,
+    mq: int,
+    inner: float,
+) -> bool:
+    """Whether a centre at ``(x, y)`` (absolute) keeps the new particle inside the walls."""
+    if mode == WALL_BOX:
+        return box[0] <= x <= box[1] and box[2] <= y <= box[3]
+    if mode == WALL_HALFPLANES:
+        for e in range(walls.shape[0]):
+            if walls[e, 0] * x + walls[e, 1] * y > woff[e]:
+                return False
+        return True
+    if mode == WALL_CIRCLE:
+        for j in range(mq):
+            # the reflected core holds -v: the vertex is at x - q
+            if math.hypot(x - qx[j] - walls[0, 0], y - qy[j] - walls[0, 1]) > inner:
+                return False
+        return True
+    return True
+
+
+@numba.njit(cache=True)
+def _wall_lines(
+    mode: int,
+    walls: FloatArray,
+    box: FloatArray,
+    woff: FloatArray,
+    qx: FloatArray,
+    qy: FloatArray,
+    mq: int,
+    inner: float,
+    pcx: float,
+    pcy: float,
+) -> FloatArray:
+    """Boundaries of the admissible centres relative to ``pc``: lines (kind 2), circles (3)."""
+    if mode == WALL_BOX:
+        out = np.zeros((4, 6))
+        for e in range(4):
+            out[e, 0] = 2.0
+        out[0, 1] = box[0] - pcx
+        out[0, 4] = 1.0
+        out[1, 1] = box[1] - pcx
+        out[1, 4] = 1.0
+        out[2, 2] = box[2] - pcy
+        out[2, 3] = 1.0
+        out[3, 2] = box[3] - pcy
+        out[3, 3] = 1.0
+        return out
+    if mode == WALL_HALFPLANES:
+        k = walls.shape[0]
+        out = np.zeros((k, 6))
+        for e in range(k):
+            nx = walls[e, 0]
+            ny = walls[e, 1]
+            off = woff[e] - (nx * pcx + ny * pcy)
+            out[e, 0] = 2.0
+            out[e, 1] = nx * off
+            out[e, 2] = ny * off
+            out[e, 3] = -ny
+            out[e, 4] = nx
+        return out
+    if mode == WALL_CIRCLE:
+        out = np.zeros((mq, 6))
+        for j in range(mq):
+            out[j, 0] = 3.0
+            out[j, 1] = walls[0, 0] + qx[j] - pcx
+            out[j, 2] = walls[0, 1] + qy[j] - pcy
+            out[j, 3] = inner
+        return out
+    return np.zeros((0, 6))
+
+
+@numba.njit(cache=True)
+def rounded_arcs(
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+    n: int,
+    rho: float,
+    pcx: float,
+    pcy: float,
+    nf: int,
+    slot: NDArray[np.int64],
+    odx: FloatArray,
+    ody: FloatArray,
+    ox: FloatArray,
+    oy: FloatArray,
+    oex: FloatArray,
+    oey: FloatArray,
+    on: NDArray[np.int64],
+    orad: FloatArray,
+    orho: FloatArray,
+    mode: int,
+    walls: FloatArray,
+    box: FloatArray,
+    woff: FloatArray,
+    qx: FloatArray,
+    qy: FloatArray,
+    mq: int,
+    inner: float,
+) -> FloatArray:
+    """Available arcs (polar angles about the candidate) of a rounded envelope.
+
+    ``w`` (``n`` vertices) is the envelope's core relative to the candidate
+    centre ``pc`` and ``rho`` its rounding; interferer ``f`` has its core in
+    row ``slot[f]`` of ``o*`` (relative to its own centre, which is at
+    ``(odx[f], ody[f])`` from ``pc``) and rounding ``orho[f]``. The walls are
+    described as in :func:`_fits` (``box`` absolute; ``q`` the reflected core
+    of the new particle; ``inner`` the circular wall's radius less the new
+    particle's rounding). Same conventions as ``kernel.analyze_candidate``.
+    """
+    pieces = envelope_pieces(wx, wy, wex, wey, n, rho)
+    npc = pieces.shape[0]
+    va = np.empty(npc + 1)
+    piece_angles(pieces, va)
+    # interferer pieces, relative to pc
+    start = np.zeros(nf + 1, dtype=np.int64)
+    total = 0
+    for f in range(nf):
+        total += 5 * on[slot[f]] + 4
+    opieces = np.empty((total, 6))
+    tx = np.empty(on.max() if nf > 0 else 1)
+    ty = np.empty(tx.shape[0])
+    for f in range(nf):
+        sl = slot[f]
+        for j in range(on[sl]):
+            tx[j] = ox[sl, j] + odx[f]
+            ty[j] = oy[sl, j] + ody[f]
+        got = envelope_pieces(tx, ty, oex[sl], oey[sl], on[sl], orho[f])
+        opieces[start[f] : start[f] + got.shape[0]] = got
+        start[f + 1] = start[f] + got.shape[0]
+    lines = _wall_lines(mode, walls, box, woff, qx, qy, mq, inner, pcx, pcy)
+    cuts = np.empty(2 * (total + lines.shape[0]) + 2)
+    arcs = np.empty((2 * npc + 2 * (total + lines.shape[0]) + 2, 2))
+    na = 0
+    joined = -1  # the last arc ends at the end of this piece
+    first_at_zero = False
+    for p in range(npc):
+        pc_ = pieces[p]
+        # bounding disk of the piece
+        if pc_[0] == 0.0:
+            bx = 0.5 * (pc_[1] + pc_[3])
+            by = 0.5 * (pc_[2] + pc_[4])
+            br = 0.5 * math.hypot(pc_[3] - pc_[1], pc_[4] - pc_[2])
+        else:
+            bx = pc_[1]
+            by = pc_[2]
+            br = pc_[3]
+        nc = 0
+        cuts[nc] = 0.0
+        nc += 1
+        cuts[nc] = 1.0
+        nc += 1
+        for f in range(nf):
+            reach = orad[slot[f]] + orho[f] + br
+            if (odx[f] - bx) ** 2 + (ody[f] - by) ** 2 >= reach * reach:
+                continue
+            for q in range(start[f], start[f + 1]):
+                nc = crossings(pc_, opieces[q], cuts, nc)
+        for q in range(lines.shape[0]):
+            nc = crossings(pc_, lines[q], cuts, nc)
+        cuts[:nc].sort()
+        for c in range(nc - 1):
+            ua = cuts[c]
+            ub = cuts[c + 1]
+            if ub <= ua:
+                continue
+            mx, my = piece_point(pc_, 0.5 * (ua + ub))
+            free = _fits(mx + pcx, my + pcy, mode, walls, box, woff, qx, qy, mq, inner)
+            if free:
+                for f in range(nf):
+                    sl = slot[f]
+                    gx = mx - odx[f]
+                    gy = my - ody[f]
+                    reach = orad[sl] + orho[f]
+                    if gx * gx + gy * gy >= reach * reach:
+                        continue
+                    if inside_rounded(gx, gy, ox[sl], oy[sl], oex[sl], oey[sl], on[sl], orho[f]):
+                        free = False
+                        break
+            if not free:
+                continue
+            a1 = angle_on_piece(pieces, va, p, ub)
+            if ua == 0.0 and joined == p and na > 0:
+                arcs[na - 1, 1] = a1
+            else:
+                if ua == 0.0 and p == 0:
+                    first_at_zero = True
+                arcs[na, 0] = angle_on_piece(pieces, va, p, ua)
+                arcs[na, 1] = a1
+                na += 1
+            joined = p + 1 if ub == 1.0 else -1
+    if na >= 2 and first_at_zero and joined == npc:
+        arcs[0, 0] = arcs[na - 1, 0] - (va[npc] - va[0])
+        na -= 1
+    out = 0
+    for a in range(na):
+        if arcs[a, 1] > arcs[a, 0]:
+            arcs[out, 0] = arcs[a, 0]
+            arcs[out, 1] = arcs[a, 1]
+            out += 1
+    return arcs[:out]
+
+
+@numba.njit(cache=True)
+def rounded_locate(
+    wx: FloatArray,
+    wy: FloatArray,
+    wex: FloatArray,
+    wey: FloatArray,
+    n: int,
+    rho: float,
+    angle: float,
+) -> tuple[float, float]:
+    """Point of the rounded envelope at polar ``angle`` (relative to the candidate)."""
+    pieces = envelope_pieces(wx, wy, wex, wey, n, rho)
+    npc = pieces.shape[0]
+    va = np.empty(npc + 1)
+    piece_angles(pieces, va)
+    period = va[npc] - va[0]
+    a = angle - va[0]
+    a = a - period * math.floor(a / period)
+    a += va[0]
+    p = 0
+    while p < npc - 1 and va[p + 1] < a:
+        p += 1
+    return ray_hit(pieces[p], a)
