@@ -84,3 +84,21 @@ def test_domain_mistakes_are_one_line(tmp_path, capsys, monkeypatch, domain, exp
     (tmp_path / "scene.toml").write_text(_scene(domain).replace('count = "auto"', "count = 500"))
     assert main(["run", "scene.toml", "--out", "out", "--quiet"]) == 2
     assert one_error_line(capsys).startswith(expected)
+
+
+def test_disks_from_the_command_line(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    disks = ["--set", 'phases.0.shape={kind = "disk"}', "--set", 'phases.2.shape={kind = "disk"}']
+    assert main(["run", "small", *disks, "--out", "out", "--quiet"]) == 0
+    assert main(["verify", "out/packing.npz"]) == 0
+    assert "OK" in capsys.readouterr().out
+    assert main(["analyze", "out/packing.npz", "--no-figures"]) == 0
+    results = json.loads((tmp_path / "out" / "analysis" / "analysis.json").read_text())
+    assert results["contacts"]["n_contacts"] > 0
+    for fmt in ("csv", "json", "svg", "vtk"):
+        assert main(["export", "out/packing.npz", "--to", fmt]) == 0
+    capsys.readouterr()
+    assert main(["export", "out/packing.npz", "--to", "lammps"]) == 2
+    assert one_error_line(capsys).startswith(
+        "regopack: error: the lammps export takes sharp polygons only"
+    )
