@@ -323,3 +323,24 @@ def segment_point_distance(
         elif t > 1.0:
             t = 1.0
     return math.hypot(ax + t * dx - px, ay + t * dy - py)
+
+
+@numba.njit(cache=True)
+def close_arcs(arcs: FloatArray, na: int, wraps: bool, period: float) -> FloatArray:
+    """Finish the ``na`` arcs collected around an envelope.
+
+    When ``wraps`` (the first arc starts at the envelope's start and the last
+    one ends there), the last arc is joined to the first, which then starts
+    ``period`` below. Arcs of zero angular length (single free points) are
+    dropped.
+    """
+    if na >= 2 and wraps:
+        arcs[0, 0] = arcs[na - 1, 0] - period
+        na -= 1
+    out = 0
+    for a in range(na):
+        if arcs[a, 1] > arcs[a, 0]:
+            arcs[out, 0] = arcs[a, 0]
+            arcs[out, 1] = arcs[a, 1]
+            out += 1
+    return arcs[:out]

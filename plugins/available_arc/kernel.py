@@ -26,6 +26,7 @@ from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.available_arc.geometry import (
     clip_closed_box,
     clip_open_interior,
+    close_arcs,
     inside_open,
     minkowski_envelope,
     reflect_outline,
@@ -607,17 +608,7 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
                 arcs[na, 1] = a1
                 na += 1
             joined_vertex = j + 1 if piece_hi == 1.0 else -1
-    if na >= 2 and first_at_zero and joined_vertex == n:
-        arcs[0, 0] = arcs[na - 1, 0] - (va[n] - va[0])
-        na -= 1
-    # drop arcs of zero angular length (single free points)
-    out = 0
-    for a in range(na):
-        if arcs[a, 1] > arcs[a, 0]:
-            arcs[out, 0] = arcs[a, 0]
-            arcs[out, 1] = arcs[a, 1]
-            out += 1
-    return arcs[:out]
+    return close_arcs(arcs, na, first_at_zero and joined_vertex == n, va[n] - va[0])
 
 
 @numba.njit(cache=True)

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_arc.geometry import close_arcs, inside_open
 
 FloatArray = NDArray[np.float64]
 
@@ -141,6 +142,14 @@ def _line_circle(
 
 
 @numba.njit(cache=True)
+def _as_line(other: FloatArray) -> tuple[float, float, float, float]:
+    """Start point and direction of a segment (kind 0) or a line (kind 2)."""
+    if other[0] == 0.0:
+        return other[1], other[2], other[3] - other[1], other[4] - other[2]
+    return other[1], other[2], other[3], other[4]
+
+
+@numba.njit(cache=True)
 def crossings(piece: FloatArray, other: FloatArray, out: FloatArray, k: int) -> int:
     """Append to ``out[k:]`` the parameters on ``piece`` where it meets ``other``.
 
@@ -156,14 +165,7 @@ def crossings(piece: FloatArray, other: FloatArray, out: FloatArray, k: int) -> 
         dx = piece[3] - ax
         dy = piece[4] - ay
         if other[0] == 0.0 or other[0] == 2.0:
-            ox = other[1]
-            oy = other[2]
-            if other[0] == 0.0:
-                fx = other[3] - ox
-                fy = other[4] - oy
-            else:
-                fx = other[3]
-                fy = other[4]
+            ox, oy, fx, fy = _as_line(other)
             det = dx * fy - dy * fx
             if det == 0.0:
                 return k
@@ -195,14 +197,7 @@ def crossings(piece: FloatArray, other: FloatArray, out: FloatArray, k: int) -> 
     cy = piece[2]
     r = piece[3]
     if other[0] == 0.0 or other[0] == 2.0:
-        ox = other[1]
-        oy = other[2]
-        if other[0] == 0.0:
-            fx = other[3] - ox
-            fy = other[4] - oy
-        else:
-            fx = other[3]
-            fy = other[4]
+        ox, oy, fx, fy = _as_line(other)
         cnt, s1, s2 = _line_circle(ox, oy, fx, fy, cx, cy, r)
         for c in range(cnt):
             s = s1 if c == 0 else s2
@@ -251,12 +246,7 @@ def inside_rounded(
     rho: float,
 ) -> bool:
     """Return whether ``p`` lies in the open interior of core polygon ``w`` grown by ``rho``."""
-    inside = True
-    for j in range(n):
-        if wex[j] * (py - wy[j]) - wey[j] * (px - wx[j]) <= 0.0:
-            inside = False
-            break
-    if inside:
+    if inside_open(px, py, wx, wy, wex, wey, n):
         return True
     if rho <= 0.0:
         return False
@@ -545,16 +535,7 @@ def rounded_arcs(
                 arcs[na, 1] = a1
                 na += 1
             joined = p + 1 if ub == 1.0 else -1
-    if na >= 2 and first_at_zero and joined == npc:
-        arcs[0, 0] = arcs[na - 1, 0] - (va[npc] - va[0])
-        na -= 1
-    out = 0
-    for a in range(na):
-        if arcs[a, 1] > arcs[a, 0]:
-            arcs[out, 0] = arcs[a, 0]
-            arcs[out, 1] = arcs[a, 1]
-            out += 1
-    return arcs[:out]
+    return close_arcs(arcs, na, first_at_zero and joined == npc, va[npc] - va[0])
 
 
 @numba.njit(cache=True)
