@@ -142,6 +142,24 @@ def _line_circle(
 
 
 @numba.njit(cache=True)
+def piece_bound(piece: FloatArray) -> tuple[float, float, float]:
+    """Centre and radius of a disk that contains the piece.
+
+    A segment: its midpoint and half length. An arc (at most a quarter turn):
+    the midpoint of its chord, with half the chord plus the arc's height.
+    """
+    xa, ya = piece_point(piece, 0.0)
+    xb, yb = piece_point(piece, 1.0)
+    mx = 0.5 * (xa + xb)
+    my = 0.5 * (ya + yb)
+    half = 0.5 * math.hypot(xb - xa, yb - ya)
+    if piece[0] == 0.0:
+        return mx, my, half
+    height = piece[3] - math.hypot(mx - piece[1], my - piece[2])
+    return mx, my, half + max(height, 0.0)
+
+
+@numba.njit(cache=True)
 def _as_line(other: FloatArray) -> tuple[float, float, float, float]:
     """Start point and direction of a segment (kind 0) or a line (kind 2)."""
     if other[0] == 0.0:
@@ -474,6 +492,9 @@ def rounded_arcs(
         got = envelope_pieces(tx, ty, oex[sl], oey[sl], on[sl], orho[f])
         opieces[start[f] : start[f] + got.shape[0]] = got
         start[f + 1] = start[f] + got.shape[0]
+    obound = np.empty((start[nf], 3))
+    for q in range(start[nf]):
+        obound[q, 0], obound[q, 1], obound[q, 2] = piece_bound(opieces[q])
     lines = _wall_lines(mode, walls, box, woff, qx, qy, mq, inner, pcx, pcy)
     cuts = np.empty(2 * (total + lines.shape[0]) + 2)
     arcs = np.empty((2 * npc + 2 * (total + lines.shape[0]) + 2, 2))
@@ -482,15 +503,7 @@ def rounded_arcs(
     first_at_zero = False
     for p in range(npc):
         pc_ = pieces[p]
-        # bounding disk of the piece
-        if pc_[0] == 0.0:
-            bx = 0.5 * (pc_[1] + pc_[3])
-            by = 0.5 * (pc_[2] + pc_[4])
-            br = 0.5 * math.hypot(pc_[3] - pc_[1], pc_[4] - pc_[2])
-        else:
-            bx = pc_[1]
-            by = pc_[2]
-            br = pc_[3]
+        bx, by, br = piece_bound(pc_)
         nc = 0
         cuts[nc] = 0.0
         nc += 1
@@ -501,6 +514,9 @@ def rounded_arcs(
             if (odx[f] - bx) ** 2 + (ody[f] - by) ** 2 >= reach * reach:
                 continue
             for q in range(start[f], start[f + 1]):
+                both = (br + obound[q, 2]) * (1.0 + 1e-9)
+                if (obound[q, 0] - bx) ** 2 + (obound[q, 1] - by) ** 2 > both * both:
+                    continue  # the two pieces cannot meet
                 nc = crossings(pc_, opieces[q], cuts, nc)
         for q in range(lines.shape[0]):
             nc = crossings(pc_, lines[q], cuts, nc)
