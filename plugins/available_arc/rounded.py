@@ -472,6 +472,18 @@ def rounded_arcs(
     of the new particle; ``inner`` the circular wall's radius less the new
     particle's rounding). Same conventions as ``kernel.analyze_candidate``.
     """
+    if _all_same(wx, wy, n) and wx[0] == 0.0 and wy[0] == 0.0:
+        disks = True
+        for f in range(nf):
+            sl = slot[f]
+            if not _all_same(ox[sl], oy[sl], on[sl]):
+                disks = False
+                break
+        if disks:
+            return _disk_arcs(
+                rho, pcx, pcy, nf, slot, odx, ody, ox, oy, orho,
+                mode, walls, box, woff, qx, qy, inner,
+            )  # fmt: skip
     pieces = envelope_pieces(wx, wy, wex, wey, n, rho)
     npc = pieces.shape[0]
     va = np.empty(npc + 1)
@@ -552,6 +564,132 @@ def rounded_arcs(
                 na += 1
             joined = p + 1 if ub == 1.0 else -1
     return close_arcs(arcs, na, first_at_zero and joined == npc, va[npc] - va[0])
+
+
+@numba.njit(cache=True)
+def _cover(lo: FloatArray, hi: FloatArray, k: int, centre: float, half: float) -> int:
+    """Append the open interval ``(centre - half, centre + half)`` of angles; return the count.
+
+    ``half >= pi`` covers the whole circle (one interval of length 2 pi).
+    """
+    if half <= 0.0:
+        return k
+    if half >= math.pi:
+        lo[k] = 0.0
+        hi[k] = 2.0 * math.pi
+        return k + 1
+    a = centre - half
+    a -= 2.0 * math.pi * math.floor(a / (2.0 * math.pi))
+    lo[k] = a
+    hi[k] = a + 2.0 * half
+    return k + 1
+
+
+@numba.njit(cache=True)
+def _circle_cover(r: float, cx: float, cy: float, r2: float) -> tuple[float, float]:
+    """Angles of the circle of radius ``r`` about 0 inside the open disk ``(c, r2)``.
+
+    Returns ``(centre, half)``: the arc ``(centre - half, centre + half)``;
+    ``half >= pi`` for all of the circle, ``half <= 0`` for none of it.
+    """
+    d = math.hypot(cx, cy)
+    if d + r <= r2:
+        return 0.0, math.pi
+    if d >= r + r2 or d + r2 <= r or d == 0.0:
+        return 0.0, 0.0
+    c = (r * r + d * d - r2 * r2) / (2.0 * r * d)
+    return math.atan2(cy, cx), math.acos(min(max(c, -1.0), 1.0))
+
+
+@numba.njit(cache=True)
+def _disk_arcs(
+    rho: float,
+    pcx: float,
+    pcy: float,
+    nf: int,
+    slot: NDArray[np.int64],
+    odx: FloatArray,
+    ody: FloatArray,
+    ox: FloatArray,
+    oy: FloatArray,
+    orho: FloatArray,
+    mode: int,
+    walls: FloatArray,
+    box: FloatArray,
+    woff: FloatArray,
+    qx: FloatArray,
+    qy: FloatArray,
+    inner: float,
+) -> FloatArray:
+    """:func:`rounded_arcs` when the candidate, the new particle and every interferer are disks.
+
+    The envelope is the circle of radius ``rho`` about the candidate; each
+    interferer covers one open arc of it, and every wall (or, in a circle,
+    the outside of the one admissible disk) covers one arc. The free arcs are
+    the gaps between the covered ones, in polar angle from 0.
+    """
+    k_walls = 4 if mode == WALL_BOX else (walls.shape[0] if mode == WALL_HALFPLANES else 1)
+    lo = np.empty(2 * (nf + k_walls))
+    hi = np.empty(2 * (nf + k_walls))
+    k = 0
+    for f in range(nf):
+        sl = slot[f]
+        centre, half = _circle_cover(rho, odx[f] + ox[sl, 0], ody[f] + oy[sl, 0], orho[f])
+        k = _cover(lo, hi, k, centre, half)
+    if mode == WALL_BOX or mode == WALL_HALFPLANES:
+        for e in range(k_walls):
+            if mode == WALL_BOX:
+                nx = (-1.0, 1.0, 0.0, 0.0)[e]
+                ny = (0.0, 0.0, -1.0, 1.0)[e]
+                off = (-(box[0] - pcx), box[1] - pcx, -(box[2] - pcy), box[3] - pcy)[e]
+            else:
+                nx = walls[e, 0]
+                ny = walls[e, 1]
+                off = woff[e] - (nx * pcx + ny * pcy)
+            # covered where rho (n . u) > off
+            if off >= rho:
+                continue
+            half = math.pi if off <= -rho else math.acos(off / rho)
+            k = _cover(lo, hi, k, math.atan2(ny, nx), half)
+    elif mode == WALL_CIRCLE:
+        # admissible: inside the disk of radius inner about c + q - pc
+        centre, half = _circle_cover(
+            rho, walls[0, 0] + qx[0] - pcx, walls[0, 1] + qy[0] - pcy, inner
+        )
+        if half < math.pi:  # outside that disk's arc is covered
+            k = _cover(lo, hi, k, centre + math.pi, math.pi - max(half, 0.0))
+    # free = the complement of the union of the covered intervals; an interval
+    # that runs past 2 pi also covers the start of the circle: add that part
+    out = np.empty((2 * k + 1, 2))
+    if k == 0:
+        out[0, 0] = 0.0
+        out[0, 1] = 2.0 * math.pi
+        return out[:1]
+    m = k
+    for idx in range(m):
+        if hi[idx] > 2.0 * math.pi:
+            lo[k] = lo[idx] - 2.0 * math.pi
+            hi[k] = hi[idx] - 2.0 * math.pi
+            k += 1
+    order = np.argsort(lo[:k])
+    # sweep once around from the start of the first covered interval
+    start = lo[order[0]]
+    reach = hi[order[0]]
+    na = 0
+    for idx in range(1, k):
+        a = lo[order[idx]]
+        b = hi[order[idx]]
+        if a > reach:
+            out[na, 0] = reach
+            out[na, 1] = a
+            na += 1
+        if b > reach:
+            reach = b
+    if reach < start + 2.0 * math.pi:
+        out[na, 0] = reach
+        out[na, 1] = start + 2.0 * math.pi
+        na += 1
+    return out[:na]
 
 
 @numba.njit(cache=True)

@@ -275,3 +275,47 @@ def test_random_disk_scenes_at_the_extremes(seed, n, ratio, scale, kind, eta) ->
     assert ratio_.min() > 1.0 - 1e-9
     assert wall.min() > -1e-9
     assert verify(packing).ok
+
+
+def _in_arcs(arcs: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    two_pi = 2 * np.pi
+    out = np.zeros(phi.shape, dtype=bool)
+    for a, b in arcs:
+        out |= ((phi - a) % two_pi) < (b - a)
+    return out
+
+
+@settings(max_examples=150, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    nf=st.integers(0, 12),
+    mode=st.sampled_from([0, 3]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+)
+def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, scale) -> None:
+    from regopack.plugins.available_arc.rounded import _disk_arcs, rounded_arcs
+
+    rng = np.random.default_rng(seed)
+    rho = 2.0 * scale
+    odx, ody = rng.uniform(-4, 4, (2, nf)) * scale
+    orho = rng.uniform(0.3, 2.5, nf) * scale
+    ox, oy = np.zeros((nf, 2)), np.zeros((nf, 2))
+    oex, oey = np.tile([1.0, -1.0], (nf, 1)), np.zeros((nf, 2))
+    on, slot, orad = np.full(nf, 2), np.arange(nf), np.zeros(nf)
+    pc = rng.uniform(-1e3, 1e3, 2) * scale
+    box = np.r_[pc[0] + rng.uniform(-3, 0.5) * scale, pc[0] + rng.uniform(-0.5, 3) * scale]
+    box = np.r_[box, pc[1] + rng.uniform(-3, 0.5) * scale, pc[1] + rng.uniform(-0.5, 3) * scale]
+    walls, woff, q = box.reshape(1, 4), np.zeros(1), np.zeros(1)
+    w = (np.zeros(2), np.zeros(2), np.array([1.0, -1.0]), np.zeros(2))
+    common = (nf, slot, odx, ody, ox, oy)
+    fast = _disk_arcs(rho, pc[0], pc[1], *common, orho, mode, walls, box, woff, q, q, 0.0)
+    general = rounded_arcs(
+        *w, 2, rho, pc[0], pc[1], *common, oex, oey, on, orad, orho, mode, walls, box, woff,
+        q, q, 1, 0.0,
+    )  # fmt: skip
+    phi = np.linspace(0, 2 * np.pi, 3001, endpoint=False)
+    ends = np.concatenate([fast.ravel(), general.ravel()]) % (2 * np.pi)
+    away = np.all(
+        np.abs(((phi[:, None] - ends[None, :]) + np.pi) % (2 * np.pi) - np.pi) > 1e-6, axis=1
+    )
+    assert np.array_equal(_in_arcs(fast, phi)[away], _in_arcs(general, phi)[away])
