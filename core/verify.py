@@ -240,6 +240,12 @@ def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
                 k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
                 i, j = sorted((int(idx[a[k]]), int(idx[b[k]])))
                 worst_overlap = (i, j, float(frac[k]))
+    zero = np.zeros(n)
+    n_self, worst_self = _self_image_overlaps(packing, idx, geoms, zero, zero, scale, rel_tol)
+    if worst_self is not None:
+        n_pairs += n_self
+        if worst_overlap is None or worst_self[2] > worst_overlap[2]:
+            worst_overlap = worst_self
 
     n_outside, worst_outside = _outside(packing, idx, geoms, areas, scale, rel_tol)
     return VerifyReport(
@@ -386,6 +392,71 @@ def _cores(packing: Packing, idx: NDArray[np.int64], scale: float) -> NDArray[np
     return np.asarray(shapely.convex_hull(points), dtype=object)
 
 
+def _self_image_overlaps(
+    packing: Packing,
+    idx: NDArray[np.int64],
+    shapes: NDArray[np.object_],
+    rho: NDArray[np.float64],
+    req: NDArray[np.float64],
+    scale: float,
+    rel_tol: float,
+) -> tuple[int, tuple[int, int, float] | None]:
+    """Particles of a periodic packing that overlap their own periodic image.
+
+    Only a particle wider or higher than a period can; ``shapes`` are the
+    outlines (sharp) or cores (rounded, by ``rho``) in the frame of
+    :func:`verify`. Returns how many overlap by more than ``rel_tol`` and
+    the worst of those as ``(i, i, fraction)``.
+    """
+    dom: Any = packing.domain
+    if not dom.periodic or len(idx) == 0:
+        return 0, None
+    lx, ly = dom.width / scale, dom.height / scale
+    b = shapely.bounds(shapes)
+    wide = np.flatnonzero((b[:, 2] - b[:, 0] + 2 * rho >= lx) | (b[:, 3] - b[:, 1] + 2 * rho >= ly))
+    count = 0
+    worst: tuple[int, int, float] | None = None
+    for k in wide.tolist():
+        g = shapes[k]
+        frac = 0.0
+        for sx, sy in ((lx, 0.0), (0.0, ly), (lx, ly), (lx, -ly)):
+            moved = shapely.transform(g, lambda c, sx=sx, sy=sy: c + (sx, sy))
+            if rho[k] > 0:
+                depth = 2.0 * rho[k] - shapely.distance(g, moved)
+                f = float(segment_fraction(np.array([depth]), np.array([req[k]]))[0])
+            else:
+                f = float(shapely.area(shapely.intersection(g, moved)) / shapely.area(g))
+            frac = max(frac, f)
+        if not frac <= rel_tol:
+            count += 1
+            if worst is None or frac > worst[2]:
+                worst = (int(idx[k]), int(idx[k]), frac)
+    return count, worst
+
+
+def segment_fraction(depth: NDArray[np.float64], r: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Area of the circular segment of depth ``depth`` of a disk of radius ``r``, over its area.
+
+    Depths at or below 0 give 0, depths of ``2 r`` or more give 1; small depths
+    use the series ``(4/3) sqrt(2 r) d^1.5``, which keeps the precision that
+    the closed form loses.
+
+    Examples
+    --------
+    >>> float(segment_fraction(np.array([1.0]), np.array([1.0]))[0])
+    0.5
+    """
+    d = np.clip(np.asarray(depth, dtype=np.float64), 0.0, 2.0 * r)
+    x = d / r
+    small = x < 1e-4
+    closed = np.arccos(np.clip(1.0 - x, -1.0, 1.0)) - (1.0 - x) * np.sqrt(
+        np.maximum(x * (2.0 - x), 0.0)
+    )
+    series = (4.0 / 3.0) * np.sqrt(2.0) * x**1.5
+    out: NDArray[np.float64] = np.where(small, series, closed) / np.pi
+    return out
+
+
 def _verify_rounded(
     packing: Packing, idx: NDArray[np.int64], scale: float, rel_tol: float
 ) -> VerifyReport:
@@ -393,11 +464,13 @@ def _verify_rounded(
 
     A particle is its core grown by its rounding radius, so two particles
     overlap by the depth ``rho_i + rho_j - distance(core_i, core_j)`` (GEOS
-    distance; an overlap of the cores counts as the full depth) and a particle
+    distance; cores that meet count as overlapping entirely) and a particle
     crosses a wall by how far its core, grown by its radius, reaches beyond
-    it. Both depths are reported relative to the smaller equivalent radius;
-    a violation exceeds ``rel_tol``. Pairs of two sharp polygons are measured
-    by their intersection area, as without rounding.
+    it. A depth is turned into an area fraction by :func:`segment_fraction`
+    (the circular segment that a disk of the smaller equivalent radius loses
+    at that depth), so ``rel_tol`` means what it means for polygons. Pairs of
+    two sharp polygons are measured by their intersection area, as without
+    rounding.
     """
     dom = packing.domain
     rho = packing.rounding_radius[idx] / scale
@@ -423,7 +496,7 @@ def _verify_rounded(
     if rest.any():
         gap = shapely.distance(cores[a][rest], cores_b[rest])
         depth = rho[a][rest] + rho[b][rest] - gap
-        frac[rest] = np.maximum(depth, 0.0) / np.minimum(req[a][rest], req[b][rest])
+        frac[rest] = segment_fraction(depth, np.minimum(req[a][rest], req[b][rest]))
     bad = ~(frac <= rel_tol)
     n_pairs = int(np.count_nonzero(bad))
     worst_overlap: tuple[int, int, float] | None = None
@@ -431,6 +504,11 @@ def _verify_rounded(
         k = int(np.argmax(np.where(bad, np.nan_to_num(frac, nan=np.inf), -np.inf)))
         i, j = sorted((int(idx[a[k]]), int(idx[b[k]])))
         worst_overlap = (i, j, float(frac[k]))
+    n_self, worst_self = _self_image_overlaps(packing, idx, cores, rho, req, scale, rel_tol)
+    if worst_self is not None:
+        n_pairs += n_self
+        if worst_overlap is None or worst_self[2] > worst_overlap[2]:
+            worst_overlap = worst_self
     # walls: how far the grown core reaches beyond them
     out = np.zeros(len(idx))
     if not dom.periodic:
@@ -450,7 +528,7 @@ def _verify_rounded(
                 offset = np.array([-dom.xmin, dom.xmax, -dom.ymin, dom.ymax])  # type: ignore[attr-defined]
             beyond = (pts @ normal.T - offset).max(axis=1) + r
         np.maximum.at(out, owner, beyond / scale)
-        out = np.maximum(out, 0.0) / req
+        out = segment_fraction(out, req)
     flagged = ~(out <= rel_tol)
     n_outside = int(np.count_nonzero(flagged))
     worst_outside: tuple[int, float] | None = None

@@ -163,21 +163,49 @@ def _two(centres, radii, domain=None) -> Packing:
     return Packing.from_parts(pop, res, domain or Rectangle(-10, 10, -10, 10), {}, 0)
 
 
-@pytest.mark.parametrize(("gap", "ok"), [(0.0, True), (1e-6, True), (-1e-6, False), (-0.5, False)])
+@pytest.mark.parametrize(
+    ("gap", "ok"),
+    [(0.0, True), (1e-6, True), (-1e-7, True), (-1e-5, False), (-0.5, False)],
+)
 def test_verify_measures_disks_exactly(gap, ok) -> None:
+    from regopack.verify import segment_fraction
+
     packing = _two([[0.0, 0.0], [3.0 + gap, 0.0]], [1.0, 2.0])
     report = verify(packing)
     assert report.ok is ok
-    if not ok:
+    if not ok:  # the depth as the area of a segment of the smaller disk
         assert report.worst_overlap is not None
-        assert report.worst_overlap[2] == pytest.approx(-gap / 1.0, rel=1e-6)
+        expected = segment_fraction(np.array([-gap]), np.array([1.0]))[0]
+        assert report.worst_overlap[2] == pytest.approx(expected, rel=1e-6)
+
+
+def test_verify_finds_a_disk_overlapping_its_own_periodic_image() -> None:
+    domain = PeriodicRectangle(0.0, 10.0, 0.0, 10.0)
+    report = verify(_two([[5.0, 5.0]], [6.0], domain))
+    assert not report.ok and report.worst_overlap is not None
+    assert report.worst_overlap[:2] == (0, 0)
+    assert verify(_two([[5.0, 5.0]], [4.9], domain)).ok
+
+
+def test_verify_finds_a_bar_overlapping_its_own_periodic_image() -> None:
+    from regopack.testing import packing_from_polygons
+
+    domain = PeriodicRectangle(0.0, 10.0, 0.0, 10.0)
+    bar = [(-0.5, 4.0), (11.5, 4.0), (11.5, 5.0), (-0.5, 5.0)]
+    report = verify(packing_from_polygons([bar], domain=domain))
+    assert not report.ok and report.worst_overlap is not None
+    assert report.worst_overlap[0] == report.worst_overlap[1] == 0
+    short = [(0.5, 4.0), (9.5, 4.0), (9.5, 5.0), (0.5, 5.0)]
+    assert verify(packing_from_polygons([short], domain=domain)).ok
 
 
 def test_verify_finds_a_disk_through_the_wall() -> None:
     packing = _two([[0.0, 0.0], [9.5, 0.0]], [1.0, 1.0])
     report = verify(packing)
     assert report.n_outside == 1
-    assert report.worst_outside == (1, pytest.approx(0.5))
+    r, d = 1.0, 0.5  # the disk pokes 0.5 through the wall: that segment of it is outside
+    segment = r * r * math.acos((r - d) / r) - (r - d) * math.sqrt(2 * r * d - d * d)
+    assert report.worst_outside == (1, pytest.approx(segment / (math.pi * r * r)))
     inside = _two([[0.0, 0.0], [5.0, 0.0]], [1.0, 1.0], Circle(0.0, 0.0, 6.0))
     assert verify(inside).ok
     across = _two([[0.0, 0.0], [5.5, 0.0]], [1.0, 1.0], Circle(0.0, 0.0, 6.0))
