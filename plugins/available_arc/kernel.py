@@ -33,6 +33,7 @@ from regopack.plugins.available_arc.geometry import (
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
 from regopack.plugins.available_arc.rounded import rounded_arcs, rounded_locate
+from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.plugins.walls import (
     WALL_BOX,
     WALL_CIRCLE,
@@ -755,13 +756,61 @@ def eta_shrink(
 
 
 @numba.njit(cache=True)
+def _inner_centre(i: int, g: Outlines, s: Packed) -> tuple[bool, float, float]:
+    """Find a centre for particle ``i`` when the domain's centre does not fit it.
+
+    In a polygon: the mean of the corners of the polygon of admissible centres
+    (the domain's box clipped by every wall moved in by the particle's
+    support). In a circle: the centre less the middle of the particle's box,
+    which centres the particle's box on the circle's centre.
+    """
+    fpar = s.fpar
+    mode = s.ipar[I_WALLMODE]
+    a = g.offsets[i]
+    b = g.offsets[i + 1]
+    x = fpar[F_CX]
+    y = fpar[F_CY]
+    if mode == WALL_HALFPLANES:
+        k = s.walls.shape[0]
+        off = np.empty(k)
+        particle_offsets(g.vx, g.vy, a, b, s.walls, off)
+        px = np.empty(k + 5)
+        py = np.empty(k + 5)
+        qx = np.empty(k + 5)
+        qy = np.empty(k + 5)
+        px[0], py[0] = fpar[F_XMIN], fpar[F_YMIN]
+        px[1], py[1] = fpar[F_XMAX], fpar[F_YMIN]
+        px[2], py[2] = fpar[F_XMAX], fpar[F_YMAX]
+        px[3], py[3] = fpar[F_XMIN], fpar[F_YMAX]
+        count = 4
+        for e in range(k):
+            count = clip_halfplane(
+                px, py, count, s.walls[e, 0], s.walls[e, 1], off[e] - g.rho[i], qx, qy
+            )
+            px, qx = qx, px
+            py, qy = qy, py
+            if count == 0:
+                return False, x, y
+        x = 0.0
+        y = 0.0
+        for j in range(count):
+            x += px[j] / count
+            y += py[j] / count
+    elif mode == WALL_CIRCLE:
+        x -= 0.5 * (g.box[i, 0] + g.box[i, 1])
+        y -= 0.5 * (g.box[i, 2] + g.box[i, 3])
+    return point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls, g.rho[i]), x, y
+
+
+@numba.njit(cache=True)
 def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> bool:
     """Place the first particle at the domain centre (or a random feasible point).
 
     In a walled rectangle a centre that does not fit is moved to the nearest
-    feasible one. In a polygon or circle the centre (or, with the random
-    option, one of :data:`FIRST_RANDOM_TRIES` uniform draws in the domain's
-    box) must fit as it is; otherwise the particle is not placed.
+    feasible one. In a polygon or circle a centre that does not fit is
+    replaced by :func:`_inner_centre`; with the random option, the first of
+    :data:`FIRST_RANDOM_TRIES` uniform draws in the domain's box that fits is
+    taken. Otherwise the particle is not placed.
     """
     fpar = s.fpar
     mode = s.ipar[I_WALLMODE]
@@ -786,7 +835,9 @@ def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> boo
         x = fpar[F_CX]
         y = fpar[F_CY]
         if not point_fits(x, y, g.vx, g.vy, a, b, mode, s.walls, g.rho[i]):
-            return False
+            ok, x, y = _inner_centre(i, g, s)
+            if not ok:
+                return False
         insert_particle(i, x, y, g, s)
         return True
     for _ in range(FIRST_RANDOM_TRIES):

@@ -200,3 +200,13 @@ def test_no_overlap_and_nothing_outside_in_random_domains(
     assert report.ok, str(report)
     if kind == "periodic":
         assert brute_force_periodic_overlap(packing) < 1e-9
+
+
+def test_first_particle_in_a_thin_triangle_moves_in_from_the_centroid() -> None:
+    # the centroid lies 1 from the base: a particle of radius 1.4 does not fit there
+    tri = ConvexPolygon(((-10.0, 0.0), (10.0, 0.0), (0.0, 3.0)))
+    rng = np.random.default_rng(2)
+    pop = octagon_population(np.array([1.2, 0.3, 0.3]), rng)
+    res = _pack(pop, tri, rng)
+    assert res.placed[0]
+    assert verify(_packing(pop, res, tri)).ok
