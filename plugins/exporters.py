@@ -679,7 +679,8 @@ class LammpsExporter(Exporter):
     ``Bodies`` section each body lists its vertex count, the six components of
     its inertia tensor in the box frame (``ixx iyy izz ixy ixz iyz``, of a
     uniform lamina), its vertices relative to the centroid (z = 0) and the
-    rounding diameter.
+    rounding diameter. A disk is one vertex with its own diameter; rounded
+    polygons are refused.
     """
 
     suffix = ".data"
@@ -694,10 +695,11 @@ class LammpsExporter(Exporter):
         cfg = self.config
         path = Path(path)
         idx = np.flatnonzero(packing.placed)
-        if packing.rounded:
+        rounding = packing.rounding_radius
+        counts = np.diff(packing.offsets)
+        if np.any((rounding[idx] > 0) & (counts[idx] != 1)):
             raise ExportError(
-                "the lammps export takes sharp polygons only; this packing has rounded "
-                "particles (disks)"
+                "the lammps export takes polygons and disks; this packing has rounded polygons"
             )
         xmin, xmax, ymin, ymax = (float(v) for v in packing.domain.bounds())
         n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
@@ -705,9 +707,17 @@ class LammpsExporter(Exporter):
         bodies: list[str] = []
         for atom_id, j in enumerate(idx.tolist(), start=1):
             local = packing.vertices[packing.offsets[j] : packing.offsets[j + 1]]
-            if local.shape[0] < 3:
+            diameter = cfg.rounding
+            if rounding[j] > 0:  # a disk: one vertex at its centre, its own diameter
+                r = float(rounding[j])
+                area, c = math.pi * r * r, local[0]
+                ixx = iyy = 0.25 * area * r * r
+                ixy = 0.0
+                diameter = 2.0 * r
+            elif local.shape[0] < 3:
                 raise ExportError(f"particle {j} has fewer than 3 vertices")
-            area, c, ixx, iyy, ixy = polygon_moments(local)
+            else:
+                area, c, ixx, iyy, ixy = polygon_moments(local)
             rho = cfg.density
             pos = packing.centre[j] + c
             mass = area * rho
@@ -721,7 +731,7 @@ class LammpsExporter(Exporter):
             bodies.append(str(rel.shape[0]))
             bodies.append(" ".join(_num(v) for v in inertia))
             bodies += [f"{_num(x)} {_num(y)} 0.0" for x, y in rel.tolist()]
-            bodies.append(_num(cfg.rounding))
+            bodies.append(_num(diameter))
         counts = np.diff(packing.offsets)[idx]
         n_min = int(counts.min()) if counts.size else 3
         n_max = int(counts.max()) if counts.size else 3

