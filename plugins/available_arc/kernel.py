@@ -266,10 +266,14 @@ def _clip_walls(
 
 
 @numba.njit(cache=True)
-def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work) -> FloatArray:
+def analyze_candidate(
+    pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work, rounded: object = None
+) -> FloatArray:
     """Available arcs of candidate particle ``pk`` for the new particle ``i``.
 
-    ``begin_particle(i, ...)`` must have been called.
+    ``begin_particle(i, ...)`` must have been called. ``rounded`` is ``None``
+    in a scene of sharp polygons (the rounded path is then pruned at compile
+    time and never compiled) and ``True`` when some particle is rounded.
 
     Returns
     -------
@@ -464,7 +468,7 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
                 rr = d2
         orad[sl] = math.sqrt(rr)
 
-    if ipar[I_ROUNDED] == 1:
+    if rounded is not None:
         orho = np.empty(nf)
         for f in range(nf):
             orho[f] = g.rho[found[f]] + g.rho[i]
@@ -614,7 +618,7 @@ def analyze_candidate(pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work)
 
 @numba.njit(cache=True)
 def find_site(
-    i: int, start: int, mq: int, g: Outlines, s: Packed, w: Work
+    i: int, start: int, mq: int, g: Outlines, s: Packed, w: Work, rounded: object = None
 ) -> tuple[int, FloatArray]:
     """First candidate (insertion index ``>= start``) with available arcs for particle ``i``.
 
@@ -633,7 +637,7 @@ def find_site(
     k = first_candidate(s.tree, leaves, start, count, r, t, linear)
     while k >= 0:
         ipar[I_ANALYSES] += 1
-        arcs = analyze_candidate(s.order[k], i, mq, g, s, w)
+        arcs = analyze_candidate(s.order[k], i, mq, g, s, w, rounded)
         if arcs.shape[0] > 0:
             return k, arcs
         ipar[I_EMPTY] += 1
@@ -650,11 +654,19 @@ def reject(k: int, r: float, s: Packed) -> None:
 
 @numba.njit(cache=True)
 def locate(
-    pk: int, i: int, mq: int, angle: float, g: Outlines, s: Packed, w: Work
+    pk: int,
+    i: int,
+    mq: int,
+    angle: float,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rounded: object = None,
 ) -> tuple[float, float]:
     """Return where the ray from ``pk``'s centre at polar ``angle`` meets the envelope.
 
-    The envelope is that of candidate ``pk`` and new particle ``i``.
+    The envelope is that of candidate ``pk`` and new particle ``i``;
+    ``rounded`` as in :func:`analyze_candidate`.
     """
     wx = w.wx
     wy = w.wy
@@ -677,7 +689,7 @@ def locate(
         w.wex,
         w.wey,
     )
-    if s.ipar[I_ROUNDED] == 1:
+    if rounded is not None:
         x, y = rounded_locate(wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], angle)
         return s.cx[pk] + x, s.cy[pk] + y
     va = w.va
@@ -851,11 +863,17 @@ def place_first(i: int, g: Outlines, s: Packed, rng: np.random.Generator) -> boo
 
 @numba.njit(cache=True)
 def pack_range(
-    begin: int, end: int, g: Outlines, s: Packed, w: Work, rng: np.random.Generator
+    begin: int,
+    end: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rng: np.random.Generator,
+    rounded: object = None,
 ) -> int:
     """Insert particles ``begin`` to ``end - 1`` with the built-in eta rule.
 
-    Returns how many were placed.
+    Returns how many were placed. ``rounded`` as in :func:`analyze_candidate`.
 
     ``fpar[F_ETA]`` is the packing control coefficient (0 draws nothing).
     """
@@ -869,7 +887,7 @@ def pack_range(
         mq = begin_particle(i, g, s, w)
         start = 0
         while True:
-            k, arcs = find_site(i, start, mq, g, s, w)
+            k, arcs = find_site(i, start, mq, g, s, w, rounded)
             if k < 0:
                 break
             if eta != 0.0:
@@ -879,7 +897,7 @@ def pack_range(
                     start = k + 1
                     continue
             angle = sample_angle(arcs, rng.random())
-            x, y = locate(s.order[k], i, mq, angle, g, s, w)
+            x, y = locate(s.order[k], i, mq, angle, g, s, w, rounded)
             insert_particle(i, x, y, g, s)
             placed += 1
             break

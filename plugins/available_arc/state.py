@@ -85,6 +85,8 @@ class ArcState:
         ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
         ipar[kernel.I_WALLMODE] = mode
         ipar[kernel.I_ROUNDED] = 1 if rounded else 0
+        # the kernels compile their rounded path only for rounded scenes
+        self.rounded: bool | None = True if rounded else None
         self.packed = kernel.Packed(
             cx=np.full(n, np.nan),
             cy=np.full(n, np.nan),
@@ -134,7 +136,9 @@ class ArcState:
 
     def pack_range(self, begin: int, end: int, rng: np.random.Generator) -> int:
         """Insert particles ``begin`` to ``end - 1`` with the compiled eta rule."""
-        return int(kernel.pack_range(begin, end, self.outlines, self.packed, self.work, rng))
+        return int(
+            kernel.pack_range(begin, end, self.outlines, self.packed, self.work, rng, self.rounded)
+        )
 
     def place_first(self, i: int, rng: np.random.Generator) -> bool:
         """Place the first particle; False when it does not fit the domain."""
@@ -146,13 +150,22 @@ class ArcState:
 
     def find_site(self, i: int, start: int, mq: int) -> tuple[int, FloatArray]:
         """First candidate at or after insertion index ``start`` with arcs for particle ``i``."""
-        k, arcs = kernel.find_site(i, start, mq, self.outlines, self.packed, self.work)
+        k, arcs = kernel.find_site(
+            i, start, mq, self.outlines, self.packed, self.work, self.rounded
+        )
         return int(k), arcs
 
     def locate(self, k: int, i: int, mq: int, angle: float) -> tuple[float, float]:
         """Centre of particle ``i`` on candidate ``k``'s envelope at polar ``angle``."""
         x, y = kernel.locate(
-            int(self.packed.order[k]), i, mq, angle, self.outlines, self.packed, self.work
+            int(self.packed.order[k]),
+            i,
+            mq,
+            angle,
+            self.outlines,
+            self.packed,
+            self.work,
+            self.rounded,
         )
         return float(x), float(y)
 
