@@ -4,7 +4,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from regopack.domain import Rectangle
+from regopack.domain import Domain, Rectangle
+from regopack.interfaces import InsertionResult
+from regopack.packing import Packing
+from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
+from regopack.plugins.change5 import Change5, Change5Config
+from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.plugins.octagon import OctagonConfig, RandomPolygon
 from regopack.population import Population, ShapeBatch, concat_shapes
 
@@ -42,3 +47,25 @@ def mixed_population(
 
 def big_domain(scale: float = 1.0) -> Rectangle:
     return Rectangle(-1e3 * scale, 1e3 * scale, -1e3 * scale, 1e3 * scale)
+
+
+def change5_population(
+    n: int, seed: int, scale: float = 1.0
+) -> tuple[Population, np.random.Generator]:
+    """``n`` Chang'e-5 radii (times ``scale``) as a three-phase octagon population."""
+    rng = np.random.default_rng(seed)
+    radius = scale * Change5(Change5Config()).sample(n, rng)
+    return mixed_population(radius, rng), rng
+
+
+def pack(
+    pop: Population, domain: Domain, rng: np.random.Generator, eta: float = 0.0, **cfg: object
+) -> InsertionResult:
+    """Run the available-arc inserter with the eta controller."""
+    inserter = AvailableArc(AvailableArcConfig(**cfg))
+    return inserter.pack(pop, domain, EtaController(EtaConfig(eta=eta)), rng)
+
+
+def as_packing(pop: Population, res: InsertionResult, domain: Domain) -> Packing:
+    """The packing of an insertion result."""
+    return Packing.from_parts(pop, res, domain, {}, 0)

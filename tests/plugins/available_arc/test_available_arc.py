@@ -5,37 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-from arc_helpers import mixed_population, octagon_population
+from arc_helpers import as_packing, change5_population, octagon_population, pack
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from regopack.domain import Rectangle
 from regopack.interfaces import DensityController, InsertionResult
-from regopack.packing import Packing
 from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
-from regopack.plugins.change5 import Change5, Change5Config
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.population import Population
 from regopack.verify import verify
 
-
-def _change5_population(
-    n: int, seed: int, scale: float = 1.0
-) -> tuple[Population, np.random.Generator]:
-    rng = np.random.default_rng(seed)
-    radius = scale * Change5(Change5Config()).sample(n, rng)
-    return mixed_population(radius, rng), rng
-
-
-def _pack(
-    pop: Population, domain: Rectangle, rng: np.random.Generator, eta: float = 0.0, **cfg: object
-) -> InsertionResult:
-    inserter = AvailableArc(AvailableArcConfig(**cfg))
-    return inserter.pack(pop, domain, EtaController(EtaConfig(eta=eta)), rng)
-
-
-def _packing(pop: Population, res: InsertionResult, domain: Rectangle) -> Packing:
-    return Packing.from_parts(pop, res, domain, {}, 0)
+_change5_population = change5_population
+_pack = pack
+_packing = as_packing
 
 
 def _check(pop: Population, res: InsertionResult, domain: Rectangle) -> None:

@@ -5,39 +5,24 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-from arc_helpers import mixed_population, octagon_population
+from arc_helpers import as_packing, change5_population, octagon_population, pack
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.errors import GeometryError
-from regopack.interfaces import InsertionResult
 from regopack.packing import Packing
-from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
 from regopack.plugins.change5 import Change5, Change5Config
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.plugins.rsa import RandomSequentialAddition, RsaConfig
-from regopack.population import Population
 from regopack.verify import verify
 
 PENTAGON = ((-100.0, -80.0), (90.0, -100.0), (120.0, 60.0), (0.0, 110.0), (-110.0, 40.0))
 
 
-def _population(n: int, seed: int, scale: float = 1.0) -> tuple[Population, np.random.Generator]:
-    rng = np.random.default_rng(seed)
-    radius = scale * Change5(Change5Config()).sample(n, rng)
-    return mixed_population(radius, rng), rng
-
-
-def _pack(
-    pop: Population, domain: Domain, rng: np.random.Generator, eta: float = 0.0, **cfg: object
-) -> InsertionResult:
-    inserter = AvailableArc(AvailableArcConfig(**cfg))
-    return inserter.pack(pop, domain, EtaController(EtaConfig(eta=eta)), rng)
-
-
-def _packing(pop: Population, res: InsertionResult, domain: Domain) -> Packing:
-    return Packing.from_parts(pop, res, domain, {}, 0)
+_population = change5_population
+_pack = pack
+_packing = as_packing
 
 
 def brute_force_periodic_overlap(packing: Packing) -> float:
