@@ -347,3 +347,18 @@ def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, sc
         np.abs(((phi[:, None] - ends[None, :]) + np.pi) % (2 * np.pi) - np.pi) > 1e-6, axis=1
     )
     assert np.array_equal(_in_arcs(fast, phi)[away], _in_arcs(general, phi)[away])
+
+
+@pytest.mark.parametrize("kind", ["periodic", "circle"])
+def test_disk_scenes_are_reproducible_and_search_independent(kind: str) -> None:
+    domain = DOMAINS[kind]
+    out = []
+    for search in ("linear", "indexed", "indexed"):
+        rng = np.random.default_rng(8)
+        pop = _population(Change5(Change5Config()).sample(250, rng), rng, share=0.5)
+        res = AvailableArc(AvailableArcConfig(search=search)).pack(
+            pop, domain, EtaController(EtaConfig(eta=5.0)), rng
+        )
+        out.append(res.centre)
+    np.testing.assert_array_equal(out[0], out[1])
+    np.testing.assert_array_equal(out[1], out[2])
