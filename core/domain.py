@@ -16,7 +16,7 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -127,8 +127,8 @@ class Rectangle(Domain):
     @classmethod
     def centred(
         cls, width: float, height: float, center: tuple[float, float] = (0.0, 0.0)
-    ) -> Rectangle:
-        """Build the rectangle of the given size around ``center``."""
+    ) -> Self:
+        """Build the rectangle (of this class) of the given size around ``center``."""
         cx, cy = center
         return cls(cx - width / 2, cx + width / 2, cy - height / 2, cy + height / 2)
 
@@ -232,14 +232,6 @@ class PeriodicRectangle(Rectangle):
 
     kind: ClassVar[str] = "periodic"
     periodic: ClassVar[bool] = True
-
-    @classmethod
-    def centred(
-        cls, width: float, height: float, center: tuple[float, float] = (0.0, 0.0)
-    ) -> PeriodicRectangle:
-        """Build the periodic rectangle of the given size around ``center``."""
-        cx, cy = center
-        return cls(cx - width / 2, cx + width / 2, cy - height / 2, cy + height / 2)
 
     @property
     def period(self) -> tuple[float, float]:
