@@ -73,11 +73,21 @@ def main() -> None:
     parser.add_argument(
         "--cold", action="store_true", help="also time a first run with an empty cache"
     )
+    parser.add_argument(
+        "--set",
+        dest="overrides",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="scene override for every size, as for 'regopack run --set' (repeatable)",
+    )
     args = parser.parse_args()
 
     print(
         f"machine: {platform.machine()}, {os.cpu_count()} cores, Python {platform.python_version()}"
     )
+    if args.overrides:
+        print("overrides: " + " ".join(args.overrides))
     if args.cold:
         with tempfile.TemporaryDirectory() as cache:
             env = dict(os.environ, NUMBA_CACHE_DIR=cache)
@@ -97,6 +107,7 @@ def main() -> None:
             f"domain.height={size}",
             f"seed={args.seed}",
             f'insertion.search="{args.search}"',
+            *args.overrides,
         ]
         row = _child(overrides, warm=True)
         ns.append(row["tried"])

@@ -125,9 +125,7 @@ class Rectangle(Domain):
     ymax: float
 
     @classmethod
-    def centred(
-        cls, width: float, height: float, center: tuple[float, float] = (0.0, 0.0)
-    ) -> Self:
+    def centred(cls, width: float, height: float, center: tuple[float, float] = (0.0, 0.0)) -> Self:
         """Build the rectangle (of this class) of the given size around ``center``."""
         cx, cy = center
         return cls(cx - width / 2, cx + width / 2, cy - height / 2, cy + height / 2)
