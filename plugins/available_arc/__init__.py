@@ -68,6 +68,13 @@ class AvailableArcConfig(BaseModel):
             "Where the first particle goes: the domain's 'center' or a 'random' feasible point."
         ),
     )
+    neighbour_lists: bool = Field(
+        True,
+        description=(
+            "Keep a neighbour list per particle (walled domains, sharp polygons): the same "
+            "packing, faster in large domains, about 1.8 kB per particle; false uses the grid only."
+        ),
+    )
     search: Literal["indexed", "linear"] = Field(
         "indexed",
         description=(
@@ -114,6 +121,7 @@ class AvailableArc(InsertionStrategy):
             linear=cfg.search == "linear",
             first_random=cfg.first == "random",
             eta=eta,
+            neighbour_lists=cfg.neighbour_lists,
         )
         prepared = time.perf_counter()
         placed = 0

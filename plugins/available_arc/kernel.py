@@ -32,6 +32,7 @@ from regopack.plugins.available_arc.geometry import (
     reflect_outline,
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
+from regopack.plugins.available_arc.neighbours import GAP_SLACK, register_neighbours
 from regopack.plugins.available_arc.rounded import rounded_arcs, rounded_locate
 from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.plugins.walls import (
@@ -66,8 +67,9 @@ IntArray = NDArray[np.int64]
     F_CX,
     F_CY,
     F_REACH,
-) = range(13)
-N_FPAR = 13
+    F_NBCAP,
+) = range(14)
+N_FPAR = 14
 # ipar: scalar integer parameters and counters
 (
     I_TAUMODE,
@@ -85,8 +87,9 @@ N_FPAR = 13
     I_FIRSTRANDOM,
     I_WALLMODE,
     I_ROUNDED,
-) = range(15)
-N_IPAR = 15
+    I_NBLISTS,
+) = range(16)
+N_IPAR = 16
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -121,6 +124,12 @@ class Packed(NamedTuple):
     fpar: FloatArray
     ipar: IntArray
     walls: FloatArray
+    nb_o: NDArray[np.int32]
+    nb_gap: FloatArray
+    nb_dx: FloatArray
+    nb_dy: FloatArray
+    nb_n: IntArray
+    nb_reach: FloatArray
 
 
 class Work(NamedTuple):
@@ -181,6 +190,14 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
     ipar[I_COUNT] = k + 1
     gpar = s.fpar[F_GX0 : F_GCELL + 1]
     gdim = ipar[I_GNX : I_GUSED + 1]
+    if ipar[I_NBLISTS] == 1:
+        token = ipar[I_STAMP] + 1
+        ipar[I_STAMP] = token
+        register_neighbours(
+            i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
+            s.head, s.nxt, s.item, s.stamp, token,
+            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n,
+        )  # fmt: skip
     grid_insert(i, x, y, reach_of(i, g, s.fpar, ipar), gpar, gdim, s.head, s.nxt, s.item)
     return k
 
@@ -263,6 +280,21 @@ def _clip_walls(
     if mode == WALL_CIRCLE:
         return clip_closed_circle(ax, ay, dx, dy, w.rx, w.ry, mq, -1.0, g.circum[i], s.walls)
     return -np.inf, np.inf
+
+
+@numba.njit(cache=True)
+def _interferes(
+    pk: int, o: int, i: int, d2: float, g: Outlines, tau_mode: bool, tau: float
+) -> bool:
+    """Whether ``o``, at squared distance ``d2`` from ``pk``, can cover part of ``E_k``."""
+    if tau_mode:
+        lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
+    else:
+        lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
+    hit = d2 < lim * lim
+    if hit and tau_mode:
+        hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
+    return hit
 
 
 @numba.njit(cache=True)
@@ -355,7 +387,26 @@ def analyze_candidate(
     found_q = np.empty(32 if periodic else 0, dtype=np.int64)
     nf = 0
     stamp = s.stamp
-    for qs in range(nsx * nsy):
+    # the candidate's neighbour list, nearest first, holds every interferer of a
+    # new particle whose reach is at most the lists' cap: read it up to the gap
+    # beyond which none can interfere; otherwise (and for a dropped list) search the grid
+    lists = ipar[I_NBLISTS] == 1 and s.nb_n[pk] >= 0 and s.nb_reach[i] <= fpar[F_NBCAP]
+    if lists:
+        cnt = s.nb_n[pk]
+        if cnt > found.shape[0]:
+            found = np.empty(cnt, dtype=np.int64)
+        lgap = s.nb_reach[pk] + 2.0 * s.nb_reach[i]
+        stop = lgap + GAP_SLACK * (lgap + 2.0 * fpar[F_REACH])
+        for e in range(cnt):
+            if s.nb_gap[pk, e] > stop:
+                break
+            o = s.nb_o[pk, e]
+            ddx = s.nb_dx[pk, e]
+            ddy = s.nb_dy[pk, e]
+            if _interferes(pk, o, i, ddx * ddx + ddy * ddy, g, tau_mode, tau):
+                found[nf] = o
+                nf += 1
+    for qs in range(0 if lists else nsx * nsy):
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
         qcx = pcx
@@ -381,14 +432,7 @@ def analyze_candidate(
                     ddx = cx[o] - qcx
                     ddy = cy[o] - qcy
                     d2 = ddx * ddx + ddy * ddy
-                    if tau_mode:
-                        lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
-                    else:
-                        lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
-                    hit = d2 < lim * lim
-                    if hit and tau_mode:
-                        hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
-                    if hit:
+                    if _interferes(pk, o, i, d2, g, tau_mode, tau):
                         if nf == found.shape[0]:
                             found = _grow_int(found, nf)
                             if periodic:
@@ -506,15 +550,19 @@ def analyze_candidate(
         dx = bx - ax
         dy = by - ay
         # fast path: both ends strictly inside one interferer's envelope cover the edge
-        full = False
-        if cur >= 0:
-            sl = slot[cur]
-            full = inside_open(
-                bx - odx[cur], by - ody[cur], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
-            )
+        # (with the same circumcircle test as the search below, so that whether
+        # an edge counts as covered does not depend on the interferers' order)
         mx = ax + 0.5 * dx
         my = ay + 0.5 * dy
         half = 0.5 * math.sqrt(dx * dx + dy * dy)
+        full = False
+        if cur >= 0:
+            sl = slot[cur]
+            gx = odx[cur] - mx
+            gy = ody[cur] - my
+            full = gx * gx + gy * gy + half * half <= orad[sl] * orad[sl] and inside_open(
+                bx - odx[cur], by - ody[cur], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+            )
         if not full:
             cur = -1
             for f in range(nf):

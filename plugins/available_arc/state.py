@@ -10,10 +10,21 @@ from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.candidates import tree_size
 from regopack.plugins.available_arc.geometry import prepare_outlines
 from regopack.plugins.available_arc.grid import grid_layout
-from regopack.plugins.walls import WALL_HALFPLANES, check_periodic_size, wall_arrays
+from regopack.plugins.available_arc.neighbours import list_capacity
+from regopack.plugins.walls import (
+    WALL_HALFPLANES,
+    WALL_PERIODIC,
+    check_periodic_size,
+    wall_arrays,
+)
 from regopack.population import Population
 
 FloatArray = NDArray[np.float64]
+
+LIST_CAP_QUANTILE = 0.9
+"""New particles up to this quantile of the reach look up interferers in neighbour lists."""
+LIST_CAPACITY = 64
+"""Entries per neighbour list; a particle with more neighbours uses the grid."""
 
 
 class ArcState:
@@ -35,6 +46,10 @@ class ArcState:
         Put the first particle at a random feasible point instead of the centre.
     eta
         Packing control coefficient of the compiled ``eta`` rule.
+    neighbour_lists
+        Keep per-particle neighbour lists where the scene allows them (walled
+        domains, sharp polygons); ``False`` always searches the grid. Both give
+        the same packing.
     """
 
     def __init__(
@@ -47,6 +62,7 @@ class ArcState:
         linear: bool,
         first_random: bool = False,
         eta: float = 0.0,
+        neighbour_lists: bool = True,
     ) -> None:
         n = len(population)
         offsets = np.ascontiguousarray(population.shapes.offsets, dtype=np.int64)
@@ -76,6 +92,9 @@ class ArcState:
         fpar[kernel.F_ETA] = eta
         fpar[kernel.F_CX], fpar[kernel.F_CY] = domain.center
         fpar[kernel.F_REACH] = float(reach.max()) if n else 0.0
+        # neighbour lists: walled domains of sharp polygons (see neighbours.py)
+        lists = neighbour_lists and n > 0 and mode != WALL_PERIODIC and not rounded
+        fpar[kernel.F_NBCAP] = float(np.quantile(reach, LIST_CAP_QUANTILE)) if lists else 0.0
         ipar = np.zeros(kernel.N_IPAR, dtype=np.int64)
         ipar[kernel.I_TAUMODE] = 0 if tau is None else 1
         ipar[kernel.I_LINEAR] = 1 if linear else 0
@@ -85,6 +104,8 @@ class ArcState:
         ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
         ipar[kernel.I_WALLMODE] = mode
         ipar[kernel.I_ROUNDED] = 1 if rounded else 0
+        ipar[kernel.I_NBLISTS] = 1 if lists else 0
+        rows, cols = list_capacity(n, lists, LIST_CAPACITY)
         # the kernels compile their rounded path only for rounded scenes
         self.rounded: bool | None = True if rounded else None
         self.packed = kernel.Packed(
@@ -99,6 +120,12 @@ class ArcState:
             fpar=fpar,
             ipar=ipar,
             walls=walls,
+            nb_o=np.zeros((rows, cols), dtype=np.int32),
+            nb_gap=np.zeros((rows, cols)),
+            nb_dx=np.zeros((rows, cols)),
+            nb_dy=np.zeros((rows, cols)),
+            nb_n=np.full(rows, -1, dtype=np.int64),
+            nb_reach=np.ascontiguousarray(reach, dtype=np.float64),
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax

@@ -1,0 +1,128 @@
+"""Per-particle neighbour lists: the possible interferers of a candidate, nearest first.
+
+A buried candidate is analysed again and again (once for every new record-low
+radius), and each analysis looks up the particles near it. The lists keep, for
+every placed particle ``q``, the placed particles ``o`` with
+
+    |c_q - c_o| < reach_q + reach_o + 2 cap,
+
+sorted by ``gap = |c_q - c_o| - reach_o`` and stored with their offsets
+``c_o - c_q``. Every interferer of candidate ``q`` for a new particle of reach
+at most ``cap`` is in the list, before the first entry whose gap exceeds
+``reach_q + 2 reach_new``, so a query reads one short contiguous block instead
+of the grid cells. A list that would outgrow its capacity is dropped
+(``count = -1``) and its particle goes back to the grid.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_arc.grid import cell_range
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+GAP_SLACK = 1e-9
+"""Relative slack of the list cut-offs, far above the rounding of the gaps."""
+
+
+@numba.njit(cache=True)
+def _add_entry(
+    q: int,
+    o: int,
+    gap: float,
+    dx: float,
+    dy: float,
+    nb_o: NDArray[np.int32],
+    nb_gap: FloatArray,
+    nb_dx: FloatArray,
+    nb_dy: FloatArray,
+    nb_n: IntArray,
+) -> None:
+    """Insert ``o`` into ``q``'s list at its place by gap; drop the list when full."""
+    cnt = nb_n[q]
+    if cnt < 0:
+        return
+    if cnt == nb_o.shape[1]:
+        nb_n[q] = -1
+        return
+    e = cnt
+    while e > 0 and nb_gap[q, e - 1] > gap:
+        nb_o[q, e] = nb_o[q, e - 1]
+        nb_gap[q, e] = nb_gap[q, e - 1]
+        nb_dx[q, e] = nb_dx[q, e - 1]
+        nb_dy[q, e] = nb_dy[q, e - 1]
+        e -= 1
+    nb_o[q, e] = o
+    nb_gap[q, e] = gap
+    nb_dx[q, e] = dx
+    nb_dy[q, e] = dy
+    nb_n[q] = cnt + 1
+
+
+@numba.njit(cache=True)
+def register_neighbours(
+    p: int,
+    cap: float,
+    maxreach: float,
+    cx: FloatArray,
+    cy: FloatArray,
+    reach: FloatArray,
+    gpar: FloatArray,
+    gdim: IntArray,
+    head: IntArray,
+    nxt: IntArray,
+    item: IntArray,
+    stamp: IntArray,
+    token: int,
+    nb_o: NDArray[np.int32],
+    nb_gap: FloatArray,
+    nb_dx: FloatArray,
+    nb_dy: FloatArray,
+    nb_n: IntArray,
+) -> None:
+    """Start ``p``'s list and add ``p`` to its neighbours' lists.
+
+    Call after ``p`` is placed and before it is registered in the grid;
+    ``token`` must be a fresh stamp value.
+    """
+    x = cx[p]
+    y = cy[p]
+    rp = reach[p]
+    nb_n[p] = 0
+    stamp[p] = token
+    # o qualifies when |c_p - c_o| < (rp + ro + 2 cap)(1 + slack): its grid disk
+    # (radius ro <= maxreach) then reaches into this box
+    half = (rp + 2.0 * cap) + (rp + maxreach + 2.0 * cap) * 2.0 * GAP_SLACK
+    ia, ib = cell_range(x - half, x + half, gpar[0], gpar[2], gdim[0])
+    ja, jb = cell_range(y - half, y + half, gpar[1], gpar[2], gdim[1])
+    nx = gdim[0]
+    for gj in range(ja, jb + 1):
+        for gi in range(ia, ib + 1):
+            e = head[gj * nx + gi]
+            while e >= 0:
+                o = item[e]
+                e = nxt[e]
+                if stamp[o] == token:
+                    continue
+                stamp[o] = token
+                dx = cx[o] - x
+                dy = cy[o] - y
+                d = math.sqrt(dx * dx + dy * dy)
+                ro = reach[o]
+                lim = rp + ro + 2.0 * cap
+                if d >= lim * (1.0 + GAP_SLACK):
+                    continue
+                _add_entry(p, o, d - ro, dx, dy, nb_o, nb_gap, nb_dx, nb_dy, nb_n)
+                _add_entry(o, p, d - rp, x - cx[o], y - cy[o], nb_o, nb_gap, nb_dx, nb_dy, nb_n)
+
+
+def list_capacity(n: int, enabled: bool, capacity: int) -> tuple[int, int]:
+    """Shape ``(rows, columns)`` of the list arrays (one dummy entry when disabled)."""
+    return (n, capacity) if enabled and n > 0 else (1, 1)
