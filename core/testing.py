@@ -44,6 +44,7 @@ __all__ = [
     "check_density_controller",
     "check_shape_generator",
     "check_size_distribution",
+    "extreme_radii",
     "make_registry",
     "packing_from_polygons",
     "verify",
@@ -68,6 +69,28 @@ def make_registry(*plugins: object, builtins: Sequence[str] = BUILTIN_PLUGINS) -
     return Registry.from_manager(
         build_plugin_manager(autoload=False, extra=plugins, builtins=builtins)
     )
+
+
+def extreme_radii(n: int, ratio: float, scale: float, rng: np.random.Generator) -> FloatArray:
+    """Draw ``n >= 2`` radii log-uniformly in ``[scale, scale * ratio]``, both ends included.
+
+    The largest and the smallest radius are always present (at random places),
+    so a test sees the full size ratio; ``ratio = 1`` gives ``n`` equal radii.
+
+    Examples
+    --------
+    >>> r = extreme_radii(5, 1e4, 1e-6, np.random.default_rng(0))
+    >>> float(r.max() / r.min())
+    10000.0
+    """
+    if ratio > 1:
+        radius = scale * np.exp(rng.uniform(0.0, np.log(ratio), size=n))
+    else:
+        radius = np.full(n, scale)
+    radius[0] = scale * ratio
+    radius[-1] = scale
+    rng.shuffle(radius)
+    return radius
 
 
 def packing_from_polygons(

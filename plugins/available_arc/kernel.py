@@ -93,6 +93,8 @@ N_IPAR = 16
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
+CIRCLE_SLACK = 1.0 + 1e-9
+"""Relative slack of the squared-circumcircle pre-test of the covered-edge search."""
 
 
 class Outlines(NamedTuple):
@@ -282,11 +284,14 @@ def _clip_walls(
     return -np.inf, np.inf
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _interferes(
     pk: int, o: int, i: int, d2: float, g: Outlines, tau_mode: bool, tau: float
 ) -> bool:
-    """Whether ``o``, at squared distance ``d2`` from ``pk``, can cover part of ``E_k``."""
+    """Whether ``o``, at squared distance ``d2`` from ``pk``, can cover part of ``E_k``.
+
+    Inlined where it is used, so that it costs no call.
+    """
     if tau_mode:
         lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
     else:
@@ -550,27 +555,25 @@ def analyze_candidate(
         dx = bx - ax
         dy = by - ay
         # fast path: both ends strictly inside one interferer's envelope cover the edge
-        # (with the same circumcircle test as the search below, so that whether
-        # an edge counts as covered does not depend on the interferers' order)
-        mx = ax + 0.5 * dx
-        my = ay + 0.5 * dy
-        half = 0.5 * math.sqrt(dx * dx + dy * dy)
         full = False
         if cur >= 0:
             sl = slot[cur]
-            gx = odx[cur] - mx
-            gy = ody[cur] - my
-            full = gx * gx + gy * gy + half * half <= orad[sl] * orad[sl] and inside_open(
+            full = inside_open(
                 bx - odx[cur], by - ody[cur], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
             )
+        mx = ax + 0.5 * dx
+        my = ay + 0.5 * dy
+        half = 0.5 * math.sqrt(dx * dx + dy * dy)
         if not full:
             cur = -1
             for f in range(nf):
                 gx = odx[f] - mx
                 gy = ody[f] - my
                 sl = slot[f]
-                # both ends within the circumcircle need |mid - c|^2 <= R^2 - half^2
-                if gx * gx + gy * gy + half * half > orad[sl] * orad[sl]:
+                # both ends within the circumcircle need |mid - c|^2 <= R^2 - half^2; the
+                # slack keeps rounding from rejecting an envelope that holds both ends,
+                # so that coverage does not depend on which interferer the fast path kept
+                if gx * gx + gy * gy + half * half > orad[sl] * orad[sl] * CIRCLE_SLACK:
                     continue
                 if inside_open(
                     ax - odx[f], ay - ody[f], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]

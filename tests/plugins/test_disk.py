@@ -20,7 +20,7 @@ from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.plugins.octagon import OctagonConfig, RandomPolygon
 from regopack.plugins.rsa import RandomSequentialAddition, RsaConfig
 from regopack.population import Population, concat_shapes
-from regopack.testing import check_shape_generator
+from regopack.testing import check_shape_generator, extreme_radii
 from regopack.verify import verify
 
 DOMAINS: dict[str, Domain] = {
@@ -281,12 +281,7 @@ def test_contacts_of_a_disk_on_an_octagon_are_within_the_polygon_margin() -> Non
 @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_random_disk_scenes_at_the_extremes(seed, n, ratio, scale, kind, eta) -> None:
     rng = np.random.default_rng(seed)
-    radius = (
-        scale * np.exp(rng.uniform(0.0, np.log(ratio), size=n)) if ratio > 1 else np.full(n, scale)
-    )
-    radius[0] = scale * ratio
-    radius[-1] = scale
-    rng.shuffle(radius)
+    radius = extreme_radii(n, ratio, scale, rng)
     pop = _population(radius, rng, share=1.0)
     size = scale * max(4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2 / scale**2)))
     size = max(size, 4.4 * float(radius.max()))

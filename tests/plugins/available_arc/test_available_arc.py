@@ -14,6 +14,7 @@ from regopack.interfaces import DensityController, InsertionResult
 from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.population import Population
+from regopack.testing import extreme_radii
 from regopack.verify import verify
 
 _change5_population = change5_population
@@ -153,12 +154,7 @@ def test_no_overlap_in_random_small_scenes(
     seed, n, ratio, scale, psi, a, eta, interference
 ) -> None:
     rng = np.random.default_rng(seed)
-    radius = (
-        scale * np.exp(rng.uniform(0.0, np.log(ratio), size=n)) if ratio > 1 else np.full(n, scale)
-    )
-    radius[0] = scale * ratio  # the extremes are always present
-    radius[-1] = scale
-    rng.shuffle(radius)
+    radius = extreme_radii(n, ratio, scale, rng)  # the extremes are always present
     pop = octagon_population(radius, rng, psi=psi, a=a)
     side = scale * max(4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2 / scale**2)))
     side = max(side, 2.6 * float(pop.circumradius.max()))  # needles (a = 1) must fit

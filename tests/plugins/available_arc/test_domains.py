@@ -15,6 +15,7 @@ from regopack.packing import Packing
 from regopack.plugins.change5 import Change5, Change5Config
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.plugins.rsa import RandomSequentialAddition, RsaConfig
+from regopack.testing import extreme_radii
 from regopack.verify import verify
 
 PENTAGON = ((-100.0, -80.0), (90.0, -100.0), (120.0, 60.0), (0.0, 110.0), (-110.0, 40.0))
@@ -154,12 +155,7 @@ def test_no_overlap_and_nothing_outside_in_random_domains(
     seed, n, ratio, scale, psi, a, kind, eta
 ) -> None:
     rng = np.random.default_rng(seed)
-    radius = (
-        scale * np.exp(rng.uniform(0.0, np.log(ratio), size=n)) if ratio > 1 else np.full(n, scale)
-    )
-    radius[0] = scale * ratio
-    radius[-1] = scale
-    rng.shuffle(radius)
+    radius = extreme_radii(n, ratio, scale, rng)
     pop = octagon_population(radius, rng, psi=psi, a=a)
     size = scale * max(4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2 / scale**2)))
     size = max(size, 4.4 * float(pop.circumradius.max()))

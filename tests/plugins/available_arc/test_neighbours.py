@@ -13,6 +13,7 @@ from regopack.plugins.available_arc import kernel, state
 from regopack.plugins.available_arc.neighbours import GAP_SLACK
 from regopack.plugins.available_arc.state import ArcState
 from regopack.population import Population
+from regopack.testing import extreme_radii
 
 HEXAGON = tuple((60.0 * np.cos(a), 60.0 * np.sin(a)) for a in np.linspace(0, 2 * np.pi, 7)[:-1])
 
@@ -137,12 +138,7 @@ def test_lists_are_not_kept_where_the_grid_is_needed() -> None:
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_lists_and_grid_agree_in_random_scenes(seed, n, ratio, scale, psi, tau) -> None:
     rng = np.random.default_rng(seed)
-    radius = (
-        scale * np.exp(rng.uniform(0.0, np.log(ratio), size=n)) if ratio > 1 else np.full(n, scale)
-    )
-    radius[0] = scale * ratio
-    radius[-1] = scale
-    rng.shuffle(radius)
+    radius = extreme_radii(n, ratio, scale, rng)
     pop = octagon_population(radius, rng, psi=psi)
     side = max(scale * 4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2)), 2.6 * pop.circumradius.max())
     domain = Rectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
