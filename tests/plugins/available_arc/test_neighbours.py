@@ -143,3 +143,18 @@ def test_lists_and_grid_agree_in_random_scenes(seed, n, ratio, scale, psi, tau) 
     side = max(scale * 4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2)), 2.6 * pop.circumradius.max())
     domain = Rectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
     _same_with_and_without_lists(pop, domain, seed, tau)
+
+
+def test_the_option_from_the_command_line(capsys: pytest.CaptureFixture[str]) -> None:
+    import tomllib
+
+    from regopack.cli import main
+
+    assert main(["config", "--set", "insertion.neighbour_lists=false"]) == 0
+    assert tomllib.loads(capsys.readouterr().out)["insertion"]["neighbour_lists"] is False
+    assert main(["config", "--set", "insertion.neighbour_lists=3"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        "regopack: error: --set: insertion.neighbour_lists = 3: "
+        "Input should be a valid boolean, unable to interpret input"
+    ]
