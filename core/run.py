@@ -27,6 +27,7 @@ from regopack.interfaces import (
 from regopack.packing import Packing, save, write_json_atomic
 from regopack.population import IntArray, Population, ShapeBatch, concat_shapes
 from regopack.scene import ResolvedPlugin, ResolvedScene
+from regopack.sieve import unplaced_per_class
 
 __all__ = [
     "RunOutcome",
@@ -212,6 +213,10 @@ def run_scene(
         summary["phi_interior_note"] = (
             f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
         )
+    if n_placed < packing.n_particles:
+        summary["not_placed_by_class"] = [
+            row for row in unplaced_per_class(packing) if row["not_placed"] > 0
+        ]
     eta = getattr(resolved.density.config, "eta", None)
     if eta is not None:
         summary["eta"] = eta

@@ -346,7 +346,7 @@ def builtin_scenes() -> dict[str, str]:
     Examples
     --------
     >>> sorted(builtin_scenes())
-    ['small', 'table1']
+    ['dem', 'small', 'table1']
     """
     out: dict[str, str] = {}
     for entry in sorted(resources.files("regopack.scenes").iterdir(), key=lambda e: e.name):

@@ -110,7 +110,8 @@ def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
     with pytest.raises(ConfigError) as info:
         run_analyses(packing, registry, [("rdff", {})])
     assert str(info.value) == (
-        "unknown analyzer 'rdff'; known analyzers: contacts, coordination, density, network, rdf"
+        "unknown analyzer 'rdff'; known analyzers: contacts, coordination, density, "
+        "homogeneity, network, psd, rdf"
     )
 
 

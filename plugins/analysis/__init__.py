@@ -1,6 +1,6 @@
 """Built-in structure analyzers (the paper's Stage 3).
 
-Density, contacts, coordination, rdf and network.
+Density, contacts, coordination, rdf, network, homogeneity and psd.
 """
 
 from __future__ import annotations
@@ -12,7 +12,9 @@ from regopack.plugin_types import AnalyzerSpec
 from regopack.plugins.analysis.contacts import Contacts, ContactsConfig
 from regopack.plugins.analysis.coordination import Coordination, CoordinationConfig
 from regopack.plugins.analysis.density import Density, DensityConfig
+from regopack.plugins.analysis.homogeneity import Homogeneity, HomogeneityConfig
 from regopack.plugins.analysis.network import Network, NetworkConfig
+from regopack.plugins.analysis.psd import Psd, PsdConfig
 from regopack.plugins.analysis.rdf import Rdf, RdfConfig
 
 
@@ -34,5 +36,17 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
         ),
         AnalyzerSpec(
             "network", NetworkConfig, Network, "Contact network and fabric of the contact normals."
+        ),
+        AnalyzerSpec(
+            "homogeneity",
+            HomogeneityConfig,
+            Homogeneity,
+            "Density, area fraction, size and minerals over rings and tiles; radial trends.",
+        ),
+        AnalyzerSpec(
+            "psd",
+            PsdConfig,
+            Psd,
+            "Size distribution of the placed particles against the requested one, by sieve class.",
         ),
     ]

@@ -12,6 +12,8 @@ file stem                 needs                   shows (figure of the paper)
 ``z-vs-tol``              ``coordination``        Z against tol, full range and zoom (14)
 ``z-per-mineral``         ``coordination``        distribution of Z per mineral (15)
 ``rdf``                   ``rdf``                 g(r) per mineral, near and far field (16)
+``homogeneity``           ``homogeneity``         ring profiles with trends, tile maps
+``psd``                   ``psd``                 percent passing, class shares
 ========================  ======================  ==========================================
 
 Figures are sized for a journal page (7 in wide, 8 pt text) and use one
@@ -41,6 +43,8 @@ from regopack.interfaces import Analyzer
 from regopack.packing import Packing, _atomic_file
 from regopack.plugins.analysis.contacts import Contacts
 from regopack.plugins.analysis.coordination import Coordination
+from regopack.plugins.analysis.homogeneity import Homogeneity
+from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
 
 __all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
@@ -66,6 +70,8 @@ CAPTIONS: dict[str, str] = {
     "z-vs-tol": "Coordination number against the contact tolerance (cf. paper Fig. 14)",
     "z-per-mineral": "Coordination number per mineral (cf. paper Fig. 15)",
     "rdf": "Radial distribution function per mineral, near and far field (cf. paper Fig. 16)",
+    "homogeneity": "Number density, area fraction and mean diameter over rings and tiles",
+    "psd": "Size distribution of the placed particles against the requested one",
 }
 """Caption of each figure, by file stem."""
 
@@ -603,8 +609,8 @@ def figures_for(
     analyzers
         Computed analyzers by name (as :func:`regopack.analysis.run_analyses`
         returns them). Figures are drawn for ``density`` (the packing),
-        ``network``, ``contacts``, ``coordination`` and ``rdf``; other
-        analyzers are ignored.
+        ``network``, ``contacts``, ``coordination``, ``rdf``, ``homogeneity``
+        and ``psd``; other analyzers are ignored.
     out_dir
         Directory of the figures (created if needed).
     formats
@@ -632,6 +638,16 @@ def figures_for(
         jobs.append(("z-per-mineral", lambda: draw_z_per_mineral(packing, coordination)))
     if isinstance(rdf, Rdf):
         jobs.append(("rdf", lambda: draw_rdf(packing, rdf)))
+    homogeneity = analyzers.get("homogeneity")
+    if isinstance(homogeneity, Homogeneity):
+        from regopack.plugins.analysis.homogeneity_figure import draw_homogeneity
+
+        jobs.append(("homogeneity", lambda: draw_homogeneity(packing, homogeneity)))
+    psd = analyzers.get("psd")
+    if isinstance(psd, Psd):
+        from regopack.plugins.analysis.psd_figure import draw_psd
+
+        jobs.append(("psd", lambda: draw_psd(psd)))
     if not jobs:
         return []
     out.mkdir(parents=True, exist_ok=True)

@@ -18,6 +18,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.domain import Domain
+from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
     DensityController,
@@ -32,6 +33,8 @@ if TYPE_CHECKING:
     from regopack.plugins.available_arc.state import ArcState
 
 PROGRESS_EVERY = 256
+ZONE_PER_RADIUS = 6.0
+"""Default sweep zone height over the largest equivalent radius (three diameters)."""
 
 
 class AvailableArcConfig(BaseModel):
@@ -73,6 +76,43 @@ class AvailableArcConfig(BaseModel):
         description=(
             "Keep a neighbour list per particle (walled domains, sharp polygons): the same "
             "packing, faster in large domains, about 1.8 kB per particle; false uses the grid only."
+        ),
+    )
+    order: Literal["paper", "sweep"] = Field(
+        "paper",
+        description=(
+            "Which candidates a particle is offered to: 'paper' (every inserted particle, "
+            "oldest first: the reference, grows from the centre and grades radially) or "
+            "'sweep' (only those of a zone rising from the bottom of the domain: "
+            "homogeneous, true to the size distribution; see docs/explanation/method.md)."
+        ),
+    )
+    screening: Literal["paper", "exact"] = Field(
+        "paper",
+        description=(
+            "What a refusal means: 'paper' (not placed when every candidate that passes the "
+            "screening lacks arcs) or 'exact' (then also analysed, unscreened, at every "
+            "candidate: not placed only when none has an arc; slower, places more). "
+            "The sweep order always refuses exactly."
+        ),
+    )
+    zone: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Height of the sweep's zone (length units); 0: three times the largest "
+            "particle's equivalent diameter. Ignored by order = 'paper'."
+        ),
+    )
+    closing: Literal["paced", "prompt"] = Field(
+        "paced",
+        description=(
+            "How the sweep ends under the top wall: 'paced' (the last zone is offered as "
+            "many particles as every zone before: denser and homogeneous to the top, but the "
+            "coarse particles it cannot take are refused) or 'prompt' (each refusal retires "
+            "a bin: the particles left out are a random tail, the top band is looser). "
+            "Ignored by order = 'paper'."
         ),
     )
     search: Literal["indexed", "linear"] = Field(
@@ -124,12 +164,28 @@ class AvailableArc(InsertionStrategy):
             neighbour_lists=cfg.neighbour_lists,
         )
         prepared = time.perf_counter()
+        if cfg.order == "sweep":
+            if not compiled:
+                raise ConfigError(
+                    "insertion.order = 'sweep' needs the built-in 'eta' density controller "
+                    f"(got {type(controller).__name__})"
+                )
+            return _pack_sweep(st, population, domain, cfg, rng, progress, started, prepared)
+        exact = cfg.screening == "exact"
+        if exact and not compiled:
+            raise ConfigError(
+                "insertion.screening = 'exact' needs the built-in 'eta' density controller "
+                f"(got {type(controller).__name__})"
+            )
+        counts = np.zeros(1, dtype=np.int64)
         placed = 0
         for begin in range(0, n, PROGRESS_EVERY):
             if progress is not None:
                 progress(begin, placed, n)
             end = min(begin + PROGRESS_EVERY, n)
-            if compiled:
+            if exact:
+                placed += st.pack_range_exact(begin, end, rng, counts)
+            elif compiled:
                 placed += st.pack_range(begin, end, rng)
             else:
                 placed += _pack_python(st, begin, end, controller, rng)
@@ -142,10 +198,62 @@ class AvailableArc(InsertionStrategy):
         stats = {
             "candidate_analyses": float(st.counter(kernel.I_ANALYSES)),
             "empty_analyses": float(st.counter(kernel.I_EMPTY)),
+            **({"rescued": float(counts[0])} if exact else {}),
             "prepare_time_s": prepared - started,
             "insert_time_s": time.perf_counter() - prepared,
         }
         return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+
+def _pack_sweep(
+    st: ArcState,
+    population: Population,
+    domain: Domain,
+    cfg: AvailableArcConfig,
+    rng: np.random.Generator,
+    progress: ProgressCallback | None,
+    started: float,
+    prepared: float,
+) -> InsertionResult:
+    """Insert in the sweep order (see :mod:`regopack.plugins.available_arc.sweep`)."""
+    from regopack.plugins.available_arc import kernel, sweep
+
+    n = len(population)
+    bounds = domain.bounds()
+    height = float(bounds[3] - bounds[2])
+    zone = cfg.zone
+    if zone == 0.0:
+        zone = ZONE_PER_RADIUS * float(population.radius.max()) if n else 1.0
+    sw = sweep.Sweep(n, height, zone, prompt=cfg.closing == "prompt")
+    placed = 0
+    for begin in range(0, n, PROGRESS_EVERY):
+        if progress is not None:
+            progress(begin, placed, n)
+        end = min(begin + PROGRESS_EVERY, n)
+        placed += int(
+            sweep.sweep_range(
+                begin, end, sw.delta, st.outlines, st.packed, st.work, rng,
+                sw.zs, sw.bin_head, sw.bin_next, sw.flag, sw.status, st.rounded,
+            )
+        )  # fmt: skip
+    if progress is not None:
+        progress(n, placed, n)
+    index = np.full(n, -1, dtype=np.int64)
+    order = st.packed.order[: st.count]
+    index[order] = np.arange(order.shape[0])
+    centre = np.column_stack([st.packed.cx, st.packed.cy])
+    refused = int(sw.zs[sweep.Z_REFUSED])
+    stats = {
+        "candidate_analyses": float(st.counter(kernel.I_ANALYSES)),
+        "empty_analyses": float(st.counter(kernel.I_EMPTY)),
+        "zone": float(zone),
+        "zone_raises": float(sw.zs[sweep.Z_RAISES]),
+        "refused": float(refused),
+        "not_offered": float(n - placed - refused),
+        "prepare_time_s": prepared - started,
+        "insert_time_s": time.perf_counter() - prepared,
+    }
+    return InsertionResult(centre=centre, insertion_index=index, stats=stats)
 
 
 def _pack_python(

@@ -167,6 +167,18 @@ class ArcState:
             kernel.pack_range(begin, end, self.outlines, self.packed, self.work, rng, self.rounded)
         )
 
+    def pack_range_exact(
+        self, begin: int, end: int, rng: np.random.Generator, counts: NDArray[np.int64]
+    ) -> int:
+        """As :meth:`pack_range`, with an exact scan before any refusal (``counts[0]``: rescued)."""
+        from regopack.plugins.available_arc.refusal import pack_range_exact
+
+        return int(
+            pack_range_exact(
+                begin, end, self.outlines, self.packed, self.work, rng, counts, self.rounded
+            )
+        )
+
     def place_first(self, i: int, rng: np.random.Generator) -> bool:
         """Place the first particle; False when it does not fit the domain."""
         return bool(kernel.place_first(i, self.outlines, self.packed, rng))

@@ -1,0 +1,291 @@
+"""The sweep order of the available-arc inserter, checked by the shapely oracles."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+from arc_helpers import as_packing, change5_population, octagon_population, pack
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from test_domains import brute_force_periodic_overlap
+
+from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
+from regopack.errors import ConfigError
+from regopack.interfaces import DensityController
+from regopack.packing import Packing
+from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
+from regopack.plugins.change5 import Change5, Change5Config
+from regopack.plugins.disk import Disk
+from regopack.plugins.octagon import OctagonConfig, RandomPolygon
+from regopack.population import Population, concat_shapes
+from regopack.testing import extreme_radii
+from regopack.verify import verify
+
+PENTAGON = ((-100.0, -80.0), (90.0, -100.0), (120.0, 60.0), (0.0, 110.0), (-110.0, 40.0))
+DOMAINS: dict[str, Domain] = {
+    "rectangle": Rectangle.centred(220.0, 180.0, (3.0, -2.0)),
+    "polygon": ConvexPolygon(PENTAGON),
+    "circle": Circle(5.0, -3.0, 110.0),
+    "periodic": PeriodicRectangle.centred(200.0, 160.0, (4.0, -2.0)),
+}
+
+
+def _oracle(packing: Packing) -> None:
+    """No overlap (verify; nine images when periodic) and nothing outside (shapely)."""
+    report = verify(packing)
+    assert report.ok, str(report)
+    domain = packing.domain
+    if isinstance(domain, PeriodicRectangle):
+        assert brute_force_periodic_overlap(packing) < 1e-9
+    elif isinstance(domain, Circle):  # exact: every vertex, grown by the rounding, inside
+        placed = np.flatnonzero(packing.placed)
+        rho = np.zeros(packing.n_particles) if packing.rounding is None else packing.rounding
+        off = packing.offsets
+        for j in placed:
+            v = packing.vertices[off[j] : off[j + 1]] + packing.centre[j]
+            reach = np.hypot(v[:, 0] - domain.cx, v[:, 1] - domain.cy).max() + rho[j]
+            assert reach <= domain.radius * (1.0 + 1e-9)
+    else:
+        window = shapely.Polygon(domain.outline()).buffer(1e-9 * domain.width)
+        assert shapely.contains(window, packing.to_shapely()).all()
+
+
+def _disks_and_octagons(radius: np.ndarray, rng: np.random.Generator, share: float) -> Population:
+    n = len(radius)
+    disk = rng.random(n) < share
+    a, b = np.flatnonzero(disk), np.flatnonzero(~disk)
+    parts = [(a, Disk().generate(radius[a], rng))]
+    parts.append((b, RandomPolygon(OctagonConfig(psi=1.0)).generate(radius[b], rng)))
+    return Population(radius, disk.astype(np.int64), ("octagon", "disk"), concat_shapes(parts, n))
+
+
+@pytest.mark.parametrize("kind", list(DOMAINS))
+def test_sweep_fills_every_domain_kind_without_overlap(kind: str) -> None:
+    domain = DOMAINS[kind]
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 3)
+    res = pack(pop, domain, rng, order="sweep")
+    packing = as_packing(pop, res, domain)
+    _oracle(packing)
+    assert packing.area()[packing.placed].sum() / domain.area > 0.75
+    stats = res.stats
+    assert stats["refused"] + stats["not_offered"] == n - packing.n_placed
+
+
+@pytest.mark.parametrize("kind", list(DOMAINS))
+@pytest.mark.parametrize("share", [1.0, 0.5])
+def test_sweep_packs_disks_and_mixed_scenes(kind: str, share: float) -> None:
+    domain = DOMAINS[kind]
+    rng = np.random.default_rng(6)
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop = _disks_and_octagons(Change5(Change5Config()).sample(n, rng), rng, share)
+    res = pack(pop, domain, rng, eta=10.0 * (1.0 - share), order="sweep")
+    _oracle(as_packing(pop, res, domain))
+    assert res.placed.sum() > 0.85 * n
+
+
+def test_same_seed_same_sweep_packing_bit_for_bit() -> None:
+    domain = DOMAINS["rectangle"]
+    runs = []
+    for _ in range(2):
+        pop, rng = change5_population(600, 11)
+        res = pack(pop, domain, rng, eta=5.0, order="sweep")
+        runs.append(res)
+    assert np.array_equal(runs[0].centre, runs[1].centre, equal_nan=True)
+    assert np.array_equal(runs[0].insertion_index, runs[1].insertion_index)
+
+
+def test_the_paper_order_is_unchanged_by_the_sweep_option() -> None:
+    domain = DOMAINS["rectangle"]
+    pop, rng = change5_population(500, 2)
+    a = pack(pop, domain, rng)
+    pop, rng = change5_population(500, 2)
+    b = pack(pop, domain, rng, order="paper", zone=3.0)
+    assert np.array_equal(a.centre, b.centre, equal_nan=True)
+
+
+def test_the_sweep_grows_from_the_bottom() -> None:
+    domain = DOMAINS["rectangle"]
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 4)
+    res = pack(pop, domain, rng, order="sweep")
+    order = np.argsort(np.where(res.placed, res.insertion_index, np.iinfo(np.int64).max))
+    y = res.centre[order[: res.placed.sum()], 1]
+    first, last = y[: len(y) // 5], y[-len(y) // 5 :]
+    assert np.median(first) < np.median(last)  # the first fifth lies below the last fifth
+    assert y[0] < domain.ymin + 2.0 * pop.circumradius.max()  # type: ignore[attr-defined]
+
+
+def test_every_refusal_is_certified_by_an_exact_scan() -> None:
+    """A refused particle has no available arc at any candidate that is not retired."""
+    from regopack.plugins.available_arc import sweep
+    from regopack.plugins.available_arc.state import ArcState
+    from regopack.plugins.eta import EtaConfig, EtaController
+
+    domain = Rectangle.centred(90.0, 70.0)
+    n = round(1.1 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 7)
+    inserter = AvailableArc(AvailableArcConfig(order="sweep"))
+    res = inserter.pack(pop, domain, EtaController(EtaConfig()), rng)
+    assert res.stats["refused"] >= 1
+    # replay the same run by hand, keeping the sweep's state
+    pop, rng = change5_population(n, 7)
+    st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
+    sw = sweep.Sweep(n, domain.height, 6.0 * float(pop.radius.max()))
+    sweep.sweep_range(
+        0, n, sw.delta, st_.outlines, st_.packed, st_.work, rng,
+        sw.zs, sw.bin_head, sw.bin_next, sw.flag, sw.status, st_.rounded,
+    )  # fmt: skip
+    assert np.array_equal(np.isfinite(st_.packed.cx), res.placed)
+    refused = np.flatnonzero(sw.status == sweep.STATUS_REFUSED)
+    assert len(refused) == res.stats["refused"]
+    # the last refused particle: no candidate left open has an arc for it, exactly
+    from regopack.plugins.available_arc import kernel
+
+    i = int(refused[-1])
+    mq = kernel.begin_particle(i, st_.outlines, st_.packed, st_.work)
+    open_ = np.flatnonzero(sw.flag[: st_.count] != sweep.RETIRED)
+    for k in open_:
+        arcs = kernel.analyze_candidate(
+            int(st_.packed.order[k]), i, mq, st_.outlines, st_.packed, st_.work, None
+        )
+        assert arcs.shape[0] == 0
+
+
+def test_sweep_with_a_python_controller_is_refused_in_one_line() -> None:
+    class Half(DensityController):
+        def shrink(self, arcs, r_new, r_cand, rng):  # type: ignore[no-untyped-def]
+            return arcs
+
+    pop, rng = change5_population(20, 1)
+    inserter = AvailableArc(AvailableArcConfig(order="sweep"))
+    with pytest.raises(ConfigError, match="order = 'sweep' needs the built-in 'eta'"):
+        inserter.pack(pop, DOMAINS["rectangle"], Half(), rng)
+
+
+def test_a_particle_larger_than_the_domain_is_refused() -> None:
+    domain = Rectangle.centred(10.0, 10.0)
+    rng = np.random.default_rng(1)
+    pop = octagon_population(np.array([20.0, 1.0, 1.0, 30.0, 1.0]), rng)
+    res = pack(pop, domain, rng, order="sweep")
+    assert not res.placed[0] and not res.placed[3]
+    assert res.placed[[1, 2, 4]].all()
+    _oracle(as_packing(pop, res, domain))
+
+
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    n=st.integers(2, 50),
+    ratio=st.sampled_from([1.0, 10.0, 1e2, 1e4]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+    psi=st.sampled_from([0.01, 1.0, 1000.0]),
+    a=st.sampled_from([0.05, 1 / 3, 1.0]),
+    kind=st.sampled_from(["rectangle", "polygon", "circle", "periodic"]),
+    eta=st.sampled_from([0.0, 30.0]),
+    zone=st.sampled_from([0.0, 0.5, 3.0]),
+    closing=st.sampled_from(["paced", "prompt"]),
+)
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_no_overlap_and_nothing_outside_at_the_extremes(
+    seed, n, ratio, scale, psi, a, kind, eta, zone, closing
+) -> None:
+    rng = np.random.default_rng(seed)
+    radius = extreme_radii(n, ratio, scale, rng)
+    pop = octagon_population(radius, rng, psi=psi, a=a)
+    size = scale * max(4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2 / scale**2)))
+    size = max(size, 4.4 * float(pop.circumradius.max()))
+    centre = (3.0 * scale, -2.0 * scale)
+    domain: Domain
+    if kind == "rectangle":
+        domain = Rectangle.centred(size, 0.8 * size, centre)
+    elif kind == "polygon":
+        r = 1.5 * size
+        t = np.array([0.3, 1.9, 3.1, 4.6])
+        domain = ConvexPolygon(
+            tuple((centre[0] + r * np.cos(x), centre[1] + r * np.sin(x)) for x in t)
+        )
+    elif kind == "circle":
+        domain = Circle(centre[0], centre[1], 0.8 * size)
+    else:
+        domain = PeriodicRectangle.centred(size, 1.1 * size, centre)
+    zone_length = zone * float(radius.max())
+    res = pack(pop, domain, rng, eta=eta, order="sweep", zone=zone_length, closing=closing)
+    assert res.placed.sum() >= 1
+    _oracle(as_packing(pop, res, domain))
+
+
+def test_exact_screening_rescues_particles_and_certifies_the_rest() -> None:
+    from regopack.plugins.available_arc import kernel
+    from regopack.plugins.available_arc.state import ArcState
+
+    domain = Rectangle.centred(90.0, 72.0)
+    n = round(1.1 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 5)
+    paper = pack(pop, domain, rng)
+    pop, rng = change5_population(n, 5)
+    exact = pack(pop, domain, rng, screening="exact")
+    _oracle(as_packing(pop, exact, domain))
+    assert exact.stats["rescued"] >= 1
+    assert exact.placed.sum() == paper.placed.sum() + exact.stats["rescued"]
+    # identical up to the first particle the exact scan rescues
+    first = int(np.flatnonzero(exact.placed != paper.placed)[0])
+    assert np.array_equal(exact.centre[:first], paper.centre[:first], equal_nan=True)
+    # replay: the last particle not placed has no arc at any candidate
+    pop, rng = change5_population(n, 5)
+    st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
+    counts = np.zeros(1, dtype=np.int64)
+    st_.pack_range_exact(0, n, rng, counts)
+    assert np.array_equal(np.isfinite(st_.packed.cx), exact.placed)
+    i = int(np.flatnonzero(~exact.placed)[-1])
+    mq = kernel.begin_particle(i, st_.outlines, st_.packed, st_.work)
+    for k in range(st_.count):
+        arcs = kernel.analyze_candidate(
+            int(st_.packed.order[k]), i, mq, st_.outlines, st_.packed, st_.work, None
+        )
+        assert arcs.shape[0] == 0
+
+
+def test_exact_screening_with_a_python_controller_is_refused_in_one_line() -> None:
+    class Same(DensityController):
+        def shrink(self, arcs, r_new, r_cand, rng):  # type: ignore[no-untyped-def]
+            return arcs
+
+    pop, rng = change5_population(20, 1)
+    inserter = AvailableArc(AvailableArcConfig(screening="exact"))
+    with pytest.raises(ConfigError, match="screening = 'exact' needs the built-in 'eta'"):
+        inserter.pack(pop, DOMAINS["rectangle"], Same(), rng)
+
+
+def test_the_sweep_removes_the_radial_grading_of_the_paper_order() -> None:
+    from regopack.analysis import run_analyses
+    from regopack.manager import default_registry
+    from regopack.run import run_scene
+    from regopack.scene import load_scene, resolve_scene
+
+    registry = default_registry(autoload=False)
+    slopes = {}
+    for order in ("paper", "sweep"):
+        overrides = ["domain.width=400", "domain.height=400", f"insertion.order={order}"]
+        packing = run_scene(resolve_scene(load_scene("table1", overrides), registry)).packing
+        h = run_analyses(packing, registry, [("homogeneity", {})])["homogeneity"].results()
+        slopes[order] = (h["density_slope_per_100"], h["density_slope_err"])
+    slope, err = slopes["paper"]
+    assert slope < -4.0 * err  # the paper's order grades: fewer particles far from the centre
+    slope, err = slopes["sweep"]
+    assert abs(slope) < 3.0 * err
+
+
+def test_the_paced_closing_places_more_and_the_prompt_one_refuses_at_most_a_zone() -> None:
+    from regopack.plugins.available_arc.sweep import ZONE_BINS
+
+    domain = DOMAINS["rectangle"]
+    n = round(1.2 * domain.area / Change5(Change5Config()).mean_area)
+    runs = {}
+    for closing in ("paced", "prompt"):
+        pop, rng = change5_population(n, 8)
+        runs[closing] = pack(pop, domain, rng, order="sweep", closing=closing)
+        _oracle(as_packing(pop, runs[closing], domain))
+    assert runs["prompt"].stats["refused"] <= ZONE_BINS
+    assert runs["paced"].placed.sum() > runs["prompt"].placed.sum()
+    assert runs["paced"].stats["not_offered"] < runs["prompt"].stats["not_offered"]
