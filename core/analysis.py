@@ -190,6 +190,9 @@ def run_analyses(
     PluginError
         Analyzers that require each other in a cycle, or an unregistered
         requirement.
+    PackingError
+        The packing breaks the packing format (see
+        :meth:`~regopack.packing.Packing.validate`); nothing is computed.
 
     Examples
     --------
@@ -200,6 +203,7 @@ def run_analyses(
     >>> list(done), done["density"].results()["phi_domain"]
     (['density'], 0.25)
     """
+    packing.validate()  # the arrays may have changed in place since the packing was built
     planned = _plan(registry, requests, params or {})
     done: dict[str, Analyzer] = {}
     for name, analyzer in planned.items():

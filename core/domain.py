@@ -450,22 +450,44 @@ DOMAIN_KINDS: dict[str, type[Domain]] = {
 def domain_from_dict(data: Mapping[str, Any]) -> Domain:
     """Rebuild a domain written by :meth:`Domain.to_dict`.
 
+    The record is checked as the scene's ``[domain]`` is: finite numbers, a
+    rectangle's bounds in increasing order (a positive width and height), a
+    circle's radius positive, a polygon's corners strictly convex.
+
     Raises
     ------
     KeyError, TypeError, ValueError, GeometryError
-        When the record is incomplete or malformed.
+        When the record is incomplete or malformed, or describes no valid domain.
     """
     kind = data.get("kind", "rectangle")
     if kind in ("rectangle", "periodic"):
-        xmin, xmax, ymin, ymax = (float(b) for b in data["bounds"])
+        xmin, xmax, ymin, ymax = (_finite(b, "bounds") for b in data["bounds"])
+        if not (xmin < xmax and ymin < ymax):
+            raise GeometryError(
+                f"bounds [{xmin:g}, {xmax:g}, {ymin:g}, {ymax:g}] must be "
+                "[xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax"
+            )
         cls = PeriodicRectangle if kind == "periodic" else Rectangle
         return cls(xmin, xmax, ymin, ymax)
     if kind == "polygon":
         return ConvexPolygon(tuple((float(x), float(y)) for x, y in data["vertices"]))
     if kind == "circle":
-        cx, cy = (float(c) for c in data["center"])
-        return Circle(cx, cy, float(data["radius"]))
+        cx, cy = (_finite(c, "center") for c in data["center"])
+        radius = _finite(data["radius"], "radius")
+        if radius <= 0:
+            raise GeometryError(f"radius {radius:g} must be > 0")
+        return Circle(cx, cy, radius)
     raise ValueError(f"unknown domain kind {kind!r}")
+
+
+def _finite(value: Any, what: str) -> float:
+    """Return ``value`` as a finite float; a string, boolean or non-finite number is refused."""
+    if isinstance(value, bool | str | bytes) or value is None:
+        raise TypeError(f"{what}: {value!r} is not a number")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ValueError(f"{what}: {number} is not finite")
+    return number
 
 
 def _signed_area(v: FloatArray) -> float:

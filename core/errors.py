@@ -20,7 +20,11 @@ class PluginError(RegopackError):
 
 
 class PackingFileError(RegopackError):
-    """A packing file cannot be read or has an unsupported format version."""
+    """A packing file cannot be read, breaks the packing format, or has an unsupported version."""
+
+
+class PackingError(RegopackError, ValueError):
+    """A packing's arrays break the packing format (a shape, dtype, range or order)."""
 
 
 class GeometryError(RegopackError):

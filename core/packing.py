@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from regopack.domain import Domain, Rectangle, domain_from_dict
-from regopack.errors import GeometryError, PackingFileError
+from regopack.errors import GeometryError, PackingError, PackingFileError
 
 if TYPE_CHECKING:
     from regopack.interfaces import InsertionResult
@@ -64,6 +64,36 @@ _ARRAYS: dict[str, tuple[type[np.generic], int]] = {
     "centre": (np.float64, 2),
     "insertion_index": (np.int64, 1),
 }
+"""Arrays of every packing (and of its file): dtype and number of dimensions."""
+
+_FINITE = ("radius", "vertices", "orientation")
+"""Arrays whose every value must be finite (``centre`` is NaN where not placed)."""
+
+
+def _as_array(name: str, value: Any, dtype: type[np.generic]) -> NDArray[Any]:
+    """Return ``value`` as an array of ``dtype``, converting only where no value can change.
+
+    Raises
+    ------
+    PackingError
+        When ``value`` is not a numeric array (an object array, strings, a
+        ragged list) or its dtype does not convert safely to ``dtype``
+        (floats for an index array, booleans, complex numbers).
+    """
+    try:
+        arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+    except (TypeError, ValueError) as err:
+        raise PackingError(f"array {name!r} is not a numeric array ({err})") from None
+    if arr.dtype == dtype:
+        return arr
+    convertible = arr.dtype.kind in "iuf" and np.can_cast(arr.dtype, dtype, casting="safe")
+    if not convertible and not (arr.size == 0 and arr.dtype.kind in "iuf"):
+        raise PackingError(f"array {name!r} has dtype {arr.dtype}, expected {np.dtype(dtype)}")
+    return arr.astype(dtype)
+
+
+def _first(mask: NDArray[np.bool_]) -> int:
+    return int(np.flatnonzero(mask)[0])
 
 
 def _segment_reduce(
@@ -129,6 +159,183 @@ class Packing:
     version: str = "0.0.0"
     stats: dict[str, float] = field(default_factory=dict)
     rounding: FloatArray | None = None
+
+    def __post_init__(self) -> None:
+        """Convert the arrays to their dtypes (where no value changes) and :meth:`validate`."""
+        for name, (dtype, _) in _ARRAYS.items():
+            object.__setattr__(self, name, _as_array(name, getattr(self, name), dtype))
+        if self.rounding is not None:
+            object.__setattr__(self, "rounding", _as_array("rounding", self.rounding, np.float64))
+        names = self.mineral_names
+        if isinstance(names, list | tuple):
+            object.__setattr__(self, "mineral_names", tuple(names))
+        self.validate()
+
+    def validate(self) -> None:
+        """Check the packing against the packing format; raise if it breaks it.
+
+        Every packing is checked when it is built, and :func:`load` and the
+        analyses check again (the arrays can be changed in place), so that no
+        compiled kernel sees an index out of range. Checked, in this order:
+
+        - the arrays have their dtypes (``float64``, ``int64``), dimensions and
+          lengths (``n`` rows; ``offsets`` ``n + 1``; ``centre`` and
+          ``vertices`` two columns);
+        - ``offsets`` starts at 0, rises strictly (every particle has a
+          vertex) and ends at the number of vertices;
+        - ``radius``, ``vertices`` and ``orientation`` are finite, and every
+          radius is positive;
+        - every ``mineral`` is an index into ``mineral_names``, ``[0, n_phases)``;
+        - every ``insertion_index`` lies in ``[-1, n)``, and the placed
+          particles (index ``>= 0``) are numbered ``0 .. n_placed - 1``, each
+          number once;
+        - ``centre`` is finite exactly for the placed particles and NaN for the others;
+        - ``rounding``, when present, is one finite radius ``>= 0`` per particle;
+        - the mineral names are non-empty, distinct strings, and every
+          value of ``stats`` is a number;
+        - the domain is a :class:`~regopack.domain.Domain` with finite bounds
+          and a positive area.
+
+        Raises
+        ------
+        PackingError
+            One line naming the array (or attribute) and what is wrong with it.
+        """
+        for name, (dtype, ndim) in _ARRAYS.items():
+            arr = getattr(self, name)
+            if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
+                got = arr.dtype if isinstance(arr, np.ndarray) else type(arr).__name__
+                raise PackingError(f"array {name!r} has dtype {got}, expected {np.dtype(dtype)}")
+            if arr.ndim != ndim:
+                raise PackingError(
+                    f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array"
+                )
+        radius, mineral, vertices, offsets = self.radius, self.mineral, self.vertices, self.offsets
+        centre, index = self.centre, self.insertion_index
+        n = radius.shape[0]
+        for name in ("mineral", "orientation", "centre", "insertion_index"):
+            rows = getattr(self, name).shape[0]
+            if rows != n:
+                raise PackingError(
+                    f"array {name!r} has {rows} rows, expected one per particle "
+                    f"({n}, the length of 'radius')"
+                )
+        for name in ("centre", "vertices"):
+            shape = getattr(self, name).shape
+            if shape[1] != 2:
+                raise PackingError(f"array {name!r} has shape {shape}, expected ({shape[0]}, 2)")
+        if offsets.shape[0] != n + 1:
+            raise PackingError(
+                f"array 'offsets' has {offsets.shape[0]} entries, expected n + 1 = {n + 1}"
+            )
+        if offsets[0] != 0:
+            raise PackingError(f"array 'offsets' starts at {offsets[0]}, not 0")
+        counts = np.diff(offsets)
+        if n and counts.min() < 1:
+            j = _first(counts < 1)
+            raise PackingError(
+                f"array 'offsets' does not rise strictly: offsets[{j}] = {offsets[j]} and "
+                f"offsets[{j + 1}] = {offsets[j + 1]} give particle {j} {counts[j]} vertices"
+            )
+        if offsets[-1] != vertices.shape[0]:
+            raise PackingError(
+                f"array 'offsets' ends at {offsets[-1]}, but 'vertices' has "
+                f"{vertices.shape[0]} rows"
+            )
+        for name in _FINITE:
+            arr = getattr(self, name)
+            finite = np.isfinite(arr)
+            if not finite.all():
+                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
+                which = (
+                    f"row {row} (particle {int(np.searchsorted(offsets, row, side='right')) - 1})"
+                    if name == "vertices"
+                    else f"particle {row}"
+                )
+                raise PackingError(f"array {name!r} has the non-finite value {arr[row]} at {which}")
+        if n and radius.min() <= 0:
+            j = _first(radius <= 0)
+            raise PackingError(
+                f"array 'radius' has the value {radius[j]} at particle {j}; radii are > 0"
+            )
+        n_phases = len(self.mineral_names)
+        if n and (mineral.min() < 0 or mineral.max() >= n_phases):
+            j = _first((mineral < 0) | (mineral >= n_phases))
+            raise PackingError(
+                f"array 'mineral' has the value {mineral[j]} at particle {j}, which is not a "
+                f"phase index in [0, {n_phases}) ({n_phases} mineral names)"
+            )
+        if n and (index.min() < -1 or index.max() >= n):
+            j = _first((index < -1) | (index >= n))
+            raise PackingError(
+                f"array 'insertion_index' has the value {index[j]} at particle {j}, "
+                f"outside [-1, {n})"
+            )
+        placed = index >= 0
+        finite_centre = np.isfinite(centre).all(axis=1)
+        if not np.array_equal(finite_centre, placed):
+            j = _first(finite_centre != placed)
+            state = "placed" if placed[j] else "not placed"
+            raise PackingError(
+                f"array 'centre' is {centre[j]} at particle {j}, which is {state} "
+                f"(insertion_index {index[j]}): a centre is finite exactly where the particle "
+                "is placed"
+            )
+        if not np.isnan(centre[~placed]).all():
+            j = _first(~placed & ~np.isnan(centre).all(axis=1))
+            raise PackingError(
+                f"array 'centre' is {centre[j]} at particle {j}, not placed: not NaN"
+            )
+        n_placed = int(np.count_nonzero(placed))
+        uses = np.bincount(index[placed], minlength=n)
+        if n_placed and uses.max() > 1:
+            value = _first(uses > 1)
+            a, b = np.flatnonzero(index == value)[:2]
+            raise PackingError(
+                f"array 'insertion_index' gives the value {value} to particles {a} and {b}; "
+                "every placed particle has its own"
+            )
+        if n_placed and not uses[:n_placed].all():
+            raise PackingError(
+                f"array 'insertion_index' skips {_first(uses[:n_placed] == 0)}: the "
+                f"{n_placed} placed particles are numbered 0 to {n_placed - 1}"
+            )
+        if self.rounding is not None:
+            rho = self.rounding
+            if not isinstance(rho, np.ndarray) or rho.dtype != np.float64 or rho.shape != (n,):
+                what = f"shape {rho.shape}" if isinstance(rho, np.ndarray) else type(rho).__name__
+                raise PackingError(
+                    f"array 'rounding' has {what}, expected float64 of shape ({n},) "
+                    "(one radius per particle)"
+                )
+            bad = ~(np.isfinite(rho) & (rho >= 0))
+            if bad.any():
+                j = _first(bad)
+                raise PackingError(
+                    f"array 'rounding' has the value {rho[j]} at particle {j}; a rounding "
+                    "radius is finite and >= 0"
+                )
+        names = self.mineral_names
+        if not isinstance(names, tuple) or not all(isinstance(m, str) for m in names):
+            raise PackingError(f"'mineral_names' must be a list of strings, not {names!r}")
+        for k, m in enumerate(names):
+            if not m.strip():
+                raise PackingError(f"'mineral_names' has an empty name (phase {k})")
+        if len(set(names)) != len(names):
+            repeated = sorted({m for m in names if names.count(m) > 1})
+            raise PackingError(f"'mineral_names' repeats {', '.join(map(repr, repeated))}")
+        if not isinstance(self.stats, dict):
+            raise PackingError(f"'stats' is a {type(self.stats).__name__}, not a dict")
+        for key, stat in self.stats.items():
+            if not isinstance(stat, int | float | np.integer | np.floating) or isinstance(
+                stat, bool | np.bool_
+            ):
+                raise PackingError(f"'stats' has {key!r} = {_short(stat)}, not a number")
+        if not isinstance(self.domain, Domain):
+            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a Domain")
+        area = self.domain.area
+        if not (np.isfinite(self.domain.bounds()).all() and math.isfinite(area) and area > 0):
+            raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite area")
 
     @classmethod
     def from_parts(
@@ -413,17 +620,144 @@ def save(packing: Packing, path: str | Path) -> None:
 
 
 def _bad(path: Path, why: str) -> PackingFileError:
+    """Error for a file that is not a regopack packing file at all."""
     return PackingFileError(f"{path}: not a regopack packing file ({why})")
 
 
+def _invalid(path: Path, why: str) -> PackingFileError:
+    """Error for a regopack packing file that breaks the format."""
+    return PackingFileError(f"{path}: invalid packing file: {' '.join(why.split())}")
+
+
+KNOWN_FORMAT_VERSIONS = (1, 2)
+"""Packing format versions that :func:`load` reads."""
+
+
+def _is_int(value: Any) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
+def _is_number(value: Any) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _short(value: Any, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def _read_meta(path: Path, npz: Any) -> dict[str, Any]:
+    """Read the ``meta`` entry and check that it names a packing of a known version."""
+    if "meta" not in npz.files:
+        raise _bad(path, "no 'meta' entry")
+    try:
+        entry = npz["meta"]
+    except ValueError as err:  # an object array, which needs pickle
+        raise _bad(path, "unreadable 'meta' entry") from err
+    if entry.dtype.kind != "U" or entry.ndim != 0:
+        raise _bad(path, f"'meta' is a {entry.dtype} array of shape {entry.shape}, not a string")
+    try:
+        meta = json.loads(str(entry))
+    except json.JSONDecodeError as err:
+        raise _bad(path, "unreadable 'meta' entry") from err
+    if not isinstance(meta, dict) or meta.get("format") != FILE_MAGIC:
+        raise _bad(path, "'meta' does not identify a regopack packing")
+    version = meta.get("format_version")
+    if version is None:
+        raise _invalid(path, "meta 'format_version' is missing")
+    if not _is_int(version):
+        raise _invalid(
+            path,
+            f"meta 'format_version' is {_short(version)}, a {type(version).__name__}, "
+            "not an integer",
+        )
+    if version > FORMAT_VERSION:
+        raise PackingFileError(
+            f"{path}: written in packing format version {version}, but this regopack "
+            f"reads versions up to {FORMAT_VERSION}; upgrade regopack"
+        )
+    if version not in KNOWN_FORMAT_VERSIONS:
+        raise _invalid(
+            path,
+            f"meta 'format_version' is {version}, not a known version "
+            f"({', '.join(map(str, KNOWN_FORMAT_VERSIONS))})",
+        )
+    return meta
+
+
+def _read_array(path: Path, npz: Any, name: str, dtype: type[np.generic], ndim: int) -> Any:
+    """Read one array, check its dimensions and convert it to ``dtype`` (where no value changes)."""
+    try:
+        arr = npz[name]
+    except ValueError as err:  # e.g. an object array, which needs pickle
+        raise _invalid(path, f"array {name!r} cannot be read ({err})") from err
+    if arr.ndim != ndim:
+        raise _invalid(path, f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array")
+    try:
+        return _as_array(name, arr, dtype)
+    except PackingError as err:
+        raise _invalid(path, str(err)) from err
+
+
+def _read_domain(path: Path, data: Any) -> Domain:
+    if not isinstance(data, dict):
+        raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
+    try:
+        return domain_from_dict(data)
+    except (KeyError, TypeError, ValueError, GeometryError) as err:
+        why = f"no {err}" if isinstance(err, KeyError) else str(err)
+        kind = _short(data.get("kind", "rectangle"))
+        raise _invalid(path, f"meta 'domain' (kind {kind}): {why}") from err
+
+
+def _read_meta_keys(path: Path, meta: Mapping[str, Any]) -> dict[str, Any]:
+    """Return the keyword arguments of :class:`Packing` that ``meta`` holds, types checked."""
+    for key in ("domain", "mineral_names"):
+        if key not in meta:
+            raise _invalid(path, f"meta {key!r} is missing")
+    names = meta["mineral_names"]
+    if not isinstance(names, list) or not all(isinstance(m, str) for m in names):
+        raise _invalid(path, f"meta 'mineral_names' is {_short(names)}, not a list of strings")
+    scene = meta.get("scene") or {}
+    if not isinstance(scene, dict):
+        raise _invalid(path, f"meta 'scene' is {_short(scene)}, not an object")
+    seed = meta.get("seed", 0)
+    if not _is_int(seed):
+        raise _invalid(path, f"meta 'seed' is {_short(seed)}, not an integer")
+    version = meta.get("version", "unknown")
+    if not isinstance(version, str):
+        raise _invalid(path, f"meta 'version' is {_short(version)}, not a string")
+    stats = meta.get("stats") or {}
+    if not isinstance(stats, dict):
+        raise _invalid(path, f"meta 'stats' is {_short(stats)}, not an object")
+    for key, value in stats.items():
+        if value is not None and not _is_number(value):
+            raise _invalid(path, f"meta 'stats' has {key!r} = {_short(value)}, not a number")
+    return {
+        "mineral_names": tuple(names),
+        "domain": _read_domain(path, meta["domain"]),
+        "scene": scene,
+        "seed": seed,
+        "version": version,
+        "stats": {str(k): (math.nan if v is None else v) for k, v in stats.items()},
+    }
+
+
 def load(path: str | Path) -> Packing:
-    """Read a packing written by :func:`save`.
+    """Read a packing written by :func:`save`, checking it against the format.
+
+    Every array is checked (dtype, shape, finite values, index ranges, the
+    order of placement; see :meth:`Packing.validate`), and so is every
+    ``meta`` key (types, the domain's geometry), so that a damaged or crafted
+    file never reaches a compiled kernel. Nothing is unpickled.
 
     Raises
     ------
     PackingFileError
-        One line, if the file is missing, is not a regopack packing file, or
-        was written in a newer format version.
+        One line naming the file: if it is missing, is not a regopack packing
+        file, was written in a newer format version, or breaks the format
+        (``invalid packing file: array 'mineral' has the value 7 at particle
+        3, ...``, naming the array or ``meta`` key and what is wrong).
     """
     path = Path(path)
     if not path.exists():
@@ -434,65 +768,17 @@ def load(path: str | Path) -> Packing:
         raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
     try:
         with np.load(path, allow_pickle=False) as npz:
-            contents = {name: npz[name] for name in npz.files}
+            meta = _read_meta(path, npz)
+            arrays: dict[str, Any] = {}
+            for name, (dtype, ndim) in _ARRAYS.items():
+                if name not in npz.files:
+                    raise _invalid(path, f"missing array {name!r}")
+                arrays[name] = _read_array(path, npz, name, dtype, ndim)
+            if "rounding" in npz.files:
+                arrays["rounding"] = _read_array(path, npz, "rounding", np.float64, 1)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
         raise _bad(path, " ".join(str(err).split()) or type(err).__name__) from err
-    if "meta" not in contents:
-        raise _bad(path, "no 'meta' entry")
     try:
-        meta = json.loads(str(contents["meta"]))
-    except json.JSONDecodeError as err:
-        raise _bad(path, "unreadable 'meta' entry") from err
-    if not isinstance(meta, dict) or meta.get("format") != FILE_MAGIC:
-        raise _bad(path, "'meta' does not identify a regopack packing")
-    version = meta.get("format_version")
-    if not isinstance(version, int):
-        raise _bad(path, "no format version")
-    if version > FORMAT_VERSION:
-        raise PackingFileError(
-            f"{path}: written in packing format version {version}, but this regopack "
-            f"reads versions up to {FORMAT_VERSION}; upgrade regopack"
-        )
-    arrays: dict[str, Any] = {}
-    for name, (dtype, ndim) in _ARRAYS.items():
-        if name not in contents:
-            raise _bad(path, f"missing array {name!r}")
-        arr = contents[name]
-        if arr.ndim != ndim or not np.can_cast(arr.dtype, dtype, casting="same_kind"):
-            raise _bad(path, f"array {name!r} has dtype {arr.dtype} and {arr.ndim} dimensions")
-        arrays[name] = arr.astype(dtype, copy=False)
-    n = arrays["radius"].shape[0]
-    offsets = arrays["offsets"]
-    consistent = (
-        all(arrays[k].shape[0] == n for k in ("mineral", "orientation", "centre"))
-        and arrays["insertion_index"].shape[0] == n
-        and arrays["centre"].shape[1:] == (2,)
-        and arrays["vertices"].shape[1:] == (2,)
-        and offsets.shape == (n + 1,)
-        and offsets[0] == 0
-        and offsets[-1] == arrays["vertices"].shape[0]
-        and bool(np.all(np.diff(offsets) >= 0))
-    )
-    if not consistent:
-        raise _bad(path, "array shapes are inconsistent")
-    try:
-        domain = domain_from_dict(meta["domain"])
-        mineral_names = tuple(str(m) for m in meta["mineral_names"])
-    except (KeyError, TypeError, ValueError, GeometryError) as err:
-        raise _bad(path, "incomplete 'meta' entry") from err
-    stats = {str(k): (math.nan if v is None else v) for k, v in dict(meta.get("stats", {})).items()}
-    rounding = None
-    if "rounding" in contents:
-        rounding = np.asarray(contents["rounding"], dtype=np.float64)
-        if rounding.shape != (n,) or not np.all(np.isfinite(rounding) & (rounding >= 0)):
-            raise _bad(path, "array 'rounding' is not one finite radius >= 0 per particle")
-    return Packing(
-        **arrays,
-        mineral_names=mineral_names,
-        domain=domain,
-        scene=dict(meta.get("scene") or {}),
-        seed=int(meta.get("seed", 0)),
-        version=str(meta.get("version", "unknown")),
-        stats=stats,
-        rounding=rounding,
-    )
+        return Packing(**arrays, **_read_meta_keys(path, meta))
+    except PackingError as err:
+        raise _invalid(path, str(err)) from err

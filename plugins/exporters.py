@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.domain import Circle, Rectangle, domain_from_dict
-from regopack.errors import ExportError, GeometryError
+from regopack.errors import ExportError, GeometryError, PackingError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing, _atomic_file, _finite_or_none
@@ -148,22 +148,25 @@ def _packing_from(
     stats = {
         str(k): (math.nan if v is None else v) for k, v in dict(header.get("stats") or {}).items()
     }
-    return Packing(
-        radius=np.asarray(arrays["radius"], dtype=np.float64),
-        mineral=np.asarray(arrays["mineral"], dtype=np.int64),
-        mineral_names=names,
-        vertices=np.asarray(arrays["vertices"], dtype=np.float64).reshape(-1, 2),
-        offsets=np.asarray(arrays["offsets"], dtype=np.int64),
-        orientation=np.asarray(arrays["orientation"], dtype=np.float64),
-        centre=np.asarray(arrays["centre"], dtype=np.float64).reshape(-1, 2),
-        insertion_index=np.asarray(arrays["insertion_index"], dtype=np.int64),
-        domain=domain,
-        scene=dict(header.get("scene") or {}),
-        seed=int(header.get("seed", 0)),
-        version=str(header.get("version", "unknown")),
-        stats=stats,
-        rounding=rounding,
-    )
+    try:
+        return Packing(
+            radius=np.asarray(arrays["radius"], dtype=np.float64),
+            mineral=np.asarray(arrays["mineral"], dtype=np.int64),
+            mineral_names=names,
+            vertices=np.asarray(arrays["vertices"], dtype=np.float64).reshape(-1, 2),
+            offsets=np.asarray(arrays["offsets"], dtype=np.int64),
+            orientation=np.asarray(arrays["orientation"], dtype=np.float64),
+            centre=np.asarray(arrays["centre"], dtype=np.float64).reshape(-1, 2),
+            insertion_index=np.asarray(arrays["insertion_index"], dtype=np.int64),
+            domain=domain,
+            scene=dict(header.get("scene") or {}),
+            seed=int(header.get("seed", 0)),
+            version=str(header.get("version", "unknown")),
+            stats=stats,
+            rounding=rounding,
+        )
+    except PackingError as err:  # the particles break the packing format
+        raise ExportError(f"{path}: {err}") from err
 
 
 def _mineral_name(packing: Packing, k: int) -> str:

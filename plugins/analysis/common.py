@@ -88,7 +88,9 @@ def periodic_images(packing: Packing, pad: float) -> tuple[Packing, NDArray[np.i
     np.cumsum(ext_counts, out=offsets[1:])
     starts = np.repeat(packing.offsets[origin], ext_counts)
     within = np.arange(int(offsets[-1])) - np.repeat(offsets[:-1], ext_counts)
-    index = np.concatenate([packing.insertion_index, np.arange(len(g)) + n])
+    # ghosts are numbered after the placed particles, so the extended packing keeps
+    # the format's order of placement 0 .. n_placed - 1
+    index = np.concatenate([packing.insertion_index, np.arange(len(g)) + packing.n_placed])
     ext = replace(
         packing,
         radius=packing.radius[origin],

@@ -18,6 +18,7 @@ Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any, Self
 
@@ -95,7 +96,16 @@ def rdf_histogram(
     total, per_kind
         ``(bins,)`` and ``(n_kinds, n_kinds, bins)`` (symmetric) curves; NaN where
         a kind pair has no pairs to normalise by.
+
+    Raises
+    ------
+    ValueError
+        When the arguments would make the compiled kernel index out of bounds:
+        a kind outside ``[0, n_kinds)``, arrays of different lengths, a
+        coordinate that is not finite, no bins, a bin width that is not
+        positive, or ``n_real`` beyond the points.
     """
+    kind = _checked_kinds(x, y, kind, n_kinds, r_lo, width, bins, n_real)
     from regopack.plugins.analysis.rdf_kernel import weighted_pair_histogram
 
     edges = r_lo + width * np.arange(bins + 1)
@@ -128,6 +138,50 @@ def rdf_histogram(
                 per[p, q] = hist[p, q] * area2 / (norm * shell)
                 per[q, p] = per[p, q]
     return total, per
+
+
+def _checked_kinds(
+    x: FloatArray,
+    y: FloatArray,
+    kind: NDArray[np.int64],
+    n_kinds: int,
+    r_lo: float,
+    width: float,
+    bins: int,
+    n_real: int | None,
+) -> NDArray[np.int64]:
+    """Return ``kind`` as int64 after checking what the compiled kernel indexes without checks.
+
+    The kernel writes ``out[kind[p], kind[q], k]`` with numba's unchecked
+    indexing: a kind out of range, or a bin ``k`` from a NaN distance, would
+    write outside the histogram.
+    """
+    kind = np.asarray(kind)
+    if kind.dtype.kind not in "iu":
+        raise ValueError(f"kind must be an integer array, not {kind.dtype}")
+    kind = kind.astype(np.int64, copy=False)
+    n = x.shape[0]
+    if x.ndim != 1 or y.shape != x.shape or kind.shape != x.shape:
+        raise ValueError(
+            f"x, y and kind must be 1-D arrays of one length, not {x.shape}, {y.shape} and "
+            f"{kind.shape}"
+        )
+    if n_kinds < 1:
+        raise ValueError(f"n_kinds must be >= 1, not {n_kinds}")
+    if n and (int(kind.min()) < 0 or int(kind.max()) >= n_kinds):
+        raise ValueError(
+            f"every kind must lie in [0, {n_kinds}); got kinds from {int(kind.min())} "
+            f"to {int(kind.max())}"
+        )
+    if not (np.isfinite(x).all() and np.isfinite(y).all()):
+        raise ValueError("the coordinates x and y must be finite")
+    if not (bins >= 1 and math.isfinite(width) and width > 0 and math.isfinite(r_lo) and r_lo >= 0):
+        raise ValueError(
+            f"bins ({bins}) must be >= 1, width ({width}) > 0 and r_lo ({r_lo}) >= 0, finite"
+        )
+    if n_real is not None and not 0 <= n_real <= n:
+        raise ValueError(f"n_real must lie in [0, {n}], not {n_real}")
+    return kind
 
 
 def covariogram(window: Domain, r: FloatArray) -> FloatArray:

@@ -1,0 +1,605 @@
+"""A packing file that breaks the format is refused with one line, before any kernel runs.
+
+A crafted file used to reach the compiled g(r) kernel with mineral indices
+outside the phases: ``regopack analyze FILE --only rdf`` segfaulted (index
+10^6), aborted in glibc (indices 99 and -3) or wrote out of bounds and exited
+0 (index 6 of 6 phases). :func:`regopack.load` now checks every array and
+``meta`` key of the file, :class:`~regopack.packing.Packing` checks itself
+when it is built (and :meth:`~regopack.packing.Packing.validate` again before
+the analyses), and the g(r) wrapper checks the indices it passes to the
+compiled code.
+
+Each bad file is a valid one with one entry rewritten by numpy. The command
+line runs outside pytest's process (the installed ``regopack`` program, and
+forked children of one helper process), so that a crash shows as a negative
+exit status instead of killing pytest.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from collections.abc import Callable
+from dataclasses import replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from regopack.analysis import run_analyses
+from regopack.errors import ExportError, PackingError, PackingFileError, RegopackError
+from regopack.interfaces import InsertionResult
+from regopack.packing import Packing, load, save
+from regopack.plugins.analysis.common import interior_margin, interior_mask
+from regopack.plugins.analysis.rdf import rdf_histogram
+from regopack.plugins.exporters import JsonExporter, read_json
+from regopack.population import Population, ShapeBatch
+from regopack.testing import make_registry, packing_from_polygons
+
+NAMES = ("pyroxene", "glass", "ilmenite")
+SIDE = 7
+
+
+def valid_packing(rounding: bool = False) -> Packing:
+    """7 x 7 unit squares of three minerals in a 7 x 7 box; particles 5, 17 and 30 not placed."""
+    squares = [
+        [(x, y), (x + 1, y), (x + 1, y + 1), (x, y + 1)] for y in range(SIDE) for x in range(SIDE)
+    ]
+    placed = [j not in (5, 17, 30) for j in range(len(squares))]
+    p = packing_from_polygons(squares, domain=(0, SIDE, 0, SIDE), placed=placed)
+    p = replace(
+        p,
+        mineral=np.arange(p.n_particles, dtype=np.int64) % len(NAMES),
+        mineral_names=NAMES,
+        stats={"interior_margin": 0.5, "tries": 49.0},
+    )
+    if rounding:
+        p = replace(p, rounding=np.full(p.n_particles, 0.01))
+    return p
+
+
+@pytest.fixture(scope="module")
+def good(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("good") / "packing.npz"
+    save(valid_packing(), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def good_rounded(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("good") / "rounded.npz"
+    save(valid_packing(rounding=True), path)
+    return path
+
+
+Change = Callable[[dict[str, Any]], None]
+
+
+def craft(source: Path, target: Path, change: Change) -> Path:
+    """Copy ``source`` to ``target`` with ``change`` applied to its entries (``meta`` as a dict)."""
+    with np.load(source, allow_pickle=False) as npz:
+        contents: dict[str, Any] = {k: npz[k] for k in npz.files}
+    contents["meta"] = json.loads(str(contents["meta"]))
+    change(contents)
+    if isinstance(contents["meta"], dict):
+        contents["meta"] = np.array(json.dumps(contents["meta"]))
+    np.savez(target, **contents)
+    return target
+
+
+# -- the defects ------------------------------------------------------------------
+
+INTERIOR = 24  # the middle square: placed, inside the g(r) window, so the kernel sees it
+NOT_PLACED = 5
+
+
+def set_value(name: str, j: int, value: Any) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        arr = c[name].copy()
+        arr[j] = value
+        c[name] = arr
+
+    return change
+
+
+def set_array(name: str, value: Callable[[np.ndarray], Any]) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        c[name] = value(c[name])
+
+    return change
+
+
+def set_meta(key: str, value: Any) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        c["meta"][key] = value
+
+    return change
+
+
+def drop(name: str) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        del c[name]
+
+    return change
+
+
+def set_minerals(values: dict[int, int]) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        m = c["mineral"].copy()
+        for j, v in values.items():
+            m[j] = v
+        c["mineral"] = m
+
+    return change
+
+
+def swap_offsets(c: dict[str, Any]) -> None:
+    o = c["offsets"].copy()
+    o[3], o[4] = o[4], o[3]  # offsets decrease from particle 3 to 4
+    c["offsets"] = o
+
+
+DEFECTS: dict[str, tuple[Change, str]] = {
+    # index ranges: the crashes of the issue
+    "mineral 10^6": (
+        set_value("mineral", INTERIOR, 10**6),
+        "array 'mineral' has the value 1000000",
+    ),
+    "mineral -3": (set_value("mineral", INTERIOR, -3), "array 'mineral' has the value -3"),
+    "mineral 99 and -3": (
+        set_minerals({8: 99, 9: -3}),
+        "array 'mineral' has the value 99 at particle 8",
+    ),
+    "mineral n_phases": (
+        set_value("mineral", 8, len(NAMES)),
+        "array 'mineral' has the value 3 at particle 8",
+    ),
+    "mineral of unplaced particle": (set_value("mineral", NOT_PLACED, 7), "array 'mineral'"),
+    "insertion_index n": (
+        set_value("insertion_index", 0, 49),
+        "array 'insertion_index' has the value 49",
+    ),
+    "insertion_index -2": (set_value("insertion_index", NOT_PLACED, -2), "array 'insertion_index'"),
+    "insertion_index duplicate": (
+        set_value("insertion_index", 1, 0),
+        "gives the value 0 to particles 0 and 1",
+    ),
+    "insertion_index gap": (set_value("insertion_index", 48, 47), "array 'insertion_index' skips"),
+    # non-finite and non-positive values
+    "vertices NaN": (
+        set_value("vertices", 10, np.nan),
+        "array 'vertices' has the non-finite value",
+    ),
+    "vertices inf": (set_value("vertices", 0, np.inf), "array 'vertices' has the non-finite value"),
+    "radius NaN": (set_value("radius", 3, np.nan), "array 'radius' has the non-finite value"),
+    "radius negative": (
+        set_value("radius", 3, -1.0),
+        "array 'radius' has the value -1.0 at particle 3",
+    ),
+    "radius zero": (set_value("radius", 3, 0.0), "array 'radius' has the value 0.0"),
+    "orientation inf": (
+        set_value("orientation", 2, np.inf),
+        "array 'orientation' has the non-finite",
+    ),
+    "centre NaN placed": (
+        set_value("centre", 0, np.nan),
+        "array 'centre' is [nan nan] at particle 0, which is placed",
+    ),
+    "centre inf placed": (set_value("centre", 0, [np.inf, 1.0]), "array 'centre'"),
+    "centre of unplaced": (set_value("centre", NOT_PLACED, [1.0, 1.0]), "which is not placed"),
+    "centre inf unplaced": (set_value("centre", NOT_PLACED, [np.inf, np.nan]), "array 'centre'"),
+    # offsets
+    "offsets decreasing": (swap_offsets, "array 'offsets' does not rise strictly"),
+    "offsets repeated": (set_value("offsets", 4, 12), "array 'offsets' does not rise strictly"),
+    "offsets start": (set_array("offsets", lambda o: o + 1), "array 'offsets' starts at 1, not 0"),
+    "offsets end": (set_value("offsets", -1, 10**6), "array 'offsets' ends at 1000000"),
+    "offsets short": (set_array("offsets", lambda o: o[:-1]), "array 'offsets' has 49 entries"),
+    # shapes
+    "orientation short": (
+        set_array("orientation", lambda a: a[:-1]),
+        "array 'orientation' has 48 rows",
+    ),
+    "mineral 2-D": (
+        set_array("mineral", lambda a: a.reshape(7, 7)),
+        "array 'mineral' has shape (7, 7), expected a 1-D array",
+    ),
+    "vertices 1-D": (
+        set_array("vertices", lambda a: a.ravel()),
+        "array 'vertices' has shape (392,), expected a 2-D array",
+    ),
+    "centre 3 columns": (
+        set_array("centre", lambda a: np.c_[a, a[:, :1]]),
+        "array 'centre' has shape (49, 3)",
+    ),
+    "vertices empty": (set_array("vertices", lambda a: a[:0]), "array 'offsets' ends at 196"),
+    # dtypes
+    "mineral float": (
+        set_array("mineral", lambda a: a.astype(np.float64)),
+        "array 'mineral' has dtype float64, expected int64",
+    ),
+    "mineral bool": (set_array("mineral", lambda a: a > 0), "array 'mineral' has dtype bool"),
+    "mineral uint64": (
+        set_array("mineral", lambda a: a.astype(np.uint64)),
+        "array 'mineral' has dtype uint64",
+    ),
+    "radius complex": (
+        set_array("radius", lambda a: a + 0j),
+        "array 'radius' has dtype complex128",
+    ),
+    "radius strings": (set_array("radius", lambda a: a.astype(str)), "array 'radius' has dtype <U"),
+    "radius object": (
+        set_array("radius", lambda a: a.astype(object)),
+        "array 'radius' cannot be read (Object arrays",
+    ),
+    "mineral object": (
+        set_array("mineral", lambda a: a.astype(object)),
+        "array 'mineral' cannot be read",
+    ),
+    # rounding
+    "rounding negative": (
+        lambda c: c.update(rounding=np.full(49, -0.1)),
+        "array 'rounding' has the value -0.1",
+    ),
+    "rounding NaN": (
+        lambda c: c.update(rounding=np.r_[np.zeros(48), np.nan]),
+        "array 'rounding' has the value nan at particle 48",
+    ),
+    "rounding short": (
+        lambda c: c.update(rounding=np.zeros(48)),
+        "array 'rounding' has shape (48,)",
+    ),
+    "rounding 2-D": (
+        lambda c: c.update(rounding=np.zeros((49, 1))),
+        "array 'rounding' has shape (49, 1), expected a 1-D array",
+    ),
+    # missing arrays
+    **{
+        f"missing {name}": (drop(name), f"missing array {name!r}")
+        for name in (
+            "radius",
+            "mineral",
+            "vertices",
+            "offsets",
+            "orientation",
+            "centre",
+            "insertion_index",
+        )
+    },
+    # meta: names, version, types, domain
+    "mineral name empty": (
+        set_meta("mineral_names", ["pyroxene", "", "ilmenite"]),
+        "'mineral_names' has an empty name (phase 1)",
+    ),
+    "mineral names repeated": (
+        set_meta("mineral_names", ["glass", "glass", "ilmenite"]),
+        "'mineral_names' repeats 'glass'",
+    ),
+    "mineral names not strings": (
+        set_meta("mineral_names", [1, 2, 3]),
+        "meta 'mineral_names' is [1, 2, 3], not a list of strings",
+    ),
+    "mineral names a string": (set_meta("mineral_names", "abc"), "meta 'mineral_names' is 'abc'"),
+    "mineral names missing": (
+        lambda c: c["meta"].pop("mineral_names"),
+        "meta 'mineral_names' is missing",
+    ),
+    "mineral names too few": (
+        set_meta("mineral_names", ["pyroxene", "glass"]),
+        "array 'mineral' has the value 2 at particle 2",
+    ),
+    "version a string": (
+        set_meta("format_version", "1"),
+        "meta 'format_version' is '1', a str, not an integer",
+    ),
+    "version a bool": (set_meta("format_version", True), "meta 'format_version' is True, a bool"),
+    "version a float": (set_meta("format_version", 1.0), "meta 'format_version' is 1.0, a float"),
+    "version 0": (set_meta("format_version", 0), "meta 'format_version' is 0, not a known version"),
+    "version missing": (
+        lambda c: c["meta"].pop("format_version"),
+        "meta 'format_version' is missing",
+    ),
+    "scene a list": (set_meta("scene", [1]), "meta 'scene' is [1], not an object"),
+    "stats a number": (set_meta("stats", 3), "meta 'stats' is 3, not an object"),
+    "stats a string value": (
+        set_meta("stats", {"tries": "many"}),
+        "meta 'stats' has 'tries' = 'many', not a number",
+    ),
+    "seed a string": (set_meta("seed", "1"), "meta 'seed' is '1', not an integer"),
+    "seed a float": (set_meta("seed", 1.5), "meta 'seed' is 1.5"),
+    "version number": (set_meta("version", 1), "meta 'version' is 1, not a string"),
+    "domain a list": (
+        set_meta("domain", [0, 7, 0, 7]),
+        "meta 'domain' is [0, 7, 0, 7], not an object",
+    ),
+    "domain missing": (lambda c: c["meta"].pop("domain"), "meta 'domain' is missing"),
+    "domain reversed": (
+        set_meta("domain", {"kind": "rectangle", "bounds": [7, 0, 0, 7]}),
+        "meta 'domain' (kind 'rectangle'): bounds [7, 0, 0, 7] must be",
+    ),
+    "domain flat": (
+        set_meta("domain", {"kind": "rectangle", "bounds": [0, 7, 1, 1]}),
+        "meta 'domain' (kind 'rectangle')",
+    ),
+    "domain NaN": (
+        set_meta("domain", {"kind": "periodic", "bounds": [0, float("nan"), 0, 7]}),
+        "bounds: nan is not finite",
+    ),
+    "domain string bound": (
+        set_meta("domain", {"kind": "rectangle", "bounds": ["0", 7, 0, 7]}),
+        "bounds: '0' is not a number",
+    ),
+    "domain 3 bounds": (
+        set_meta("domain", {"kind": "rectangle", "bounds": [0, 7, 0]}),
+        "meta 'domain' (kind 'rectangle')",
+    ),
+    "domain no bounds": (
+        set_meta("domain", {"kind": "rectangle"}),
+        "meta 'domain' (kind 'rectangle'): no 'bounds'",
+    ),
+    "domain unknown kind": (set_meta("domain", {"kind": "torus"}), "unknown domain kind 'torus'"),
+    "circle radius": (
+        set_meta("domain", {"kind": "circle", "center": [3.5, 3.5], "radius": -1}),
+        "radius -1 must be > 0",
+    ),
+    "polygon not convex": (
+        set_meta("domain", {"kind": "polygon", "vertices": [[0, 0], [7, 0], [1, 1], [0, 7]]}),
+        "meta 'domain' (kind 'polygon'): the corners must form",
+    ),
+    "meta an array": (lambda c: c.update(meta=np.arange(3)), "'meta' is a int64 array"),
+}
+
+
+@pytest.mark.parametrize("defect", list(DEFECTS))
+def test_load_refuses_the_defect_naming_file_and_array(good, tmp_path, defect):
+    change, message = DEFECTS[defect]
+    path = craft(good, tmp_path / "bad.npz", change)
+    with pytest.raises(PackingFileError) as info:
+        load(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: ")
+    assert message in text
+    assert "\n" not in text
+
+
+def test_the_valid_files_load(good, good_rounded, tmp_path):
+    for path in (good, good_rounded):
+        p = load(path)
+        p.validate()
+        assert (p.n_particles, p.n_placed, p.mineral_names) == (49, 46, NAMES)
+    assert load(good_rounded).rounded
+    # an unchanged rewrite with numpy loads too: the crafting alone is no defect
+    assert load(craft(good, tmp_path / "same.npz", lambda c: None)).n_placed == 46
+    # narrower dtypes that convert exactly are read as the format's dtypes
+    narrow = craft(good, tmp_path / "narrow.npz", set_array("mineral", lambda a: a.astype(np.int8)))
+    assert load(narrow).mineral.dtype == np.int64
+    # null stats (NaN when written) and a missing scene are fine
+    loose = craft(
+        good, tmp_path / "loose.npz", lambda c: c["meta"].update(stats={"x": None}, scene=None)
+    )
+    assert np.isnan(load(loose).stats["x"]) and load(loose).scene == {}
+
+
+def test_unknown_entries_are_ignored(good, tmp_path):
+    path = craft(good, tmp_path / "extra.npz", lambda c: c.update(extra=np.arange(3)))
+    assert load(path).n_particles == 49
+
+
+# -- the command line ---------------------------------------------------------------
+
+CLI_DEFECTS = {
+    "index": "mineral 10^6",  # segfaulted
+    "index_abort": "mineral 99 and -3",  # glibc abort
+    "index_silent": "mineral n_phases",  # exit 0 after an out-of-bounds write
+    "insertion": "insertion_index duplicate",
+    "finite": "vertices NaN",
+    "offsets": "offsets decreasing",
+    "shape": "orientation short",
+    "dtype": "mineral float",
+    "pickle": "mineral object",
+    "missing": "missing centre",
+    "rounding": "rounding negative",
+    "names": "mineral name empty",
+    "version": "version a string",
+    "meta": "stats a string value",
+    "domain": "domain reversed",
+}
+
+
+FORKING_DRIVER = """
+import json, os, sys
+import regopack.analysis, regopack.manager  # what 'analyze' imports, once for all children
+from regopack.cli import main
+
+results = {}
+for label, argv, out, err in json.loads(sys.argv[1]):
+    pid = os.fork()
+    if pid == 0:  # the child runs the command once, as the regopack program would
+        os.dup2(os.open(out, os.O_WRONLY | os.O_CREAT), 1)
+        os.dup2(os.open(err, os.O_WRONLY | os.O_CREAT), 2)
+        code = main(argv)
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(code)
+    results[label] = pid
+for label, pid in results.items():
+    results[label] = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+print(json.dumps(results))
+"""
+"""Import regopack once, then run each command in a child of its own (a crash kills only it)."""
+
+
+def analyze_argv(path: Path, out_dir: Path) -> list[str]:
+    return ["analyze", str(path), "--only", "rdf", "--no-figures", "--out", str(out_dir)]
+
+
+@pytest.fixture(scope="module", autouse=True)
+def cli_started(good, tmp_path_factory):
+    """Start ``regopack analyze FILE --only rdf`` on every bad file; the other tests run meanwhile.
+
+    The issue's crash (mineral index 10^6) runs through the installed
+    ``regopack`` program; the rest run in forked children of one process that
+    imported regopack once, so the whole set takes about as long as one run.
+    """
+    root = tmp_path_factory.mktemp("cli")
+    files = {
+        label: craft(good, root / f"{label}.npz", DEFECTS[defect][0])
+        for label, defect in CLI_DEFECTS.items()
+    }
+    program = Path(sys.executable).with_name("regopack")
+    real = subprocess.Popen(
+        [str(program), *analyze_argv(files["index"], root / "out-index")],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    jobs = [
+        (
+            label,
+            analyze_argv(path, root / f"out-{label}"),
+            f"{root}/{label}.out",
+            f"{root}/{label}.err",
+        )
+        for label, path in files.items()
+        if label != "index"
+    ]
+    driver = subprocess.Popen(
+        [sys.executable, "-c", FORKING_DRIVER, json.dumps(jobs)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    yield files, root, real, driver
+    for proc in (real, driver):
+        if proc.poll() is None:
+            proc.kill()
+            proc.communicate()
+
+
+@pytest.fixture(scope="module")
+def cli_runs(cli_started):
+    """Exit status, stdout, stderr and output directory of every command started."""
+    files, root, real, driver = cli_started
+    driver_out, driver_err = driver.communicate(timeout=120)
+    assert driver.returncode == 0, driver_err
+    runs = {}
+    for label, status in json.loads(driver_out).items():
+        out = (root / f"{label}.out").read_text()
+        err = (root / f"{label}.err").read_text()
+        runs[label] = (files[label], status, out, err, root / f"out-{label}")
+    out, err = real.communicate(timeout=120)
+    runs["index"] = (files["index"], real.returncode, out, err, root / "out-index")
+    return runs
+
+
+def test_the_kernel_would_see_the_crafted_particles(good):
+    """The particles given bad minerals lie in the g(r) window: without the checks, the
+    compiled kernel indexes its histogram with their minerals (the crash of the issue)."""
+    p = load(good)
+    inside = interior_mask(p, interior_margin(p))
+    assert inside[[INTERIOR, 8, 9]].all()
+    assert inside.sum() == 23  # 25 squares inside the window, 2 of them not placed
+
+
+@pytest.mark.parametrize("label", list(CLI_DEFECTS))
+def test_cli_refuses_a_bad_file_in_one_line(cli_runs, label):
+    path, status, out, err, out_dir = cli_runs[label]
+    assert status == 2, f"exit status {status} (a crash is negative or > 128): {err[-2000:]}"
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"regopack: error: {path}: invalid packing file: ")
+    assert DEFECTS[CLI_DEFECTS[label]][1] in lines[0]
+    assert "Traceback" not in err
+    assert out == ""
+    assert not out_dir.exists()
+
+
+# -- packings built in Python ---------------------------------------------------------
+
+
+def test_packing_error_is_a_one_line_user_error():
+    assert issubclass(PackingError, RegopackError)
+    assert issubclass(PackingError, ValueError)
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"mineral": np.full(49, 3)}, "array 'mineral' has the value 3 at particle 0"),
+        ({"mineral": np.full(49, -1)}, "array 'mineral' has the value -1"),
+        ({"mineral": np.zeros(49)}, "array 'mineral' has dtype float64, expected int64"),
+        ({"mineral_names": ()}, "not a phase index in [0, 0)"),
+        ({"mineral_names": "abc"}, "'mineral_names' must be a list of strings"),
+        ({"insertion_index": np.arange(49)}, "array 'centre' is [nan nan] at particle 5"),
+        ({"offsets": np.zeros(50, dtype=np.int64)}, "array 'offsets' does not rise strictly"),
+        ({"radius": np.ones((49, 1))}, "array 'radius' has shape (49, 1), expected a 1-D array"),
+        ({"vertices": [[0.0, 0.0]] * 3}, "array 'offsets' ends at 196, but 'vertices' has 3 rows"),
+        ({"radius": [object()] * 49}, "array 'radius' has dtype object"),
+        ({"rounding": np.zeros(3)}, "array 'rounding' has shape (3,)"),
+        ({"stats": {"tries": "many"}}, "'stats' has 'tries' = 'many', not a number"),
+        ({"domain": (0, 7, 0, 7)}, "'domain' is a tuple, not a Domain"),
+    ],
+    ids=lambda v: next(iter(v)) if isinstance(v, dict) else None,
+)
+def test_constructor_refuses_a_broken_packing(changes, message):
+    with pytest.raises(PackingError) as info:
+        replace(valid_packing(), **changes)
+    assert message in str(info.value)
+
+
+def test_constructor_converts_exact_dtypes():
+    p = valid_packing()
+    q = replace(p, mineral=p.mineral.astype(np.int32).tolist(), radius=p.radius.astype(np.float32))
+    assert q.mineral.dtype == np.int64 and q.radius.dtype == np.float64
+    assert replace(p, mineral_names=list(NAMES)).mineral_names == NAMES
+
+
+def test_from_parts_refuses_an_inserter_result_out_of_range():
+    shapes = ShapeBatch(
+        np.tile([[1.0, 0.0], [0.0, 1.0], [-1.0, -1.0]], (2, 1)), np.array([0, 3, 6]), np.zeros(2)
+    )
+    pop = Population(np.ones(2), np.array([0, 1], dtype=np.int64), ("x", "y"), shapes)
+    result = InsertionResult(np.array([[0.0, 0.0], [5.0, 5.0]]), np.array([0, 0], dtype=np.int64))
+    with pytest.raises(PackingError, match="gives the value 0 to particles 0 and 1"):
+        Packing.from_parts(pop, result, valid_packing().domain, {}, 1)
+
+
+def test_analyses_refuse_arrays_changed_in_place():
+    p = valid_packing()
+    p.mineral[INTERIOR] = 10**6  # the arrays are not read-only: the analyses check again
+    with pytest.raises(PackingError, match="array 'mineral' has the value 1000000"):
+        p.validate()
+    with pytest.raises(PackingError, match="array 'mineral'"):
+        run_analyses(p, make_registry(builtins=()), [("rdf", {})])
+
+
+def test_json_import_refuses_a_broken_packing(tmp_path):
+    path = JsonExporter().export(valid_packing(), tmp_path / "p.json")
+    doc = json.loads(path.read_text())
+    doc["particles"][4]["mineral"] = 99
+    path.write_text(json.dumps(doc))
+    with pytest.raises(ExportError, match=rf"^{path}: array 'mineral' has the value 99"):
+        read_json(path)
+
+
+# -- the g(r) wrapper -------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("kind", "n_kinds", "x", "bins", "message"),
+    [
+        ([0, 1, 3], 3, [0.0, 1.0, 2.0], 4, r"every kind must lie in \[0, 3\)"),
+        ([0, -1, 2], 3, [0.0, 1.0, 2.0], 4, r"every kind must lie in \[0, 3\)"),
+        ([0, 0, 0], 0, [0.0, 1.0, 2.0], 4, "n_kinds must be >= 1"),
+        ([0, 0], 1, [0.0, 1.0, 2.0], 4, "one length"),
+        ([0.0, 0.0, 0.0], 1, [0.0, 1.0, 2.0], 4, "integer array"),
+        ([0, 0, 0], 1, [0.0, np.nan, 2.0], 4, "finite"),
+        ([0, 0, 0], 1, [0.0, 1.0, 2.0], 0, "bins"),
+    ],
+)
+def test_rdf_wrapper_checks_what_the_kernel_indexes(kind, n_kinds, x, bins, message):
+    x = np.asarray(x)
+    y = np.zeros(3)
+    with pytest.raises(ValueError, match=message):
+        rdf_histogram(x, y, np.asarray(kind), n_kinds, 0.0, 0.5, bins, 10.0, 10.0)
