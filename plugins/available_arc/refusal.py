@@ -52,6 +52,38 @@ def try_candidate(
 
 
 @numba.njit(cache=True)
+def place_screened(
+    i: int,
+    mq: int,
+    g: K.Outlines,
+    s: K.Packed,
+    w: K.Work,
+    rng: np.random.Generator,
+    rounded: object,
+) -> int:
+    """Place particle ``i`` at the first candidate that takes it (the paper's screened search).
+
+    Candidates whose arcs the eta control removes record the rejection and
+    the search goes on. Returns the new insertion index, or -1.
+    """
+    eta = s.fpar[K.F_ETA]
+    start = 0
+    while True:
+        k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
+        if k < 0:
+            return -1
+        if eta != 0.0:
+            arcs = K.eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
+            if arcs.shape[0] == 0:
+                K.reject(k, g.req[i], s)
+                start = k + 1
+                continue
+        angle = K.sample_angle(arcs, rng.random())
+        x, y = K.locate(s.order[k], i, mq, angle, g, s, w, rounded)
+        return K.insert_particle(i, x, y, g, s)
+
+
+@numba.njit(cache=True)
 def pack_range_exact(
     begin: int,
     end: int,
@@ -66,7 +98,6 @@ def pack_range_exact(
 
     ``counts[I_RESCUED]`` counts the particles placed by the exact scan.
     """
-    eta = s.fpar[K.F_ETA]
     placed = 0
     for i in range(begin, end):
         if s.ipar[K.I_COUNT] == 0:
@@ -74,23 +105,7 @@ def pack_range_exact(
                 placed += 1
             continue
         mq = K.begin_particle(i, g, s, w)
-        start = 0
-        done = False
-        while True:
-            k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
-            if k < 0:
-                break
-            if eta != 0.0:
-                arcs = K.eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
-                if arcs.shape[0] == 0:
-                    K.reject(k, g.req[i], s)
-                    start = k + 1
-                    continue
-            angle = K.sample_angle(arcs, rng.random())
-            x, y = K.locate(s.order[k], i, mq, angle, g, s, w, rounded)
-            K.insert_particle(i, x, y, g, s)
-            done = True
-            break
+        done = place_screened(i, mq, g, s, w, rng, rounded) >= 0
         if not done:
             for k in range(s.ipar[K.I_COUNT]):
                 if try_candidate(k, i, mq, g, s, w, rng, rounded):

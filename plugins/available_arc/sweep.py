@@ -39,7 +39,7 @@ from numpy.typing import NDArray
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.candidates import tree_set
-from regopack.plugins.available_arc.refusal import try_candidate
+from regopack.plugins.available_arc.refusal import place_screened, try_candidate
 from regopack.plugins.walls import WALL_BOX, WALL_PERIODIC, point_fits
 
 FloatArray = NDArray[np.float64]
@@ -138,34 +138,6 @@ def _lowest_centre(i: int, g: K.Outlines, s: K.Packed) -> tuple[bool, float, flo
         else:
             lo = mid
     return True, x, hi
-
-
-@numba.njit(cache=True)
-def _search(
-    i: int,
-    mq: int,
-    g: K.Outlines,
-    s: K.Packed,
-    w: K.Work,
-    rng: np.random.Generator,
-    rounded: object,
-) -> int:
-    """Screened search of the reachable candidates; return the insertion index or -1."""
-    eta = s.fpar[K.F_ETA]
-    start = 0
-    while True:
-        k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
-        if k < 0:
-            return -1
-        if eta != 0.0:
-            arcs = K.eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
-            if arcs.shape[0] == 0:
-                K.reject(k, g.req[i], s)
-                start = k + 1
-                continue
-        angle = K.sample_angle(arcs, rng.random())
-        x, y = K.locate(s.order[k], i, mq, angle, g, s, w, rounded)
-        return K.insert_particle(i, x, y, g, s)
 
 
 @numba.njit(cache=True)
@@ -309,7 +281,7 @@ def sweep_range(
         raises = 0
         k = -1
         while True:
-            k = _search(i, mq, g, s, w, rng, rounded)
+            k = place_screened(i, mq, g, s, w, rng, rounded)
             if k >= 0:
                 break
             if zs[Z_FULL] == 0 and raises < zs[Z_NZONE]:

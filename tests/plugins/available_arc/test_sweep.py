@@ -51,13 +51,14 @@ def _oracle(packing: Packing) -> None:
         assert shapely.contains(window, packing.to_shapely()).all()
 
 
-def _disks_and_octagons(radius: np.ndarray, rng: np.random.Generator, share: float) -> Population:
-    n = len(radius)
-    disk = rng.random(n) < share
-    a, b = np.flatnonzero(disk), np.flatnonzero(~disk)
-    parts = [(a, Disk().generate(radius[a], rng))]
-    parts.append((b, RandomPolygon(OctagonConfig(psi=1.0)).generate(radius[b], rng)))
-    return Population(radius, disk.astype(np.int64), ("octagon", "disk"), concat_shapes(parts, n))
+def disks_and_octagons(radius: np.ndarray, rng: np.random.Generator, share: float) -> Population:
+    """Disks with probability ``share``, random octagons (psi = 1) otherwise."""
+    disk = rng.random(len(radius)) < share
+    parts = [(np.flatnonzero(disk), Disk())]
+    parts.append((np.flatnonzero(~disk), RandomPolygon(OctagonConfig(psi=1.0))))
+    batches = [(idx, gen.generate(radius[idx], rng)) for idx, gen in parts]
+    mineral = disk.astype(np.int64)
+    return Population(radius, mineral, ("octagon", "disk"), concat_shapes(batches, len(radius)))
 
 
 @pytest.mark.parametrize("kind", list(DOMAINS))
@@ -79,7 +80,7 @@ def test_sweep_packs_disks_and_mixed_scenes(kind: str, share: float) -> None:
     domain = DOMAINS[kind]
     rng = np.random.default_rng(6)
     n = round(domain.area / Change5(Change5Config()).mean_area)
-    pop = _disks_and_octagons(Change5(Change5Config()).sample(n, rng), rng, share)
+    pop = disks_and_octagons(Change5(Change5Config()).sample(n, rng), rng, share)
     res = pack(pop, domain, rng, eta=10.0 * (1.0 - share), order="sweep")
     _oracle(as_packing(pop, res, domain))
     assert res.placed.sum() > 0.85 * n
