@@ -47,6 +47,9 @@ IntArray = NDArray[np.int64]
 
 ZONE_BINS = 80
 """Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
+MAX_BINS = 1 << 20
+"""Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
+has fewer than ``ZONE_BINS`` bins)."""
 
 # zs: integer state of the sweep
 (
@@ -73,14 +76,18 @@ class Sweep:
     """Arrays of one sweep run: bins, flags and the stored screening radii."""
 
     def __init__(self, n: int, height: float, zone: float, prompt: bool = False) -> None:
-        self.delta = zone / ZONE_BINS
+        # bins of zone / ZONE_BINS, but at least ZONE_BINS of them over the domain's
+        # height (a zone taller than the domain) and at most MAX_BINS (a tiny zone)
+        self.delta = max(min(zone, height) / ZONE_BINS, height / MAX_BINS)
+        if not self.delta > 0:
+            self.delta = 1.0
         nbins = max(1, math.ceil(height / self.delta)) + 1
         self.bin_head = np.full(nbins, -1, dtype=np.int64)
         self.bin_next = np.full(max(n, 1), -1, dtype=np.int64)
         self.flag = np.full(max(n, 1), FROZEN, dtype=np.int64)
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
-        self.zs[Z_NZONE] = ZONE_BINS
+        self.zs[Z_NZONE] = max(1, round(zone / self.delta))
         self.zs[Z_PROMPT] = 1 if prompt else 0
 
 
@@ -203,6 +210,39 @@ def _raise(
 
 
 @numba.njit(cache=True)
+def _roll_back(
+    zs: IntArray,
+    lo0: int,
+    hi0: int,
+    full: int,
+    raises: int,
+    s: K.Packed,
+    bin_head: IntArray,
+    bin_next: IntArray,
+    flag: IntArray,
+) -> None:
+    """Undo one particle's rises: refreeze the bins above ``hi0``, reopen those from ``lo0``."""
+    leaves = s.ipar[K.I_LEAVES]
+    for b in range(hi0 + 1, zs[Z_HI] + 1):
+        e = bin_head[b]
+        while e >= 0:
+            if flag[e] == ACTIVE:
+                flag[e] = FROZEN
+                tree_set(s.tree, leaves, e, -np.inf)
+            e = bin_next[e]
+    for b in range(lo0, zs[Z_LO]):
+        e = bin_head[b]
+        while e >= 0:
+            flag[e] = ACTIVE
+            tree_set(s.tree, leaves, e, np.inf)
+            e = bin_next[e]
+    zs[Z_LO] = lo0
+    zs[Z_HI] = hi0
+    zs[Z_FULL] = full
+    zs[Z_RAISES] -= raises
+
+
+@numba.njit(cache=True)
 def _register(
     k: int,
     zs: IntArray,
@@ -279,6 +319,8 @@ def sweep_range(
             zs[Z_OFFERED] += 1
         mq = K.begin_particle(i, g, s, w)
         raises = 0
+        lo0 = zs[Z_LO]
+        hi0 = zs[Z_HI]
         k = -1
         while True:
             k = place_screened(i, mq, g, s, w, rng, rounded)
@@ -290,6 +332,12 @@ def sweep_range(
                     continue
                 zs[Z_FULL] = 1
                 zs[Z_PACE] = max(1, zs[Z_OFFERED] // max(1, zs[Z_RAISES]))
+            if raises > 0:
+                # rising did not help: a particle too large for the front must not
+                # carry the zone away with it. The bins it retired reopen; the bins it
+                # opened freeze again, unless the zone reached the top (the closing)
+                keep_hi = zs[Z_HI] if zs[Z_FULL] == 1 else hi0
+                _roll_back(zs, lo0, keep_hi, zs[Z_FULL], raises, s, bin_head, bin_next, flag)
             k = _exhaustive(i, mq, g, s, w, rng, rounded, zs[Z_LO], bin_head, bin_next, flag)
             break
         if k < 0:
