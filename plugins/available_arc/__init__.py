@@ -84,7 +84,7 @@ class AvailableArcConfig(BaseModel):
             "Which candidates a particle is offered to: 'paper' (every inserted particle, "
             "oldest first: the reference, grows from the centre and grades radially) or "
             "'sweep' (only those of a zone rising from the bottom of the domain: "
-            "homogeneous, true to the size distribution; see docs/explanation/method.md)."
+            "homogeneous, the same size mix everywhere; see docs/explanation/method.md)."
         ),
     )
     screening: Literal["paper", "exact"] = Field(
