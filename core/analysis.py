@@ -18,8 +18,8 @@ writes what the analyzers found into one directory:
 ``report.md``
     The main numbers as Markdown tables, with the figures embedded.
 
-Every file is written atomically: it is either the previous one or the
-complete new one.
+The folder is written as a whole (see :func:`write_analysis`): it holds
+either the complete earlier analysis or the complete new one.
 """
 
 from __future__ import annotations
@@ -38,6 +38,7 @@ from pydantic import ValidationError
 from regopack.errors import ConfigError, PluginError
 from regopack.interfaces import Analyzer
 from regopack.manager import Registry
+from regopack.outdir import mark_folder, rebase, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
 
 __all__ = [
@@ -47,7 +48,11 @@ __all__ = [
     "main_numbers",
     "run_analyses",
     "write_analysis",
+    "write_analysis_files",
 ]
+
+ANALYSIS_KIND = "analysis"
+"""Kind of the folder :func:`write_analysis` writes (in its marker file)."""
 
 DEFAULT_ANALYSES: tuple[str, ...] = ("density", "contacts", "coordination", "rdf", "network")
 """Analyzers that ``regopack analyze`` runs when ``--only`` is not given."""
@@ -248,6 +253,17 @@ class AnalysisFiles:
     report: Path | None = None
     summary: dict[str, Any] = field(default_factory=dict)
 
+    def moved(self, old: Path, new: Path) -> AnalysisFiles:
+        """Return the same files after the folder ``old`` they lie in became ``new``."""
+        return AnalysisFiles(
+            out_dir=rebase(self.out_dir, old, new),
+            results=rebase(self.results, old, new),
+            tables={k: rebase(v, old, new) for k, v in self.tables.items()},
+            figures=tuple(rebase(p, old, new) for p in self.figures),
+            report=rebase(self.report, old, new),
+            summary=self.summary,
+        )
+
 
 def _first(results: Mapping[str, Mapping[str, Any]], key: str) -> Any:
     for res in results.values():
@@ -365,10 +381,17 @@ def write_analysis(
 ) -> AnalysisFiles:
     """Write the results, tables, figures and report of computed analyzers.
 
+    The folder is written as a whole: the files go into a fresh temporary
+    folder beside ``out_dir``, which then replaces ``out_dir`` (see
+    :func:`regopack.outdir.replace_folder`), so ``out_dir`` holds this
+    analysis and nothing of an earlier one, and an interrupted call leaves the
+    earlier one untouched.
+
     Parameters
     ----------
     out_dir
-        Directory to write into (created if needed).
+        The analysis folder: one that does not exist, an empty one, or one
+        that an earlier analysis wrote.
     packing
         The analysed packing.
     analyzers
@@ -389,7 +412,36 @@ def write_analysis(
     Raises
     ------
     ConfigError
-        When the directory cannot be created or written.
+        When the folder may not be replaced, or cannot be created or written.
+    """
+    if table_format not in ("csv", "npz"):
+        raise ConfigError(f"table format {table_format!r}: expected 'csv' or 'npz'")
+    out = Path(out_dir)
+    with replace_folder(out, ANALYSIS_KIND) as tmp:
+        files = write_analysis_files(
+            tmp,
+            packing,
+            analyzers,
+            figures=figures,
+            packing_path=packing_path,
+            table_format=table_format,
+        )
+    return files.moved(tmp, out)
+
+
+def write_analysis_files(
+    out_dir: str | Path,
+    packing: Packing,
+    analyzers: Mapping[str, Analyzer],
+    *,
+    figures: bool = True,
+    packing_path: str | Path | None = None,
+    table_format: TableFormat = "csv",
+) -> AnalysisFiles:
+    """Write what :func:`write_analysis` writes, into ``out_dir`` as it is.
+
+    ``out_dir`` is created if needed and marked as an analysis folder; files
+    already in it stay. A run uses this inside its own temporary folder.
     """
     if table_format not in ("csv", "npz"):
         raise ConfigError(f"table format {table_format!r}: expected 'csv' or 'npz'")
@@ -400,6 +452,7 @@ def write_analysis(
         raise ConfigError(f"cannot create the output directory {out}: {err}") from err
     summary = analysis_summary(packing, analyzers, packing_path)
     try:
+        mark_folder(out, ANALYSIS_KIND)
         results_path = out / "analysis.json"
         write_json_atomic(results_path, summary)
         tables, columns = _write_tables(out, analyzers, table_format)

@@ -3,15 +3,19 @@
 A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
 TOML file, a missing file, a bad option) prints one line
 ``regopack: error: <message>`` and exits with status 2; anything unexpected
-keeps its traceback. ``Ctrl-C`` exits with status 130 and leaves no partial
-output file.
+keeps its traceback. ``Ctrl-C`` (SIGINT) exits with status 130 and SIGTERM
+(what batch schedulers send at a time limit) with status 143, each after one
+line and leaving no partial output: output folders are swapped in only when
+complete (see :mod:`regopack.outdir`).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import threading
 import tomllib
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -34,7 +38,7 @@ from rich.table import Table
 from rich.text import Text
 
 from regopack import __version__
-from regopack.errors import ConfigError, RegopackError
+from regopack.errors import ConfigError, RegopackError, Terminated
 from regopack.interfaces import ProgressCallback
 from regopack.plugin_types import KINDS
 
@@ -44,6 +48,7 @@ EXIT_OK = 0
 EXIT_VIOLATED = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
+EXIT_TERMINATED = 143
 
 
 class _RateColumn(ProgressColumn):
@@ -128,7 +133,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--out",
         type=Path,
         metavar="DIR",
-        help="output directory (default: runs/<scene>-seed<seed>)",
+        help="output folder, replaced as a whole by the run (default: runs/<scene>-seed<seed>)",
     )
     run.add_argument("--quiet", action="store_true", help="print no progress and no summary")
     run.set_defaults(handler=_cmd_run)
@@ -183,7 +188,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="set an analyzer parameter, e.g. --set contacts.tol_max=1 (repeatable)",
     )
     analyze.add_argument(
-        "--out", type=Path, metavar="DIR", help="output directory (default: <packing dir>/analysis)"
+        "--out",
+        type=Path,
+        metavar="DIR",
+        help="output folder, replaced as a whole (default: <packing dir>/analysis)",
     )
     analyze.add_argument(
         "--tables",
@@ -292,11 +300,25 @@ def _kernels_not_cached() -> bool:
     return not any(folder.rglob("*.nbi")) if folder.is_dir() else True
 
 
+def _refuse_inside(path: Path, folder: Path, what: str) -> None:
+    """Refuse an output folder that holds ``path``: replacing it would delete the input."""
+    import os
+
+    real, real_folder = os.path.realpath(path), os.path.realpath(folder)
+    if os.path.commonpath([real, real_folder]) == real_folder:
+        raise ConfigError(
+            f"output folder {folder}: holds the {what} {path}, and the output folder is "
+            "replaced as a whole; give another folder"
+        )
+
+
 def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     from regopack.run import default_out_dir, run_scene, summary_rows
 
     resolved = _resolve(args)
     out_dir = args.out if args.out is not None else default_out_dir(resolved)
+    if args.scene is not None and Path(args.scene).is_file():
+        _refuse_inside(Path(args.scene), out_dir, "scene file")
     if not args.quiet and _kernels_not_cached():
         err.print(
             "[dim]compiling the packing kernels (first run after an install or upgrade; "
@@ -379,18 +401,22 @@ def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, d
 
 def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
     from regopack.analysis import (
+        ANALYSIS_KIND,
         DEFAULT_ANALYSES,
         main_numbers,
         run_analyses,
         write_analysis,
     )
     from regopack.manager import default_registry
+    from regopack.outdir import check_replaceable
     from regopack.packing import load
 
     names = _analyzer_names(args.only) or list(DEFAULT_ANALYSES)
     params = _analyzer_params(args.overrides, args.tol)
     packing = load(args.packing)
     out_dir = args.out if args.out is not None else args.packing.parent / "analysis"
+    _refuse_inside(args.packing, out_dir, "packing file")
+    check_replaceable(out_dir, ANALYSIS_KIND)
     registry = default_registry()
     with err.status(f"analysing {args.packing}"):
         analyzers = run_analyses(packing, registry, [(n, {}) for n in names], params=params)
@@ -609,10 +635,53 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = Console(file=sys.stdout)
     err = Console(file=sys.stderr)
     try:
-        return handler(args, out, err)
+        with _signals_raise():
+            return handler(args, out, err)
     except (RegopackError, ValidationError, tomllib.TOMLDecodeError, FileNotFoundError) as exc:
         print(f"regopack: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
+    except Terminated:
+        print("regopack: terminated; no partial files were written", file=sys.stderr)
+        return EXIT_TERMINATED
     except KeyboardInterrupt:
         print("regopack: interrupted; no partial files were written", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+@contextmanager
+def _signals_raise() -> Iterator[None]:
+    """Within the block, SIGTERM raises :class:`Terminated` and SIGINT ``KeyboardInterrupt``.
+
+    Both are deferred while an output folder is being swapped in (see
+    :func:`regopack.outdir.raise_or_defer`). A signal that is ignored (e.g.
+    SIGINT in a background job) stays ignored; a second SIGTERM is ignored
+    while the first one is being handled.
+    """
+    from regopack.outdir import raise_or_defer
+
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    terminated = False
+
+    def on_term(signum: int, frame: object) -> None:
+        nonlocal terminated
+        if not terminated:
+            terminated = True
+            raise_or_defer(Terminated())
+
+    def on_int(signum: int, frame: object) -> None:
+        raise_or_defer(KeyboardInterrupt())
+
+    previous: dict[signal.Signals, Any] = {}
+    for signum, handler, default in (
+        (signal.SIGTERM, on_term, signal.SIG_DFL),
+        (signal.SIGINT, on_int, signal.default_int_handler),
+    ):
+        if signal.getsignal(signum) is default:
+            previous[signum] = signal.signal(signum, handler)
+    try:
+        yield
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)

@@ -33,3 +33,12 @@ class GeometryError(RegopackError):
 
 class ExportError(RegopackError):
     """A packing cannot be exported, or an exported file cannot be read back."""
+
+
+class Terminated(KeyboardInterrupt):
+    """The process received SIGTERM (what batch schedulers send at a time limit).
+
+    The command line turns SIGTERM into this exception, a kind of
+    :class:`KeyboardInterrupt`, so that a terminated run cleans up exactly like
+    one interrupted with Ctrl-C; it then exits with status 143.
+    """

@@ -33,6 +33,7 @@ import json
 import math
 import os
 import re
+import signal
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -56,9 +57,16 @@ from pydantic import (
 from regopack import _toml
 from regopack.errors import ConfigError, RegopackError
 from regopack.manager import Registry, default_registry
+from regopack.outdir import check_replaceable, name_key, remove_leftovers, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
-from regopack.run import run_scene
-from regopack.scene import ResolvedScene, builtin_scenes, load_scene, resolve_scene
+from regopack.run import RUN_FOLDER, run_scene
+from regopack.scene import (
+    ResolvedScene,
+    builtin_scenes,
+    load_scene,
+    output_files,
+    resolve_scene,
+)
 from regopack.verify import verify
 from regopack.voids import void_metrics
 
@@ -483,21 +491,29 @@ def expand(experiment: Experiment) -> list[RunSpec]:
     short = _short_names(keys)
     fixed = tuple(_override(k, v) for k, v in experiment.set_.items())
     runs: list[RunSpec] = []
-    seen: dict[str, int] = {}
+    seen: dict[str, RunSpec] = {}
     for index, point in enumerate(itertools.product(*axes)):
         params: dict[str, Any] = {}
         for part in point:
             params.update(part)
         raw_id = ",".join(f"{short[k]}={_format_value(v)}" for k, v in params.items())
         run_id = _sanitise(raw_id) if params else "base"
-        if run_id in seen:
+        other = seen.get(name_key(run_id))
+        if other is not None:
+            if other.run_id == run_id:
+                raise ConfigError(
+                    f"{experiment.label}: runs {other.index} and {index} get the same id "
+                    f"{run_id!r}; is a value repeated in a list?"
+                )
             raise ConfigError(
-                f"{experiment.label}: runs {seen[run_id]} and {index} get the same id "
-                f"{run_id!r}; is a value repeated in a list?"
+                f"{experiment.label}: runs {other.index} ({other.run_id!r}) and {index} "
+                f"({run_id!r}) would write the same folder on a case-insensitive file "
+                "system; make the values differ by more than case"
             )
-        seen[run_id] = index
         overrides = fixed + tuple(_override(k, v) for k, v in params.items())
-        runs.append(RunSpec(index, run_id, params, overrides))
+        run = RunSpec(index, run_id, params, overrides)
+        seen[name_key(run_id)] = run
+        runs.append(run)
     return runs
 
 
@@ -528,6 +544,27 @@ def _analysis_names(resolved: ResolvedScene) -> set[str]:
     return {a.kind for a in resolved.analyses}
 
 
+def _check_sweep_files(experiment: Experiment, run: RunSpec, resolved: ResolvedScene) -> None:
+    """Refuse a run output that is one of the files the sweep keeps in the run folder."""
+    reserved = {name_key(SCENE_JSON): SCENE_JSON, name_key(ERROR_TXT): ERROR_TXT}
+    for loc, names in output_files(resolved).items():
+        for name in names:
+            if name_key(name) in reserved:
+                where = _origin(experiment, loc) if _sets(experiment, loc) else None
+                prefix = f"{where}.{loc}" if where else f"base scene: {loc}"
+                raise ConfigError(
+                    f"{experiment.label}: {prefix}: writes {name}, the same file as the "
+                    f"sweep's {reserved[name_key(name)]} in every run folder; give it "
+                    f"another name (run {run.run_id})"
+                )
+
+
+def _sets(experiment: Experiment, loc: str) -> bool:
+    """Whether the experiment sets or varies the scene field ``loc`` (or a table holding it)."""
+    keys = [*experiment.set_, *experiment.sweep, *(k for g in experiment.zip_groups for k in g)]
+    return any(loc == k or loc.startswith(k + ".") or k.startswith(loc + ".") for k in keys)
+
+
 def check_runs(
     experiment: Experiment,
     runs: Sequence[RunSpec] | None = None,
@@ -555,6 +592,8 @@ def check_runs(
             resolved.append(resolve_scene(scene, registry))
         except ConfigError as err:
             raise _scene_error(experiment, run, err) from err
+    for run, resolved_scene in zip(runs, resolved, strict=True):
+        _check_sweep_files(experiment, run, resolved_scene)
     for metric in experiment.metrics or ():
         parts = metric.split(".")
         if parts[0] == "analyses" and len(parts) > 1:
@@ -747,6 +786,7 @@ class _Job:
     figures: bool
     verify: bool = False
     voids: bool = False
+    scene_text: str = ""
 
 
 def verify_metrics(packing: Packing) -> dict[str, Any]:
@@ -782,22 +822,59 @@ def _one_line(exc: BaseException) -> str:
 
 
 def _run_job(job: _Job) -> tuple[dict[str, Any] | None, str | None]:
-    """Run one scene; return ``(summary, None)`` or ``(None, error message)``."""
+    """Run one scene; return ``(summary, None)`` or ``(None, error message)``.
+
+    The run folder is written as a whole (see :func:`regopack.run.run_scene`),
+    with the run's ``scene.json`` and the ``verify`` and ``voids`` metrics in
+    its summary.
+    """
+
+    def extras(packing: Packing) -> dict[str, Any]:
+        out: dict[str, Any] = {}
+        if job.verify:
+            out["verify"] = verify_metrics(packing)
+        if job.voids:
+            out["voids"] = void_metrics(packing)
+        return out
+
     try:
         scene = load_scene(job.base, job.overrides)
         resolved = resolve_scene(scene, default_registry())
-        outcome = run_scene(resolved, job.out_dir, figures=job.figures)
-        summary = outcome.summary
-        if job.verify or job.voids:
-            if job.verify:
-                summary["verify"] = verify_metrics(outcome.packing)
-            if job.voids:
-                summary["voids"] = void_metrics(outcome.packing)
-            if outcome.summary_path is not None:
-                write_json_atomic(outcome.summary_path, summary)
+        outcome = run_scene(
+            resolved,
+            job.out_dir,
+            figures=job.figures,
+            summary_extras=extras,
+            extra_files={SCENE_JSON: job.scene_text},
+        )
     except Exception as exc:  # a failed run is recorded; the others go on
         return None, _one_line(exc)
-    return summary, None
+    return outcome.summary, None
+
+
+def _init_worker() -> None:
+    """Start a worker process: Ctrl-C goes to the main process, which stops the workers.
+
+    SIGTERM keeps its default action (the process ends at once); the main
+    process removes what a stopped worker left.
+    """
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """End the pool's worker processes now (SIGTERM), and wait until they are gone."""
+    # no public way before Python 3.14 (ProcessPoolExecutor.terminate_workers)
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        if process.is_alive():
+            process.terminate()
+    for process in processes:
+        process.join(timeout=10)
+        if process.is_alive():
+            process.kill()
+            process.join(timeout=10)
+    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _submit_local(
@@ -810,7 +887,9 @@ def _submit_local(
     import multiprocessing
 
     context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context) as pool:
+    with ProcessPoolExecutor(
+        max_workers=workers, mp_context=context, initializer=_init_worker
+    ) as pool:
         pending: dict[Future[tuple[dict[str, Any] | None, str | None]], _Job] = {
             pool.submit(_run_job, job): job for job in jobs
         }
@@ -824,8 +903,8 @@ def _submit_local(
                     except BrokenProcessPool as exc:
                         outcome = (None, f"worker process died: {_one_line(exc)}")
                     yield job, outcome
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
+        except BaseException:  # Ctrl-C, SIGTERM, or the caller stopped early
+            _stop_workers(pool)
             raise
 
 
@@ -851,6 +930,7 @@ def _submit_dask(
         raise ConfigError(
             f"--scheduler {scheduler}: cannot connect to the Dask scheduler: {_one_line(err)}"
         ) from err
+    futures: dict[Any, _Job] = {}
     try:
         futures = {
             client.submit(
@@ -865,6 +945,9 @@ def _submit_dask(
             except Exception as exc:  # the worker was lost, or the task was cancelled
                 outcome = (None, f"Dask task failed: {_one_line(exc)}")
             yield job, outcome
+    except BaseException:
+        client.cancel(list(futures))  # a task already running finishes its run folder
+        raise
     finally:
         client.close()
 
@@ -880,13 +963,14 @@ def _read_text(path: Path) -> str | None:
         return None
 
 
-def _write_text(path: Path, text: str) -> None:
+def _write_failed_run(run_dir: Path, scene_text: str, message: str) -> None:
+    """Replace the run folder by the record of a failed run: its scene and its error."""
     try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with _atomic_file(path) as fh:
-            fh.write(text.encode("utf-8"))
+        with replace_folder(run_dir, RUN_FOLDER) as tmp:
+            (tmp / SCENE_JSON).write_text(scene_text, encoding="utf-8")
+            (tmp / ERROR_TXT).write_text(message + "\n", encoding="utf-8")
     except OSError as err:
-        raise ConfigError(f"cannot write {path}: {err}") from err
+        raise ConfigError(f"cannot write {run_dir / ERROR_TXT}: {err}") from err
 
 
 def _read_summary(path: Path) -> dict[str, Any] | None:
@@ -938,13 +1022,23 @@ def run_experiment(
 
     Notes
     -----
-    Every run's scene is validated before anything runs. A run whose summary
-    file exists, and whose ``scene.json`` matches its current resolved scene,
-    is not run again, so restarting an interrupted sweep loses nothing (a run
-    whose scene changed, e.g. through the experiment's ``set``, runs again).
-    A run that raises leaves its message in ``<run id>/error.txt`` and in
-    ``results.csv``; the other runs go on. ``results.csv`` is
-    rewritten (atomically) after every finished run.
+    Every run's scene, and every run folder, is checked before anything
+    runs. Each run folder is written as a whole (see
+    :func:`regopack.run.run_scene`): it holds the run's ``scene.json``,
+    packing and summary, or, for a run that raised, ``scene.json`` and
+    ``error.txt`` with its message, never a mix of two runs. A run whose
+    summary file exists, and whose ``scene.json`` matches its current
+    resolved scene, is not run again, so restarting an interrupted sweep
+    loses nothing (a run whose scene changed, e.g. through the experiment's
+    ``set``, runs again). A failed run is also listed in ``results.csv``;
+    the other runs go on. ``results.csv`` is rewritten (atomically) after
+    every finished run.
+
+    When the sweep is interrupted (``KeyboardInterrupt``, or
+    :class:`~regopack.errors.Terminated` for SIGTERM), the local worker
+    processes are stopped and the temporary folders of their unfinished runs
+    removed; the finished runs stay in ``results.csv`` and are reused when
+    the sweep is started again.
 
     Raises
     ------
@@ -962,6 +1056,11 @@ def run_experiment(
     runs = expand(experiment)
     resolved = check_runs(experiment, runs)
     out = Path(out_dir) if out_dir is not None else default_experiment_dir(experiment)
+    for run in runs:
+        try:
+            check_replaceable(out / run.run_id, RUN_FOLDER)
+        except ConfigError as err:
+            raise ConfigError(f"{experiment.label}: run {run.run_id}: {err}") from err
     try:
         out.mkdir(parents=True, exist_ok=True)
     except OSError as err:
@@ -1003,11 +1102,8 @@ def run_experiment(
             metrics = _collect(summary, experiment.metrics)
             record(RunResult(run, "done", run_dir, metrics, reused=True), write=False)
             continue
-        try:  # a summary of an older scene must not pass for this run's
-            (run_dir / scene.scene.outputs.summary).unlink(missing_ok=True)
-        except OSError as err:
-            raise ConfigError(f"cannot remove the old summary of run {run.run_id}: {err}") from err
-        _write_text(run_dir / SCENE_JSON, scene_text)
+        # an older run in the folder stays until this one replaces it as a whole;
+        # its scene.json does not match, so it is never taken for this run
         jobs.append(
             _Job(
                 run_id=run.run_id,
@@ -1017,6 +1113,7 @@ def run_experiment(
                 figures=experiment.figures,
                 verify=experiment.verify,
                 voids=experiment.voids,
+                scene_text=scene_text,
             )
         )
     _write_csv(results_path, experiment, finished)
@@ -1028,16 +1125,26 @@ def run_experiment(
     else:
         count = (os.cpu_count() or 1) if workers is None else workers
         stream = _submit_local(jobs, max(1, min(count, len(jobs))))
-    for job, (summary, error) in stream:
-        run = by_id[job.run_id]
-        run_dir = out / run.run_id
-        if error is None and summary is not None:
-            (run_dir / ERROR_TXT).unlink(missing_ok=True)
-            record(RunResult(run, "done", run_dir, _collect(summary, experiment.metrics)))
-        else:
-            message = error or "the run returned no summary"
-            _write_text(run_dir / ERROR_TXT, message + "\n")
-            record(RunResult(run, "failed", run_dir, error=message))
+    unfinished = {job.run_id: job for job in jobs}
+    try:
+        for job, (summary, error) in stream:
+            run = by_id[job.run_id]
+            run_dir = out / run.run_id
+            if error is None and summary is not None:
+                record(RunResult(run, "done", run_dir, _collect(summary, experiment.metrics)))
+            else:
+                message = error or "the run returned no summary"
+                _write_failed_run(run_dir, job.scene_text, message)
+                record(RunResult(run, "failed", run_dir, error=message))
+            del unfinished[job.run_id]
+    except BaseException:
+        close = getattr(stream, "close", None)
+        if close is not None:
+            close()  # stops the workers now, not when the generator is collected
+        if scheduler is None:
+            for job in unfinished.values():
+                remove_leftovers(job.out_dir)
+        raise
     ordered = tuple(sorted(finished, key=lambda r: r.spec.index))
     columns = _metric_columns(experiment, ordered)
     return ExperimentResult(

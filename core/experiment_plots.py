@@ -19,6 +19,7 @@ from __future__ import annotations
 import csv
 import json
 import math
+import shutil
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -27,10 +28,15 @@ from typing import Any
 import numpy as np
 from matplotlib.ticker import MaxNLocator, NullFormatter
 
+from regopack.outdir import rebase, replace_folder
+
 __all__ = ["PLOTS_DIR", "fit_power_law", "plot_experiment", "seed_statistics"]
 
 PLOTS_DIR = "plots"
 """Folder of the plots inside the sweep's output directory."""
+
+PLOTS_KIND = "plots"
+"""Kind of the plots folder (in its marker file)."""
 
 _COLOURS = ("#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000")
 _MARKERS = ("o", "s", "^", "D", "v", "P", "X")
@@ -361,7 +367,9 @@ def plot_experiment(out_dir: str | Path) -> list[Path]:
     ----------
     out_dir
         The sweep's output directory (with ``results.csv`` and ``experiment.json``).
-        The plots go into ``<out_dir>/plots/``.
+        The plots go into ``<out_dir>/plots/``, which is written as a whole
+        (see :func:`regopack.outdir.replace_folder`): it holds the plots of
+        this call and none of an earlier one.
 
     Returns
     -------
@@ -374,11 +382,14 @@ def plot_experiment(out_dir: str | Path) -> list[Path]:
         return []
     plots = out / PLOTS_DIR
     written: list[Path] = []
-    if "density.eta" in params:
-        written += _plot_eta(params, rows, plots)
-    seeds = {row.get("seed") for row in rows}
-    if "seed" in params and len(seeds) >= 2:
-        written += _plot_seeds(params, rows, plots)
-    if "domain.width" in params:
-        written += _plot_time(params, rows, plots)
-    return written
+    with replace_folder(plots, PLOTS_KIND) as tmp:
+        if "density.eta" in params:
+            written += _plot_eta(params, rows, tmp)
+        seeds = {row.get("seed") for row in rows}
+        if "seed" in params and len(seeds) >= 2:
+            written += _plot_seeds(params, rows, tmp)
+        if "domain.width" in params:
+            written += _plot_time(params, rows, tmp)
+    if not written:  # nothing to plot: no folder, and none left of an earlier call
+        shutil.rmtree(plots, ignore_errors=True)
+    return [rebase(p, tmp, plots) for p in written]

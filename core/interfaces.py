@@ -190,3 +190,12 @@ class Exporter(ABC):
             Computed analyzers by name (e.g. ``"coordination"``); an exporter
             may add their per-particle results to the file and ignores the rest.
         """
+
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Companion files that :meth:`export` writes beside the main file ``path``.
+
+        A run checks that no two of its outputs are one file, so an exporter
+        that writes more than its main file lists the others here. The
+        default is none.
+        """
+        return ()

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import re
 import tempfile
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
@@ -540,11 +541,43 @@ def _finite_or_none(obj: Any) -> Any:
     return obj
 
 
+_CLEANED: set[tuple[str, str]] = set()
+"""Files whose stale temporaries this process has already looked for."""
+
+
+def _remove_stale_temporaries(directory: Path, name: str) -> None:
+    """Remove ``.<name>.<random>.tmp`` files that a killed write left in ``directory``.
+
+    Done once per file and process, so that rewriting a file often (a sweep's
+    ``results.csv``) does not list its directory every time.
+    """
+    key = (os.path.abspath(directory), name)
+    if key in _CLEANED:
+        return
+    _CLEANED.add(key)
+    pattern = re.compile(re.escape(f".{name}.") + r"[A-Za-z0-9_]{8}\.tmp")
+    try:
+        entries = list(os.scandir(directory))
+    except OSError:
+        return
+    for entry in entries:
+        if pattern.fullmatch(entry.name) and entry.is_file(follow_symlinks=False):
+            try:
+                os.unlink(entry.path)
+            except OSError:
+                pass
+
+
 @contextmanager
 def _atomic_file(path: Path) -> Iterator[IO[bytes]]:
-    """Open a temporary file beside ``path``; move it over ``path`` on success."""
+    """Open a temporary file beside ``path``; move it over ``path`` on success.
+
+    Temporaries of an earlier write of ``path`` that was killed (SIGKILL, a
+    power cut) are removed first.
+    """
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
+    _remove_stale_temporaries(directory, path.name)
     fd, tmp_name = tempfile.mkstemp(dir=directory, prefix=f".{path.name}.", suffix=".tmp")
     try:
         with os.fdopen(fd, "wb") as fh:

@@ -4,14 +4,14 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from regopack.analysis import AnalysisFiles, run_analyses, write_analysis
+from regopack.analysis import AnalysisFiles, run_analyses, write_analysis_files
 from regopack.domain import Domain, Rectangle
 from regopack.errors import ConfigError, ExportError, PluginError
 from regopack.interfaces import (
@@ -24,12 +24,23 @@ from regopack.interfaces import (
     ShapeGenerator,
     SizeDistribution,
 )
+from regopack.outdir import (
+    MARKER,
+    NAME_RULE,
+    check_replaceable,
+    checkpoint,
+    name_key,
+    name_problem,
+    rebase,
+    replace_folder,
+)
 from regopack.packing import Packing, save, write_json_atomic
 from regopack.population import IntArray, Population, ShapeBatch, concat_shapes
-from regopack.scene import ResolvedPlugin, ResolvedScene
+from regopack.scene import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.sieve import unplaced_per_class
 
 __all__ = [
+    "RUN_FOLDER",
     "RunOutcome",
     "default_out_dir",
     "draw_population",
@@ -37,6 +48,10 @@ __all__ = [
     "phi_in_window",
     "run_scene",
 ]
+
+
+RUN_FOLDER = "run"
+"""Kind of the folder a run writes (in its :data:`regopack.outdir.MARKER` file)."""
 
 
 @dataclass(frozen=True)
@@ -148,6 +163,8 @@ def run_scene(
     progress: ProgressCallback | None = None,
     *,
     figures: bool = True,
+    summary_extras: Callable[[Packing], Mapping[str, Any]] | None = None,
+    extra_files: Mapping[str, str] | None = None,
 ) -> RunOutcome:
     """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
 
@@ -156,18 +173,33 @@ def run_scene(
     resolved
         The scene, with validated plugin parameters.
     out_dir
-        Directory for the packing and summary files (created if needed;
-        see :func:`default_out_dir`). ``None`` writes nothing.
+        The run folder (see :func:`default_out_dir`), written as a whole:
+        it ends up holding this run's files and nothing else. ``None``
+        writes nothing.
     progress
         Called as ``progress(done, placed, total)`` during insertion.
     figures
         Draw the analysis figures when the scene lists analyses and
         ``out_dir`` is given.
+    summary_extras
+        Called with the packing once it is analysed; the items it returns are
+        added to the summary before anything is written.
+    extra_files
+        More text files for the run folder, by plain file name (a sweep's
+        ``scene.json``); a name that is also one of the run's outputs is
+        refused.
 
     Returns
     -------
     RunOutcome
         The packing, the summary and the paths written.
+
+    Raises
+    ------
+    ConfigError
+        When ``out_dir`` may not be replaced (it exists, is not empty and
+        does not hold a previous regopack run; or it is the current
+        directory) or cannot be written, checked before the packing starts.
 
     Notes
     -----
@@ -176,9 +208,17 @@ def run_scene(
     :func:`regopack.analysis.write_analysis` writes all of them into
     ``<out_dir>/analysis``. The exporters in ``outputs.exports`` then write
     the packing beside the packing file, as ``<packing stem><suffix>``, with
-    the computed analyzers passed on. Files are written atomically: an
-    interrupted run never leaves a partial file in place of a previous one.
+    the computed analyzers passed on.
+
+    Everything is written into a fresh temporary folder beside ``out_dir``
+    (``<out_dir>.tmp-<random>``), which replaces ``out_dir`` as a whole once
+    every file is complete (see :func:`regopack.outdir.replace_folder`): an
+    interrupted or killed run leaves the previous run untouched, and a rerun
+    leaves nothing of the previous one (no stale analysis or exports).
     """
+    if out_dir is not None:
+        check_replaceable(out_dir, RUN_FOLDER)
+        _check_extra_files(resolved, extra_files or {})
     start = time.perf_counter()
     rng = np.random.default_rng(resolved.seed)
     population = draw_population(resolved, rng)
@@ -227,31 +267,70 @@ def run_scene(
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
         analyzers = run_analyses(packing, resolved.registry, requests)
         summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
+    if summary_extras is not None:
+        summary.update(summary_extras(packing))
 
-    packing_path = summary_path = None
+    if out_dir is None:
+        return RunOutcome(packing, summary)
+    return _write_run(
+        resolved, Path(out_dir), packing, summary, analyzers, figures, extra_files or {}
+    )
+
+
+def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) -> None:
+    taken = {name_key(name): loc for loc, names in output_files(resolved).items() for name in names}
+    taken[name_key(MARKER)] = "regopack's marker file"
+    for name in extra_files:
+        problem = name_problem(name)
+        if problem is not None:
+            raise ConfigError(f"extra run file {name!r}: {problem} ({NAME_RULE})")
+        if name_key(name) in taken:
+            raise ConfigError(f"extra run file {name!r}: the same file as {taken[name_key(name)]}")
+
+
+def _write_run(
+    resolved: ResolvedScene,
+    out: Path,
+    packing: Packing,
+    summary: dict[str, Any],
+    analyzers: Mapping[str, Analyzer],
+    figures: bool,
+    extra_files: Mapping[str, str],
+) -> RunOutcome:
+    """Write the run into a fresh folder and swap it in place of ``out``."""
+    outputs = resolved.scene.outputs
+    packing_path = out / outputs.packing
+    summary_path = out / outputs.summary
     analysis = None
     exports: tuple[Path, ...] = ()
-    if out_dir is not None:
-        out = Path(out_dir)
-        packing_path = out / resolved.scene.outputs.packing
-        summary_path = out / resolved.scene.outputs.summary
-        for directory in (out, packing_path.parent, summary_path.parent):
-            try:
-                directory.mkdir(parents=True, exist_ok=True)
-            except OSError as err:
-                raise ConfigError(f"cannot create the output directory {directory}: {err}") from err
+    with replace_folder(out, RUN_FOLDER) as tmp:
         try:
-            save(packing, packing_path)
-            write_json_atomic(summary_path, summary)
+            checkpoint("packing")
+            save(packing, tmp / outputs.packing)
+            checkpoint("summary")
+            write_json_atomic(tmp / outputs.summary, summary)
+            for name, text in extra_files.items():
+                (tmp / name).write_text(text, encoding="utf-8")
         except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
             raise ConfigError(f"cannot write the run's output: {err}") from err
         if analyzers:
-            analysis = write_analysis(
-                out / "analysis", packing, analyzers, figures=figures, packing_path=packing_path
+            checkpoint("analysis")
+            analysis = write_analysis_files(
+                tmp / ANALYSIS_FOLDER,
+                packing,
+                analyzers,
+                figures=figures,
+                packing_path=packing_path,
             )
+        if resolved.exports:
+            checkpoint("exports")
         exports = tuple(
-            _export(packing, plugin, packing_path, analyzers) for plugin in resolved.exports
+            _export(packing, plugin, tmp / outputs.packing, packing_path, analyzers)
+            for plugin in resolved.exports
         )
+    if analysis is not None:
+        analysis = analysis.moved(tmp, out)
+    exports = tuple(rebase(p, tmp, out) for p in exports)
     return RunOutcome(packing, summary, packing_path, summary_path, analysis, exports)
 
 
@@ -259,15 +338,20 @@ def _export(
     packing: Packing,
     plugin: ResolvedPlugin[Any],
     packing_path: Path,
+    shown_path: Path,
     analyzers: Mapping[str, Analyzer],
 ) -> Path:
-    """Write ``packing`` with one exporter of ``outputs.exports``, beside ``packing_path``."""
+    """Write ``packing`` with one exporter of ``outputs.exports``, beside ``packing_path``.
+
+    ``shown_path`` is where the packing file will be, for messages.
+    """
     exporter: Exporter = _build(plugin, Exporter, "export")
     path = packing_path.with_suffix(exporter.suffix)
     try:
         return exporter.export(packing, path, analyses=analyzers or None)
     except OSError as err:
-        raise ExportError(f"cannot write {path}: {err.strerror or err}") from err
+        shown = shown_path.with_suffix(exporter.suffix)
+        raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err
 
 
 def _params(plugin: ResolvedPlugin[Any]) -> dict[str, Any]:

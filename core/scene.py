@@ -40,9 +40,11 @@ from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, Rectangle
 from regopack.domain import Domain as DomainGeometry
 from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.manager import Registry
+from regopack.outdir import MARKER, NAME_RULE, name_key, name_problem
 from regopack.plugin_types import PluginSpec
 
 __all__ = [
+    "ANALYSIS_FOLDER",
     "DEFAULT_SCENE",
     "FRACTION_TOLERANCE",
     "Domain",
@@ -56,6 +58,7 @@ __all__ = [
     "apply_overrides",
     "builtin_scenes",
     "load_scene",
+    "output_files",
     "resolve_scene",
 ]
 
@@ -64,6 +67,9 @@ DEFAULT_SCENE = "table1"
 
 FRACTION_TOLERANCE = 1e-3
 """Largest allowed distance of the sum of the phase fractions from 1."""
+
+ANALYSIS_FOLDER = "analysis"
+"""Folder of the analysis files inside a run folder (when the scene lists analyses)."""
 
 T = TypeVar("T")
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
@@ -201,8 +207,16 @@ class Outputs(BaseModel):
 
     model_config = ConfigDict(extra="forbid")
 
-    packing: str = Field("packing.npz", min_length=1, description="Packing file (NPZ).")
-    summary: str = Field("summary.json", min_length=1, description="Run summary (JSON).")
+    packing: str = Field(
+        "packing.npz",
+        min_length=1,
+        description="Packing file (NPZ): a plain file name inside the run folder.",
+    )
+    summary: str = Field(
+        "summary.json",
+        min_length=1,
+        description="Run summary (JSON): a plain file name inside the run folder.",
+    )
     analyses: list[Annotated[str, Field(min_length=1)] | PluginRef] = Field(
         default_factory=list,
         description=(
@@ -217,6 +231,16 @@ class Outputs(BaseModel):
             'or an inline table with its parameters, e.g. {kind = "lammps", rounding = 0.05}.'
         ),
     )
+
+    @field_validator("packing", "summary")
+    @classmethod
+    def _check_file_name(cls, name: str) -> str:
+        problem = name_problem(name)
+        if problem is not None:
+            raise ValueError(
+                f"{problem}; an output is a plain file name inside the run folder ({NAME_RULE})"
+            )
+        return name
 
 
 class Scene(BaseModel):
@@ -250,6 +274,17 @@ class Scene(BaseModel):
 
     _source: str | None = PrivateAttr(default=None)
     _overridden: dict[str, str] = PrivateAttr(default_factory=dict)
+
+    @field_validator("name")
+    @classmethod
+    def _check_name(cls, name: str) -> str:
+        problem = name_problem(name)
+        if problem is not None:
+            raise ValueError(
+                f"{problem}; the scene name is used in the output folder "
+                f"runs/<name>-seed<seed>, so it must be a plain folder name ({NAME_RULE})"
+            )
+        return name
 
     @field_validator("count", mode="before")
     @classmethod
@@ -707,6 +742,7 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
 
     analyses = resolve_list("analysis", "analyses", scene.outputs.analyses)
     exports = resolve_list("export", "exports", scene.outputs.exports)
+    _check_output_files(scene, analyses, exports)
     return ResolvedScene(
         scene=scene,
         size=size,
@@ -717,3 +753,118 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
         registry=registry,
         exports=exports,
     )
+
+
+# ---------------------------------------------------------------------------
+# output files
+
+
+@dataclass(frozen=True)
+class _OutputFile:
+    """One path a run writes into its folder, and how to name it in messages."""
+
+    loc: str
+    name: str
+    value: Any
+    description: str
+    verb: str = ""
+
+
+def _export_name(packing: str, suffix: str) -> str | None:
+    """``<packing stem><suffix>``, or ``None`` when that is no plain file name."""
+    try:
+        name = Path(packing).with_suffix(suffix).name
+    except ValueError:
+        return None
+    return name if name_problem(name) is None else None
+
+
+def _output_entries(
+    scene: Scene,
+    analyses: Sequence[ResolvedPlugin[Any]],
+    exports: Sequence[ResolvedPlugin[Any]],
+) -> list[_OutputFile]:
+    outputs = scene.outputs
+    entries: list[_OutputFile] = []
+    if analyses:
+        entries.append(
+            _OutputFile(
+                "outputs.analyses",
+                ANALYSIS_FOLDER,
+                None,
+                f'the analysis folder "{ANALYSIS_FOLDER}" of outputs.analyses',
+            )
+        )
+    for field_name in ("packing", "summary"):
+        name = getattr(outputs, field_name)
+        loc = f"outputs.{field_name}"
+        entries.append(_OutputFile(loc, name, name, f"{loc} ({_toml._value(name)})"))
+    for i, (plugin, item) in enumerate(zip(exports, outputs.exports, strict=True)):
+        loc = f"outputs.exports.{i}"
+        value = item if isinstance(item, str) else None
+        exporter = plugin.build()
+        suffix = getattr(exporter, "suffix", "")
+        main = _export_name(outputs.packing, suffix if isinstance(suffix, str) else "")
+        if main is None:
+            raise ConfigError(
+                f"{loc}: the {plugin.kind!r} exporter's suffix {suffix!r} gives no plain "
+                "file name beside the packing file"
+            )
+        names = [main]
+        companions = getattr(exporter, "companions", None)
+        if callable(companions):
+            names += [Path(p).name for p in companions(Path(main))]
+        for name in names:
+            entries.append(
+                _OutputFile(
+                    loc,
+                    name,
+                    value,
+                    f"{loc} ({plugin.kind}), which writes {name}",
+                    verb=f"writes {name}, ",
+                )
+            )
+    return entries
+
+
+def _check_output_files(
+    scene: Scene,
+    analyses: Sequence[ResolvedPlugin[Any]],
+    exports: Sequence[ResolvedPlugin[Any]],
+) -> None:
+    """Refuse two outputs of one run that are one path (before anything is written)."""
+    claimed: dict[str, _OutputFile] = {
+        name_key(MARKER): _OutputFile("", MARKER, None, f"regopack's marker file {MARKER}")
+    }
+    for entry in _output_entries(scene, analyses, exports):
+        other = claimed.get(name_key(entry.name))
+        if other is None:
+            claimed[name_key(entry.name)] = entry
+            continue
+        shown = _format_value(entry.value) if entry.value is not None else None
+        text = f"{entry.loc} = {shown}" if shown is not None else entry.loc
+        where = _where(entry.loc, None, scene._overridden)
+        if where is None and other.loc:
+            where = _where(other.loc, None, scene._overridden)
+        where = where or scene.source
+        same = "the same path as" if entry.name == other.name else "the same path (on a "
+        if entry.name != other.name:
+            same += "case-insensitive file system) as"
+        message = (
+            f"{text}: {entry.verb}{same} {other.description}; "
+            "every output of a run needs its own name"
+        )
+        raise ConfigError(f"{where}: {message}" if where else message)
+
+
+def output_files(resolved: ResolvedScene) -> dict[str, list[str]]:
+    """Return the names a run of ``resolved`` writes into its folder, by scene field.
+
+    ``outputs.packing``, ``outputs.summary``, ``outputs.analyses`` (the
+    analysis folder, when analyses are listed) and ``outputs.exports.<i>``
+    (each exporter's files). :data:`regopack.outdir.MARKER` is written too.
+    """
+    out: dict[str, list[str]] = {}
+    for entry in _output_entries(resolved.scene, resolved.analyses, resolved.exports):
+        out.setdefault(entry.loc, []).append(entry.name)
+    return out

@@ -222,6 +222,10 @@ class CsvExporter(Exporter):
     def __init__(self, config: CsvConfig | None = None) -> None:
         self.config = config or CsvConfig()
 
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Return the vertex table and the metadata file (see :func:`companion_paths`)."""
+        return companion_paths(path)
+
     def export(
         self, packing: Packing, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:

@@ -272,7 +272,7 @@ def test_rewriting_leaves_no_temporary_files(packing, registry, tmp_path):
     done = run_analyses(packing, registry, [("density", {})])
     write_analysis(tmp_path, packing, done, figures=False)
     write_analysis(tmp_path, packing, done, figures=False)
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["analysis.json", "report.md"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".regopack", "analysis.json", "report.md"]
 
 
 def test_main_numbers_skip_what_was_not_run():

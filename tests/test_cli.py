@@ -4,6 +4,7 @@ import json
 import subprocess
 import sys
 import tomllib
+from pathlib import Path
 
 import pytest
 from cli_helpers import one_error_line
@@ -139,7 +140,66 @@ def test_interrupt_exits_130_without_partial_files(tmp_path, capsys):
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("regopack: interrupted")
     assert (tmp_path / "out" / "packing.npz").read_bytes() == before
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["packing.npz", "summary.json"]
+    names = sorted(p.name for p in (tmp_path / "out").iterdir())
+    assert names == [".regopack", "packing.npz", "summary.json"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
+
+
+@pytest.mark.parametrize(
+    "override",
+    ['outputs.packing="../x.npz"', "outputs.packing=/tmp/regopack-x.npz", 'name="../../X"'],
+)
+def test_nothing_is_written_outside_the_output_folder(tmp_path, capsys, override):
+    (tmp_path / "work").mkdir()
+    argv = ["run", "small", "--set", "count=20", "--set", override, "--quiet"]
+    for more in (["--out", "work/out"], []):
+        assert main([*argv, *more]) == 2
+        line = one_error_line(capsys)
+        assert line.startswith("regopack: error: --set: ") and "contains '/'" in line
+    assert sorted(p.name for p in tmp_path.rglob("*")) == ["work"]
+    assert not Path("/tmp/regopack-x.npz").exists()
+
+
+def test_two_outputs_of_one_run_are_refused_before_anything_is_written(tmp_path, capsys):
+    argv = ["run", "small", "--set", "count=20", "--set", "outputs.summary=packing.npz"]
+    assert main([*argv, "--out", "out", "--quiet"]) == 2
+    assert one_error_line(capsys) == (
+        'regopack: error: --set: outputs.summary = "packing.npz": the same path as '
+        'outputs.packing ("packing.npz"); every output of a run needs its own name'
+    )
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_running_twice_into_the_default_folder_replaces_the_run(tmp_path, capsys):
+    for seed in ("1", "2"):
+        assert main(["run", "small", "--set", "count=20", "--seed", seed, "--out", "o"]) == 0
+    summary = json.loads((tmp_path / "o" / "summary.json").read_text())
+    assert summary["seed"] == 2
+    for _ in range(2):  # the README's quick start, run again
+        assert main(["run", "small", "--set", "count=20", "--quiet"]) == 0
+    assert sorted(p.name for p in (tmp_path / "runs").iterdir()) == ["small-seed1"]
+
+
+def test_an_output_folder_holding_the_scene_file_is_refused(tmp_path, capsys):
+    assert main(["config", "small", "--set", "count=20"]) == 0
+    scene = capsys.readouterr().out
+    assert main(["run", "small", "--set", "count=20", "--out", "o", "--quiet"]) == 0
+    (tmp_path / "o" / "mine.toml").write_text(scene)
+    assert main(["run", "o/mine.toml", "--out", "o", "--quiet"]) == 2
+    assert "holds the scene file o/mine.toml" in one_error_line(capsys)
+    assert (tmp_path / "o" / "mine.toml").read_text() == scene
+
+
+def test_a_folder_not_written_by_regopack_is_refused(tmp_path, capsys):
+    (tmp_path / "data").mkdir()
+    (tmp_path / "data" / "notes.txt").write_text("mine")
+    assert main(["run", "small", "--set", "count=20", "--out", "data", "--quiet"]) == 2
+    assert one_error_line(capsys) == (
+        "regopack: error: output folder data: exists and was not written by regopack "
+        "(it has no .regopack file); the run replaces its whole output folder, so give a "
+        "new or empty folder, or remove this one"
+    )
+    assert (tmp_path / "data" / "notes.txt").read_text() == "mine"
 
 
 def test_unexpected_errors_keep_their_traceback(monkeypatch):

@@ -107,3 +107,24 @@ def test_user_mistakes_are_one_line(packing_file, tmp_path, capsys, args, expect
 def test_a_directory_is_not_a_packing(tmp_path, capsys):
     assert main(["analyze", str(tmp_path)]) == 2
     assert "is a directory" in one_error_line(capsys)
+
+
+def test_a_second_analysis_replaces_the_first(packing_file, tmp_path, capsys):
+    out = tmp_path / "a"
+    assert main(["analyze", str(packing_file), "--only", "rdf", "--out", str(out)]) == 0
+    assert (out / "figures" / "rdf.png").is_file() and (out / "rdf_near.csv").is_file()
+    argv = ["analyze", str(packing_file), "--only", "density", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    assert sorted(p.name for p in out.iterdir()) == [".regopack", "analysis.json", "report.md"]
+    assert json.loads((out / "analysis.json").read_text())["analyses"] == ["density"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["a"]
+
+
+def test_analyze_never_replaces_a_folder_it_did_not_write(packing_file, tmp_path, capsys):
+    argv = ["analyze", str(packing_file), "--only", "density", "--no-figures", "--out"]
+    assert main([*argv, str(packing_file.parent)]) == 2
+    assert "holds the packing file" in one_error_line(capsys)
+    (tmp_path / "notes.txt").write_text("mine")
+    assert main([*argv, str(tmp_path)]) == 2
+    assert "exists and was not written by regopack" in one_error_line(capsys)
+    assert [p.name for p in tmp_path.iterdir()] == ["notes.txt"]

@@ -11,6 +11,7 @@ MODULES = [
     "regopack._toml",
     "regopack.analysis",
     "regopack.manager",
+    "regopack.outdir",
     "regopack.packing",
     "regopack.scene",
     "regopack.testing",

@@ -406,6 +406,84 @@ def test_a_failing_run_is_recorded_and_the_others_finish(
     assert not (tmp_path / "out" / IDS[1] / "error.txt").exists()
 
 
+def test_outputs_outside_the_run_folders_are_refused_before_anything_runs(
+    tmp_path: Path,
+) -> None:
+    text = TINY.replace("count = 150", 'count = 150\n"outputs.packing" = "../x.npz"')
+    path = write(tmp_path / "tiny.toml", text)
+    with pytest.raises(ConfigError) as info:
+        run_experiment(path, tmp_path / "out", workers=1)
+    assert str(info.value).startswith(
+        f"{path}: set.outputs.packing = \"../x.npz\": contains '/'; an output is a plain "
+        "file name inside the run folder"
+    )
+    assert str(info.value).endswith("(run eta=0,seed=1)")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.toml"]
+
+
+def test_runs_whose_folders_differ_only_in_case_are_refused() -> None:
+    data = {"base": "small", "sweep": {"name": ["A", "a"]}}
+    with pytest.raises(ConfigError) as info:
+        expand(experiment_from_dict(data, source="exp.toml"))
+    assert str(info.value) == (
+        "exp.toml: runs 0 ('name=A') and 1 ('name=a') would write the same folder on a "
+        "case-insensitive file system; make the values differ by more than case"
+    )
+
+
+def test_an_output_named_like_a_file_of_the_sweep_is_refused(tmp_path: Path) -> None:
+    text = TINY.replace("count = 150", 'count = 150\n"outputs.summary" = "Scene.json"')
+    path = write(tmp_path / "tiny.toml", text)
+    with pytest.raises(ConfigError) as info:
+        run_experiment(path, tmp_path / "out", workers=1)
+    assert str(info.value) == (
+        f"{path}: set.outputs.summary: writes Scene.json, the same file as the sweep's "
+        "scene.json in every run folder; give it another name (run eta=0,seed=1)"
+    )
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_run_folder_regopack_did_not_write_stops_the_sweep_before_it_runs(
+    tmp_path: Path,
+) -> None:
+    path = write(tmp_path / "tiny.toml", TINY)
+    (tmp_path / "out" / IDS[1]).mkdir(parents=True)
+    (tmp_path / "out" / IDS[1] / "notes.txt").write_text("mine")
+    with pytest.raises(ConfigError, match=f"run {IDS[1]}: output folder .*: exists and was not"):
+        run_experiment(path, tmp_path / "out", workers=1)
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [IDS[1]]
+
+
+def test_a_failed_run_replaces_the_older_run_in_its_folder(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = write(tmp_path / "tiny.toml", TINY.replace('seed = "1..2"', "seed = [1]"))
+    run_experiment(path, tmp_path / "out", workers=1)
+    folder = tmp_path / "out" / IDS[0]
+    assert sorted(p.name for p in folder.iterdir()) == [
+        ".regopack",
+        "packing.npz",
+        "scene.json",
+        "summary.json",
+    ]
+
+    def broken(*args: Any, **kwargs: Any) -> Any:
+        raise RuntimeError("no room")
+
+    monkeypatch.setattr(experiment_module, "run_scene", broken)
+    write(path, path.read_text().replace("count = 150", "count = 120"))
+    outcome = run_experiment(path, tmp_path / "out", workers=1)
+    assert [r.status for r in outcome.runs] == ["failed", "failed"]
+    assert sorted(p.name for p in folder.iterdir()) == [".regopack", "error.txt", "scene.json"]
+    assert json.loads((folder / "scene.json").read_text())["count"] == 120
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [
+        "eta=0,seed=1",
+        "eta=10,seed=1",
+        "experiment.json",
+        "results.csv",
+    ]
+
+
 def test_explicit_metrics_follow_dotted_paths(tmp_path: Path) -> None:
     text = TINY.replace(
         'base = "small"\n',

@@ -183,6 +183,15 @@ def test_meta_entry(tmp_path):
     assert meta["mineral_names"] == ["a", "b", "c"]
 
 
+def test_temporaries_of_a_killed_save_are_removed_by_the_next(tmp_path):
+    stale = [".p.npz.abcd_123.tmp", ".p.npz.0a1b2c3d.tmp"]
+    others = [".q.npz.abcd1234.tmp", ".p.npz.short.tmp", "p.npz.abcd1234.tmp"]
+    for name in stale + others:
+        (tmp_path / name).write_bytes(b"what a SIGKILL left")
+    save(random_packing(3), tmp_path / "p.npz")
+    assert sorted(f.name for f in tmp_path.iterdir()) == sorted(["p.npz", *others])
+
+
 def test_interrupted_save_keeps_previous_file(tmp_path, monkeypatch):
     path = tmp_path / "p.npz"
     save(random_packing(seed=1), path)

@@ -195,12 +195,110 @@ def test_analyses_run_with_their_requirements(tmp_path):
     assert json.loads(outcome.summary_path.read_text())["analyses"]["twice"]["n2"] == 2 * placed
 
 
-def test_output_names_may_contain_folders(registry, tmp_path):
-    scene = resolved(registry, "count=20", "outputs.packing=data/p.npz", "outputs.summary=s/s.json")
-    outcome = run_scene(scene, tmp_path / "o")
-    assert outcome.packing_path == tmp_path / "o" / "data" / "p.npz"
-    assert outcome.packing_path.exists()
-    assert outcome.summary_path.exists()
+def output_registry():
+    """The fake plugins with the built-in exporters and analyzers."""
+    from fakes import fake_registry
+
+    import regopack.plugins.analysis
+    import regopack.plugins.exporters
+
+    return fake_registry(regopack.plugins.exporters, regopack.plugins.analysis)
+
+
+def listing(folder):
+    return sorted(p.name for p in folder.iterdir())
+
+
+def test_a_rerun_replaces_the_whole_run_folder(tmp_path):
+    registry, out = output_registry(), tmp_path / "out"
+    extras = ['outputs.analyses=["density"]', 'outputs.exports=["vtk", "csv"]']
+    run_scene(resolved(registry, "count=30", *extras, seed=1), out, figures=False)
+    assert "analysis" in listing(out) and "packing.vtp" in listing(out)
+    (out / ".packing.npz.abcd1234.tmp").write_bytes(b"what a killed write left")
+    (out / "notes.txt").write_text("added by hand")
+
+    outcome = run_scene(resolved(registry, "count=30", seed=2), out)
+    assert listing(out) == [".regopack", "packing.npz", "summary.json"]
+    assert json.loads(outcome.summary_path.read_text())["seed"] == 2
+    assert load(outcome.packing_path).seed == 2
+    assert listing(tmp_path) == ["out"]
+
+
+def test_the_paths_of_a_run_are_in_its_folder(tmp_path):
+    extras = ['outputs.analyses=["density"]', 'outputs.exports=["vtk"]']
+    outcome = run_scene(
+        resolved(output_registry(), "count=30", *extras), tmp_path / "o", figures=False
+    )
+    assert outcome.analysis is not None
+    assert outcome.analysis.out_dir == tmp_path / "o" / "analysis"
+    assert outcome.analysis.report == tmp_path / "o" / "analysis" / "report.md"
+    assert outcome.analysis.report.is_file()
+    assert outcome.exports == (tmp_path / "o" / "packing.vtp",)
+    assert outcome.exports[0].is_file()
+    results = json.loads(outcome.analysis.results.read_text())
+    assert results["packing"] == str(tmp_path / "o" / "packing.npz")
+    assert listing(tmp_path) == ["o"]
+
+
+def test_leftovers_of_a_killed_run_are_removed_by_the_next_run(registry, tmp_path):
+    for name in ("out.tmp-abcd_123", "out.old-0123abcd", "out.tmp-keep", "other.tmp-abcd1234"):
+        (tmp_path / name).mkdir()
+    (tmp_path / "out.tmp-abcd_123" / "packing.npz").write_bytes(b"half a packing")
+    run_scene(resolved(registry, "count=20"), tmp_path / "out")
+    assert listing(tmp_path) == ["other.tmp-abcd1234", "out", "out.tmp-keep"]
+
+
+def test_a_folder_that_holds_no_run_is_refused_and_kept(registry, tmp_path):
+    mine = tmp_path / "mine"
+    mine.mkdir()
+    (mine / "notes.txt").write_text("precious")
+    with pytest.raises(ConfigError, match="exists and was not written by regopack") as info:
+        run_scene(resolved(registry, "count=20"), mine)
+    assert "\n" not in str(info.value)
+    assert listing(mine) == ["notes.txt"]
+    assert listing(tmp_path) == ["mine"]
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    assert run_scene(resolved(registry, "count=20"), empty).packing_path.is_file()
+
+
+def test_an_analysis_folder_is_not_replaced_by_a_run(registry, tmp_path):
+    from regopack.analysis import run_analyses, write_analysis
+
+    packing = run_scene(resolved(output_registry(), "count=20")).packing
+    analyzers = run_analyses(packing, output_registry(), [("density", {})])
+    write_analysis(tmp_path / "a", packing, analyzers, figures=False)
+    with pytest.raises(ConfigError, match="holds a regopack analysis, not a run"):
+        run_scene(resolved(registry, "count=20"), tmp_path / "a")
+
+
+@pytest.mark.parametrize("out", [".", "..", "sub/.."])
+def test_the_current_directory_is_never_an_output_folder(registry, tmp_path, monkeypatch, out):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "sub").mkdir()
+    with pytest.raises(ConfigError, match="is the current directory or contains it"):
+        run_scene(resolved(registry, "count=20"), out)
+    assert listing(tmp_path) == ["sub"]
+
+
+def test_extra_files_are_written_into_the_run_folder(registry, tmp_path):
+    outcome = run_scene(resolved(registry, "count=20"), tmp_path, extra_files={"scene.json": "{}"})
+    assert (tmp_path / "scene.json").read_text() == "{}"
+    assert outcome.summary_path == tmp_path / "summary.json"
+    with pytest.raises(ConfigError, match=r"'summary\.json': the same file as outputs\.summary"):
+        run_scene(resolved(registry, "count=20"), tmp_path, extra_files={"summary.json": "x"})
+    with pytest.raises(ConfigError, match="contains '/'"):
+        run_scene(resolved(registry, "count=20"), tmp_path, extra_files={"../x": "x"})
+
+
+def test_summary_extras_are_in_the_written_summary(registry, tmp_path):
+    outcome = run_scene(
+        resolved(registry, "count=20"),
+        tmp_path,
+        summary_extras=lambda packing: {"extra": {"placed": packing.n_placed}},
+    )
+    on_disk = json.loads(outcome.summary_path.read_text())
+    assert on_disk["extra"] == {"placed": outcome.packing.n_placed} == outcome.summary["extra"]
 
 
 def test_unwritable_output_is_a_config_error(registry, tmp_path):

@@ -308,6 +308,131 @@ def test_override_errors_name_the_option(registry):
     )
 
 
+PLAIN = (
+    "an output is a plain file name inside the run folder (not empty, no '/', '\\' or ':', "
+    "not '.' or '..', no control characters)"
+)
+
+
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [
+        ('"../x.npz"', "contains '/'"),
+        ('"/tmp/x.npz"', "contains '/'"),
+        ('"data/p.npz"', "contains '/'"),
+        ('"..\\\\x.npz"', "contains '\\'"),
+        ('"C:x.npz"', "contains ':'"),
+        ('"."', "is '.'"),
+        ('".."', "is '..'"),
+        ('"a\\u0000b"', "contains a control character"),
+        ('"a\\nb"', "contains a control character"),
+    ],
+)
+@pytest.mark.parametrize("field", ["packing", "summary"])
+def test_output_names_are_plain_file_names(registry, field, value, problem):
+    assert error_of("small", registry, [f"outputs.{field}={value}"]) == (
+        f"--set: outputs.{field} = {value}: {problem}; {PLAIN}"
+    )
+
+
+def test_an_empty_output_name_is_refused(registry):
+    assert error_of("small", registry, ['outputs.packing=""']) == (
+        '--set: outputs.packing = "": String should have at least 1 character'
+    )
+
+
+def test_a_bad_output_name_in_a_file_names_the_file(scene_file, registry):
+    path = scene_file('packing = "packing.npz"', 'packing = "../../x.npz"')
+    assert error_of(path, registry) == (
+        f"scene.toml: outputs.packing = \"../../x.npz\": contains '/'; {PLAIN}"
+    )
+
+
+@pytest.mark.parametrize(
+    ("value", "problem"),
+    [
+        ('"../../X"', "contains '/'"),
+        ('".."', "is '..'"),
+        ('"a\\tb"', "contains a control character"),
+    ],
+)
+def test_scene_names_are_plain_folder_names(registry, value, problem):
+    msg = error_of("small", registry, [f"name={value}"])
+    assert msg.startswith(f"--set: name = {value}: ")
+    assert f"{problem}; the scene name is used in the output folder runs/<name>-seed<seed>" in msg
+
+
+def output_registry():
+    """The fake plugins with the built-in exporters and analyzers."""
+    from fakes import fake_registry
+
+    import regopack.plugins.analysis
+    import regopack.plugins.exporters
+
+    return fake_registry(regopack.plugins.exporters, regopack.plugins.analysis)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "expected"),
+    [
+        (
+            ["outputs.summary=packing.npz"],
+            '--set: outputs.summary = "packing.npz": the same path as outputs.packing '
+            '("packing.npz")',
+        ),
+        (
+            ["outputs.summary=PACKING.npz"],
+            '--set: outputs.summary = "PACKING.npz": the same path (on a case-insensitive '
+            'file system) as outputs.packing ("packing.npz")',
+        ),
+        (
+            ["outputs.packing=analysis", 'outputs.analyses=["density"]'],
+            '--set: outputs.packing = "analysis": the same path as the analysis folder '
+            '"analysis" of outputs.analyses',
+        ),
+        (
+            ['outputs.exports=["svg", {kind = "svg", width_px = 400}]'],
+            "--set: outputs.exports.1: writes packing.svg, the same path as "
+            "outputs.exports.0 (svg), which writes packing.svg",
+        ),
+        (
+            ["outputs.packing=p.vtp", 'outputs.exports=["vtk"]'],
+            '--set: outputs.exports.0 = "vtk": writes p.vtp, the same path as outputs.packing '
+            '("p.vtp")',
+        ),
+        (
+            ["outputs.summary=packing_meta.json", 'outputs.exports=["csv"]'],
+            '--set: outputs.exports.0 = "csv": writes packing_meta.json, the same path as '
+            'outputs.summary ("packing_meta.json")',
+        ),
+        (
+            ["outputs.summary=.regopack"],
+            '--set: outputs.summary = ".regopack": the same path as regopack\'s marker file '
+            ".regopack",
+        ),
+    ],
+)
+def test_two_outputs_of_a_run_are_never_one_path(overrides, expected):
+    msg = error_of("small", output_registry(), overrides)
+    assert msg == expected + "; every output of a run needs its own name"
+
+
+def test_outputs_with_their_own_names_resolve():
+    from regopack.scene import output_files
+
+    resolved = resolve_scene(
+        load_scene("small", ['outputs.analyses=["density"]', 'outputs.exports=["csv", "vtk"]']),
+        output_registry(),
+    )
+    assert output_files(resolved) == {
+        "outputs.analyses": ["analysis"],
+        "outputs.packing": ["packing.npz"],
+        "outputs.summary": ["summary.json"],
+        "outputs.exports.0": ["packing.csv", "packing_vertices.csv", "packing_meta.json"],
+        "outputs.exports.1": ["packing.vtp"],
+    }
+
+
 def test_builtin_errors_name_the_builtin_file(registry):
     # a value the plugin's model rejects, in a built-in scene, via a scene dict
     data = tomllib.loads(load_builtin_text("small"))
