@@ -547,6 +547,7 @@ def polygon_disk_area(ring: ArrayLike, center: Sequence[float], radius: float) -
         d = b - a
         dd = float(d @ d)
         ts = [0.0]
+        misses = False  # the edge's line does not enter the open disk (at most touches it)
         if dd > 0:
             # |a + t d|^2 = r^2
             p = float(a @ d) / dd
@@ -555,13 +556,15 @@ def polygon_disk_area(ring: ArrayLike, center: Sequence[float], radius: float) -
             if disc > 0:
                 s = math.sqrt(disc)
                 ts += [t for t in (-p - s, -p + s) if 0.0 < t < 1.0]
+            else:
+                misses = True
         ts.append(1.0)
         for t0, t1 in itertools.pairwise(ts):
             p0 = a + t0 * d
             p1 = a + t1 * d
             mid = 0.5 * (p0 + p1)
             cross = float(p0[0] * p1[1] - p0[1] * p1[0])
-            if float(mid @ mid) <= r2:
+            if not misses and float(mid @ mid) <= r2:
                 total += 0.5 * cross
             else:
                 total += 0.5 * r2 * math.atan2(cross, float(p0 @ p1))

@@ -124,3 +124,14 @@ def test_circle_covered_area_is_exact_for_a_square_inside_and_across() -> None:
     across = shapely.box(0.0, -2.0, 4.0, 2.0)  # covers the right half disk
     total = c.covered_area(np.array([inside, across], dtype=object))
     assert total == pytest.approx(1.0 + math.pi / 2, rel=1e-12)
+
+
+def test_polygon_disk_area_with_edges_tangent_to_the_circle() -> None:
+    import math
+
+    from regopack.domain import polygon_disk_area
+
+    square = [(-60.0, -60.0), (60.0, -60.0), (60.0, 60.0), (-60.0, 60.0)]
+    assert polygon_disk_area(square, (0.0, 0.0), 60.0) == pytest.approx(math.pi * 3600.0)
+    # one tangent edge, the disk otherwise inside
+    assert polygon_disk_area(square, (0.0, 20.0), 40.0) == pytest.approx(math.pi * 1600.0)
