@@ -74,8 +74,10 @@ def test_sweep_fills_every_domain_kind_without_overlap(kind: str) -> None:
     assert stats["refused"] + stats["not_offered"] == n - packing.n_placed
 
 
-@pytest.mark.parametrize("kind", list(DOMAINS))
-@pytest.mark.parametrize("share", [1.0, 0.5])
+@pytest.mark.parametrize(
+    ("kind", "share"),
+    [("rectangle", 1.0), ("periodic", 1.0), ("circle", 0.5), ("polygon", 0.5)],
+)
 def test_sweep_packs_disks_and_mixed_scenes(kind: str, share: float) -> None:
     domain = DOMAINS[kind]
     rng = np.random.default_rng(6)
@@ -187,7 +189,7 @@ def test_a_particle_larger_than_the_domain_is_refused() -> None:
     zone=st.sampled_from([0.0, 0.5, 3.0]),
     closing=st.sampled_from(["paced", "prompt"]),
 )
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_no_overlap_and_nothing_outside_at_the_extremes(
     seed, n, ratio, scale, psi, a, kind, eta, zone, closing
 ) -> None:
