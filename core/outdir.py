@@ -51,6 +51,7 @@ __all__ = [
     "check_replaceable",
     "checkpoint",
     "folder_kind",
+    "fsync_directory",
     "mark_folder",
     "name_key",
     "name_problem",
@@ -313,7 +314,8 @@ def _fsync_tree(folder: Path) -> None:
                 os.close(fd)
 
 
-def _fsync_directory(directory: Path) -> None:
+def fsync_directory(directory: Path) -> None:
+    """Flush a folder's entries to disk (best effort; a failure is ignored)."""
     try:
         fd = os.open(directory, os.O_RDONLY)
     except OSError:
@@ -378,10 +380,10 @@ def _swap(new: Path, target: Path) -> Path | None:
     """Put the folder ``new`` at ``target``; return where the previous folder now is."""
     if not os.path.lexists(target):
         os.rename(new, target)
-        _fsync_directory(target.parent)
+        fsync_directory(target.parent)
         return None
     if _exchange(new, target):
-        _fsync_directory(target.parent)
+        fsync_directory(target.parent)
         return new
     old = target.with_name(f"{target.name}.old-{secrets.token_hex(4)}")
     os.rename(target, old)
@@ -390,7 +392,7 @@ def _swap(new: Path, target: Path) -> Path | None:
     except BaseException:
         os.rename(old, target)
         raise
-    _fsync_directory(target.parent)
+    fsync_directory(target.parent)
     return old
 
 

@@ -595,20 +595,9 @@ def _atomic_file(path: Path) -> Iterator[IO[bytes]]:
         except FileNotFoundError:
             pass
         raise
-    _fsync_directory(directory)
+    from regopack.outdir import fsync_directory
 
-
-def _fsync_directory(directory: Path) -> None:
-    try:
-        fd = os.open(directory, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
+    fsync_directory(directory)
 
 
 def write_json_atomic(path: str | Path, obj: Any) -> None:
