@@ -327,3 +327,39 @@ def test_zones_far_below_and_far_above_the_domain_size_work(zone: float) -> None
         res = pack(pop, domain, rng, order="sweep", zone=zone, closing=closing)
         _oracle(as_packing(pop, res, domain))
         assert res.placed.sum() > 0.9 * paper.placed.sum()
+
+
+@pytest.mark.parametrize(
+    ("setting", "field", "hint"),
+    [
+        ("insertion.order=spiral", 'insertion.order = "spiral"', "'paper' or 'sweep'"),
+        ("insertion.zone=-1", "insertion.zone = -1", "greater than or equal to 0"),
+        ("insertion.zone=nan", "insertion.zone = nan", "finite"),
+        ("insertion.closing=late", 'insertion.closing = "late"', "'paced' or 'prompt'"),
+        ("insertion.screening=none", 'insertion.screening = "none"', "'paper' or 'exact'"),
+    ],
+)
+def test_the_options_from_the_command_line(
+    capsys: pytest.CaptureFixture[str], setting: str, field: str, hint: str
+) -> None:
+    from regopack.cli import main
+
+    assert main(["config", "--set", setting]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert err[0].startswith(f"regopack: error: --set: {field}: ")
+    assert hint in err[0]
+
+
+def test_dem_is_the_table1_scene_in_the_sweep_order() -> None:
+    from regopack.manager import default_registry
+    from regopack.scene import load_scene, resolve_scene
+
+    registry = default_registry(autoload=False)
+    dem = resolve_scene(load_scene("dem"), registry).to_dict()
+    table1 = resolve_scene(load_scene("table1"), registry).to_dict()
+    assert dem["insertion"].pop("order") == "sweep"
+    assert table1["insertion"].pop("order") == "paper"
+    dem.pop("name")
+    table1.pop("name")
+    assert dem == table1
