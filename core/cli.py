@@ -229,7 +229,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="FIELD=VALUE",
-        help="set an exporter parameter, e.g. --set rounding=0.05 (repeatable)",
+        help="set an exporter parameter, e.g. --set stiffness=1e5 (repeatable)",
     )
     export.add_argument(
         "--analyses",
@@ -454,7 +454,7 @@ def _exporter_params(overrides: Sequence[str]) -> dict[str, Any]:
     for text in overrides:
         key, sep, raw = text.partition("=")
         if not sep or not key.strip():
-            raise ConfigError(f"--set {text!r}: expected FIELD=VALUE, e.g. rounding=0.05")
+            raise ConfigError(f"--set {text!r}: expected FIELD=VALUE, e.g. stiffness=1e5")
         try:
             value = tomllib.loads("v = " + raw.strip())["v"]
         except tomllib.TOMLDecodeError:

@@ -228,7 +228,7 @@ class Outputs(BaseModel):
         default_factory=list,
         description=(
             "Exporters to write after the run, beside the packing file: a name (defaults), "
-            'or an inline table with its parameters, e.g. {kind = "lammps", rounding = 0.05}.'
+            'or an inline table with its parameters, e.g. {kind = "lammps", stiffness = 1e5}.'
         ),
     )
 

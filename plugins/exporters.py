@@ -1,4 +1,4 @@
-"""Built-in exporters: CSV, JSON, SVG, VTK and LAMMPS.
+"""Built-in exporters: CSV, JSON, SVG, VTK and LAMMPS (in :mod:`.lammps_export`).
 
 Every exporter writes one main file (and, for CSV, two companion files named
 after its stem). CSV and JSON keep every array of the packing exactly (floats
@@ -37,6 +37,7 @@ from regopack.hookspecs import hookimpl
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing, _atomic_file, _finite_or_none
 from regopack.plugin_types import ExporterSpec
+from regopack.plugins.lammps_export import LammpsConfig, LammpsExporter
 
 __all__ = [
     "CSV_FORMAT",
@@ -630,24 +631,6 @@ class VtkExporter(Exporter):
 # LAMMPS
 
 
-class LammpsConfig(BaseModel):
-    """Parameters of the LAMMPS exporter."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    density: float = Field(
-        1.0, gt=0, description="Mass per unit area; the mass of a body is its area times this."
-    )
-    rounding: float = Field(
-        0.0,
-        ge=0,
-        description=(
-            "Rounding diameter of the rounded/polygon bodies (the circle around each vertex), "
-            "in the length unit."
-        ),
-    )
-
-
 def polygon_moments(v: FloatArray) -> tuple[float, FloatArray, float, float, float]:
     """Area, centroid and second moments of a counter-clockwise polygon.
 
@@ -678,95 +661,6 @@ def polygon_moments(v: FloatArray) -> tuple[float, FloatArray, float, float, flo
     return area, np.array([cx, cy]), ixx, iyy, ixy
 
 
-class LammpsExporter(Exporter):
-    """LAMMPS data file for ``atom_style body rounded/polygon`` (2d).
-
-    One body per placed particle, in draw order: atom type = mineral index + 1,
-    mass = polygon area × ``density``, position = the polygon's centroid. In the
-    ``Bodies`` section each body lists its vertex count, the six components of
-    its inertia tensor in the box frame (``ixx iyy izz ixy ixz iyz``, of a
-    uniform lamina), its vertices relative to the centroid (z = 0) and the
-    rounding diameter. A disk is one vertex with its own diameter; rounded
-    polygons are refused.
-    """
-
-    suffix = ".data"
-
-    def __init__(self, config: LammpsConfig | None = None) -> None:
-        self.config = config or LammpsConfig()
-
-    def export(
-        self, packing: Packing, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
-    ) -> Path:
-        """Write the data file; return ``path``."""
-        cfg = self.config
-        path = Path(path)
-        idx = np.flatnonzero(packing.placed)
-        rounding = packing.rounding_radius
-        counts = np.diff(packing.offsets)
-        if np.any((rounding[idx] > 0) & (counts[idx] != 1)):
-            raise ExportError(
-                "the lammps export takes polygons and disks; this packing has rounded polygons"
-            )
-        xmin, xmax, ymin, ymax = (float(v) for v in packing.domain.bounds())
-        n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
-        atoms: list[str] = []
-        bodies: list[str] = []
-        for atom_id, j in enumerate(idx.tolist(), start=1):
-            local = packing.vertices[packing.offsets[j] : packing.offsets[j + 1]]
-            diameter = cfg.rounding
-            if rounding[j] > 0:  # a disk: one vertex at its centre, its own diameter
-                r = float(rounding[j])
-                area, c = math.pi * r * r, local[0]
-                ixx = iyy = 0.25 * area * r * r
-                ixy = 0.0
-                diameter = 2.0 * r
-            elif local.shape[0] < 3:
-                raise ExportError(f"particle {j} has fewer than 3 vertices")
-            else:
-                area, c, ixx, iyy, ixy = polygon_moments(local)
-            rho = cfg.density
-            pos = packing.centre[j] + c
-            mass = area * rho
-            atoms.append(
-                f"{atom_id} {int(packing.mineral[j]) + 1} 1 {_num(mass)} "
-                f"{_num(pos[0])} {_num(pos[1])} 0.0"
-            )
-            rel = local - c
-            inertia = (rho * ixx, rho * iyy, rho * (ixx + iyy), -rho * ixy, 0.0, 0.0)
-            bodies.append(f"{atom_id} 1 {6 + 3 * rel.shape[0] + 1}")
-            bodies.append(str(rel.shape[0]))
-            bodies.append(" ".join(_num(v) for v in inertia))
-            bodies += [f"{_num(x)} {_num(y)} 0.0" for x, y in rel.tolist()]
-            bodies.append(_num(diameter))
-        counts = np.diff(packing.offsets)[idx]
-        n_min = int(counts.min()) if counts.size else 3
-        n_max = int(counts.max()) if counts.size else 3
-        lines = [
-            f"LAMMPS data file from regopack {packing.version}: scene "
-            f"{packing.scene.get('name', '?')}, seed {packing.seed}, "
-            f"atom_style body rounded/polygon {n_min} {n_max}",
-            "",
-            f"{len(idx)} atoms",
-            f"{len(idx)} bodies",
-            f"{n_types} atom types",
-            "",
-            f"{_num(xmin)} {_num(xmax)} xlo xhi",
-            f"{_num(ymin)} {_num(ymax)} ylo yhi",
-            "-0.5 0.5 zlo zhi",
-            "",
-            "Atoms # body",
-            "",
-            *atoms,
-            "",
-            "Bodies",
-            "",
-            *bodies,
-        ]
-        _write_text(path, "\n".join(lines) + "\n")
-        return path
-
-
 # ---------------------------------------------------------------------------
 # registration
 
@@ -785,6 +679,6 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             "lammps",
             LammpsConfig,
             LammpsExporter,
-            "LAMMPS data file for atom_style body rounded/polygon.",
+            "LAMMPS data file (body rounded/polygon) and an input script that runs it.",
         ),
     ]

