@@ -5,6 +5,7 @@ An experiment file names a base scene and the scene fields to vary::
     name = "eta-vs-seed"
     base = "small"                       # built-in scene or path of a scene file
     metrics = ["placed", "phi_interior"]  # optional; see DEFAULT_METRICS
+    max_runs = 10000                     # optional; a larger grid is refused (MAX_RUNS)
 
     [set]                                # applied to every run
     count = 150
@@ -116,6 +117,14 @@ SCENE_JSON = "scene.json"
 A finished run is reused only when this file matches the run's current scene.
 """
 
+MAX_RUNS = 10_000
+"""Default of an experiment's ``max_runs``: the largest number of runs a sweep may expand to.
+
+A grid with more runs is refused before it is expanded (a typo such as
+``seed = "1..1000000"`` would otherwise list and validate a million scenes);
+set ``max_runs`` in the experiment file to allow more.
+"""
+
 _RANGE = re.compile(r"^\s*(-?\d+)\s*\.\.\s*(-?\d+)\s*(?:\.\.\s*(\d+)\s*)?$")
 _UNSAFE = re.compile(r"[^A-Za-z0-9._=,+-]+")
 _MAX_ID = 120
@@ -181,7 +190,7 @@ class Experiment(BaseModel):
     ['eta=0,seed=1', 'eta=0,seed=2', 'eta=10,seed=1', 'eta=10,seed=2']
     """
 
-    model_config = ConfigDict(extra="forbid", populate_by_name=True)
+    model_config = ConfigDict(extra="forbid", populate_by_name=True, strict=True)
 
     name: str | None = Field(
         None,
@@ -236,6 +245,14 @@ class Experiment(BaseModel):
             "verify.worst_overlap, verify.outside, verify.any_nan and verify.ok to its metrics."
         ),
     )
+    max_runs: int = Field(
+        MAX_RUNS,
+        ge=1,
+        description=(
+            f"Largest number of runs the grid may expand to (default {MAX_RUNS:,}); a larger "
+            "grid is refused before it is expanded."
+        ),
+    )
     voids: bool = Field(
         False,
         description=(
@@ -251,8 +268,10 @@ class Experiment(BaseModel):
     @model_validator(mode="before")
     @classmethod
     def _flatten_tables(cls, data: Any) -> Any:
-        """Accept nested tables (``[sweep.density]``) as dotted keys."""
-        return _flatten_input(data)
+        """Accept nested tables (``[sweep.density]``) as dotted keys; refuse too many runs."""
+        data = _flatten_input(data)
+        _check_grid_size(data)
+        return data
 
     @field_validator("sweep", "set_")
     @classmethod
@@ -311,11 +330,56 @@ def _flatten_input(data: Any) -> Any:
     return out
 
 
+def _axis_length(values: Any) -> int | None:
+    """Count the values of a sweep axis (a list or an integer range) without listing them."""
+    if isinstance(values, list):
+        return len(values)
+    match = _RANGE.match(values) if isinstance(values, str) else None
+    if match is None:
+        return None
+    start, stop, step = int(match.group(1)), int(match.group(2)), int(match.group(3) or 1)
+    return max(0, (stop - start) // step + 1) if step >= 1 else None
+
+
+def _check_grid_size(data: Any) -> None:
+    """Refuse a grid of more than ``max_runs`` runs before any range is listed."""
+    if not isinstance(data, dict):
+        return
+    limit = data.get("max_runs", MAX_RUNS)
+    if not isinstance(limit, int) or isinstance(limit, bool) or limit < 1:
+        return  # the field's own validation reports it
+    axes: list[tuple[str, int]] = []
+    sweep = data.get("sweep")
+    if isinstance(sweep, Mapping):
+        axes += [(f"sweep.{k}", n) for k, v in sweep.items() if (n := _axis_length(v))]
+    groups = data.get("zip")
+    if isinstance(groups, list):
+        for i, group in enumerate(groups):
+            if isinstance(group, Mapping) and group:
+                n = _axis_length(next(iter(group.values())))
+                if n:
+                    axes.append((f"zip.{i}", n))
+    total = math.prod(n for _, n in axes)
+    if total > limit:
+        shown = ", ".join(f"{where} has {n:,}" for where, n in axes if n > 1)
+        raise ValueError(
+            f"the sweep expands to {total:,} runs ({shown}), more than max_runs = {limit:,}; "
+            "set max_runs in the experiment file to allow more"
+        )
+
+
+_NO_VALUE = frozenset({"value_error", "extra_forbidden", "missing"})
+"""Error types whose message says enough without the offending value."""
+
+
 def _describe(err: ValidationError, source: str) -> str:
     errors = err.errors(include_url=False)
     first = errors[0]
     loc = ".".join(str(p) for p in first["loc"])
     msg = first["msg"].removeprefix("Value error, ")
+    value = first.get("input")
+    if loc and first["type"] not in _NO_VALUE and isinstance(value, bool | int | float | str):
+        loc = f"{loc} = {_toml._value(value)}"
     text = f"{source}: {loc}: {msg}" if loc else f"{source}: {msg}"
     if len(errors) > 1:
         more = len(errors) - 1

@@ -446,6 +446,9 @@ def replace_folder(target: str | Path, kind: str) -> Iterator[Path]:
         except OSError as err:
             raise ConfigError(f"cannot move the new output into {target}: {_why(err)}") from err
         _raise_pending()
+    except OSError as err:  # e.g. the disk is full: one line, and nothing half-written
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise ConfigError(f"cannot write the output folder {target}: {_why(err)}") from err
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         raise

@@ -631,7 +631,14 @@ def save(packing: Packing, path: str | Path) -> None:
     The file is written under a temporary name in the same directory, flushed
     to disk, then renamed over ``path``; an interrupted save leaves any
     previous file untouched. The name is used as given (no ``.npz`` is added).
+
+    Raises
+    ------
+    PackingError
+        When the packing breaks the packing format (its arrays may have been
+        changed in place since it was built); nothing is written then.
     """
+    packing.validate()
     arrays: dict[str, Any] = {name: getattr(packing, name) for name in _ARRAYS}
     if packing.rounded:
         arrays["rounding"] = packing.rounding_radius

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -11,9 +12,10 @@ from typing import Any
 
 import numpy as np
 
+from regopack import _toml
 from regopack.analysis import AnalysisFiles, run_analyses, write_analysis_files
 from regopack.domain import Domain, Rectangle
-from regopack.errors import ConfigError, ExportError, PluginError
+from regopack.errors import ConfigError, ExportError, GeometryError, PluginError
 from regopack.interfaces import (
     Analyzer,
     DensityController,
@@ -40,10 +42,13 @@ from regopack.scene import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, outpu
 from regopack.sieve import unplaced_per_class
 
 __all__ = [
+    "BYTES_PER_PARTICLE",
     "RUN_FOLDER",
     "RunOutcome",
+    "check_scene",
     "default_out_dir",
     "draw_population",
+    "memory_limit",
     "particle_count",
     "phi_in_window",
     "run_scene",
@@ -52,6 +57,15 @@ __all__ = [
 
 RUN_FOLDER = "run"
 """Kind of the folder a run writes (in its :data:`regopack.outdir.MARKER` file)."""
+
+BYTES_PER_PARTICLE = 256
+"""Memory a run needs at least per particle drawn, in bytes (a lower bound).
+
+Every particle is drawn before insertion: its radius, mineral, orientation,
+vertex offset and at least three vertices, some of them twice while they are
+built. A scene whose particle count times this exceeds :func:`memory_limit`
+is refused before anything is allocated.
+"""
 
 
 @dataclass(frozen=True)
@@ -96,11 +110,141 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
 
     This is the scene's ``count``, or ``round(domain area / size_dist.mean_area)``
     for ``count = "auto"``.
+
+    Raises
+    ------
+    ConfigError
+        When ``count = "auto"`` gives no finite number of particles.
     """
     count = scene.scene.count
     if count == "auto":
-        return round(scene.domain.area / size_dist.mean_area)
+        area, mean = scene.domain.area, float(size_dist.mean_area)
+        auto = area / mean if mean > 0 else math.inf
+        if not math.isfinite(auto):
+            raise ConfigError(
+                _located(
+                    scene,
+                    "count",
+                    f"domain area / mean particle area = {area:g} / {mean:g} is not a finite "
+                    "number of particles; give a count or larger particles",
+                )
+            )
+        return round(auto)
     return int(count)
+
+
+def memory_limit() -> tuple[int, str] | None:
+    """Return the memory this process may use, in bytes, and what sets that limit.
+
+    The smallest of the machine's physical memory, the control group's limit
+    (``memory.max``, in containers and batch jobs) and the address-space limit
+    (``ulimit -v``); ``None`` where none of them is known.
+    """
+    limits: list[tuple[int, str]] = []
+    try:
+        limits.append((os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"), "memory"))
+    except (AttributeError, OSError, ValueError):
+        pass
+    try:
+        text = Path("/sys/fs/cgroup/memory.max").read_text(encoding="ascii").strip()
+        if text.isdigit():
+            limits.append((int(text), "memory limit (cgroup memory.max)"))
+    except (OSError, UnicodeDecodeError):
+        pass
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if soft != resource.RLIM_INFINITY and soft > 0:
+            limits.append((int(soft), "address-space limit (ulimit -v)"))
+    except (ImportError, OSError, ValueError):
+        pass
+    return min(limits) if limits else None
+
+
+def _bytes(n: float) -> str:
+    """``n`` bytes in binary units, e.g. ``7.3 TiB``."""
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
+        if unit == "EiB" and n >= 1e6:
+            return f"{n:.3g} {unit}"
+        if n < 1024 or unit == "EiB":
+            return f"{n:,.0f} {unit}" if unit == "B" else f"{n:,.1f} {unit}"
+        n /= 1024
+    raise AssertionError("unreachable")
+
+
+def _located(scene: ResolvedScene, loc: str, text: str) -> str:
+    """``<source>: <loc> = <value>: <text>``, the style of the scene's validation errors."""
+    where = scene.scene.origin(loc)
+    value = scene.scene.count if loc == "count" else None
+    shown = f"{loc} = {_toml._value(value)}" if value is not None else loc
+    return f"{where}: {shown}: {text}" if where else f"{shown}: {text}"
+
+
+def _count(n: int) -> str:
+    return f"{n:,}" if n < 10**15 else f"{n:.3g}"
+
+
+def check_scene(scene: ResolvedScene) -> int:
+    """Check that ``scene`` can be drawn and packed at all; return its particle count.
+
+    Refused, before anything is drawn: particles whose area overflows 64-bit
+    floats; particles larger than the domain (the smallest particle's area
+    exceeds the domain's, so none can be placed); and a particle count (given,
+    or from ``count = "auto"``) whose memory, at least
+    :data:`BYTES_PER_PARTICLE` per particle, exceeds :func:`memory_limit`.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the scene file (or ``--set``), the field and the limit.
+    """
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
+    area_max, area_min = math.pi * r_max * r_max, math.pi * r_min * r_min
+    if not math.isfinite(area_max):
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the largest particle (diameter {2 * r_max:g}) has an area of {area_max:g}: "
+                "its size overflows 64-bit floats; give smaller sizes",
+            )
+        )
+    domain_area = scene.domain.area
+    if area_min > domain_area:
+        domain_set = scene.scene.origin("domain") != scene.scene.source
+        raise ConfigError(
+            _located(
+                scene,
+                "domain"
+                if domain_set and scene.scene.origin("size") == scene.scene.source
+                else "size",
+                f"the smallest particle (diameter {2 * r_min:g}, area {area_min:g}) is larger "
+                f"than the domain (area {domain_area:g}), so no particle can be placed; "
+                "give smaller sizes or a larger domain",
+            )
+        )
+    n = particle_count(scene, size_dist)
+    limit = memory_limit()
+    needed = n * BYTES_PER_PARTICLE
+    if limit is not None and needed > limit[0]:
+        auto = scene.scene.count == "auto"
+        given = (
+            f"gives {_count(n)} particles (domain area {domain_area:g} / mean particle area "
+            f"{float(size_dist.mean_area):g}), which"
+            if auto
+            else f"{_count(n)} particles"
+        )
+        raise ConfigError(
+            _located(
+                scene,
+                "count",
+                f"{given} need at least {_bytes(needed)} of memory ({BYTES_PER_PARTICLE} bytes "
+                f"per particle); this machine's {limit[1]} is {_bytes(limit[0])}",
+            )
+        )
+    return n
 
 
 def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
@@ -111,8 +255,8 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     with the normalised fractions); then, for each phase in scene order, the
     shapes of that phase's particles (``shape.generate(radii[idx], rng)``).
     """
+    n = check_scene(scene)
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
-    n = particle_count(scene, size_dist)
     radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
     if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
         raise PluginError(
@@ -124,11 +268,24 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     for p, phase in enumerate(scene.phases):
         generator: ShapeGenerator = _build(phase.shape, ShapeGenerator, "shape")
         idx = np.flatnonzero(minerals == p).astype(np.int64)
-        batch = generator.generate(radii[idx], rng)
+        with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+            batch = generator.generate(radii[idx], rng)
         if len(batch) != len(idx):
             raise PluginError(
                 f"shape plugin {phase.shape.kind!r} returned {len(batch)} outlines "
                 f"for {len(idx)} radii (phase {phase.name!r})"
+            )
+        finite = np.isfinite(batch.vertices).all(axis=1)
+        if not finite.all():
+            j = int(np.searchsorted(batch.offsets, np.flatnonzero(~finite)[0], side="right")) - 1
+            raise GeometryError(
+                _located(
+                    scene,
+                    f"phases.{p}.shape",
+                    f"the {phase.shape.kind!r} outline of a particle of diameter "
+                    f"{2 * radii[idx][j]:g} (phase {phase.name!r}) has non-finite vertices "
+                    "(64-bit float overflow); give smaller sizes",
+                )
             )
         parts.append((idx, batch))
     shapes = concat_shapes(parts, n)

@@ -73,6 +73,16 @@ ANALYSIS_FOLDER = "analysis"
 
 T = TypeVar("T")
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
+Point = Annotated[tuple[FiniteFloat, FiniteFloat], Field(strict=False)]
+"""A point ``[x, y]``: a TOML array is taken as a tuple, its items stay strict numbers."""
+
+STRICT = ConfigDict(extra="forbid", strict=True)
+"""Model configuration of the scene sections: unknown keys and coerced values are errors.
+
+Strict validation refuses a string or a boolean where a number is expected
+(``width = "200"``, ``width = true``) and a number or string where a boolean is
+expected; an integer is still a valid float (``width = 200``).
+"""
 
 
 class Domain(BaseModel):
@@ -84,7 +94,7 @@ class Domain(BaseModel):
     is an error.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT
 
     kind: Literal["rectangle", "periodic", "polygon", "circle"] = Field(
         "rectangle",
@@ -105,13 +115,13 @@ class Domain(BaseModel):
         allow_inf_nan=False,
         description="Extent along y (micrometres); rectangle and periodic.",
     )
-    center: tuple[FiniteFloat, FiniteFloat] = Field(
+    center: Point = Field(
         (0.0, 0.0), description="Centre (micrometres); rectangle, periodic and circle."
     )
     radius: float | None = Field(
         None, gt=0, allow_inf_nan=False, description="Radius of the circle (micrometres)."
     )
-    vertices: list[tuple[FiniteFloat, FiniteFloat]] | None = Field(
+    vertices: list[Point] | None = Field(
         None,
         min_length=3,
         description="Corners of the convex polygon in order, either orientation (micrometres).",
@@ -144,6 +154,17 @@ class Domain(BaseModel):
                 self.to_domain()
             except GeometryError as err:
                 raise ValueError(f"vertices: {err}") from err
+        if not math.isfinite(self.to_domain().area):
+            if self.kind in ("rectangle", "periodic"):
+                given = f"width x height = {self.width:g} x {self.height:g}"
+            elif self.kind == "circle":
+                given = f"radius = {self.radius:g}"
+            else:
+                given = "the vertices"
+            raise ValueError(
+                f"{given} gives a {self.kind} whose area overflows 64-bit floats (inf); "
+                "give a smaller domain"
+            )
         return self
 
     def to_domain(self) -> DomainGeometry:
@@ -191,7 +212,7 @@ class PluginRef(BaseModel):
 class Phase(BaseModel):
     """One mineral phase: its share of the particles and its shape generator."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT
 
     name: str = Field(min_length=1, description="Name of the mineral phase.")
     fraction: float = Field(
@@ -205,7 +226,7 @@ class Phase(BaseModel):
 class Outputs(BaseModel):
     """Names of the files a run writes into its output directory."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT
 
     packing: str = Field(
         "packing.npz",
@@ -253,7 +274,7 @@ class Scene(BaseModel):
     ('small', 200.0)
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = STRICT
 
     name: str = Field("custom", min_length=1, description="Name of the scene (used for outputs).")
     seed: int = Field(0, ge=0, strict=True, description="Seed of the run's random generator.")
@@ -314,6 +335,10 @@ class Scene(BaseModel):
         """File the scene was read from (for messages), if any."""
         return self._source
 
+    def origin(self, loc: str) -> str | None:
+        """Where the value of the dotted field ``loc`` came from: an option or the file."""
+        return _where(loc, self._source, self._overridden)
+
     @property
     def fractions(self) -> NDArray[np.float64]:
         """Phase fractions divided by their sum."""
@@ -366,7 +391,7 @@ def _describe_validation_error(
 def _where(loc: str, source: str | None, overridden: Mapping[str, str]) -> str | None:
     """Where the value at ``loc`` came from: a command-line option or the file."""
     for key, label in overridden.items():
-        if loc == key or loc.startswith(key + "."):
+        if loc == key or loc.startswith(key + ".") or key.startswith(loc + "."):
             return label
     return source
 

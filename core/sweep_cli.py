@@ -73,9 +73,11 @@ def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
         action="store_true",
         help="list the built-in experiments and exit",
     )
+    from regopack.cli import output_path
+
     sweep.add_argument(
         "--out",
-        type=Path,
+        type=output_path,
         metavar="DIR",
         help="output directory (default: runs/<experiment name>)",
     )
@@ -181,7 +183,10 @@ def run_sweep_command(
         TimeElapsedColumn(),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=live, transient=False, disable=quiet) as bar:
+    from regopack.cli import shown_until_error
+
+    progress_bar = Progress(*columns, console=live, transient=False, disable=quiet)
+    with shown_until_error(progress_bar) as bar:
         task = bar.add_task(f"sweep {builtin or experiment_path}", total=None, failed=0, reused=0)
         failed = reused = 0
 

@@ -20,6 +20,7 @@ measured by exact polygon-disk intersection.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -28,6 +29,7 @@ import shapely
 from numpy.typing import NDArray
 
 from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, polygon_disk_area
+from regopack.errors import ConfigError
 from regopack.packing import Packing
 
 __all__ = ["CONFIRM_GRID", "VerifyReport", "assert_valid_packing", "verify"]
@@ -207,7 +209,18 @@ def verify(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport:
     >>> p = packing_from_polygons([sq, [(x + 1, y) for x, y in sq]], domain=(0, 2, 0, 1))
     >>> verify(p).ok
     True
+
+    Raises
+    ------
+    ConfigError
+        When ``rel_tol`` is negative or not finite.
+    PackingError
+        When the packing breaks the packing format (e.g. a NaN coordinate or
+        a particle without vertices after its arrays were changed in place).
     """
+    if not (math.isfinite(rel_tol) and rel_tol >= 0):
+        raise ConfigError(f"rel_tol = {rel_tol!r}: must be a finite number >= 0")
+    packing.validate()  # the arrays may have changed in place since the packing was built
     dom = packing.domain
     idx = np.flatnonzero(packing.placed).astype(np.int64)
     n = len(idx)

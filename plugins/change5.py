@@ -24,7 +24,7 @@ from regopack.plugin_types import SizeDistributionSpec
 class Change5Config(BaseModel):
     """Parameters of the Chang'e-5 size distribution."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     d_min: float = Field(
         2.0,

@@ -26,7 +26,7 @@ FloatArray = NDArray[np.float64]
 class DiskConfig(BaseModel):
     """The disk takes no parameters: its radius is the particle's equivalent radius."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class Disk(ShapeGenerator):

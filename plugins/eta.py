@@ -22,7 +22,7 @@ from regopack.plugin_types import DensityControllerSpec
 class EtaConfig(BaseModel):
     """Parameters of the eta density controller."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     eta: float = Field(
         0.0,

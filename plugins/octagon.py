@@ -33,7 +33,7 @@ SNAP = 1e-10
 class OctagonConfig(BaseModel):
     """Parameters of the random convex polygon with shape coefficient psi."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     psi: float = Field(
         1.0,

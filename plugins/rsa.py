@@ -88,7 +88,7 @@ N_IPAR = 10
 class RsaConfig(BaseModel):
     """Parameters of the random sequential addition inserter."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     max_attempts: int = Field(
         1000,

@@ -76,7 +76,7 @@ CONVEX_RTOL = 1e-9
 class RegularConfig(BaseModel):
     """Parameters of the regular m-gon."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     m: int = Field(6, ge=3, le=256, description="Number of vertices m (3 to 256).")
 
@@ -84,7 +84,7 @@ class RegularConfig(BaseModel):
 class RandomPolygonConfig(BaseModel):
     """Parameters of the random convex m-gon."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     m: int = Field(8, ge=3, le=256, description="Number of vertices m (3 to 256).")
     jitter: float = Field(
@@ -103,7 +103,7 @@ class RandomPolygonConfig(BaseModel):
 class TemplateConfig(BaseModel):
     """Parameters of the template shape."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     path: str = Field(
         min_length=1,

@@ -138,7 +138,7 @@ _D_MAX_DESCRIPTION = (
 class LogNormalConfig(BaseModel):
     """Parameters of the (optionally truncated) lognormal distribution of diameters."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     median: float | None = Field(
         None,
@@ -188,7 +188,7 @@ class LogNormalConfig(BaseModel):
 class RosinRammlerConfig(BaseModel):
     """Parameters of the (optionally truncated) Rosin–Rammler distribution of diameters."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     d63: float = Field(
         gt=0,
@@ -217,7 +217,7 @@ class RosinRammlerConfig(BaseModel):
 class UniformConfig(BaseModel):
     """Parameters of the uniform distribution of diameters."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     d_min: float = Field(
         gt=0, allow_inf_nan=False, description="Smallest diameter (> 0); required."
@@ -235,7 +235,7 @@ class UniformConfig(BaseModel):
 class MonodisperseConfig(BaseModel):
     """Parameters of the single-size distribution."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     d: float = Field(
         gt=0, allow_inf_nan=False, description="The diameter of every particle (> 0); required."
@@ -245,9 +245,10 @@ class MonodisperseConfig(BaseModel):
 class TabulatedConfig(BaseModel):
     """Parameters of a sieve curve read from a CSV file."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     path: Path = Field(
+        strict=False,  # a TOML string
         description=(
             "CSV file with two columns, sieve size and cumulative percent passing, finest "
             "sieve first. A relative path is taken from the current working directory and "

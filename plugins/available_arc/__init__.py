@@ -40,7 +40,7 @@ ZONE_PER_RADIUS = 6.0
 class AvailableArcConfig(BaseModel):
     """Parameters of the available-arc inserter."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     t: float = Field(
         0.999,

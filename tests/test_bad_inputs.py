@@ -1,0 +1,310 @@
+"""Bad inputs end in one line on stderr and a non-zero exit, and write nothing.
+
+Each case is a command a user could type: a value of the wrong type in a scene
+or experiment file or in ``--set``, an empty ``--out``, a negative or NaN
+``--rel-tol``, a scene that cannot be drawn (too many particles for the
+memory, sizes that overflow 64-bit floats, particles larger than the domain),
+a sweep that expands to too many runs, a full disk. None may print a
+traceback or leave a file behind.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+from collections.abc import Callable
+from importlib.resources import files
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import regopack.analysis
+import regopack.run
+from regopack.cli import main
+from regopack.errors import PackingError
+from regopack.packing import save
+from regopack.testing import packing_from_polygons
+from regopack.verify import verify
+
+GIB = 1024**3
+SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
+
+UNIFORM_SCENE = """\
+name = "huge"
+count = 5
+[size]
+kind = "uniform"
+d_min = 1e300
+d_max = 2e300
+[[phases]]
+name = "a"
+fraction = 1
+shape = { kind = "octagon", psi = 1, a = 0.3, m = 8 }
+[insertion]
+kind = "available-arc"
+[density]
+kind = "eta"
+"""
+
+
+def small_with(old: str, new: str) -> str:
+    """The built-in ``small`` scene with one piece of text replaced."""
+    text = files("regopack.scenes").joinpath("small.toml").read_text(encoding="utf-8")
+    assert old in text
+    return text.replace(old, new, 1)
+
+
+FILES: dict[str, Callable[[Path], None]] = {
+    "width.toml": lambda p: p.write_text(small_with("width = 200.0", 'width = "200"')),
+    "lists.toml": lambda p: p.write_text(
+        small_with('search = "indexed"', 'search = "indexed"\nneighbour_lists = "yes"')
+    ),
+    "uniform.toml": lambda p: p.write_text(UNIFORM_SCENE),
+    "verify.toml": lambda p: p.write_text('base = "small"\nverify = "yes"\n[set]\ncount = 5\n'),
+    "grid.toml": lambda p: p.write_text(
+        'base = "small"\n[sweep]\nseed = "1..1000000000000"\n"density.eta" = [0, 1]\n'
+    ),
+    "packing.npz": lambda p: save(
+        packing_from_polygons([SQUARE, [(x + 2, y) for x, y in SQUARE]], domain=(0, 4, 0, 2)),
+        p,
+    ),
+}
+"""Input files every case finds in its working directory."""
+
+
+@pytest.fixture(autouse=True)
+def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
+    """Run in a temporary directory holding the input files, on a machine with 16 GiB."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setattr(regopack.run, "memory_limit", lambda: (16 * GIB, "memory"), raising=False)
+    for name, write in FILES.items():
+        write(tmp_path / name)
+    return tmp_path
+
+
+def tree(folder: Path) -> dict[str, bytes]:
+    """Every file below ``folder`` with its content."""
+    return {str(p.relative_to(folder)): p.read_bytes() for p in folder.rglob("*") if p.is_file()}
+
+
+def one_line(capsys: pytest.CaptureFixture[str], prefix: str = "regopack: error: ") -> str:
+    """The single line on stderr, without its prefix; no traceback."""
+    err = capsys.readouterr().err
+    assert "Traceback" not in err
+    lines = err.splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith(prefix), err
+    return lines[0].removeprefix(prefix)
+
+
+def usage(command: str, option: str, text: str) -> str:
+    return f"{command}: argument {option}: {text} (see 'regopack {command} --help')"
+
+
+EMPTY_OUT = "'' is an empty path; give a folder or file name, e.g. runs/mine"
+
+CASES: list[tuple[str, list[str], str]] = [
+    # 1. strict types: no string or boolean is taken for a number, nor a string for a boolean
+    (
+        "scene-file-string-for-float",
+        ["run", "width.toml", "--set", "count=5", "--quiet"],
+        'width.toml: domain.width = "200": Input should be a valid number',
+    ),
+    (
+        "scene-file-string-for-bool",
+        ["run", "lists.toml", "--set", "count=5", "--quiet"],
+        'lists.toml: insertion.neighbour_lists = "yes": Input should be a valid boolean',
+    ),
+    (
+        "set-string-for-float",
+        ["run", "small", "--set", "count=5", "--set", 'domain.width="200"', "--quiet"],
+        '--set: domain.width = "200": Input should be a valid number',
+    ),
+    (
+        "set-bare-word-for-float",
+        ["run", "small", "--set", "domain.width=abc", "--quiet"],
+        '--set: domain.width = "abc": Input should be a valid number',
+    ),
+    (
+        "set-bool-for-float",
+        ["run", "small", "--set", "count=5", "--set", "domain.width=true", "--quiet"],
+        "--set: domain.width = true: Input should be a valid number",
+    ),
+    (
+        "set-string-in-point",
+        ["config", "small", "--set", 'domain.center=["1", 2]'],
+        '--set: domain.center.0 = "1": Input should be a valid number',
+    ),
+    (
+        "set-string-for-plugin-float",
+        ["run", "small", "--set", "count=5", "--set", 'insertion.t="0.9"', "--quiet"],
+        '--set: insertion.t = "0.9": Input should be a valid number',
+    ),
+    (
+        "set-string-for-size-float",
+        ["config", "small", "--set", 'size.d_min="2"'],
+        '--set: size.d_min = "2": Input should be a valid number',
+    ),
+    (
+        "experiment-string-for-bool",
+        ["sweep", "verify.toml", "--out", "sweep", "--quiet", "--no-plots"],
+        'verify.toml: verify = "yes": Input should be a valid boolean',
+    ),
+    # 2. an empty --out would mean the current directory
+    (
+        "run-empty-out",
+        ["run", "small", "--set", "count=5", "--out", ""],
+        usage("run", "--out", EMPTY_OUT),
+    ),
+    (
+        "analyze-empty-out",
+        ["analyze", "packing.npz", "--out", "", "--no-figures"],
+        usage("analyze", "--out", EMPTY_OUT),
+    ),
+    (
+        "export-empty-out",
+        ["export", "packing.npz", "--to", "csv", "--out", ""],
+        usage("export", "--out", EMPTY_OUT),
+    ),
+    ("sweep-empty-out", ["sweep", "verify.toml", "--out", ""], usage("sweep", "--out", EMPTY_OUT)),
+    # 3. --rel-tol
+    (
+        "negative-rel-tol",
+        ["verify", "packing.npz", "--rel-tol", "-1"],
+        usage("verify", "--rel-tol", "'-1': must be a finite number >= 0, e.g. 1e-9"),
+    ),
+    (
+        "nan-rel-tol",
+        ["verify", "packing.npz", "--rel-tol", "nan"],
+        usage("verify", "--rel-tol", "'nan': must be a finite number >= 0, e.g. 1e-9"),
+    ),
+    # 4. more particles than the memory holds
+    (
+        "count-beyond-memory",
+        ["run", "small", "--set", f"count={10**12}", "--quiet"],
+        "--set: count = 1000000000000: 1,000,000,000,000 particles need at least 232.8 TiB "
+        "of memory (256 bytes per particle); this machine's memory is 16.0 GiB",
+    ),
+    # 5. huge domains with count = "auto"
+    (
+        "domain-area-overflows",
+        ["run", "small", "--set", "domain.width=1e200", "--set", "domain.height=1e200"],
+        "--set: domain: width x height = 1e+200 x 1e+200 gives a rectangle whose area "
+        "overflows 64-bit floats (inf); give a smaller domain",
+    ),
+    (
+        "auto-count-beyond-memory",
+        ["run", "small", "--set", "domain.width=1e100", "--set", "domain.height=1e100"],
+        'small.toml: count = "auto": gives 2.59e+198 particles (domain area 1e+200 / mean '
+        "particle area 38.6039), which need at least 5.75e+182 EiB of memory (256 bytes per "
+        "particle); this machine's memory is 16.0 GiB",
+    ),
+    # 6. sizes whose area (and vertices) overflow
+    (
+        "sizes-overflow",
+        ["run", "uniform.toml"],
+        "uniform.toml: size: the largest particle (diameter 2e+300) has an area of inf: its "
+        "size overflows 64-bit floats; give smaller sizes",
+    ),
+    # 7. no particle fits the domain
+    (
+        "particles-larger-than-domain",
+        ["run", "small", "--set", "domain.width=1", "--set", "domain.height=1", "--set", "count=5"],
+        "--set: domain: the smallest particle (diameter 2, area 3.14159) is larger than the "
+        "domain (area 1), so no particle can be placed; give smaller sizes or a larger domain",
+    ),
+    # 10. a sweep expanding to more runs than max_runs
+    (
+        "sweep-too-many-runs",
+        ["sweep", "grid.toml", "--out", "sweep"],
+        "grid.toml: the sweep expands to 2,000,000,000,000 runs (sweep.seed has "
+        "1,000,000,000,000, sweep.density.eta has 2), more than max_runs = 10,000; set "
+        "max_runs in the experiment file to allow more",
+    ),
+]
+
+
+@pytest.mark.parametrize(("argv", "expected"), [c[1:] for c in CASES], ids=[c[0] for c in CASES])
+def test_refused_in_one_line_and_nothing_written(
+    workdir: Path, capsys: pytest.CaptureFixture[str], argv: list[str], expected: str
+) -> None:
+    before = tree(workdir)
+    assert main(argv) == 2
+    assert one_line(capsys) == expected
+    assert tree(workdir) == before
+
+
+def test_integers_stay_valid_floats(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["config", "small", "--set", "domain.width=200", "--set", "insertion.t=1"]) == 0
+
+
+def test_nothing_placed_is_a_loud_warning(
+    workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "small", "--set", "domain.width=100", "--set", "domain.height=1"]
+    assert main([*argv, "--set", "count=3", "--out", "out", "--quiet"]) == 0
+    assert one_line(capsys, "regopack: warning: ") == (
+        "no particle was placed: none of the 3 particles drawn fits into the domain; "
+        "the packing in out/packing.npz is empty"
+    )
+
+
+def _disk_full(*args: object, **kwargs: object) -> None:
+    raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), "somewhere")
+
+
+@pytest.mark.parametrize(
+    ("module", "writer", "argv", "out"),
+    [
+        (regopack.run, "save", ["run", "small", "--set", "count=5", "--quiet"], "runs/x"),
+        (regopack.analysis, "write_json_atomic", ["analyze", "packing.npz", "--no-figures"], "a"),
+    ],
+    ids=["run", "analyze"],
+)
+def test_a_full_disk_is_one_line_and_leaves_nothing(
+    workdir: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    module: object,
+    writer: str,
+    argv: list[str],
+    out: str,
+) -> None:
+    monkeypatch.setattr(module, writer, _disk_full)
+    before = tree(workdir)
+    assert main([*argv, "--out", out]) == 2
+    assert one_line(capsys) == f"cannot write the output folder {out}: No space left on device"
+    assert tree(workdir) == before
+    assert not any(p.name.startswith(Path(out).name) for p in (workdir / out).parent.iterdir())
+
+
+BREAK: dict[str, Callable[..., None]] = {
+    "nan-centre": lambda p: p.centre.__setitem__((0, 0), np.nan),
+    "inf-centre": lambda p: p.centre.__setitem__((1, 1), np.inf),
+    "nan-vertex": lambda p: p.vertices.__setitem__((0, 0), np.nan),
+    "zero-vertex-particle": lambda p: p.offsets.__setitem__(1, 0),
+}
+"""Changes in place that make a packing built in Python break the packing format."""
+
+
+@pytest.mark.parametrize("change", BREAK.values(), ids=list(BREAK))
+def test_verify_and_save_refuse_a_broken_packing(
+    workdir: Path, change: Callable[..., None]
+) -> None:
+    packing = packing_from_polygons([SQUARE, [(x + 2, y) for x, y in SQUARE]], (0, 4, 0, 2))
+    change(packing)
+    with pytest.raises(PackingError) as info:
+        verify(packing)
+    assert "\n" not in str(info.value) and str(info.value).startswith("array ")
+    before = tree(workdir)
+    with pytest.raises(PackingError):
+        save(packing, workdir / "broken.npz")
+    assert tree(workdir) == before
+
+
+@pytest.mark.parametrize("rel_tol", [-1.0, float("nan"), float("inf")])
+def test_verify_refuses_a_bad_tolerance(rel_tol: float) -> None:
+    packing = packing_from_polygons([SQUARE], (0, 4, 0, 2))
+    with pytest.raises(Exception, match=r"^rel_tol = .*: must be a finite number >= 0$"):
+        verify(packing, rel_tol=rel_tol)
