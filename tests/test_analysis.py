@@ -111,7 +111,7 @@ def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
         run_analyses(packing, registry, [("rdff", {})])
     assert str(info.value) == (
         "unknown analyzer 'rdff'; known analyzers: contacts, coordination, density, "
-        "homogeneity, network, psd, rdf"
+        "homogeneity, local_fraction, network, psd, rdf"
     )
 
 

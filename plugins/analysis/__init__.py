@@ -1,6 +1,6 @@
 """Built-in structure analyzers (the paper's Stage 3).
 
-Density, contacts, coordination, rdf, network, homogeneity and psd.
+Density, contacts, coordination, rdf, network, homogeneity, psd and local_fraction.
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from regopack.plugins.analysis.contacts import Contacts, ContactsConfig
 from regopack.plugins.analysis.coordination import Coordination, CoordinationConfig
 from regopack.plugins.analysis.density import Density, DensityConfig
 from regopack.plugins.analysis.homogeneity import Homogeneity, HomogeneityConfig
+from regopack.plugins.analysis.local_fraction import LocalFraction, LocalFractionConfig
 from regopack.plugins.analysis.network import Network, NetworkConfig
 from regopack.plugins.analysis.psd import Psd, PsdConfig
 from regopack.plugins.analysis.rdf import Rdf, RdfConfig
@@ -48,5 +49,11 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             PsdConfig,
             Psd,
             "Size distribution of the placed particles against the requested one, by sieve class.",
+        ),
+        AnalyzerSpec(
+            "local_fraction",
+            LocalFractionConfig,
+            LocalFraction,
+            "Local packing fraction of every particle from its Laguerre or Voronoi cell.",
         ),
     ]

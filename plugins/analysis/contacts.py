@@ -28,7 +28,7 @@ IntArray = NDArray[np.int64]
 class ContactsConfig(BaseModel):
     """Parameters of the contact analyzer."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     tol: float = Field(
         0.05,

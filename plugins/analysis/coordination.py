@@ -16,6 +16,8 @@ from regopack.plugins.analysis.common import eta_of
 from regopack.plugins.analysis.contacts import Contacts
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 
 def _default_sweep() -> list[float]:
@@ -25,7 +27,7 @@ def _default_sweep() -> list[float]:
 class CoordinationConfig(BaseModel):
     """Parameters of the coordination analyzer."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     tols: list[float] = Field(
         default_factory=_default_sweep,
@@ -34,6 +36,80 @@ class CoordinationConfig(BaseModel):
             "Tolerances of the Z(tol) sweep (each at most the contacts analyzer's tol_max)."
         ),
     )
+    rattler_min_contacts: int = Field(
+        2,
+        ge=1,
+        le=100,
+        description=(
+            "A particle with fewer contacts (counting only non-rattlers, removed in turn) is "
+            "a rattler: 2 for frictional particles in 2D, 3 for frictionless ones."
+        ),
+    )
+
+
+def remove_rattlers(
+    i: IntArray, j: IntArray, members: BoolArray, min_contacts: int
+) -> tuple[BoolArray, IntArray, int]:
+    """Remove rattlers from a contact graph, repeatedly, until none is left.
+
+    A member with fewer than ``min_contacts`` contacts with other members is
+    a rattler. Removing it lowers its neighbours' counts, which may make
+    rattlers of them, so removal goes on in rounds until every member left has
+    at least ``min_contacts`` contacts with the others left (the remaining
+    graph is the ``min_contacts``-core of the contact graph).
+
+    Parameters
+    ----------
+    i, j
+        The two particles of every contact.
+    members
+        Mask of the particles that take part (the placed ones); contacts with
+        other particles are ignored.
+    min_contacts
+        Threshold of the contact count.
+
+    Returns
+    -------
+    rattler, z_mechanical, rounds
+        Mask of the rattlers; every particle's contacts with non-rattlers (0
+        for rattlers and non-members); the number of removal rounds.
+
+    Examples
+    --------
+    A triangle with a particle hanging from one corner:
+
+    >>> i, j = np.array([0, 1, 2, 2]), np.array([1, 2, 0, 3])
+    >>> rattler, z, rounds = remove_rattlers(i, j, np.ones(4, bool), 2)
+    >>> rattler.tolist(), z.tolist(), rounds
+    ([False, False, False, True], [2, 2, 2, 0], 1)
+    """
+    n = int(members.shape[0])
+    i = np.asarray(i, dtype=np.int64)
+    j = np.asarray(j, dtype=np.int64)
+    keep = members[i] & members[j]
+    i, j = i[keep], j[keep]
+    z = np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+    ends = np.concatenate([i, j])
+    order = np.argsort(ends, kind="stable")
+    neighbour = np.concatenate([j, i])[order]
+    start = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(np.bincount(ends, minlength=n), out=start[1:])
+    alive = members.copy()
+    front = np.flatnonzero(alive & (z < min_contacts))
+    rounds = 0
+    while front.size:
+        rounds += 1
+        alive[front] = False
+        count = start[front + 1] - start[front]
+        first = np.repeat(np.cumsum(count) - count, count)
+        rows = np.repeat(start[front], count) + np.arange(int(count.sum())) - first
+        hit = neighbour[rows]
+        hit = hit[alive[hit]]
+        z -= np.bincount(hit, minlength=n)
+        touched = np.unique(hit)
+        front = touched[z[touched] < min_contacts]
+    z[~alive] = 0
+    return members & ~alive, z.astype(np.int64), rounds
 
 
 class Coordination(Analyzer):
@@ -41,6 +117,9 @@ class Coordination(Analyzer):
 
     Interior statistics count, for every particle whose centre is farther than
     the exclusion margin from every wall, all its contacts (with any particle).
+    Rattlers are removed from the contact graph of the placed particles by
+    :func:`remove_rattlers`; the mechanical coordination number Z_m is the mean
+    contact count of the particles left, counting only contacts among them.
     """
 
     name = "coordination"
@@ -91,6 +170,13 @@ class Coordination(Analyzer):
         self.tols = np.asarray(tols)
         self.z_tol_domain = np.asarray(sweep_domain)
         self.z_tol_interior = np.asarray(sweep_interior)
+        k = self.config.rattler_min_contacts
+        rattler, zm, rounds = remove_rattlers(contacts.i, contacts.j, placed, k)
+        self.rattler = rattler
+        self.z_mechanical = zm
+        solid = placed & ~rattler
+        solid_in = interior & ~rattler
+        self._z_counts = self._count_table(z, zm, placed, interior, solid_in, names)
         self._results = {
             "tol": contacts.config.tol,
             "eta": eta_of(packing),
@@ -99,6 +185,18 @@ class Coordination(Analyzer):
             "z_interior": float(z[interior].mean()) if interior.any() else None,
             "n_interior": int(interior.sum()),
             "rattlers_interior": int(np.sum(z[interior] == 0)),
+            "rattler_min_contacts": k,
+            "rattlers": int(rattler.sum()),
+            "rattler_fraction": float(rattler.sum() / placed.sum()) if placed.any() else None,
+            "rattlers_interior_dem": int(rattler[interior].sum()),
+            "rattler_fraction_interior": float(rattler[interior].mean())
+            if interior.any()
+            else None,
+            "rattler_rounds": rounds,
+            "n_mechanical": int(solid.sum()),
+            "n_mechanical_interior": int(solid_in.sum()),
+            "z_mechanical": float(zm[solid].mean()) if solid.any() else None,
+            "z_mechanical_interior": float(zm[solid_in].mean()) if solid_in.any() else None,
             "z_per_mineral": per_mineral,
             "n_per_mineral": counts,
             "z_distribution_per_mineral": dist,
@@ -111,6 +209,32 @@ class Coordination(Analyzer):
         }
         return self
 
+    def _count_table(
+        self,
+        z: IntArray,
+        zm: IntArray,
+        placed: BoolArray,
+        interior: BoolArray,
+        solid_in: BoolArray,
+        names: tuple[str, ...],
+    ) -> dict[str, Any]:
+        """Particles with each contact count: domain, interior, per mineral, rattler-free."""
+        top = int(z[placed].max()) if placed.any() else 0
+        size = top + 1
+
+        def counts(values: IntArray, mask: BoolArray) -> IntArray:
+            return np.bincount(values[mask], minlength=size)[:size].astype(np.int64)
+
+        table: dict[str, Any] = {
+            "z": np.arange(size, dtype=np.int64),
+            "n_domain": counts(z, placed),
+            "n_interior": counts(z, interior),
+            "n_interior_mechanical": counts(zm, solid_in),
+        }
+        for m, name in enumerate(names):
+            table[f"n_interior_{name}"] = counts(z, interior & (self._mineral == m))
+        return table
+
     def results(self) -> dict[str, Any]:
         """Scalars and small lists (JSON): Z overall, interior, per mineral, and Z(tol)."""
         if self._results is None:
@@ -121,9 +245,11 @@ class Coordination(Analyzer):
         """Per-particle table and the Z(tol) sweep.
 
         ``particles`` has one row per placed particle: its index in the packing,
-        mineral index, centre, equivalent radius, whether it is interior, and
-        its contact count ``z`` at the contact tolerance. ``z_tol`` has the
-        columns ``tol, z_domain, z_interior``.
+        mineral index, centre, equivalent radius, whether it is interior, its
+        contact count ``z`` at the contact tolerance, whether it is a rattler
+        and its contacts with non-rattlers ``z_mechanical``. ``z_tol`` has the
+        columns ``tol, z_domain, z_interior``; ``z_counts`` one row per
+        contact count ``z``, with the number of particles that have it.
         """
         if self._results is None:
             raise RuntimeError("call compute() first")
@@ -137,10 +263,13 @@ class Coordination(Analyzer):
                 "radius": self._radius[idx],
                 "interior": self.interior[idx],
                 "z": self.per_particle[idx],
+                "rattler": self.rattler[idx],
+                "z_mechanical": self.z_mechanical[idx],
             },
             "z_tol": {
                 "tol": self.tols,
                 "z_domain": self.z_tol_domain,
                 "z_interior": self.z_tol_interior,
             },
+            "z_counts": self._z_counts,
         }

@@ -14,6 +14,7 @@ file stem                 needs                   shows (figure of the paper)
 ``rdf``                   ``rdf``                 g(r) per mineral, near and far field (16)
 ``homogeneity``           ``homogeneity``         ring profiles with trends, tile maps
 ``psd``                   ``psd``                 percent passing, class shares
+``local-fraction``        ``local_fraction``      map of local φ per particle, histogram
 ========================  ======================  ==========================================
 
 Figures are sized for a journal page (7 in wide, 8 pt text) and use one
@@ -44,6 +45,7 @@ from regopack.packing import Packing, _atomic_file
 from regopack.plugins.analysis.contacts import Contacts
 from regopack.plugins.analysis.coordination import Coordination
 from regopack.plugins.analysis.homogeneity import Homogeneity
+from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
 
@@ -72,6 +74,7 @@ CAPTIONS: dict[str, str] = {
     "rdf": "Radial distribution function per mineral, near and far field (cf. paper Fig. 16)",
     "homogeneity": "Number density, area fraction and mean diameter over rings and tiles",
     "psd": "Size distribution of the placed particles against the requested one",
+    "local-fraction": "Local packing fraction of the particles from their Laguerre cells",
 }
 """Caption of each figure, by file stem."""
 
@@ -610,7 +613,7 @@ def figures_for(
         Computed analyzers by name (as :func:`regopack.analysis.run_analyses`
         returns them). Figures are drawn for ``density`` (the packing),
         ``network``, ``contacts``, ``coordination``, ``rdf``, ``homogeneity``
-        and ``psd``; other analyzers are ignored.
+        ``psd`` and ``local_fraction``; other analyzers are ignored.
     out_dir
         Directory of the figures (created if needed).
     formats
@@ -648,6 +651,12 @@ def figures_for(
         from regopack.plugins.analysis.psd_figure import draw_psd
 
         jobs.append(("psd", lambda: draw_psd(psd)))
+    local_fraction = analyzers.get("local_fraction")
+    if isinstance(local_fraction, LocalFraction):
+        from regopack.plugins.analysis.local_fraction_figure import draw_local_fraction
+
+        lf = local_fraction
+        jobs.append(("local-fraction", lambda: draw_local_fraction(packing, lf)))
     if not jobs:
         return []
     out.mkdir(parents=True, exist_ok=True)

@@ -64,7 +64,7 @@ PER_LENGTH = 100.0
 class HomogeneityConfig(BaseModel):
     """Parameters of the homogeneity analyzer."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     ring_width: float | None = Field(
         None,
@@ -86,7 +86,9 @@ class HomogeneityConfig(BaseModel):
         ),
     )
     tiles: tuple[int, int] = Field(
-        (4, 4), description="Tiles along x and y over the interior window's bounding box."
+        (4, 4),
+        strict=False,
+        description="Tiles along x and y over the interior window's bounding box.",
     )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."

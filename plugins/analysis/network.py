@@ -16,7 +16,7 @@ from regopack.plugins.analysis.contacts import Contacts
 class NetworkConfig(BaseModel):
     """The network analyzer has no parameters; it uses the contacts analyzer's."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 class Network(Analyzer):

@@ -50,7 +50,7 @@ MASS_GRID = 4096
 class PsdConfig(BaseModel):
     """Parameters of the size distribution analyzer."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     min_class_count: int = Field(
         100,

@@ -46,14 +46,14 @@ COVARIOGRAM_DIRECTIONS = 90
 class RdfConfig(BaseModel):
     """Parameters of the radial distribution function."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     near: tuple[float, float] = Field(
-        (0.0, 10.0), description="Near-field range of r (length unit)."
+        (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
     )
     near_bin: float = Field(0.1, gt=0, description="Bin width in the near field.")
     far: tuple[float, float] = Field(
-        (100.0, 340.0), description="Far-field range of r (length unit)."
+        (100.0, 340.0), strict=False, description="Far-field range of r (length unit)."
     )
     far_bin: float = Field(2.0, gt=0, description="Bin width in the far field.")
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")

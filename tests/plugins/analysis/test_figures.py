@@ -51,7 +51,7 @@ def test_every_figure_of_the_default_analyses_is_drawn(packing, analyzers, tmp_p
         assert path.stat().st_size > 1000
     image = imread(tmp_path / "figs" / "packing.png")
     assert image.shape[1] == pytest.approx(figures.WIDTH * figures.DPI, abs=2)
-    assert set(figures.CAPTIONS) == {*STEMS, "homogeneity", "psd"}
+    assert set(figures.CAPTIONS) == {*STEMS, "homogeneity", "psd", "local-fraction"}
 
 
 def test_only_the_figures_of_computed_analyzers(packing, registry, tmp_path):
