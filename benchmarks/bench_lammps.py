@@ -10,7 +10,7 @@ diameter, kinetic energy, bodies inside the walls). Run from the repository
 root:
 
     python benchmarks/bench_lammps.py
-    python benchmarks/bench_lammps.py --packing runs/table1/packing.npz --steps 5000
+    python benchmarks/bench_lammps.py --packing runs/table1-seed1/packing.npz --steps 5000
 """
 
 from __future__ import annotations

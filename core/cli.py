@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import signal
 import sys
 import threading
@@ -82,13 +83,36 @@ def _progress_bar(console: Console, enabled: bool, label: str) -> Iterator[Progr
         TimeElapsedColumn(),
         TimeRemainingColumn(),
     )
-    with Progress(*columns, console=console, transient=False) as bar:
+    with shown_until_error(Progress(*columns, console=console, transient=False)) as bar:
         task = bar.add_task(label, total=None, placed=0)
 
         def update(done: int, placed: int, total: int) -> None:
             bar.update(task, completed=done, total=total, placed=placed)
 
         yield update
+
+
+@contextmanager
+def shown_until_error(progress: Progress) -> Iterator[Progress]:
+    """Show ``progress`` during the block; an error removes it, leaving only the error's line.
+
+    On a terminal the display is erased; into a file or pipe (where it is
+    drawn once, at the end) it is not drawn at all.
+    """
+    console = progress.console
+    was_quiet = console.quiet
+    try:
+        with progress:
+            try:
+                yield progress
+            except BaseException:
+                if console.is_terminal:
+                    progress.live.transient = True
+                else:
+                    console.quiet = True
+                raise
+    finally:
+        console.quiet = was_quiet
 
 
 class _ArgumentParser(argparse.ArgumentParser):
@@ -98,6 +122,26 @@ class _ArgumentParser(argparse.ArgumentParser):
         command = self.prog.removeprefix("regopack").strip()
         where = f"{command}: " if command else ""
         self.exit(EXIT_USAGE, f"regopack: error: {where}{message} (see '{self.prog} --help')\n")
+
+
+def output_path(text: str) -> Path:
+    """Argument type of ``--out``: a path, never the empty string (which would mean ``.``)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is an empty path; give a folder or file name, e.g. runs/mine"
+        )
+    return Path(text)
+
+
+def _rel_tol(text: str) -> float:
+    """Argument type of ``--rel-tol``: a finite number >= 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= 0):
+        raise argparse.ArgumentTypeError(f"{text!r}: must be a finite number >= 0, e.g. 1e-9")
+    return value
 
 
 def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
@@ -131,7 +175,7 @@ def build_parser() -> argparse.ArgumentParser:
     _add_scene_arguments(run)
     run.add_argument(
         "--out",
-        type=Path,
+        type=output_path,
         metavar="DIR",
         help="output folder, replaced as a whole by the run (default: runs/<scene>-seed<seed>)",
     )
@@ -149,7 +193,7 @@ def build_parser() -> argparse.ArgumentParser:
     verify.add_argument("packing", type=Path, metavar="PACKING", help="packing file (.npz)")
     verify.add_argument(
         "--rel-tol",
-        type=float,
+        type=_rel_tol,
         default=1e-9,
         metavar="X",
         help="tolerated overlap, relative to the smaller particle area (default: 1e-9)",
@@ -189,7 +233,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     analyze.add_argument(
         "--out",
-        type=Path,
+        type=output_path,
         metavar="DIR",
         help="output folder, replaced as a whole (default: <packing dir>/analysis)",
     )
@@ -204,7 +248,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     export = sub.add_parser(
         "export",
-        help="write a packing as CSV, JSON, SVG, VTK or a LAMMPS data file",
+        help="write a packing for LAMMPS, HOOMD-blue (GSD), VTK, image tools, CSV, JSON or SVG",
         description=(
             "Write a saved packing in another program's file format with an exporter "
             "plugin (see 'regopack plugins --kind export')."
@@ -215,11 +259,11 @@ def build_parser() -> argparse.ArgumentParser:
         "--to",
         required=True,
         metavar="FORMAT",
-        help="exporter name: csv, json, svg, vtk, lammps or one from a plugin",
+        help="exporter name: csv, json, svg, vtk, lammps, gsd, image or one from a plugin",
     )
     export.add_argument(
         "--out",
-        type=Path,
+        type=output_path,
         metavar="PATH",
         help="output file, or a directory (default: the packing's name with the format's suffix)",
     )
@@ -313,12 +357,15 @@ def _refuse_inside(path: Path, folder: Path, what: str) -> None:
 
 
 def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.run import default_out_dir, run_scene, summary_rows
+    from regopack.outdir import check_replaceable
+    from regopack.run import RUN_FOLDER, check_scene, default_out_dir, run_scene, summary_rows
 
     resolved = _resolve(args)
     out_dir = args.out if args.out is not None else default_out_dir(resolved)
     if args.scene is not None and Path(args.scene).is_file():
         _refuse_inside(Path(args.scene), out_dir, "scene file")
+    check_replaceable(out_dir, RUN_FOLDER)  # before the progress bar: errors stay one line
+    check_scene(resolved)
     if not args.quiet and _kernels_not_cached():
         err.print(
             "[dim]compiling the packing kernels (first run after an install or upgrade; "
@@ -326,6 +373,13 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         )
     with _progress_bar(err, not args.quiet, f"packing {resolved.name}") as progress:
         outcome = run_scene(resolved, out_dir, progress=progress)
+    tried, placed = outcome.summary["tried"], outcome.summary["placed"]
+    if tried and not placed:
+        print(
+            f"regopack: warning: no particle was placed: none of the {tried:,} particles drawn "
+            f"fits into the domain; the packing in {outcome.packing_path} is empty",
+            file=sys.stderr,
+        )
     if args.quiet:
         return EXIT_OK
     table = Table(title=f"regopack run: {resolved.name}", show_header=False)

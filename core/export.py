@@ -2,7 +2,7 @@
 
 The formats are the plugins of kind ``"export"`` (see
 :func:`regopack.hookspecs.regopack_exporters`); the built-in ones are ``csv``,
-``json``, ``svg``, ``vtk`` and ``lammps``.
+``json``, ``svg``, ``vtk``, ``lammps``, ``gsd`` and ``image``.
 
 Examples
 --------

@@ -50,6 +50,8 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.disk",
     "regopack.plugins.rsa",
     "regopack.plugins.exporters",
+    "regopack.plugins.image_export",
+    "regopack.plugins.gsd_export",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 

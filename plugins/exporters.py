@@ -182,7 +182,7 @@ def _mineral_name(packing: Packing, k: int) -> str:
 class CsvConfig(BaseModel):
     """Parameters of the CSV exporter (it has none)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 def companion_paths(path: Path) -> tuple[Path, Path]:
@@ -325,7 +325,7 @@ def read_csv(path: str | Path) -> Packing:
 class JsonConfig(BaseModel):
     """Parameters of the JSON exporter."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     indent: int = Field(
         0, ge=0, le=8, description="Spaces of indentation; 0 writes the document on one line."
@@ -427,7 +427,7 @@ def read_json(path: str | Path) -> Packing:
 class SvgConfig(BaseModel):
     """Parameters of the SVG exporter."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     width_px: int = Field(
         1000, gt=0, description="Width of the picture in pixels; the height keeps the aspect."
@@ -532,7 +532,7 @@ class SvgExporter(Exporter):
 class VtkConfig(BaseModel):
     """Parameters of the VTK exporter (it has none)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
 
 def _coordination(packing: Packing, analyses: Mapping[str, Analyzer] | None) -> IntArray | None:

@@ -55,6 +55,9 @@ FloatArray = NDArray[np.float64]
 STEPS_PER_COLLISION = 50
 """Time steps per duration of a collision of the two smallest bodies (sets the time step)."""
 
+MAX_BODY_LINES = 32
+"""Lines LAMMPS' read_data accepts for one body (its MAXBODY); long cores share lines."""
+
 ROUNDING_TRIES = 8
 """Times the rounding radius of one body is halved when its eroded core vanishes."""
 
@@ -69,7 +72,7 @@ class LammpsConfig(BaseModel):
     ``density`` of 3.1 pg/µm³ is 3.1 g/cm³.
     """
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", strict=True)
 
     units: Literal["micro", "si", "cgs", "nano", "lj"] = Field(
         "micro", description="LAMMPS unit style named in the input script."
@@ -332,7 +335,10 @@ class LammpsExporter(Exporter):
         s = cfg.length_scale
         frame = _frame(packing, s)
         lamina = cfg.density * cfg.thickness * s  # mass per unit area (LAMMPS lengths)
-        mass = bodies.area * s * s * lamina
+        with np.errstate(over="ignore", under="ignore"):  # checked below
+            mass = bodies.area * (np.float64(s) ** 2 * lamina)
+            per_area = np.float64(lamina) * np.float64(s) ** 4
+            inertia = np.stack([bodies.ixx, bodies.iyy, bodies.ixy], axis=1) * per_area
         n = bodies.index.size
         counts = [c.shape[0] for c in bodies.core]
         n_min, n_max = (min(counts), max(counts)) if counts else (1, 1)
@@ -342,6 +348,16 @@ class LammpsExporter(Exporter):
             lo = np.array([frame.box[0], frame.box[2]])
             width = np.array([frame.box[1] - frame.box[0], frame.box[3] - frame.box[2]])
             pos = lo + np.mod(pos - lo, width)
+        for what, values in (("mass", mass), ("moment of inertia", inertia[:, :2])):
+            tiny = np.finfo(np.float64).tiny  # subnormal numbers lose their precision
+            if n and not (np.isfinite(values).all() and (values >= tiny).all()):
+                raise ExportError(
+                    f"length_scale = {s}, thickness = {cfg.thickness}, density = {cfg.density}: "
+                    f"a body's {what} is not a positive finite number; give values nearer 1"
+                )
+        reach = np.array([np.hypot(*c.T).max() for c in bodies.core]) + bodies.rounding
+        half_z = max(0.5 * s, 2.0 * float(reach.max(initial=0.0)) * s)  # bins need room in z
+        per_line = max(1, math.ceil(n_max / (MAX_BODY_LINES - 4)))  # + count, inertia, rounding
         atoms: list[str] = []
         blocks: list[str] = []
         for k in range(n):
@@ -350,13 +366,13 @@ class LammpsExporter(Exporter):
                 f"{k + 1} {int(packing.mineral[j]) + 1} 1 {_num(mass[k])} "
                 f"{_num(pos[k, 0])} {_num(pos[k, 1])} 0.0"
             )
-            s4 = lamina * s**3  # second moments scale with length^4
-            ixx, iyy, ixy = bodies.ixx[k] * s4, bodies.iyy[k] * s4, bodies.ixy[k] * s4
+            ixx, iyy, ixy = inertia[k]  # area moments x s^4 x mass per area
             core = bodies.core[k] * s
             blocks.append(f"{k + 1} 1 {6 + 3 * core.shape[0] + 1}")
             blocks.append(str(core.shape[0]))
             blocks.append(" ".join(_num(v) for v in (ixx, iyy, ixx + iyy, -ixy, 0.0, 0.0)))
-            blocks += [f"{_num(x)} {_num(y)} 0.0" for x, y in core.tolist()]
+            xyz = [f"{_num(x)} {_num(y)} 0.0" for x, y in core.tolist()]
+            blocks += [" ".join(xyz[i : i + per_line]) for i in range(0, len(xyz), per_line)]
             blocks.append(_num(2.0 * bodies.rounding[k] * s))
         rounding_note = (
             f"rounding radius {_num(cfg.rounding_radius)}"
@@ -364,6 +380,7 @@ class LammpsExporter(Exporter):
             else f"rounding radius {cfg.rounding_fraction} x equivalent radius"
         )
         r_all = bodies.rounding * s
+        fill = float(np.min(bodies.area / packing.area()[bodies.index])) if n else 1.0
         xlo, xhi, ylo, yhi = frame.box
         lines = [
             f"LAMMPS data file from regopack {packing.version}: scene "
@@ -373,7 +390,8 @@ class LammpsExporter(Exporter):
             f"# polygon bodies: outline eroded by the {rounding_note}; the Bodies section "
             "ends each body with its rounding diameter",
             f"# rounding radii from {_num(r_all.min() if n else 0.0)} to "
-            f"{_num(r_all.max() if n else 0.0)}; {bodies.reduced} bodies with a halved radius",
+            f"{_num(r_all.max() if n else 0.0)}; {bodies.reduced} bodies with a halved radius; "
+            f"the smallest body fills {_num(round(fill, 4))} of its particle",
             f"# lengths = packing lengths x {_num(s)}; mass = area x {_num(cfg.thickness * s)} "
             f"x {_num(cfg.density)}; {frame.note}",
             "",
@@ -383,7 +401,7 @@ class LammpsExporter(Exporter):
             "",
             f"{_num(xlo)} {_num(xhi)} xlo xhi",
             f"{_num(ylo)} {_num(yhi)} ylo yhi",
-            f"{_num(-0.5 * s)} {_num(0.5 * s)} zlo zhi",
+            f"{_num(-half_z)} {_num(half_z)} zlo zhi",
             "",
             "Atoms # body",
             "",

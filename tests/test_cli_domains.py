@@ -95,5 +95,5 @@ def test_disks_from_the_command_line(tmp_path, capsys, monkeypatch):
     assert main(["analyze", "out/packing.npz", "--no-figures"]) == 0
     results = json.loads((tmp_path / "out" / "analysis" / "analysis.json").read_text())
     assert results["contacts"]["n_contacts"] > 0
-    for fmt in ("csv", "json", "svg", "vtk", "lammps"):
+    for fmt in ("csv", "json", "svg", "vtk", "lammps", "gsd"):
         assert main(["export", "out/packing.npz", "--to", fmt]) == 0

@@ -29,7 +29,7 @@ def test_default_registry_has_the_builtins():
     assert reg.names("shape") == ["disk", "octagon", "random-polygon", "regular", "template"]
     assert reg.names("insertion") == ["available-arc", "rsa"]
     assert reg.names("density") == ["eta"]
-    assert reg.names("export") == ["csv", "json", "lammps", "svg", "vtk"]
+    assert reg.names("export") == ["csv", "gsd", "image", "json", "lammps", "svg", "vtk"]
     assert reg.origin("shape", "octagon") == "regopack.plugins.octagon"
     assert default_registry(autoload=False) is not reg
 

