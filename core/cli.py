@@ -180,6 +180,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="output folder, replaced as a whole by the run (default: runs/<scene>-seed<seed>)",
     )
     run.add_argument("--quiet", action="store_true", help="print no progress and no summary")
+    run.add_argument(
+        "--verify",
+        action="store_true",
+        help="check the packing for overlaps and wall violations; exit 1 if violated "
+        "(done anyway, without the exit status, when the insertion settings may overlap)",
+    )
     run.set_defaults(handler=_cmd_run)
 
     scenes = sub.add_parser("scenes", help="list the built-in scenes")
@@ -372,8 +378,19 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
             "about 15-30 s, then cached)[/dim]"
         )
     with _progress_bar(err, not args.quiet, f"packing {resolved.name}") as progress:
-        outcome = run_scene(resolved, out_dir, progress=progress)
+        outcome = run_scene(resolved, out_dir, progress=progress, verify=args.verify or None)
     tried, placed = outcome.summary["tried"], outcome.summary["placed"]
+    checked = outcome.summary.get("verify")
+    violated = checked is not None and not checked["ok"]
+    if violated:
+        print(
+            f"regopack: warning: the packing is violated: {checked['overlap_pairs']:,} "
+            f"overlapping pairs (worst {checked['worst_overlap']:.3g} of the smaller area), "
+            f"{checked['outside']:,} particles outside the domain; see 'verify' in "
+            f"{outcome.summary_path}",
+            file=sys.stderr,
+        )
+    status = EXIT_VIOLATED if violated and args.verify else EXIT_OK
     if tried and not placed:
         print(
             f"regopack: warning: no particle was placed: none of the {tried:,} particles drawn "
@@ -381,7 +398,7 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
             file=sys.stderr,
         )
     if args.quiet:
-        return EXIT_OK
+        return status
     table = Table(title=f"regopack run: {resolved.name}", show_header=False)
     table.add_column("quantity", style="bold")
     table.add_column("value", justify="right")
@@ -394,7 +411,7 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     for path in outcome.exports:
         table.add_row("export", str(path))
     out.print(table)
-    return EXIT_OK
+    return status
 
 
 def _cmd_scenes(args: argparse.Namespace, out: Console, err: Console) -> int:

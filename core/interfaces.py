@@ -132,6 +132,15 @@ class InsertionStrategy(ABC):
     ) -> InsertionResult:
         """Place the particles in population order; return where each went."""
 
+    def may_overlap(self) -> bool:
+        """Tell whether this strategy, as configured, can place overlapping particles.
+
+        A run verifies the packing of a strategy that says so (an approximate
+        interference test, say) and reports what it finds. The default is
+        ``False``: the strategy guarantees overlap-free packings.
+        """
+        return False
+
 
 class Analyzer(ABC):
     """Structure analysis of a packing.

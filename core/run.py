@@ -321,6 +321,7 @@ def run_scene(
     *,
     figures: bool = True,
     summary_extras: Callable[[Packing], Mapping[str, Any]] | None = None,
+    verify: bool | None = None,
     extra_files: Mapping[str, str] | None = None,
 ) -> RunOutcome:
     """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
@@ -341,6 +342,11 @@ def run_scene(
     summary_extras
         Called with the packing once it is analysed; the items it returns are
         added to the summary before anything is written.
+    verify
+        Check the packing for overlaps and wall violations
+        (:func:`regopack.verify.verify`) and add the ``verify`` entry to the
+        summary. ``None`` (the default) verifies when the insertion strategy
+        says its settings may overlap (:meth:`InsertionStrategy.may_overlap`).
     extra_files
         More text files for the run folder, by plain file name (a sweep's
         ``scene.json``); a name that is also one of the run's outputs is
@@ -419,6 +425,8 @@ def run_scene(
         summary["eta"] = eta
     for key, value in result.stats.items():
         summary.setdefault(key, value)
+    if verify if verify is not None else inserter.may_overlap():
+        summary["verify"] = verify_summary(packing)
     analyzers: dict[str, Analyzer] = {}
     if resolved.analyses:
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
@@ -432,6 +440,25 @@ def run_scene(
     return _write_run(
         resolved, Path(out_dir), packing, summary, analyzers, figures, extra_files or {}
     )
+
+
+def verify_summary(packing: Packing) -> dict[str, Any]:
+    """Return the ``verify`` entry of a run's summary.
+
+    ``ok``, ``overlap_pairs`` (pairs overlapping by more than 1e-9 of the
+    smaller area), ``worst_overlap`` (the largest overlap as a fraction of the
+    smaller area, 0 when none) and ``outside`` (particles leaving the domain).
+    """
+    from regopack.verify import verify
+
+    report = verify(packing)
+    worst = report.worst_overlap[2] if report.worst_overlap is not None else 0.0
+    return {
+        "ok": bool(report.ok),
+        "overlap_pairs": int(report.n_overlapping_pairs),
+        "worst_overlap": float(worst),
+        "outside": int(report.n_outside),
+    }
 
 
 def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) -> None:
@@ -541,4 +568,15 @@ def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     ]
     if "eta" in summary:
         rows.insert(2, ("η", fmt(summary["eta"], "g")))
+    checked = summary.get("verify")
+    if checked is not None:
+        rows.append(
+            (
+                "verified",
+                "OK"
+                if checked["ok"]
+                else f"VIOLATED: {checked['overlap_pairs']:,} pairs, "
+                f"{checked['outside']:,} outside",
+            )
+        )
     return rows

@@ -130,6 +130,10 @@ class AvailableArc(InsertionStrategy):
     def __init__(self, config: AvailableArcConfig) -> None:
         self.config = config
 
+    def may_overlap(self) -> bool:
+        """Return True for the approximate ``tau`` interference test, which can overlap."""
+        return self.config.interference == "tau"
+
     def pack(
         self,
         population: Population,
