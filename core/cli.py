@@ -381,8 +381,9 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         outcome = run_scene(resolved, out_dir, progress=progress, verify=args.verify or None)
     tried, placed = outcome.summary["tried"], outcome.summary["placed"]
     checked = outcome.summary.get("verify")
-    violated = checked is not None and not checked["ok"]
-    if violated:
+    violated = False
+    if checked is not None and not checked["ok"]:
+        violated = True
         print(
             f"regopack: warning: the packing is violated: {checked['overlap_pairs']:,} "
             f"overlapping pairs (worst {checked['worst_overlap']:.3g} of the smaller area), "

@@ -35,6 +35,8 @@ import math
 import os
 import re
 import signal
+import threading
+import time
 import uuid
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -924,6 +926,24 @@ def _init_worker() -> None:
     """
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
+    parent = os.getppid()
+    threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
+
+
+PARENT_POLL_S = 0.5
+"""How often a worker process checks that the sweep that started it is still alive."""
+
+
+def _exit_with_parent(parent: int) -> None:
+    """End this worker as soon as its parent is gone (e.g. killed with SIGKILL).
+
+    A worker whose parent died is re-parented and would otherwise go on taking
+    runs; its half-written run folder stays a temporary that the next sweep
+    removes.
+    """
+    while os.getppid() == parent:
+        time.sleep(PARENT_POLL_S)
+    os._exit(1)
 
 
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
@@ -1027,14 +1047,20 @@ def _read_text(path: Path) -> str | None:
         return None
 
 
-def _write_failed_run(run_dir: Path, scene_text: str, message: str) -> None:
-    """Replace the run folder by the record of a failed run: its scene and its error."""
+def _write_failed_run(run_dir: Path, scene_text: str, message: str) -> str:
+    """Replace the run folder by the record of a failed run: its scene and its error.
+
+    Returns the message to record: ``message``, plus why the record could not
+    be written when the folder is not writable. That run fails alone; the
+    sweep goes on with the others.
+    """
     try:
         with replace_folder(run_dir, RUN_FOLDER) as tmp:
             (tmp / SCENE_JSON).write_text(scene_text, encoding="utf-8")
             (tmp / ERROR_TXT).write_text(message + "\n", encoding="utf-8")
-    except OSError as err:
-        raise ConfigError(f"cannot write {run_dir / ERROR_TXT}: {err}") from err
+    except (OSError, ConfigError) as err:
+        return f"{message} (and {run_dir / ERROR_TXT} could not be written: {_one_line(err)})"
+    return message
 
 
 def _read_summary(path: Path) -> dict[str, Any] | None:
@@ -1197,8 +1223,9 @@ def run_experiment(
             if error is None and summary is not None:
                 record(RunResult(run, "done", run_dir, _collect(summary, experiment.metrics)))
             else:
-                message = error or "the run returned no summary"
-                _write_failed_run(run_dir, job.scene_text, message)
+                message = _write_failed_run(
+                    run_dir, job.scene_text, error or "the run returned no summary"
+                )
                 record(RunResult(run, "failed", run_dir, error=message))
             del unfinished[job.run_id]
     except BaseException:

@@ -406,6 +406,39 @@ def test_a_failing_run_is_recorded_and_the_others_finish(
     assert not (tmp_path / "out" / IDS[1] / "error.txt").exists()
 
 
+def test_an_unwritable_run_folder_fails_that_run_only(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Neither the run nor the record of its failure can be written: the others go on."""
+    import errno
+    from contextlib import contextmanager
+
+    real_run, real_replace = experiment_module.run_scene, experiment_module.replace_folder
+
+    def refuse(name: Any) -> None:
+        if Path(name).name == IDS[1]:
+            raise PermissionError(errno.EACCES, "Permission denied", str(name))
+
+    def run_scene(resolved: Any, out_dir: Any, *args: Any, **kwargs: Any) -> Any:
+        refuse(out_dir)
+        return real_run(resolved, out_dir, *args, **kwargs)
+
+    @contextmanager
+    def replace_folder(folder: Any, kind: str) -> Any:
+        refuse(folder)
+        with real_replace(folder, kind) as tmp:
+            yield tmp
+
+    monkeypatch.setattr(experiment_module, "run_scene", run_scene)
+    monkeypatch.setattr(experiment_module, "replace_folder", replace_folder)
+    path = write(tmp_path / "tiny.toml", TINY)
+    outcome = run_experiment(path, tmp_path / "out", workers=1)
+    assert [r.run_id for r in outcome.failed] == [IDS[1]]
+    assert "could not be written" in (outcome.failed[0].error or "")
+    rows = read_csv(tmp_path / "out" / "results.csv")
+    assert [row["status"] for row in rows] == ["done", "failed", "done", "done"]
+
+
 def test_outputs_outside_the_run_folders_are_refused_before_anything_runs(
     tmp_path: Path,
 ) -> None:

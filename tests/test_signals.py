@@ -215,3 +215,37 @@ def test_a_terminated_sweep_stops_its_workers_and_resumes(tmp_path: Path) -> Non
     ]
     for seed in (1, 2, 3):
         assert_one_run(out / f"seed={seed}", seed, ["packing.npz", "scene.json", "summary.json"])
+
+
+def _children(pid: int) -> list[int]:
+    path = Path(f"/proc/{pid}/task/{pid}/children")
+    return [int(p) for p in path.read_text().split()] if path.exists() else []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").exists(), reason="needs /proc")
+def test_workers_exit_when_the_sweep_is_killed(tmp_path: Path) -> None:
+    import time
+
+    experiment = tmp_path / "tiny.toml"
+    experiment.write_text(
+        'name = "tiny"\nbase = "small"\n[set]\ncount = 40\n[sweep]\nseed = "1..4"\n',
+        encoding="utf-8",
+    )
+    argv = ["sweep", str(experiment), "--out", "out", "--workers", "2", "--quiet", "--no-plots"]
+    paused = Paused(argv, "swap", tmp_path, fake=False)  # a worker waits before its swap
+    workers = _children(paused.proc.pid)
+    assert workers
+    paused.proc.kill()  # SIGKILL: the parent cannot stop its workers itself
+    paused.proc.wait(timeout=TIMEOUT)
+    deadline = time.monotonic() + 20
+    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(w) for w in workers)
