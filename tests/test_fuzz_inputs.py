@@ -170,3 +170,46 @@ def test_mutated_scene_files_are_one_error_or_fine(data):
         assert_clean_outcome(status, lines, allowed=(0, 2))
         new = {p for p in files_in(root) - before if not p.is_relative_to(root / "out")}
         assert not new, new
+
+
+# ---------------------------------------------------------------------------
+# experiment files
+
+EXPERIMENT = {
+    "name": "fuzz",
+    "base": "small",
+    "set": {"count": 10, "domain.width": 50.0, "domain.height": 50.0},
+    "sweep": {"seed": "1..2"},
+    "metrics": ["placed", "phi_domain"],
+    "verify": False,
+    "max_runs": 4,
+}
+EXPERIMENT_BAD_VALUES = st.sampled_from(
+    ["", "yes", "1..", "3..1", "1..10**9", -1, 0, 1e308, math.inf, True, [], {"x": 1}, [None]]
+)
+
+
+@settings(max_examples=15, deadline=None, derandomize=True)
+@given(
+    key=st.sampled_from(["name", "base", "set", "sweep", "metrics", "verify", "max_runs", "seed"]),
+    value=EXPERIMENT_BAD_VALUES,
+)
+def test_mutated_experiment_files_are_one_error_or_fine(key, value):
+    doc = json.loads(json.dumps(EXPERIMENT))
+    if key == "seed":
+        doc["sweep"]["seed"] = value
+    else:
+        doc[key] = value
+    with tempfile.TemporaryDirectory() as tmp:
+        root = Path(tmp)
+        path = root / "fuzz.toml"
+        try:
+            path.write_text(_toml.dumps(doc), encoding="utf-8")
+        except (TypeError, ValueError):
+            return
+        before = files_in(root)
+        argv = ["sweep", str(path), "--out", str(root / "out"), "--workers", "1"]
+        status, lines = run_cli([*argv, "--quiet", "--no-plots"])
+        assert_clean_outcome(status, lines, allowed=(0, 1, 2))
+        new = {p for p in files_in(root) - before if not p.is_relative_to(root / "out")}
+        assert not new, new
