@@ -27,7 +27,6 @@ vertex ``(0, 0)`` rounded by its radius) integrators.
 
 from __future__ import annotations
 
-import math
 import os
 import tempfile
 from collections.abc import Iterable, Mapping
@@ -44,7 +43,7 @@ from regopack.hookspecs import hookimpl
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing, _remove_stale_temporaries
 from regopack.plugin_types import ExporterSpec
-from regopack.plugins.exporters import polygon_moments
+from regopack.plugins.rounded_bodies import rounded_moments
 
 __all__ = [
     "OUTLINE_TOL",
@@ -149,7 +148,8 @@ def shape_moments(core: FloatArray, rho: float) -> tuple[float, FloatArray, floa
     The shape is the Minkowski sum of the convex ``core`` (``(k, 2)``,
     counter-clockwise, distinct, not collinear; one vertex or two are allowed
     when ``rho > 0``) and the disk of radius ``rho``: the core, a rectangle
-    on every edge and a circular sector at every vertex.
+    on every edge and a circular sector at every vertex
+    (:func:`regopack.plugins.rounded_bodies.rounded_moments`).
 
     Returns
     -------
@@ -163,39 +163,10 @@ def shape_moments(core: FloatArray, rho: float) -> tuple[float, FloatArray, floa
     (4.0, [0.0, 0.0], 1.0)
     """
     core = np.asarray(core, dtype=np.float64).reshape(-1, 2)
-    k = core.shape[0]
-    pieces: list[tuple[float, FloatArray, float]] = []  # area, centroid, own polar moment
-    if k >= 3:
-        area, c, ixx, iyy, _ = polygon_moments(core)
-        pieces.append((area, c, ixx + iyy))
-    elif rho <= 0:
+    if core.shape[0] < 3 and rho <= 0:
         raise ValueError("a sharp outline needs at least three vertices")
-    if rho > 0:
-        if k == 1:
-            pieces.append((math.pi * rho**2, core[0].copy(), 0.5 * math.pi * rho**4))
-        else:
-            edges = np.roll(core, -1, axis=0) - core
-            length = np.hypot(*edges.T)
-            normal = np.column_stack([edges[:, 1], -edges[:, 0]]) / length[:, None]
-            for i in range(k):  # the rectangle on edge i (from vertex i to i + 1)
-                mid = core[i] + 0.5 * edges[i] + 0.5 * rho * normal[i]
-                a = float(length[i]) * rho
-                pieces.append((a, mid, a * (length[i] ** 2 + rho**2) / 12.0))
-            for i in range(k):  # the sector at vertex i, between the normals of edges i-1, i
-                e0, e1 = edges[i - 1], edges[i]
-                phi = math.atan2(e0[0] * e1[1] - e0[1] * e1[0], float(e0 @ e1))
-                if phi <= 0:
-                    phi += 2.0 * math.pi
-                n0 = normal[i - 1]
-                mid_angle = math.atan2(n0[1], n0[0]) + 0.5 * phi
-                d = 4.0 * rho * math.sin(0.5 * phi) / (3.0 * phi)
-                a = 0.5 * phi * rho**2
-                c = core[i] + d * np.array([math.cos(mid_angle), math.sin(mid_angle)])
-                pieces.append((a, c, 0.25 * phi * rho**4 - a * d * d))
-    total = sum(p[0] for p in pieces)
-    centroid = sum((p[0] * p[1] for p in pieces), np.zeros(2)) / total
-    j = sum(p[2] + p[0] * float(np.sum((p[1] - centroid) ** 2)) for p in pieces)
-    return float(total), np.asarray(centroid, dtype=np.float64), float(j)
+    area, centroid, ixx, iyy, _ = rounded_moments(core, rho)
+    return float(area), centroid, float(ixx + iyy)
 
 
 def _gsd_hoomd() -> Any:

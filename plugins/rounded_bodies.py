@@ -232,9 +232,10 @@ def rounded_moments(core: FloatArray, r: float) -> tuple[float, FloatArray, floa
     core = np.asarray(core, dtype=np.float64).reshape(-1, 2)
     n = core.shape[0]
     total = _polygon_raw_moments(core)
-    if r > 0.0 and n == 1:
-        zero, turn = np.zeros(1), np.full(1, 2 * math.pi)
-        total = total + _sector_raw_moments(core[:1, 0], core[:1, 1], r, zero, turn)
+    if r > 0.0 and n == 1:  # a disk, exactly
+        px, py = float(core[0, 0]), float(core[0, 1])
+        a, j = math.pi * r * r, 0.25 * math.pi * r**4
+        total = total + np.array([a, px * a, py * a, j + px * px * a, j + py * py * a, px * py * a])
     elif r > 0.0:
         nxt = np.roll(core, -1, axis=0)
         e = nxt - core
