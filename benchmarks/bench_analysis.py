@@ -38,7 +38,7 @@ from regopack.plugins.analysis import (
     Rdf,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 
 def best_of(repeat: int, fn: Callable[[], Any]) -> float:

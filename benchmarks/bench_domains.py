@@ -21,8 +21,8 @@ import time
 
 from regopack.manager import default_registry
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
-from regopack.verify import verify
+from regopack.scene_model import load_scene, resolve_scene
+from regopack.verification import verify
 
 
 def domains(side: float) -> dict[str, str]:

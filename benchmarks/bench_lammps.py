@@ -40,7 +40,7 @@ def main() -> None:
     from regopack.packing import load
     from regopack.plugins.lammps_export import LammpsExporter, lammps_bodies, script_path
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     if args.packing:
         packing = load(args.packing)

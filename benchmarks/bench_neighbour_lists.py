@@ -20,7 +20,7 @@ import numpy as np
 from regopack.manager import default_registry
 from regopack.plugins.available_arc.state import ArcState
 from regopack.run import draw_population
-from regopack.scene import ResolvedScene, load_scene, resolve_scene
+from regopack.scene_model import ResolvedScene, load_scene, resolve_scene
 
 
 def _scene(size: float, seed: int) -> ResolvedScene:

@@ -30,7 +30,7 @@ import json, resource, sys, time
 t0 = time.perf_counter()
 from regopack.manager import default_registry
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 overrides = json.loads(sys.argv[1])
 warm = sys.argv[2] == "warm"
 registry = default_registry()

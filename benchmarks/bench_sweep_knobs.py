@@ -18,7 +18,7 @@ import statistics
 
 from regopack.manager import default_registry
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 SETTINGS = {
     "zone": {

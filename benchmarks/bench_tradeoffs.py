@@ -3,7 +3,7 @@
 For every setting of a knob, prints the insertion time, the packing fraction
 of the domain, the interior coordination number Z (contacts at tol 0.05) and
 the overlaps (number of overlapping pairs, worst relative area from
-``regopack.verify.verify`` and worst penetration depth). Run from the
+``regopack.verification.verify`` and worst penetration depth). Run from the
 repository root:
 
     python benchmarks/bench_tradeoffs.py                       # L = 400, 1 seed
@@ -45,8 +45,8 @@ import shapely
 from regopack.analysis import run_analyses
 from regopack.manager import default_registry
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
-from regopack.verify import verify
+from regopack.scene_model import load_scene, resolve_scene
+from regopack.verification import verify
 
 overrides, tol, repeats = json.loads(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
 registry = default_registry()

@@ -39,7 +39,7 @@ from regopack.manager import Registry, default_registry
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import interior_margin
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 ORDERS = ("paper", "sweep")
 TOLS = (0.02, 0.05, 0.5)

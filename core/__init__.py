@@ -1,13 +1,22 @@
 """regopack: dense 2D packings of lunar regolith particles.
 
-The package root stays light to import: it exposes the version and the
-packing file functions. Everything else lives in submodules
-(:mod:`regopack.scene`, :mod:`regopack.run`, :mod:`regopack.verify`, ...).
+The Python API mirrors the commands (see :mod:`regopack.api`)::
+
+    import regopack
+
+    scene = regopack.scene("table1", domain__width=400)
+    packing = regopack.pack(scene, seed=3)
+    results = regopack.analyze(packing, ["density", "coordination"])
+    report = regopack.verify(packing)
+    regopack.export(packing, "lammps", "runs/sample/packing.data")
+
+The package root stays light to import: the functions are loaded on first use.
 """
 
 from __future__ import annotations
 
 from importlib.metadata import PackageNotFoundError, version
+from typing import TYPE_CHECKING, Any
 
 try:
     __version__: str = version("regopack")
@@ -16,4 +25,36 @@ except PackageNotFoundError:  # running from a source tree that is not installed
 
 from regopack.packing import Packing, load, save
 
-__all__ = ["Packing", "__version__", "load", "save"]
+if TYPE_CHECKING:
+    from regopack.api import analyze, export, pack, pack_and_summarise, scene, sweep, verify
+
+__all__ = [
+    "Packing",
+    "__version__",
+    "analyze",
+    "export",
+    "load",
+    "pack",
+    "pack_and_summarise",
+    "save",
+    "scene",
+    "sweep",
+    "verify",
+]
+
+_API = frozenset({"analyze", "export", "pack", "pack_and_summarise", "scene", "sweep", "verify"})
+
+
+def __getattr__(name: str) -> Any:
+    """Load the API functions on first use (PEP 562)."""
+    if name in _API:
+        from regopack import api
+
+        value = getattr(api, name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'regopack' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | _API)

@@ -91,7 +91,7 @@ def _build(
     registry: Registry, name: str, params: Mapping[str, Any], needed_by: str | None
 ) -> Analyzer:
     """Validate ``params`` with the analyzer's config model and build it."""
-    from regopack.scene import _describe_validation_error
+    from regopack.scene_model import _describe_validation_error
 
     if ("analysis", name) not in registry:
         if needed_by is not None:

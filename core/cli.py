@@ -26,21 +26,11 @@ from typing import Any, NoReturn
 from pydantic import ValidationError
 from rich import box
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    Progress,
-    ProgressColumn,
-    Task,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 from rich.text import Text
 
 from regopack import __version__
 from regopack.errors import ConfigError, RegopackError, Terminated
-from regopack.interfaces import ProgressCallback
 from regopack.plugin_types import KINDS
 
 __all__ = ["build_parser", "main"]
@@ -50,69 +40,6 @@ EXIT_VIOLATED = 1
 EXIT_USAGE = 2
 EXIT_INTERRUPTED = 130
 EXIT_TERMINATED = 143
-
-
-class _RateColumn(ProgressColumn):
-    """Particles handled per second."""
-
-    def render(self, task: Task) -> Text:
-        speed = task.finished_speed or task.speed
-        return Text("-- particles/s" if speed is None else f"{speed:,.0f} particles/s")
-
-
-class _PlacedColumn(ProgressColumn):
-    """Particles placed out of the total drawn."""
-
-    def render(self, task: Task) -> Text:
-        placed = int(task.fields.get("placed", 0))
-        total = "?" if task.total is None else f"{int(task.total):,}"
-        return Text(f"{placed:,}/{total} placed")
-
-
-@contextmanager
-def _progress_bar(console: Console, enabled: bool, label: str) -> Iterator[ProgressCallback | None]:
-    """Show a rich progress bar fed by ``progress(done, placed, total)`` calls."""
-    if not enabled:
-        yield None
-        return
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(bar_width=30),
-        _PlacedColumn(),
-        _RateColumn(),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
-    )
-    with shown_until_error(Progress(*columns, console=console, transient=False)) as bar:
-        task = bar.add_task(label, total=None, placed=0)
-
-        def update(done: int, placed: int, total: int) -> None:
-            bar.update(task, completed=done, total=total, placed=placed)
-
-        yield update
-
-
-@contextmanager
-def shown_until_error(progress: Progress) -> Iterator[Progress]:
-    """Show ``progress`` during the block; an error removes it, leaving only the error's line.
-
-    On a terminal the display is erased; into a file or pipe (where it is
-    drawn once, at the end) it is not drawn at all.
-    """
-    console = progress.console
-    was_quiet = console.quiet
-    try:
-        with progress:
-            try:
-                yield progress
-            except BaseException:
-                if console.is_terminal:
-                    progress.live.transient = True
-                else:
-                    console.quiet = True
-                raise
-    finally:
-        console.quiet = was_quiet
 
 
 class _ArgumentParser(argparse.ArgumentParser):
@@ -333,52 +260,23 @@ def build_parser() -> argparse.ArgumentParser:
 
 def _resolve(args: argparse.Namespace) -> Any:
     from regopack.manager import default_registry
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     scene = load_scene(args.scene, args.overrides, seed=args.seed)
     return resolve_scene(scene, default_registry())
 
 
-def _kernels_not_cached() -> bool:
-    """Return whether the compiled-kernel cache folder holds no compiled code yet."""
-    import os
-    from pathlib import Path
-
-    from regopack.jit import kernel_cache_dir
-
-    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or kernel_cache_dir())
-    return not any(folder.rglob("*.nbi")) if folder.is_dir() else True
-
-
-def _refuse_inside(path: Path, folder: Path, what: str) -> None:
-    """Refuse an output folder that holds ``path``: replacing it would delete the input."""
-    import os
-
-    real, real_folder = os.path.realpath(path), os.path.realpath(folder)
-    if os.path.commonpath([real, real_folder]) == real_folder:
-        raise ConfigError(
-            f"output folder {folder}: holds the {what} {path}, and the output folder is "
-            "replaced as a whole; give another folder"
-        )
-
-
 def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.outdir import check_replaceable
-    from regopack.run import RUN_FOLDER, check_scene, default_out_dir, run_scene, summary_rows
+    from regopack.api import pack_and_summarise, refuse_inside
+    from regopack.run import default_out_dir, summary_rows
 
     resolved = _resolve(args)
     out_dir = args.out if args.out is not None else default_out_dir(resolved)
     if args.scene is not None and Path(args.scene).is_file():
-        _refuse_inside(Path(args.scene), out_dir, "scene file")
-    check_replaceable(out_dir, RUN_FOLDER)  # before the progress bar: errors stay one line
-    check_scene(resolved)
-    if not args.quiet and _kernels_not_cached():
-        err.print(
-            "[dim]compiling the packing kernels (first run after an install or upgrade; "
-            "about 15-30 s, then cached)[/dim]"
-        )
-    with _progress_bar(err, not args.quiet, f"packing {resolved.name}") as progress:
-        outcome = run_scene(resolved, out_dir, progress=progress, verify=args.verify or None)
+        refuse_inside(Path(args.scene), out_dir, "scene file")
+    outcome = pack_and_summarise(
+        resolved, out=out_dir, progress=not args.quiet, verify=args.verify or None
+    )
     tried, placed = outcome.summary["tried"], outcome.summary["placed"]
     checked = outcome.summary.get("verify")
     violated = False
@@ -416,7 +314,7 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _cmd_scenes(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.scene import DEFAULT_SCENE, builtin_scenes
+    from regopack.scene_model import DEFAULT_SCENE, builtin_scenes
 
     table = Table(title="built-in scenes")
     table.add_column("name", style="bold")
@@ -434,10 +332,9 @@ def _cmd_config(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _cmd_verify(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.packing import load
-    from regopack.verify import verify
+    from regopack.api import verify
 
-    report = verify(load(args.packing), rel_tol=args.rel_tol)
+    report = verify(args.packing, rel_tol=args.rel_tol)
     out.file.write(f"{report}\n")
     return EXIT_OK if report.ok else EXIT_VIOLATED
 
@@ -472,34 +369,24 @@ def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, d
 
 
 def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.analysis import (
-        ANALYSIS_KIND,
-        DEFAULT_ANALYSES,
-        main_numbers,
-        run_analyses,
-        write_analysis,
-    )
-    from regopack.manager import default_registry
-    from regopack.outdir import check_replaceable
-    from regopack.packing import load
+    from regopack.analysis import main_numbers
+    from regopack.api import analyze
 
-    names = _analyzer_names(args.only) or list(DEFAULT_ANALYSES)
+    names = _analyzer_names(args.only) or None
     params = _analyzer_params(args.overrides, args.tol)
-    packing = load(args.packing)
     out_dir = args.out if args.out is not None else args.packing.parent / "analysis"
-    _refuse_inside(args.packing, out_dir, "packing file")
-    check_replaceable(out_dir, ANALYSIS_KIND)
-    registry = default_registry()
     with err.status(f"analysing {args.packing}"):
-        analyzers = run_analyses(packing, registry, [(n, {}) for n in names], params=params)
-        files = write_analysis(
-            out_dir,
-            packing,
-            analyzers,
+        results = analyze(
+            args.packing,
+            names,
+            out=out_dir,
             figures=not args.no_figures,
-            packing_path=args.packing,
-            table_format=args.tables,
+            tables=args.tables,
+            params=params,
         )
+    files = results.files
+    assert files is not None  # written, since out is given
+    analyzers = results.analyzers
     table = Table(title=f"regopack analyze: {args.packing}", show_header=False)
     table.add_column("quantity", style="bold")
     table.add_column("value", justify="right")
@@ -536,21 +423,11 @@ def _exporter_params(overrides: Sequence[str]) -> dict[str, Any]:
 
 
 def _cmd_export(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack.analysis import run_analyses
-    from regopack.export import build_exporter, export_packing, output_path
-    from regopack.manager import default_registry
-    from regopack.packing import load
+    from regopack.api import export
 
-    registry = default_registry()
     params = _exporter_params(args.overrides)
-    exporter = build_exporter(registry, args.to, params)
-    packing = load(args.packing)
     names = _analyzer_names(args.analyses)
-    analyzers = run_analyses(packing, registry, [(n, {}) for n in names]) if names else None
-    path = output_path(exporter, args.packing, args.out)
-    written = export_packing(
-        packing, args.to, path, registry=registry, params=params, analyses=analyzers
-    )
+    written = export(args.packing, args.to, args.out, analyses=names or None, params=params)
     out.print(f"wrote {written}", soft_wrap=True, markup=False, highlight=False)
     return EXIT_OK
 

@@ -63,14 +63,14 @@ from regopack.manager import Registry, default_registry
 from regopack.outdir import check_replaceable, name_key, remove_leftovers, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
 from regopack.run import RUN_FOLDER, run_scene
-from regopack.scene import (
+from regopack.scene_model import (
     ResolvedScene,
     builtin_scenes,
     load_scene,
     output_files,
     resolve_scene,
 )
-from regopack.verify import verify
+from regopack.verification import verify
 from regopack.voids import void_metrics
 
 __all__ = [
@@ -243,7 +243,7 @@ class Experiment(BaseModel):
     verify: bool = Field(
         False,
         description=(
-            "Check every packing (regopack.verify) and add verify.overlap_pairs, "
+            "Check every packing (regopack.verification) and add verify.overlap_pairs, "
             "verify.worst_overlap, verify.outside, verify.any_nan and verify.ok to its metrics."
         ),
     )
@@ -302,7 +302,7 @@ class Experiment(BaseModel):
 
     @property
     def base_ref(self) -> str | Path:
-        """The base scene as :func:`regopack.scene.load_scene` takes it."""
+        """The base scene as :func:`regopack.scene_model.load_scene` takes it."""
         if not self.base.endswith(".toml") and self.base in builtin_scenes():
             return self.base
         path = Path(self.base)
@@ -473,7 +473,7 @@ class RunSpec:
         The varied fields (dotted keys) and their values in this run.
     overrides
         ``key=value`` strings applied to the base scene (the experiment's ``set``,
-        then the varied fields), as :func:`regopack.scene.load_scene` takes them.
+        then the varied fields), as :func:`regopack.scene_model.load_scene` takes them.
     """
 
     index: int

@@ -512,6 +512,62 @@ class Packing:
             f"scene={self.scene.get('name', '?')!r}, seed={self.seed})"
         )
 
+    # -- display ------------------------------------------------------------------
+
+    @property
+    def phi(self) -> float:
+        """Area fraction of the placed particles over the whole domain."""
+        area = float(self.area()[self.placed].sum())
+        return area / self.domain.area if self.domain.area > 0 else float("nan")
+
+    def plot(
+        self,
+        ax: Any = None,
+        color_by: str | ArrayLike = "mineral",
+        **kwargs: Any,
+    ) -> Any:
+        """Draw the placed particles with matplotlib.
+
+        Parameters
+        ----------
+        ax
+            Axes to draw into (default: a new figure's).
+        color_by
+            ``"mineral"`` (a fixed colour per mineral name, with a legend),
+            ``"diameter"``, ``"radius"``, ``"order"`` (insertion order), ``"Z"``
+            (contacts per particle, computed here), or one value per drawn or
+            per placed particle (with a colour bar).
+        **kwargs
+            ``cmap``, ``edgecolor``, ``linewidth``, ``legend``, ``colorbar``
+            and ``label`` (of the colour bar).
+
+        Returns
+        -------
+        regopack.drawing.PackingArtists
+            The axes, the particles' ``PolyCollection``, the domain outline,
+            and the legend or colour bar.
+        """
+        from regopack.drawing import draw_packing
+
+        return draw_packing(self, ax, color_by, **kwargs)
+
+    def _repr_png_(self) -> bytes:
+        from regopack.drawing import packing_png
+
+        return packing_png(self)
+
+    def _repr_html_(self) -> str:
+        import base64
+        import html
+
+        from regopack.drawing import packing_png, summary_line
+
+        png = base64.b64encode(packing_png(self)).decode("ascii")
+        return (
+            f"<div><p>{html.escape(summary_line(self))}</p>"
+            f'<img src="data:image/png;base64,{png}" alt="packing coloured by mineral"/></div>'
+        )
+
 
 # ---------------------------------------------------------------------------
 # files

@@ -38,7 +38,7 @@ from regopack.outdir import (
 )
 from regopack.packing import Packing, save, write_json_atomic
 from regopack.population import IntArray, Population, ShapeBatch, concat_shapes
-from regopack.scene import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
+from regopack.scene_model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.sieve import unplaced_per_class
 
 __all__ = [
@@ -344,7 +344,7 @@ def run_scene(
         added to the summary before anything is written.
     verify
         Check the packing for overlaps and wall violations
-        (:func:`regopack.verify.verify`) and add the ``verify`` entry to the
+        (:func:`regopack.verification.verify`) and add the ``verify`` entry to the
         summary. ``None`` (the default) verifies when the insertion strategy
         says its settings may overlap (:meth:`InsertionStrategy.may_overlap`).
     extra_files
@@ -449,7 +449,7 @@ def verify_summary(packing: Packing) -> dict[str, Any]:
     smaller area), ``worst_overlap`` (the largest overlap as a fraction of the
     smaller area, 0 when none) and ``outside`` (particles leaving the domain).
     """
-    from regopack.verify import verify
+    from regopack.verification import verify
 
     report = verify(packing)
     worst = report.worst_overlap[2] if report.worst_overlap is not None else 0.0

@@ -29,7 +29,7 @@ from pydantic import BaseModel
 from regopack import __version__
 from regopack.manager import Registry
 from regopack.plugin_types import KINDS
-from regopack.scene import Scene
+from regopack.scene_model import Scene
 
 __all__ = [
     "DOCUMENTS",

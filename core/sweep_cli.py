@@ -18,14 +18,6 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rich.console import Console
-from rich.progress import (
-    BarColumn,
-    MofNCompleteColumn,
-    Progress,
-    TextColumn,
-    TimeElapsedColumn,
-    TimeRemainingColumn,
-)
 from rich.table import Table
 from rich.text import Text
 
@@ -158,7 +150,7 @@ def run_sweep_command(
         0 when every run finished, 1 when some failed.
     """
     from regopack.errors import ConfigError
-    from regopack.experiment import RunResult, run_experiment
+    from regopack.experiment_api import run_sweep
     from regopack.experiments import builtin_experiment_path, builtin_experiments
 
     if getattr(args, "list_builtin", False):
@@ -174,40 +166,16 @@ def run_sweep_command(
     elif experiment_path is None:
         raise ConfigError("give an experiment file, --builtin NAME or --list-builtin")
     quiet = bool(getattr(args, "quiet", False))
-    live = progress_console if progress_console is not None else console
-    columns = (
-        TextColumn("{task.description}"),
-        BarColumn(bar_width=30),
-        MofNCompleteColumn(),
-        TextColumn("runs, {task.fields[failed]} failed, {task.fields[reused]} reused"),
-        TimeElapsedColumn(),
-        TimeRemainingColumn(),
+    table = run_sweep(
+        experiment_path,
+        out=getattr(args, "out", None),
+        workers=getattr(args, "workers", None),
+        scheduler=getattr(args, "scheduler", None),
+        progress=not quiet,
+        plots=not getattr(args, "no_plots", False),
+        console=progress_console if progress_console is not None else console,
     )
-    from regopack.cli import shown_until_error
-
-    progress_bar = Progress(*columns, console=live, transient=False, disable=quiet)
-    with shown_until_error(progress_bar) as bar:
-        task = bar.add_task(f"sweep {builtin or experiment_path}", total=None, failed=0, reused=0)
-        failed = reused = 0
-
-        def update(result: RunResult, finished: int, total: int) -> None:
-            nonlocal failed, reused
-            failed += not result.ok
-            reused += result.reused
-            bar.update(task, completed=finished, total=total, failed=failed, reused=reused)
-
-        outcome = run_experiment(
-            experiment_path,
-            getattr(args, "out", None),
-            workers=getattr(args, "workers", None),
-            progress=update,
-            scheduler=getattr(args, "scheduler", None),
-        )
-    plots: list[Path] = []
-    if not getattr(args, "no_plots", False):
-        from regopack.experiment_plots import plot_experiment
-
-        plots = plot_experiment(outcome.out_dir)
+    outcome, plots = table.result, table.plots
     if not quiet:
         console.print(_results_table(outcome))
         if plots:

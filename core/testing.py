@@ -35,7 +35,7 @@ from regopack.interfaces import DensityController, ShapeGenerator, SizeDistribut
 from regopack.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
 from regopack.packing import Packing
 from regopack.population import ShapeBatch
-from regopack.verify import VerifyReport, assert_valid_packing, verify
+from regopack.verification import VerifyReport, assert_valid_packing, verify
 
 __all__ = [
     "DEFAULT_RADII",

@@ -18,7 +18,7 @@ from pathlib import Path
 import vtk
 
 import regopack
-from regopack.export import export_packing
+from regopack.exporting import export_packing
 
 HERE = Path(__file__).resolve().parent
 PALETTE = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7")
@@ -83,7 +83,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         if args.packing is None:
             from regopack.run import run_scene
-            from regopack.scene import load_scene, resolve_scene
+            from regopack.scene_model import load_scene, resolve_scene
 
             resolved = resolve_scene(load_scene("small"), default_registry())
             packing = run_scene(resolved, None).packing

@@ -42,7 +42,7 @@ def run_default_scene(seed: int | None) -> Packing:
     """Pack the default scene (the paper's Table 1) in memory and return the packing."""
     from regopack.manager import default_registry
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     scene = resolve_scene(load_scene(None, seed=seed), default_registry())
     return run_scene(scene).packing

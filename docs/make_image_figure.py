@@ -33,7 +33,7 @@ from matplotlib.patches import Patch
 from PIL import Image
 
 import regopack
-from regopack.export import export_packing
+from regopack.exporting import export_packing
 from regopack.manager import default_registry
 from regopack.packing import Packing
 from regopack.plugins.image_export import image_paths
@@ -67,7 +67,7 @@ WINDOW = 60.0
 
 def _pack_small() -> Packing:
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     return run_scene(resolve_scene(load_scene("small"), default_registry())).packing
 

@@ -25,7 +25,7 @@ from regopack.manager import default_registry
 from regopack.plugin_types import AnalyzerSpec
 from regopack.plugins.analysis import Contacts, Coordination, Density, Rdf
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import make_registry, packing_from_polygons
 
 pytest.importorskip("regopack.plugins.available_arc")

@@ -25,7 +25,7 @@ from regopack.cli import main
 from regopack.errors import PackingError
 from regopack.packing import save
 from regopack.testing import packing_from_polygons
-from regopack.verify import verify
+from regopack.verification import verify
 
 GIB = 1024**3
 SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]

@@ -333,10 +333,10 @@ def test_schema_output_error_is_one_line(tmp_path, capsys):
 
 
 def test_first_run_notice_depends_on_the_kernel_cache(tmp_path, monkeypatch):
-    from regopack.cli import _kernels_not_cached
+    from regopack.api import kernels_cached
 
     monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert _kernels_not_cached()
+    assert not kernels_cached()
     (tmp_path / "sub").mkdir()
     (tmp_path / "sub" / "kernel.f-1.py311.nbi").write_bytes(b"")
-    assert not _kernels_not_cached()
+    assert kernels_cached()

@@ -15,7 +15,7 @@ from regopack.cli import main
 from regopack.manager import default_registry
 from regopack.packing import save
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 
 @pytest.fixture(scope="module")

@@ -12,7 +12,7 @@ pytest.importorskip("regopack.plugins.available_arc")
 from regopack.cli import main
 from regopack.manager import default_registry
 from regopack.packing import load
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import assert_valid_packing
 
 

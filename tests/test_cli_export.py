@@ -16,7 +16,7 @@ from regopack.manager import default_registry
 from regopack.packing import load, save
 from regopack.plugins.exporters import read_csv, read_json
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 
 @pytest.fixture(scope="module")

@@ -24,7 +24,7 @@ from regopack import hookspecs
 from regopack.cli import build_parser
 from regopack.manager import default_registry
 from regopack.plugin_types import KINDS
-from regopack.scene import Domain, Outputs, Phase, PluginRef, Scene
+from regopack.scene_model import Domain, Outputs, Phase, PluginRef, Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

@@ -35,7 +35,7 @@ import pytest
 
 from regopack.packing import load
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import (
     assert_valid_packing,
     check_shape_generator,

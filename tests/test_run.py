@@ -13,7 +13,7 @@ from regopack.packing import load
 from regopack.plugin_types import ShapeSpec
 from regopack.population import ShapeBatch
 from regopack.run import default_out_dir, draw_population, particle_count, phi_in_window, run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import assert_valid_packing, packing_from_polygons
 
 

@@ -9,7 +9,7 @@ import pytest
 from regopack.cli import main
 from regopack.manager import default_registry
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 TAU = ["count=150", 'insertion.interference="tau"', "insertion.tau=0.9"]
 

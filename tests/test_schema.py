@@ -19,7 +19,7 @@ import pytest
 
 from regopack.manager import default_registry
 from regopack.plugin_types import KINDS
-from regopack.scene import builtin_scenes
+from regopack.scene_model import builtin_scenes
 from regopack.schema import (
     DOCUMENTS,
     JSON_SCHEMA_DIALECT,

@@ -1,1 +1,1 @@
-"""Built-in scenes (TOML files), read with :func:`regopack.scene.load_scene`."""
+"""Built-in scenes (TOML files), read with :func:`regopack.scene_model.load_scene`."""

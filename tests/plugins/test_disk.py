@@ -21,7 +21,7 @@ from regopack.plugins.octagon import OctagonConfig, RandomPolygon
 from regopack.plugins.rsa import RandomSequentialAddition, RsaConfig
 from regopack.population import Population, concat_shapes
 from regopack.testing import check_shape_generator, extreme_radii
-from regopack.verify import verify
+from regopack.verification import verify
 
 DOMAINS: dict[str, Domain] = {
     "rectangle": Rectangle.centred(120.0, 100.0, (3.0, -2.0)),
@@ -168,7 +168,7 @@ def _two(centres, radii, domain=None) -> Packing:
     [(0.0, True), (1e-6, True), (-1e-7, True), (-1e-5, False), (-0.5, False)],
 )
 def test_verify_measures_disks_exactly(gap, ok) -> None:
-    from regopack.verify import segment_fraction
+    from regopack.verification import segment_fraction
 
     packing = _two([[0.0, 0.0], [3.0 + gap, 0.0]], [1.0, 2.0])
     report = verify(packing)

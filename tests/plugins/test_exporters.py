@@ -13,7 +13,7 @@ import pytest
 
 from regopack.analysis import run_analyses
 from regopack.errors import ExportError
-from regopack.export import build_exporter, export_packing, output_path
+from regopack.exporting import build_exporter, export_packing, output_path
 from regopack.manager import default_registry
 from regopack.packing import Packing, load, save
 from regopack.plugins.analysis.figures import PALETTE
@@ -29,7 +29,7 @@ from regopack.plugins.exporters import (
     read_json,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 SVG = "{http://www.w3.org/2000/svg}"
 ARRAYS = ("radius", "mineral", "vertices", "offsets", "orientation", "centre", "insertion_index")

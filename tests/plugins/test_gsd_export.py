@@ -14,13 +14,13 @@ from pydantic import ValidationError
 
 from regopack.domain import PeriodicRectangle
 from regopack.errors import ExportError
-from regopack.export import build_exporter, export_packing
+from regopack.exporting import build_exporter, export_packing
 from regopack.manager import default_registry
 from regopack.packing import ROUNDED_SEGMENTS, Packing, save
 from regopack.plugins.exporters import polygon_moments
 from regopack.plugins.gsd_export import GsdExporter, convex_outline, shape_moments
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 gsd_hoomd = pytest.importorskip("gsd.hoomd", reason="the gsd package is not installed")

@@ -13,7 +13,7 @@ import shapely
 from regopack.cli import main
 from regopack.domain import PeriodicRectangle, Rectangle
 from regopack.errors import ExportError
-from regopack.export import export_packing
+from regopack.exporting import export_packing
 from regopack.interfaces import InsertionResult
 from regopack.manager import default_registry
 from regopack.packing import Packing, save
@@ -35,7 +35,7 @@ from regopack.plugins.image_export import (
 )
 from regopack.population import Population
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 H = 0.25

@@ -26,7 +26,7 @@ from regopack.plugins.lammps_export import (
     script_path,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 
@@ -204,7 +204,7 @@ def test_scales_that_overflow_are_one_error(small, tmp_path):
 def test_old_rounding_field_is_refused(registry):
     from pydantic import ValidationError
 
-    from regopack.export import build_exporter
+    from regopack.exporting import build_exporter
 
     with pytest.raises(ValidationError):
         build_exporter(registry, "lammps", {"rounding": 0.05})

@@ -22,8 +22,8 @@ from regopack.plugins.rsa import (
 )
 from regopack.population import Population, ShapeBatch, concat_shapes
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
-from regopack.verify import verify
+from regopack.scene_model import load_scene, resolve_scene
+from regopack.verification import verify
 
 IDENTITY = EtaController(EtaConfig(eta=0.0))
 

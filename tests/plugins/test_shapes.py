@@ -30,7 +30,7 @@ from regopack.plugins.shapes import (
 )
 from regopack.population import ShapeBatch
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import assert_valid_packing
 
 # an L-shaped (not convex) outline, a clockwise square and a triangle

@@ -495,7 +495,7 @@ def test_registered_kinds_build_from_params(tmp_path: Path) -> None:
 
 
 def test_scene_errors_are_one_line(tmp_path: Path) -> None:
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     bad = tmp_path / "bad.csv"
     bad.write_text("1,0\n2,150\n", encoding="utf-8")
@@ -510,7 +510,7 @@ def test_scene_errors_are_one_line(tmp_path: Path) -> None:
 def test_end_to_end_packing_without_overlap(size: str, tmp_path: Path) -> None:
     pytest.importorskip("regopack.plugins.available_arc")
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
     from regopack.testing import assert_valid_packing
 
     if size == "tabulated":

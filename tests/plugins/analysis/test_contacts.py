@@ -73,7 +73,7 @@ def test_face_to_face_near_contacts_are_shallower_than_tol(gap: float) -> None:
 def test_threshold_and_area_match_shapely_for_random_octagons() -> None:
     from regopack.manager import default_registry
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     resolved = resolve_scene(
         load_scene("small", ["count=400", "seed=2"]), default_registry(autoload=False)
@@ -132,7 +132,7 @@ def test_mitres_of_a_square() -> None:
 def test_z_of_tol_is_non_decreasing_and_per_mineral_weights_add_up() -> None:
     from regopack.manager import default_registry
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     resolved = resolve_scene(
         load_scene("table1", ["domain.width=150", "domain.height=150", "seed=3"]),

@@ -23,7 +23,7 @@ from regopack.plugins.analysis import (
     figures,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 STEMS = ["packing", "contact-network", "contact-histograms", "z-vs-tol", "z-per-mineral", "rdf"]

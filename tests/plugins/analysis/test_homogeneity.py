@@ -29,7 +29,7 @@ from regopack.plugins.analysis.regions import (
     tile_grid,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 

@@ -24,7 +24,7 @@ from regopack.plugins.analysis.local_fraction import (
     power_cells,
 )
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.testing import packing_from_polygons
 
 pytest.importorskip("regopack.plugins.available_arc")

@@ -18,7 +18,7 @@ from regopack.analysis import run_analyses, write_analysis
 from regopack.manager import default_registry
 from regopack.plugins.analysis.psd import Psd, PsdConfig, ks_distance, unplaced_per_class
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 from regopack.sieve import class_of, sieve_edges
 from regopack.testing import packing_from_polygons
 

@@ -14,7 +14,7 @@ from regopack.plugins.analysis import density as density_module
 from regopack.plugins.analysis.coordination import remove_rattlers
 from regopack.plugins.analysis.density import void_ratio
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 pytest.importorskip("regopack.plugins.available_arc")
 

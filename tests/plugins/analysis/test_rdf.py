@@ -52,7 +52,7 @@ def test_matches_brute_force_reference() -> None:
 def test_packing_rdf_has_a_contact_peak() -> None:
     from regopack.manager import default_registry
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     resolved = resolve_scene(load_scene("small", ["count=600"]), default_registry(autoload=False))
     packing = run_scene(resolved, None).packing

@@ -24,7 +24,7 @@ from regopack.manager import default_registry
 from regopack.packing import Packing
 from regopack.plugins.analysis.rdf import Rdf, RdfConfig
 from regopack.run import run_scene
-from regopack.scene import load_scene, resolve_scene
+from regopack.scene_model import load_scene, resolve_scene
 
 freud = pytest.importorskip("freud", reason="freud-analysis is not installed")
 

@@ -15,7 +15,7 @@ from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.population import Population
 from regopack.testing import extreme_radii
-from regopack.verify import verify
+from regopack.verification import verify
 
 _change5_population = change5_population
 _pack = pack

@@ -16,7 +16,7 @@ from regopack.plugins.change5 import Change5, Change5Config
 from regopack.plugins.eta import EtaConfig, EtaController
 from regopack.plugins.rsa import RandomSequentialAddition, RsaConfig
 from regopack.testing import extreme_radii
-from regopack.verify import verify
+from regopack.verification import verify
 
 PENTAGON = ((-100.0, -80.0), (90.0, -100.0), (120.0, 60.0), (0.0, 110.0), (-110.0, 40.0))
 

@@ -20,7 +20,7 @@ from regopack.plugins.disk import Disk
 from regopack.plugins.octagon import OctagonConfig, RandomPolygon
 from regopack.population import Population, concat_shapes
 from regopack.testing import extreme_radii
-from regopack.verify import verify
+from regopack.verification import verify
 
 PENTAGON = ((-100.0, -80.0), (90.0, -100.0), (120.0, 60.0), (0.0, 110.0), (-110.0, 40.0))
 DOMAINS: dict[str, Domain] = {
@@ -264,7 +264,7 @@ def test_the_sweep_removes_the_radial_grading_of_the_paper_order() -> None:
     from regopack.analysis import run_analyses
     from regopack.manager import default_registry
     from regopack.run import run_scene
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     registry = default_registry(autoload=False)
     slopes = {}
@@ -353,7 +353,7 @@ def test_the_options_from_the_command_line(
 
 def test_dem_is_the_table1_scene_in_the_sweep_order() -> None:
     from regopack.manager import default_registry
-    from regopack.scene import load_scene, resolve_scene
+    from regopack.scene_model import load_scene, resolve_scene
 
     registry = default_registry(autoload=False)
     dem = resolve_scene(load_scene("dem"), registry).to_dict()

@@ -461,31 +461,74 @@ def apply_overrides(data: dict[str, Any], overrides: Sequence[str]) -> list[str]
     keys: list[str] = []
     for text in overrides:
         key, value = _parse_override(text)
-        parts = key.split(".")
-        node: Any = data
-        for depth, part in enumerate(parts):
-            last = depth == len(parts) - 1
-            where = ".".join(parts[: depth + 1])
-            if isinstance(node, list):
-                if not part.isdigit() or int(part) >= len(node):
-                    raise ConfigError(
-                        f"--set {key}: {where} is not an item of a list of {len(node)} items"
-                    )
-                index = int(part)
-                if last:
-                    node[index] = value
-                else:
-                    node = node[index]
-            elif isinstance(node, dict):
-                if last:
-                    node[part] = value
-                else:
-                    node = node.setdefault(part, {})
-            else:
-                parent = ".".join(parts[:depth])
-                raise ConfigError(f"--set {key}: {parent} is a value, not a table")
+        set_value(data, key, value, f"--set {key}")
         keys.append(key)
     return keys
+
+
+def set_value(data: dict[str, Any], key: str, value: Any, label: str) -> None:
+    """Set the dotted ``key`` of a raw scene dictionary to ``value``, in place.
+
+    Missing tables are created; list items are addressed by index. ``label``
+    starts the one-line error (e.g. ``--set phases.9.name``).
+
+    Examples
+    --------
+    >>> d = {"phases": [{"name": "glass"}]}
+    >>> set_value(d, "phases.0.fraction", 1.0, "example")
+    >>> d
+    {'phases': [{'name': 'glass', 'fraction': 1.0}]}
+    """
+    parts = key.split(".")
+    node: Any = data
+    for depth, part in enumerate(parts):
+        last = depth == len(parts) - 1
+        where = ".".join(parts[: depth + 1])
+        if isinstance(node, list):
+            if not part.isdigit() or int(part) >= len(node):
+                raise ConfigError(f"{label}: {where} is not an item of a list of {len(node)} items")
+            index = int(part)
+            if last:
+                node[index] = value
+            else:
+                node = node[index]
+        elif isinstance(node, dict):
+            if last:
+                node[part] = value
+            else:
+                node = node.setdefault(part, {})
+        else:
+            parent = ".".join(parts[:depth])
+            raise ConfigError(f"{label}: {parent} is a value, not a table")
+
+
+def read_scene_data(path_or_name: str | Path | None = None) -> tuple[dict[str, Any], str]:
+    """Read a scene's raw dictionary and the name of its source, unvalidated.
+
+    Parameters
+    ----------
+    path_or_name
+        As for :func:`load_scene`.
+
+    Returns
+    -------
+    data, source
+        The parsed TOML and the file name errors should name
+        (``table1.toml`` for a built-in scene).
+    """
+    if path_or_name is None:
+        path_or_name = DEFAULT_SCENE
+    name = str(path_or_name)
+    builtins = builtin_scenes()
+    if isinstance(path_or_name, str) and not name.endswith(".toml") and name in builtins:
+        source = f"{name}.toml"
+        text = _read_builtin(name)
+    else:
+        path = Path(path_or_name)
+        source = str(path)
+        known = ", ".join(sorted(builtins))
+        text = _toml.read_text_file(path, "scene", f" (built-in scenes: {known})")
+    return _toml.parse_toml(text, source), source
 
 
 def load_scene(
@@ -516,19 +559,7 @@ def load_scene(
     >>> load_scene("table1", ["density.eta=10"], seed=7).seed
     7
     """
-    if path_or_name is None:
-        path_or_name = DEFAULT_SCENE
-    name = str(path_or_name)
-    builtins = builtin_scenes()
-    if isinstance(path_or_name, str) and not name.endswith(".toml") and name in builtins:
-        source = f"{name}.toml"
-        text = _read_builtin(name)
-    else:
-        path = Path(path_or_name)
-        source = str(path)
-        known = ", ".join(sorted(builtins))
-        text = _toml.read_text_file(path, "scene", f" (built-in scenes: {known})")
-    data = _toml.parse_toml(text, source)
+    data, source = read_scene_data(path_or_name)
     overridden = dict.fromkeys(apply_overrides(data, overrides), "--set")
     if seed is not None:
         data["seed"] = seed
@@ -609,7 +640,7 @@ class ResolvedPhase:
     shape: ResolvedPlugin[Any]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class ResolvedScene:
     """A scene whose plugin parameters have been validated (step two).
 
@@ -699,6 +730,40 @@ class ResolvedScene:
     def to_toml(self) -> str:
         """:meth:`to_dict` as a TOML document."""
         return _toml.dumps(self.to_dict())
+
+    def with_(self, **overrides: Any) -> ResolvedScene:
+        """Return this scene with some fields changed, validated again.
+
+        Keys are dotted names as for ``--set``, written with ``__`` for the
+        dots (``domain__width=400``, ``phases__0__shape__psi=3``) or passed
+        as a dictionary (``**{"domain.width": 400}``). See
+        :func:`regopack.scene`.
+
+        Examples
+        --------
+        >>> import regopack
+        >>> regopack.scene("small").with_(density__eta=5, seed=3).seed
+        3
+        """
+        from regopack.api import scene
+
+        return scene(self, **overrides)
+
+    def __repr__(self) -> str:
+        d = self.scene.domain
+        if d.kind == "circle":
+            where = f"circle of radius {d.radius:g} µm"
+        elif d.kind == "polygon":
+            where = f"polygon of {len(d.vertices or ())} vertices"
+        else:
+            where = f"{d.width:g} × {d.height:g} µm {d.kind}"
+        count = self.scene.count
+        phases = ", ".join(self.phase_names)
+        return (
+            f"<scene {self.name!r}: seed {self.seed}, count {count}, {where}, "
+            f"{self.size.kind} sizes, phases [{phases}], {self.insertion.kind} insertion, "
+            f"{self.density.kind} density>"
+        )
 
 
 def _resolve_ref(

@@ -11,7 +11,7 @@ import regopack.testing
 from regopack.domain import Rectangle
 from regopack.packing import Packing
 from regopack.testing import packing_from_polygons
-from regopack.verify import VerifyReport, assert_valid_packing, verify
+from regopack.verification import VerifyReport, assert_valid_packing, verify
 
 SQUARE = np.array([(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)])
 

@@ -12,7 +12,7 @@ from pydantic import BaseModel
 
 from regopack import _toml
 from regopack.errors import ConfigError
-from regopack.scene import (
+from regopack.scene_model import (
     DEFAULT_SCENE,
     Domain,
     Outputs,
@@ -418,7 +418,7 @@ def test_two_outputs_of_a_run_are_never_one_path(overrides, expected):
 
 
 def test_outputs_with_their_own_names_resolve():
-    from regopack.scene import output_files
+    from regopack.scene_model import output_files
 
     resolved = resolve_scene(
         load_scene("small", ['outputs.analyses=["density"]', 'outputs.exports=["csv", "vtk"]']),

@@ -71,6 +71,10 @@ class VerifyReport:
     worst_outside: tuple[int, float] | None
     rel_tol: float
 
+    def __bool__(self) -> bool:
+        """Return whether the packing is valid: ``if regopack.verify(p): ...``."""
+        return self.ok
+
     def __str__(self) -> str:
         status = "OK" if self.ok else "VIOLATED"
         lines = [f"checked {self.n_checked} placed particles (rel_tol {self.rel_tol:g}): {status}"]

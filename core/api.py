@@ -1,0 +1,551 @@
+"""The Python API: one function for each command of ``regopack``.
+
+=============================  ==========================  =====================================
+function                       command                     returns
+=============================  ==========================  =====================================
+:func:`scene`                  ``regopack config``         a validated scene
+:func:`pack`                   ``regopack run``            the :class:`~regopack.Packing`
+:func:`pack_and_summarise`     ``regopack run``            packing, summary and files written
+:func:`analyze`                ``regopack analyze``        analysis results by analyzer
+:func:`verify`                 ``regopack verify``         a bool-like report
+:func:`export`                 ``regopack export``         the file written
+:func:`sweep`                  ``regopack sweep``          the results table
+=============================  ==========================  =====================================
+
+The command line calls these functions, so the two cannot drift apart. Every
+function is importable from the package root (``regopack.pack``). Nothing is
+written unless an output path is given. User mistakes raise
+:class:`~regopack.errors.RegopackError` subclasses with one-line messages that
+name the argument at fault.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from regopack.errors import ConfigError
+from regopack.interfaces import ProgressCallback
+from regopack.packing import Packing, load
+from regopack.results import AnalysisResults
+
+if TYPE_CHECKING:
+    from regopack.analysis import TableFormat
+    from regopack.experiment_api import SweepTable
+    from regopack.manager import Registry
+    from regopack.run import RunOutcome
+    from regopack.scene_model import ResolvedScene
+    from regopack.verification import VerifyReport
+
+__all__ = [
+    "analyze",
+    "export",
+    "pack",
+    "pack_and_summarise",
+    "scene",
+    "sweep",
+    "verify",
+]
+
+Progress = bool | ProgressCallback
+
+
+def _registry(registry: Registry | None) -> Registry:
+    if registry is not None:
+        return registry
+    from regopack.manager import default_registry
+
+    return default_registry()
+
+
+def _dotted(name: str) -> str:
+    """``domain__width`` → ``domain.width``; dotted names pass unchanged."""
+    return name.replace("__", ".")
+
+
+def scene(
+    source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None = None,
+    /,
+    *,
+    seed: int | None = None,
+    registry: Registry | None = None,
+    **overrides: Any,
+) -> ResolvedScene:
+    """Read, change and validate a scene, as ``regopack config`` does.
+
+    Parameters
+    ----------
+    source
+        ``None`` for the default scene (``table1``), the name of a built-in
+        scene (``regopack scenes`` lists them), the path of a TOML file, a
+        dictionary with the file's content, or a scene to change.
+    seed
+        Replaces the scene's seed.
+    registry
+        Where plugins are looked up (default: the built-in and installed ones).
+    **overrides
+        Fields to change, by dotted name as for ``--set``: ``__`` stands for
+        the dot (``domain__width=400``), or pass a dictionary
+        (``**{"domain.width": 400}``). Values are Python values.
+
+    Returns
+    -------
+    ResolvedScene
+        The scene with every plugin's parameters validated and defaults
+        filled in; ``.with_(...)`` changes it again, ``.to_toml()`` writes it.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the file or keyword, the field, the value and what is
+        allowed.
+
+    Examples
+    --------
+    >>> import regopack
+    >>> s = regopack.scene("small", domain__width=120, **{"density.eta": 5})
+    >>> s.scene.domain.width, s.density.config.eta
+    (120.0, 5.0)
+    >>> s.with_(seed=4).seed
+    4
+    """
+    from regopack.scene_model import (
+        ResolvedScene,
+        read_scene_data,
+        resolve_scene,
+        scene_from_dict,
+        set_value,
+    )
+
+    if isinstance(source, ResolvedScene):
+        data = source.to_dict()
+        origin = source.scene.source or f"scene {source.name!r}"
+        registry = registry if registry is not None else source.registry
+    elif isinstance(source, Mapping):
+        data = copy.deepcopy(dict(source))
+        origin = "scene dictionary"
+    elif source is None or isinstance(source, str | os.PathLike):
+        data, origin = read_scene_data(source if isinstance(source, str | None) else Path(source))
+    else:
+        raise ConfigError(
+            f"scene: expected a built-in scene name, a TOML file, a dictionary or a scene, "
+            f"not {type(source).__name__}"
+        )
+    overridden: dict[str, str] = {}
+    for name, value in overrides.items():
+        key = _dotted(name)
+        label = f"scene({name}=...)"
+        set_value(data, key, value, label)
+        overridden[key] = label
+    if seed is not None:
+        data["seed"] = seed
+        overridden["seed"] = "scene(seed=...)"
+    structural = scene_from_dict(data, source=origin, overridden=overridden)
+    return resolve_scene(structural, _registry(registry))
+
+
+def _as_scene(
+    source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None,
+    seed: int | None,
+    overrides: Mapping[str, Any],
+) -> ResolvedScene:
+    from regopack.scene_model import ResolvedScene
+
+    if isinstance(source, ResolvedScene) and seed is None and not overrides:
+        return source
+    return scene(source, seed=seed, **overrides)
+
+
+@contextmanager
+def _progress(progress: Progress, label: str) -> Iterator[ProgressCallback | None]:
+    """Yield a progress callback: a bar on stderr for ``True``, the callable itself, or none."""
+    if progress is False or progress is None:
+        yield None
+        return
+    if progress is not True:
+        if not callable(progress):
+            raise ConfigError(
+                f"progress: expected True, False or a callable, not {type(progress).__name__}"
+            )
+        yield progress
+        return
+    import sys
+
+    from rich.console import Console
+
+    from regopack.progress import progress_bar
+
+    console = Console(file=sys.stderr)
+    if not kernels_cached():
+        console.print(
+            "[dim]compiling the packing kernels (first run after an install or upgrade; "
+            "cached afterwards; `regopack compile` does it ahead of time)[/dim]"
+        )
+    with progress_bar(console, True, label) as callback:
+        yield callback
+
+
+def kernels_cached() -> bool:
+    """Return whether the compiled-kernel cache holds compiled code (a first run compiles)."""
+    from regopack.jit import kernel_cache_dir
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR") or kernel_cache_dir())
+    return folder.is_dir() and any(folder.rglob("*.nbi"))
+
+
+def pack_and_summarise(
+    source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None = None,
+    /,
+    *,
+    seed: int | None = None,
+    progress: Progress = False,
+    out: str | os.PathLike[str] | None = None,
+    verify: bool | None = None,
+    figures: bool = True,
+    **overrides: Any,
+) -> RunOutcome:
+    """Pack a scene and summarise the run, as ``regopack run`` does.
+
+    Takes the arguments of :func:`pack`, plus ``figures`` (draw the figures
+    of the scene's analyses when ``out`` is given).
+
+    Returns
+    -------
+    RunOutcome
+        The packing, the summary (what ``summary.json`` holds) and the files
+        written.
+    """
+    from regopack.outdir import check_replaceable
+    from regopack.run import RUN_FOLDER, check_scene, run_scene
+
+    resolved = _as_scene(source, seed, overrides)
+    if out is not None:
+        if not str(out):
+            raise ConfigError("out: empty folder name")
+        check_replaceable(Path(out), RUN_FOLDER)
+    check_scene(resolved)
+    with _progress(progress, f"packing {resolved.name}") as callback:
+        return run_scene(
+            resolved,
+            None if out is None else Path(out),
+            progress=callback,
+            verify=verify,
+            figures=figures,
+        )
+
+
+def pack(
+    source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None = None,
+    /,
+    *,
+    seed: int | None = None,
+    progress: Progress = False,
+    out: str | os.PathLike[str] | None = None,
+    verify: bool | None = None,
+    **overrides: Any,
+) -> Packing:
+    """Pack a scene, as ``regopack run`` does.
+
+    Parameters
+    ----------
+    source
+        A scene (see :func:`scene`): ``None`` for ``table1``, a built-in name,
+        a TOML path, a dictionary or a scene object.
+    seed
+        Replaces the scene's seed.
+    progress
+        ``True`` shows a progress bar on stderr; a callable is called as
+        ``progress(done, placed, total)``.
+    out
+        Run folder to write (packing, ``summary.json``, the scene's analyses
+        and exports), replaced as a whole as by ``regopack run --out``.
+        ``None`` writes nothing.
+    verify
+        Check the packing for overlaps (``None``: when the insertion
+        settings may overlap); the outcome is in ``summary.json``.
+    **overrides
+        Scene fields to change, as for :func:`scene` (``density__eta=5``).
+
+    Returns
+    -------
+    Packing
+        Every drawn particle and where it was placed; the same scene and seed
+        give the same packing, bit for bit.
+
+    Examples
+    --------
+    >>> import regopack
+    >>> p = regopack.pack("small", domain__width=60, domain__height=60, count=40)
+    >>> p.n_particles, p.n_placed > 30
+    (40, True)
+    """
+    outcome = pack_and_summarise(
+        source, seed=seed, progress=progress, out=out, verify=verify, **overrides
+    )
+    return outcome.packing
+
+
+def refuse_inside(path: Path, folder: Path, what: str) -> None:
+    """Refuse an output folder that holds ``path``: replacing it would delete the input."""
+    real, real_folder = os.path.realpath(path), os.path.realpath(folder)
+    if os.path.commonpath([real, real_folder]) == real_folder:
+        raise ConfigError(
+            f"output folder {folder}: holds the {what} {path}, and the output folder is "
+            "replaced as a whole; give another folder"
+        )
+
+
+def _packing(packing: Packing | str | os.PathLike[str]) -> Packing:
+    if isinstance(packing, Packing):
+        return packing
+    if isinstance(packing, str | os.PathLike):
+        return load(Path(packing))
+    raise ConfigError(
+        f"packing: expected a Packing or the path of a packing file, not {type(packing).__name__}"
+    )
+
+
+def analysis_params(
+    params: Mapping[str, Any], known: Callable[[str], bool] | None = None
+) -> dict[str, dict[str, Any]]:
+    """Parameters by analyzer from keywords: ``contacts={"tol": 0.1}`` or ``contacts__tol=0.1``.
+
+    Examples
+    --------
+    >>> analysis_params({"contacts__tol": 0.1, "rdf": {"dr": 0.5}})
+    {'contacts': {'tol': 0.1}, 'rdf': {'dr': 0.5}}
+    """
+    out: dict[str, dict[str, Any]] = {}
+    for name, value in params.items():
+        key = _dotted(name)
+        analyzer, dot, field = key.partition(".")
+        if dot:
+            if not field or "." in field:
+                raise ConfigError(f"{name}: expected ANALYZER__FIELD=value, e.g. contacts__tol=0.1")
+            out.setdefault(analyzer, {})[field] = value
+        elif isinstance(value, Mapping):
+            out.setdefault(analyzer, {}).update({str(k): v for k, v in value.items()})
+        else:
+            raise ConfigError(
+                f"{name}={value!r}: expected a dictionary of {name}'s parameters, "
+                f"e.g. {name}={{...}}, or {name}__FIELD=value"
+            )
+    return out
+
+
+def analyze(
+    packing: Packing | str | os.PathLike[str],
+    only: str | Sequence[str] | None = None,
+    *,
+    out: str | os.PathLike[str] | None = None,
+    figures: bool = True,
+    tables: TableFormat = "csv",
+    registry: Registry | None = None,
+    params: Mapping[str, Any] | None = None,
+    **kwargs: Any,
+) -> AnalysisResults:
+    """Analyse a packing, as ``regopack analyze`` does.
+
+    Parameters
+    ----------
+    packing
+        A packing or the path of a packing file.
+    only
+        Analyzer names (a name, a comma-separated string or a sequence); by
+        default those ``regopack analyze`` runs. Analyzers they require run
+        too.
+    out
+        Folder for ``analysis.json``, the tables, figures and report,
+        replaced as a whole. ``None`` writes nothing.
+    figures, tables
+        With ``out``: draw the figures; write the tables as ``"csv"`` or ``"npz"``.
+    registry
+        Where analyzers are looked up (default: built-in and installed).
+    params, **kwargs
+        Parameters by analyzer: ``contacts={"tol": 0.1}`` or ``contacts__tol=0.1``
+        (keywords win over ``params``). Parameters for an analyzer that does
+        not run are refused.
+
+    Returns
+    -------
+    AnalysisResults
+        A mapping from analyzer name to its result: ``res["density"]["phi_domain"]``,
+        ``res["rdf"].tables["total"]``, ``res["contacts"].to_pandas()``.
+        ``res.files`` holds the files written, or ``None``.
+
+    Examples
+    --------
+    >>> import regopack
+    >>> p = regopack.pack("small", domain__width=60, domain__height=60, count=40)
+    >>> res = regopack.analyze(p, "density", density__margin=0.0)
+    >>> list(res), 0.5 < res["density"]["phi_domain"] < 1
+    (['density'], True)
+    """
+    from regopack.analysis import ANALYSIS_KIND, DEFAULT_ANALYSES, run_analyses, write_analysis
+    from regopack.outdir import check_replaceable
+
+    if out is not None:
+        if not isinstance(packing, Packing):
+            refuse_inside(Path(packing), Path(out), "packing file")
+        check_replaceable(Path(out), ANALYSIS_KIND)
+    loaded = _packing(packing)
+    if only is None:
+        names = list(DEFAULT_ANALYSES)
+    else:
+        parts = [only] if isinstance(only, str) else list(only)
+        names = []
+        for part in parts:
+            if not isinstance(part, str):
+                raise ConfigError(f"only: expected analyzer names, not {type(part).__name__}")
+            for name in (p.strip() for p in part.split(",")):
+                if not name:
+                    raise ConfigError(f"only: empty analyzer name in {part!r}")
+                if name not in names:
+                    names.append(name)
+    reg = _registry(registry)
+    merged = analysis_params(params or {})
+    for name, fields in analysis_params(kwargs).items():
+        merged.setdefault(name, {}).update(fields)
+    analyzers = run_analyses(loaded, reg, [(n, {}) for n in names], params=merged)
+    results = AnalysisResults(analyzers)
+    if out is not None:
+        packing_path = None if isinstance(packing, Packing) else Path(packing)
+        results.files = write_analysis(
+            Path(out),
+            loaded,
+            analyzers,
+            figures=figures,
+            packing_path=packing_path,
+            table_format=tables,
+        )
+    return results
+
+
+def verify(packing: Packing | str | os.PathLike[str], rel_tol: float = 1e-9) -> VerifyReport:
+    """Check a packing for overlaps and particles outside the domain, as ``regopack verify``.
+
+    The check is independent of the insertion code (shapely polygons).
+
+    Returns
+    -------
+    VerifyReport
+        True in a boolean context when nothing is violated; ``worst_overlap``
+        and ``worst_outside`` name the worst case.
+
+    Examples
+    --------
+    >>> import regopack
+    >>> report = regopack.verify(regopack.pack("small", count=30))
+    >>> bool(report), report.worst_overlap
+    (True, None)
+    """
+    from regopack.verification import verify as check
+
+    return check(_packing(packing), rel_tol=rel_tol)
+
+
+def export(
+    packing: Packing | str | os.PathLike[str],
+    to: str,
+    path: str | os.PathLike[str] | None = None,
+    *,
+    analyses: AnalysisResults | Sequence[str] | None = None,
+    registry: Registry | None = None,
+    params: Mapping[str, Any] | None = None,
+    **kwargs: Any,
+) -> Path:
+    """Write a packing in another format, as ``regopack export`` does.
+
+    Parameters
+    ----------
+    packing
+        A packing or the path of a packing file.
+    to
+        The exporter (``regopack plugins`` lists them: ``lammps``, ``vtk``,
+        ``image``, ``gsd``, ``csv``, ...).
+    path
+        The main file to write, or a folder. Required for a packing object;
+        for a packing file it defaults to the file's name with the exporter's
+        suffix, beside it.
+    analyses
+        Results of :func:`analyze`, or analyzer names to compute, whose
+        per-particle results the exporter adds (e.g. Z in the VTK file).
+    params, **kwargs
+        The exporter's parameters (``stiffness=1e5``); keywords win over ``params``.
+
+    Returns
+    -------
+    pathlib.Path
+        The main file written; companions (e.g. LAMMPS' input script) sit beside it.
+    """
+    from regopack.analysis import run_analyses
+    from regopack.exporting import build_exporter, export_packing, output_path
+
+    reg = _registry(registry)
+    merged = {**(params or {}), **kwargs}
+    exporter = build_exporter(reg, to, merged)
+    loaded = _packing(packing)
+    if path is None:
+        if isinstance(packing, Packing):
+            raise ConfigError("export: give the path to write (the packing has no file)")
+        target = output_path(exporter, Path(packing))
+    else:
+        source = Path("packing.npz") if isinstance(packing, Packing) else Path(packing)
+        target = output_path(exporter, source, Path(path))
+    if isinstance(analyses, AnalysisResults):
+        computed = analyses.analyzers
+    elif analyses:
+        names = [analyses] if isinstance(analyses, str) else list(analyses)
+        computed = run_analyses(loaded, reg, [(n, {}) for n in names])
+    else:
+        computed = None
+    return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+
+
+def sweep(
+    experiment: str | os.PathLike[str],
+    *,
+    out: str | os.PathLike[str] | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    progress: bool = False,
+    plots: bool = True,
+) -> SweepTable:
+    """Run every run of an experiment file, as ``regopack sweep`` does.
+
+    Parameters
+    ----------
+    experiment
+        The experiment file (TOML), or the name of a built-in experiment.
+    out
+        Its folder (default ``runs/<experiment name>``); finished runs found
+        there are reused.
+    workers
+        Local worker processes (default: one per core; ``1`` runs in this process).
+    scheduler
+        Address of a Dask scheduler instead of local workers.
+    progress
+        Show a progress bar on stderr.
+    plots
+        Draw the plots the results allow into ``<out>/plots``.
+
+    Returns
+    -------
+    SweepTable
+        One row per run (its parameters and metrics), with ``.columns``,
+        ``.column(name)`` as a NumPy array and ``.to_pandas()``.
+    """
+    from regopack.experiment_api import run_sweep
+
+    return run_sweep(
+        experiment,
+        out=out,
+        workers=workers,
+        scheduler=scheduler,
+        progress=progress,
+        plots=plots,
+    )

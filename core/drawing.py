@@ -1,0 +1,193 @@
+"""Drawing a packing with matplotlib: :meth:`regopack.Packing.plot` and the notebook pictures."""
+
+from __future__ import annotations
+
+import io
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from regopack.colours import mineral_colours
+from regopack.errors import ConfigError
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colorbar import Colorbar
+    from matplotlib.legend import Legend
+    from matplotlib.lines import Line2D
+
+    from regopack.packing import Packing
+
+__all__ = ["COLOR_BY", "PackingArtists", "draw_packing", "packing_png", "summary_line"]
+
+COLOR_BY: dict[str, str] = {
+    "mineral": "mineral of each particle (fixed colour per mineral name)",
+    "diameter": "equivalent diameter 2r (µm)",
+    "radius": "equivalent radius r (µm)",
+    "order": "insertion order (0 = placed first)",
+    "Z": "contacts per particle at the coordination analyzer's default tolerance",
+}
+"""Names :func:`draw_packing` takes for ``color_by`` (or pass one value per particle)."""
+
+RASTERISE_ABOVE = 2000
+"""Collections with more particles than this are rasterised in vector output."""
+
+
+@dataclass(frozen=True)
+class PackingArtists:
+    """What :meth:`regopack.Packing.plot` drew.
+
+    Attributes
+    ----------
+    ax
+        The axes drawn into.
+    particles
+        One polygon per placed particle.
+    boundary
+        The domain's outline.
+    legend
+        The mineral legend (``color_by="mineral"``), else ``None``.
+    colorbar
+        The colour bar of a numeric ``color_by``, else ``None``.
+    """
+
+    ax: Axes
+    particles: PolyCollection
+    boundary: Line2D
+    legend: Legend | None = None
+    colorbar: Colorbar | None = None
+
+
+def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int64]) -> Any:
+    """Return ``(label, per placed particle values)`` of a numeric ``color_by``."""
+    if isinstance(color_by, str):
+        if color_by == "diameter":
+            return "equivalent diameter (µm)", 2.0 * packing.radius[placed]
+        if color_by == "radius":
+            return "equivalent radius (µm)", packing.radius[placed]
+        if color_by == "order":
+            return "insertion order", packing.insertion_index[placed].astype(np.float64)
+        if color_by == "Z":
+            from regopack.analysis import run_analyses
+            from regopack.manager import default_registry
+
+            done = run_analyses(packing, default_registry(), [("coordination", {})])
+            z = np.asarray(done["coordination"].per_particle)  # type: ignore[attr-defined]
+            tol = done["contacts"].results().get("tol")
+            return f"contacts per particle Z (tol = {tol:g} µm)", z[placed].astype(np.float64)
+        raise ConfigError(
+            f"color_by = {color_by!r}: expected one of {', '.join(COLOR_BY)}, "
+            "or one value per particle"
+        )
+    values = np.asarray(color_by, dtype=np.float64)
+    if values.ndim != 1 or values.shape[0] not in (packing.n_particles, len(placed)):
+        raise ConfigError(
+            f"color_by: {values.shape} values; expected one per drawn particle "
+            f"({packing.n_particles}) or per placed particle ({len(placed)})"
+        )
+    if values.shape[0] == packing.n_particles:
+        values = values[placed]
+    return "value", values
+
+
+def draw_packing(
+    packing: Packing,
+    ax: Axes | None = None,
+    color_by: str | ArrayLike = "mineral",
+    *,
+    cmap: str = "viridis",
+    edgecolor: str | None = None,
+    linewidth: float = 0.0,
+    legend: bool = True,
+    colorbar: bool = True,
+    label: str | None = None,
+) -> PackingArtists:
+    """Draw the placed particles of ``packing`` into ``ax`` (see :meth:`regopack.Packing.plot`)."""
+    import matplotlib.pyplot as plt
+    from matplotlib.collections import PolyCollection
+    from matplotlib.patches import Patch
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(5.0, 5.0))
+    placed = np.flatnonzero(packing.placed).astype(np.int64)
+    polygons = packing.polygons(placed)
+    coll = PolyCollection(polygons, closed=True, edgecolors=edgecolor or "face")
+    coll.set_linewidth(linewidth if edgecolor is not None else 0.0)
+    coll.set_rasterized(len(placed) > RASTERISE_ABOVE)
+    drawn_legend = drawn_bar = None
+    if isinstance(color_by, str) and color_by == "mineral":
+        colours = mineral_colours(packing.mineral_names)
+        coll.set_facecolor([colours[m] for m in packing.mineral[placed]])
+        ax.add_collection(coll)
+        if legend:
+            counts = np.bincount(
+                packing.mineral[placed], minlength=len(packing.mineral_names)
+            ).tolist()
+            handles = [
+                Patch(facecolor=c, label=f"{name} ({counts[k]:,})")
+                for k, (name, c) in enumerate(zip(packing.mineral_names, colours, strict=True))
+            ]
+            drawn_legend = ax.legend(
+                handles=handles, loc="upper left", bbox_to_anchor=(1.02, 1.0), frameon=False
+            )
+    else:
+        name, values = _values(packing, color_by, placed)
+        coll.set_array(values)
+        coll.set_cmap(cmap)
+        ax.add_collection(coll)
+        if colorbar:
+            drawn_bar = ax.figure.colorbar(coll, ax=ax, label=label or name, shrink=0.8)
+    outline = np.asarray(packing.domain.outline(), dtype=np.float64)
+    closed = np.vstack([outline, outline[:1]])
+    (boundary,) = ax.plot(closed[:, 0], closed[:, 1], color="#333333", linewidth=0.8)
+    xmin, xmax, ymin, ymax = (float(b) for b in packing.domain.bounds())
+    ax.set_xlim(xmin, xmax)
+    ax.set_ylim(ymin, ymax)
+    ax.set_aspect("equal")
+    ax.set_xlabel("x (µm)")
+    ax.set_ylabel("y (µm)")
+    return PackingArtists(ax, coll, boundary, drawn_legend, drawn_bar)
+
+
+def summary_line(packing: Packing) -> str:
+    """One line: scene, seed, particles placed of drawn, area fraction and domain.
+
+    Examples
+    --------
+    >>> from regopack.testing import packing_from_polygons
+    >>> p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
+    >>> summary_line(p)
+    'packing, seed 0: 1 of 1 particles placed, φ = 0.250 in a 2 × 2 µm rectangle'
+    """
+    dom = packing.domain
+    kind = str(dom.to_dict().get("kind", type(dom).__name__.lower()))
+    if kind == "circle":
+        where = f"a circle {dom.width:g} µm across"
+    elif kind == "polygon":
+        where = f"a polygon {dom.width:g} × {dom.height:g} µm"
+    else:
+        where = f"a {dom.width:g} × {dom.height:g} µm {kind}"
+    area = float(packing.area()[packing.placed].sum())
+    phi = area / dom.area if dom.area > 0 else float("nan")
+    name = packing.scene.get("name", "packing")
+    return (
+        f"{name}, seed {packing.seed}: {packing.n_placed:,} of {packing.n_particles:,} "
+        f"particles placed, φ = {phi:.3f} in {where}"
+    )
+
+
+def packing_png(packing: Packing, size: float = 4.0, dpi: int = 72) -> bytes:
+    """Return a small PNG picture of the packing coloured by mineral (for notebooks)."""
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(size * 1.45, size))
+    ax = fig.add_subplot()
+    draw_packing(packing, ax)
+    ax.set_title(summary_line(packing), fontsize=7)
+    fig.set_layout_engine("constrained")
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    return buf.getvalue()
