@@ -1,4 +1,4 @@
-"""Command line: ``regopack run | scenes | config | verify | analyze | export | plugins | schema``.
+"""Command line: ``regopack run | compile | scenes | config | verify | analyze | export | ...``.
 
 A user error (:class:`~regopack.errors.RegopackError`, an invalid scene or
 TOML file, a missing file, a bad option) prints one line
@@ -114,6 +114,17 @@ def build_parser() -> argparse.ArgumentParser:
         "(done anyway, without the exit status, when the insertion settings may overlap)",
     )
     run.set_defaults(handler=_cmd_run)
+
+    compile_ = sub.add_parser(
+        "compile",
+        help="compile every kernel ahead of time (e.g. for a cluster image)",
+        description=(
+            "Compile every built-in kernel now and cache it, by packing, analysing and "
+            "exporting a few tiny scenes; later runs then start at once."
+        ),
+    )
+    compile_.add_argument("--quiet", action="store_true", help="print nothing")
+    compile_.set_defaults(handler=_cmd_compile)
 
     scenes = sub.add_parser("scenes", help="list the built-in scenes")
     scenes.set_defaults(handler=_cmd_scenes)
@@ -311,6 +322,29 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         table.add_row("export", str(path))
     out.print(table)
     return status
+
+
+def _cmd_compile(args: argparse.Namespace, out: Console, err: Console) -> int:
+    import os
+
+    from regopack.compilation import compile_kernels
+    from regopack.jit import kernel_cache_dir
+
+    def report(step: str, seconds: float) -> None:
+        if not args.quiet:
+            out.print(f"{seconds:6.1f} s  {step}", soft_wrap=True, markup=False, highlight=False)
+
+    total = compile_kernels(report)
+    if not args.quiet:
+        folder = os.environ.get("NUMBA_CACHE_DIR") or str(kernel_cache_dir())
+        out.print(
+            f"compiled {total.functions} kernel signatures in {total.seconds:.1f} s; "
+            f"cache: {folder}",
+            soft_wrap=True,
+            markup=False,
+            highlight=False,
+        )
+    return EXIT_OK
 
 
 def _cmd_scenes(args: argparse.Namespace, out: Console, err: Console) -> int:

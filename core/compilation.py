@@ -1,0 +1,154 @@
+"""Compiled kernels: how long compiling took, and compiling them ahead of time.
+
+regopack's kernels are compiled by numba on first use and cached on disk
+(see :mod:`regopack.jit`). :func:`compile_timer` measures the compilation that
+happens inside a block, from numba's own compile events, so that a run can
+report its insertion time without it. :func:`compile_kernels` (the command
+``regopack compile``) packs, analyses and exports a few tiny scenes that use
+every built-in kernel, which fills the cache, e.g. when building a cluster
+image.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+__all__ = ["CompileTime", "compile_kernels", "compile_timer"]
+
+TINY: dict[str, Any] = {"domain.width": 60.0, "domain.height": 60.0, "count": 60}
+"""Overrides that make the ``small`` scene tiny (a fraction of a second once compiled)."""
+
+VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
+    ("polygons in a walled rectangle", {}),
+    ("a circle", {"domain": {"kind": "circle", "radius": 30.0}}),
+    (
+        "a convex polygon",
+        {"domain": {"kind": "polygon", "vertices": [[-30, -30], [30, -30], [30, 30], [-30, 20]]}},
+    ),
+    (
+        "a periodic rectangle",
+        {"domain.kind": "periodic", "domain.width": 80.0, "domain.height": 80.0},
+    ),
+    ("disks among polygons", {"phases.0.shape": {"kind": "disk"}}),
+    ("the sweep order", {"insertion.order": "sweep"}),
+    ("exact refusals", {"insertion.screening": "exact"}),
+    ("random sequential addition", {"insertion": {"kind": "rsa"}}),
+)
+"""Scenes :func:`compile_kernels` packs: ``small`` made tiny, then changed by these fields."""
+
+
+@dataclass
+class CompileTime:
+    """Seconds spent compiling inside a :func:`compile_timer` block.
+
+    Attributes
+    ----------
+    seconds
+        Wall time of the outermost compilations (nested ones counted once).
+    functions
+        Number of compilations (each kernel signature compiled, nested ones included).
+    """
+
+    seconds: float = 0.0
+    functions: int = 0
+    _depth: int = field(default=0, repr=False)
+    _start: float = field(default=0.0, repr=False)
+
+    def _event(self, event: Any) -> None:
+        if event.is_start:
+            if self._depth == 0:
+                self._start = time.perf_counter()
+            self._depth += 1
+            self.functions += 1
+        elif self._depth > 0:
+            self._depth -= 1
+            if self._depth == 0:
+                self.seconds += time.perf_counter() - self._start
+
+
+@contextmanager
+def compile_timer() -> Iterator[CompileTime]:
+    """Measure the kernel compilation inside the block.
+
+    Loading a kernel from the cache is not compilation and costs a few
+    milliseconds; only real compilations are counted.
+
+    Examples
+    --------
+    >>> with compile_timer() as timer:
+    ...     pass
+    >>> timer.seconds, timer.functions
+    (0.0, 0)
+    """
+    from numba.core import event
+
+    timer = CompileTime()
+
+    class _Listener(event.Listener):
+        def on_start(self, ev: Any) -> None:
+            timer._event(ev)
+
+        def on_end(self, ev: Any) -> None:
+            timer._event(ev)
+
+    with event.install_listener("numba:compile", _Listener()):
+        yield timer
+
+
+def compile_kernels(report: Callable[[str, float], None] | None = None) -> CompileTime:
+    """Compile (or load from the cache) every built-in kernel by using it once.
+
+    Packs the tiny variants of :data:`VARIANTS` whose plugins are registered,
+    runs every registered analyzer on the first and writes it with every
+    registered exporter into a temporary folder, which is then removed.
+
+    Parameters
+    ----------
+    report
+        Called as ``report(step, seconds)`` after each step.
+
+    Returns
+    -------
+    CompileTime
+        The compilation time of the whole call (zero when everything was cached).
+    """
+    from regopack.api import analyze, export, pack, scene
+    from regopack.errors import RegopackError
+    from regopack.manager import default_registry
+
+    registry = default_registry()
+    with compile_timer() as total:
+        first = None
+        for label, changes in VARIANTS:
+            start = time.perf_counter()
+            try:
+                resolved = scene("small", registry=registry, **{**TINY, **changes})
+            except RegopackError:
+                continue  # a plugin of this variant is not installed
+            packing = pack(resolved)
+            first = packing if first is None else first
+            if report is not None:
+                report(f"packing {label}", time.perf_counter() - start)
+        if first is None:
+            return total
+        start = time.perf_counter()
+        analyzers = sorted(registry.names("analysis"))
+        results = analyze(first, analyzers, registry=registry)
+        if report is not None:
+            report("analyses " + ", ".join(analyzers), time.perf_counter() - start)
+        start = time.perf_counter()
+        exporters = sorted(registry.names("export"))
+        with tempfile.TemporaryDirectory(prefix="regopack-compile-") as folder:
+            for name in exporters:
+                target = Path(folder) / name
+                target.mkdir()
+                export(first, name, target, analyses=results, registry=registry)
+        if report is not None:
+            report("exports " + ", ".join(exporters), time.perf_counter() - start)
+    return total
