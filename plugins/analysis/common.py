@@ -100,6 +100,7 @@ def periodic_images(packing: Packing, pad: float) -> tuple[Packing, NDArray[np.i
         orientation=packing.orientation[origin],
         centre=np.concatenate([packing.centre, packing.centre[g] + shift]),
         insertion_index=index.astype(np.int64),
+        rounding=None if packing.rounding is None else packing.rounding[origin],
     )
     return ext, origin
 
