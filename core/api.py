@@ -13,8 +13,10 @@ function                       command                     returns
 =============================  ==========================  =====================================
 
 The command line calls these functions, so the two cannot drift apart. Every
-function is importable from the package root (``regopack.pack``). Nothing is
-written unless an output path is given. User mistakes raise
+function is importable from the package root (``regopack.pack``). ``pack`` and
+``analyze`` write only into the ``out`` folder they are given; ``export``
+writes beside the packing file when no path is given, and ``sweep`` into
+``runs/<experiment name>`` by default, as the commands do. User mistakes raise
 :class:`~regopack.errors.RegopackError` subclasses with one-line messages that
 name the argument at fault.
 """
@@ -27,6 +29,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
+
+import numpy as np
 
 from regopack.errors import ConfigError
 from regopack.interfaces import ProgressCallback
@@ -55,16 +59,63 @@ Progress = bool | ProgressCallback
 
 
 def _registry(registry: Registry | None) -> Registry:
-    if registry is not None:
-        return registry
-    from regopack.manager import default_registry
+    from regopack.manager import Registry, default_registry
 
-    return default_registry()
+    if registry is None:
+        return default_registry()
+    if not isinstance(registry, Registry):
+        raise ConfigError(
+            f"registry: expected a regopack.manager.Registry, not {type(registry).__name__}"
+        )
+    return registry
 
 
 def _dotted(name: str) -> str:
-    """``domain__width`` → ``domain.width``; dotted names pass unchanged."""
-    return name.replace("__", ".")
+    """``domain__width`` → ``domain.width``; dotted names pass unchanged.
+
+    Raises
+    ------
+    ConfigError
+        When a part of the name is empty (``__x``, ``a____b``, ``a__``).
+    """
+    key = name.replace("__", ".")
+    if any(not part for part in key.split(".")):
+        raise ConfigError(
+            f"{name}: empty part in the dotted name {key!r}; write e.g. domain__width=400"
+        )
+    return key
+
+
+def _plain(value: Any) -> Any:
+    """NumPy scalars and arrays as the Python values a scene file would hold."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Mapping):
+        return {k: _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    return value
+
+
+def _out_path(value: Any, what: str) -> Path:
+    """Return an output path given by the caller: a str or path-like, never blank."""
+    if not isinstance(value, str | os.PathLike):
+        raise ConfigError(
+            f"{what}: expected a path (str or os.PathLike), not {type(value).__name__}"
+        )
+    text = os.fspath(value)
+    if not isinstance(text, str) or not text.strip():
+        raise ConfigError(f"{what}: {text!r} is an empty path; give a folder or file name")
+    return Path(text)
+
+
+def _flag(value: Any, what: str, allow_none: bool = False) -> None:
+    if isinstance(value, bool) or (allow_none and value is None):
+        return
+    allowed = "True, False or None" if allow_none else "True or False"
+    raise ConfigError(f"{what}: expected {allowed}, not {value!r}")
 
 
 def scene(
@@ -139,10 +190,10 @@ def scene(
     for name, value in overrides.items():
         key = _dotted(name)
         label = f"scene({name}=...)"
-        set_value(data, key, value, label)
+        set_value(data, key, _plain(value), label)
         overridden[key] = label
     if seed is not None:
-        data["seed"] = seed
+        data["seed"] = _plain(seed)
         overridden["seed"] = "scene(seed=...)"
     structural = scene_from_dict(data, source=origin, overridden=overridden)
     return resolve_scene(structural, _registry(registry))
@@ -152,12 +203,13 @@ def _as_scene(
     source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None,
     seed: int | None,
     overrides: Mapping[str, Any],
+    registry: Registry | None = None,
 ) -> ResolvedScene:
     from regopack.scene_model import ResolvedScene
 
-    if isinstance(source, ResolvedScene) and seed is None and not overrides:
+    if isinstance(source, ResolvedScene) and seed is None and not overrides and registry is None:
         return source
-    return scene(source, seed=seed, **overrides)
+    return scene(source, seed=seed, registry=registry, **overrides)
 
 
 @contextmanager
@@ -206,12 +258,14 @@ def pack_and_summarise(
     out: str | os.PathLike[str] | None = None,
     verify: bool | None = None,
     figures: bool = True,
+    registry: Registry | None = None,
     **overrides: Any,
 ) -> RunOutcome:
     """Pack a scene and summarise the run, as ``regopack run`` does.
 
     Takes the arguments of :func:`pack`, plus ``figures`` (draw the figures
-    of the scene's analyses when ``out`` is given).
+    of the scene's analyses when ``out`` is given) and ``registry`` (where
+    plugins are looked up).
 
     Returns
     -------
@@ -222,16 +276,19 @@ def pack_and_summarise(
     from regopack.outdir import check_replaceable
     from regopack.run import RUN_FOLDER, check_scene, run_scene
 
-    resolved = _as_scene(source, seed, overrides)
-    if out is not None:
-        if not str(out):
-            raise ConfigError("out: empty folder name")
-        check_replaceable(Path(out), RUN_FOLDER)
+    _flag(verify, "verify", allow_none=True)
+    _flag(figures, "figures")
+    resolved = _as_scene(source, seed, overrides, registry)
+    folder = None if out is None else _out_path(out, "out")
+    if folder is not None:
+        if isinstance(source, str | os.PathLike) and Path(source).is_file():
+            refuse_inside(Path(source), folder, "scene file")
+        check_replaceable(folder, RUN_FOLDER)
     check_scene(resolved)
     with _progress(progress, f"packing {resolved.name}") as callback:
         return run_scene(
             resolved,
-            None if out is None else Path(out),
+            folder,
             progress=callback,
             verify=verify,
             figures=figures,
@@ -374,7 +431,7 @@ def analyze(
     -------
     AnalysisResults
         A mapping from analyzer name to its result: ``res["density"]["phi_domain"]``,
-        ``res["rdf"].tables["total"]``, ``res["contacts"].to_pandas()``.
+        ``res["rdf"].tables["rdf_near"]["total"]``, ``res["contacts"].to_pandas()``.
         ``res.files`` holds the files written, or ``None``.
 
     Examples
@@ -382,21 +439,31 @@ def analyze(
     >>> import regopack
     >>> p = regopack.pack("small", domain__width=60, domain__height=60, count=40)
     >>> res = regopack.analyze(p, "density", density__margin=0.0)
-    >>> list(res), 0.5 < res["density"]["phi_domain"] < 1
+    >>> list(res), round(res["density"]["phi_domain"], 6) == round(p.phi, 6)
     (['density'], True)
     """
     from regopack.analysis import ANALYSIS_KIND, DEFAULT_ANALYSES, run_analyses, write_analysis
     from regopack.outdir import check_replaceable
 
-    if out is not None:
-        if not isinstance(packing, Packing):
-            refuse_inside(Path(packing), Path(out), "packing file")
-        check_replaceable(Path(out), ANALYSIS_KIND)
+    _flag(figures, "figures")
+    if tables not in ("csv", "npz"):
+        raise ConfigError(f'tables = {tables!r}: expected "csv" or "npz"')
     loaded = _packing(packing)
+    folder = None if out is None else _out_path(out, "out")
+    if folder is not None:
+        if not isinstance(packing, Packing):
+            refuse_inside(Path(packing), folder, "packing file")
+        check_replaceable(folder, ANALYSIS_KIND)
     if only is None:
         names = list(DEFAULT_ANALYSES)
     else:
+        if not isinstance(only, str | Sequence):
+            raise ConfigError(
+                f"only: expected an analyzer name or a list of names, not {type(only).__name__}"
+            )
         parts = [only] if isinstance(only, str) else list(only)
+        if not parts:
+            raise ConfigError("only: no analyzer named; leave it out (None) for the defaults")
         names = []
         for part in parts:
             if not isinstance(part, str):
@@ -407,15 +474,19 @@ def analyze(
                 if name not in names:
                     names.append(name)
     reg = _registry(registry)
+    if params is not None and not isinstance(params, Mapping):
+        raise ConfigError(
+            f"params: expected a dictionary of parameters by analyzer, not {type(params).__name__}"
+        )
     merged = analysis_params(params or {})
     for name, fields in analysis_params(kwargs).items():
         merged.setdefault(name, {}).update(fields)
     analyzers = run_analyses(loaded, reg, [(n, {}) for n in names], params=merged)
     results = AnalysisResults(analyzers)
-    if out is not None:
+    if folder is not None:
         packing_path = None if isinstance(packing, Packing) else Path(packing)
         results.files = write_analysis(
-            Path(out),
+            folder,
             loaded,
             analyzers,
             figures=figures,
@@ -445,7 +516,9 @@ def verify(packing: Packing | str | os.PathLike[str], rel_tol: float = 1e-9) -> 
     """
     from regopack.verification import verify as check
 
-    return check(_packing(packing), rel_tol=rel_tol)
+    if isinstance(rel_tol, bool) or not isinstance(rel_tol, int | float) or not rel_tol >= 0:
+        raise ConfigError(f"rel_tol = {rel_tol!r}: expected a number >= 0")
+    return check(_packing(packing), rel_tol=float(rel_tol))
 
 
 def export(
@@ -486,7 +559,13 @@ def export(
     from regopack.exporting import build_exporter, export_packing, output_path
 
     reg = _registry(registry)
-    merged = {**(params or {}), **kwargs}
+    if not isinstance(to, str):
+        raise ConfigError(f"to: expected the name of an exporter, not {type(to).__name__}")
+    if params is not None and not isinstance(params, Mapping):
+        raise ConfigError(
+            f"params: expected a dictionary of {to}'s parameters, not {type(params).__name__}"
+        )
+    merged = {**(params or {}), **{k: _plain(v) for k, v in kwargs.items()}}
     exporter = build_exporter(reg, to, merged)
     loaded = _packing(packing)
     if path is None:
@@ -495,14 +574,24 @@ def export(
         target = output_path(exporter, Path(packing))
     else:
         source = Path("packing.npz") if isinstance(packing, Packing) else Path(packing)
-        target = output_path(exporter, source, Path(path))
+        target = output_path(exporter, source, _out_path(path, "path"))
+    if not isinstance(packing, Packing) and os.path.realpath(target) == os.path.realpath(packing):
+        raise ConfigError(f"path {target}: is the packing file itself; give another file")
     if isinstance(analyses, AnalysisResults):
         computed = analyses.analyzers
-    elif analyses:
-        names = [analyses] if isinstance(analyses, str) else list(analyses)
-        computed = run_analyses(loaded, reg, [(n, {}) for n in names])
-    else:
+    elif analyses is None:
         computed = None
+    elif isinstance(analyses, str | Sequence):
+        parts = [analyses] if isinstance(analyses, str) else list(analyses)
+        if not all(isinstance(p, str) for p in parts):
+            raise ConfigError("analyses: expected analyzer names or the results of analyze()")
+        names = [n.strip() for p in parts for n in p.split(",") if n.strip()]
+        computed = run_analyses(loaded, reg, [(n, {}) for n in names]) if names else None
+    else:
+        raise ConfigError(
+            "analyses: expected analyzer names or the results of analyze(), "
+            f"not {type(analyses).__name__}"
+        )
     return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
 
 
@@ -541,6 +630,19 @@ def sweep(
     """
     from regopack.experiment_api import run_sweep
 
+    if not isinstance(experiment, str | os.PathLike):
+        raise ConfigError(
+            f"experiment: expected a file or a built-in experiment's name, "
+            f"not {type(experiment).__name__}"
+        )
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int)):
+        raise ConfigError(f"workers = {workers!r}: expected a whole number >= 1")
+    if scheduler is not None and not isinstance(scheduler, str):
+        raise ConfigError(f"scheduler = {scheduler!r}: expected an address, e.g. tcp://host:8786")
+    _flag(progress, "progress")
+    _flag(plots, "plots")
+    if out is not None:
+        out = _out_path(out, "out")
     return run_sweep(
         experiment,
         out=out,

@@ -1,13 +1,19 @@
 """Colours of the minerals, chosen by name so that a mineral keeps its colour in every scene.
 
 The palette is Okabe and Ito's, which stays distinguishable with the common
-forms of colour blindness. The Chang'e-5 minerals have fixed colours; other
-names take the colours left over, in alphabetical order, so that the same set
-of names always gets the same colours whatever the order of the phases.
+forms of colour blindness. The Chang'e-5 minerals have fixed colours (names
+compared in lower case). Any other name takes a colour picked by a hash of
+the name among the colours that no Chang'e-5 mineral has, so it too keeps
+its colour from scene to scene, except when two phases of one packing would
+share a colour: then, in alphabetical order of the names, the later one
+moves to the next free colour. The colours of a
+packing depend on the set of its names, never on the order of its phases,
+and are distinct as long as there are at most 16 phases.
 """
 
 from __future__ import annotations
 
+import zlib
 from collections.abc import Sequence
 
 __all__ = ["MINERAL_COLOURS", "PALETTE", "mineral_colours"]
@@ -53,8 +59,9 @@ _EXTRA: tuple[str, ...] = (
 def mineral_colours(names: Sequence[str]) -> list[str]:
     """Return the colour of each mineral, in the order of ``names``.
 
-    Known minerals keep their fixed colour; other names take unused colours in
-    alphabetical order of the names, cycling when there are many.
+    Known minerals keep their fixed colour; other names take the colour of a
+    hash of the name, moved on to the next free one when taken (see the
+    module's description).
 
     Examples
     --------
@@ -65,9 +72,29 @@ def mineral_colours(names: Sequence[str]) -> list[str]:
     >>> mineral_colours(["b", "a"]) == mineral_colours(["a", "b"])[::-1]
     True
     """
-    fixed = {n: MINERAL_COLOURS[n.lower()] for n in names if n.lower() in MINERAL_COLOURS}
-    used = set(fixed.values())
-    spare = [c for c in (*_EXTRA, *PALETTE) if c not in used] or list(PALETTE)
-    others = sorted({n for n in names if n not in fixed})
-    chosen = {n: spare[k % len(spare)] for k, n in enumerate(others)}
-    return [fixed.get(n) or chosen[n] for n in names]
+    reserved = set(MINERAL_COLOURS.values())
+    wheel = [c for c in dict.fromkeys((*_EXTRA, *PALETTE)) if c not in reserved]
+    wheel += [c for c in PALETTE if c in reserved]  # reached only when the others are taken
+    free = len(wheel) - len(reserved)
+    chosen: dict[str, str] = {}
+    used: set[str] = set()
+    unique = sorted(set(names))
+    known = [n for n in unique if n.lower() in MINERAL_COLOURS]
+    for name in known:  # fixed colours first, so that an unknown name never takes one
+        colour = MINERAL_COLOURS[name.lower()]
+        if colour not in used:
+            chosen[name] = colour
+            used.add(colour)
+    for name in unique:
+        if name in chosen:
+            continue
+        start = zlib.crc32(name.encode("utf-8")) % free
+        for step in range(len(wheel)):
+            colour = wheel[(start + step) % len(wheel)]
+            if colour not in used:
+                break
+        else:  # more phases than colours: share, still by name
+            colour = wheel[start]
+        chosen[name] = colour
+        used.add(colour)
+    return [chosen[n] for n in names]

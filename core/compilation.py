@@ -36,6 +36,26 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
         {"domain.kind": "periodic", "domain.width": 80.0, "domain.height": 80.0},
     ),
     ("disks among polygons", {"phases.0.shape": {"kind": "disk"}}),
+    (
+        "disks in a periodic rectangle",
+        {
+            "phases.0.shape": {"kind": "disk"},
+            "domain.kind": "periodic",
+            "domain.width": 80.0,
+            "domain.height": 80.0,
+        },
+    ),
+    (
+        "disks in a circle",
+        {"phases.0.shape": {"kind": "disk"}, "domain": {"kind": "circle", "radius": 30.0}},
+    ),
+    (
+        "disks in a convex polygon",
+        {
+            "phases.0.shape": {"kind": "disk"},
+            "domain": {"kind": "polygon", "vertices": [[-30, -30], [30, -30], [30, 30], [-30, 20]]},
+        },
+    ),
     ("the sweep order", {"insertion.order": "sweep"}),
     ("exact refusals", {"insertion.screening": "exact"}),
     ("random sequential addition", {"insertion": {"kind": "rsa"}}),
@@ -105,7 +125,7 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     """Compile (or load from the cache) every built-in kernel by using it once.
 
     Packs the tiny variants of :data:`VARIANTS` whose plugins are registered,
-    runs every registered analyzer on the first and writes it with every
+    runs every registered analyzer on each and writes each with every
     registered exporter into a temporary folder, which is then removed.
 
     Parameters
@@ -123,32 +143,23 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     from regopack.manager import default_registry
 
     registry = default_registry()
-    with compile_timer() as total:
-        first = None
-        for label, changes in VARIANTS:
+    analyzers = sorted(registry.names("analysis"))
+    exporters = sorted(registry.names("export"))
+    with compile_timer() as total, tempfile.TemporaryDirectory(prefix="regopack-") as folder:
+        for k, (label, changes) in enumerate(VARIANTS):
             start = time.perf_counter()
             try:
                 resolved = scene("small", registry=registry, **{**TINY, **changes})
             except RegopackError:
                 continue  # a plugin of this variant is not installed
             packing = pack(resolved)
-            first = packing if first is None else first
-            if report is not None:
-                report(f"packing {label}", time.perf_counter() - start)
-        if first is None:
-            return total
-        start = time.perf_counter()
-        analyzers = sorted(registry.names("analysis"))
-        results = analyze(first, analyzers, registry=registry)
-        if report is not None:
-            report("analyses " + ", ".join(analyzers), time.perf_counter() - start)
-        start = time.perf_counter()
-        exporters = sorted(registry.names("export"))
-        with tempfile.TemporaryDirectory(prefix="regopack-compile-") as folder:
+            # the analyses and exports of every variant: some kernels have a
+            # signature per domain kind (periodic images) or per particle kind
+            results = analyze(packing, analyzers, registry=registry)
             for name in exporters:
-                target = Path(folder) / name
+                target = Path(folder) / f"{k}-{name}"
                 target.mkdir()
-                export(first, name, target, analyses=results, registry=registry)
-        if report is not None:
-            report("exports " + ", ".join(exporters), time.perf_counter() - start)
+                export(packing, name, target, analyses=results, registry=registry)
+            if report is not None:
+                report(f"{label}: packed, analysed, exported", time.perf_counter() - start)
     return total

@@ -45,7 +45,8 @@ class PackingArtists:
     ax
         The axes drawn into.
     particles
-        One polygon per placed particle.
+        One polygon per placed particle, in draw order, followed in a
+        periodic domain by the images of those that reach past a side.
     boundary
         The domain's outline.
     legend
@@ -59,6 +60,41 @@ class PackingArtists:
     boundary: Line2D
     legend: Legend | None = None
     colorbar: Colorbar | None = None
+
+
+def _escape(text: str) -> str:
+    """Text that matplotlib shows as it is (a ``$`` would start mathematics)."""
+    return text.replace("$", r"\$")
+
+
+def _wrapped_images(
+    packing: Packing, placed: NDArray[np.int64]
+) -> tuple[list[NDArray[np.float64]], NDArray[np.int64]]:
+    """Outlines of the placed particles and, in a periodic domain, of their images.
+
+    A particle that reaches past a side is drawn again one period away, so
+    that the axes, which clip at the sides, show the whole periodic packing.
+    Returns the outlines and, for each, the particle it belongs to.
+    """
+    polygons = packing.polygons(placed)
+    owner = placed.copy()
+    dom: Any = packing.domain
+    if not getattr(dom, "periodic", False) or len(placed) == 0:
+        return polygons, owner
+    lx, ly = dom.period
+    xmin, xmax, ymin, ymax = (float(b) for b in dom.bounds())
+    extra: list[NDArray[np.float64]] = []
+    extra_owner: list[int] = []
+    for k, poly in enumerate(polygons):
+        lo, hi = poly.min(axis=0), poly.max(axis=0)
+        sx = [0.0] + ([lx] if lo[0] < xmin else []) + ([-lx] if hi[0] > xmax else [])
+        sy = [0.0] + ([ly] if lo[1] < ymin else []) + ([-ly] if hi[1] > ymax else [])
+        for dx in sx:
+            for dy in sy:
+                if dx or dy:
+                    extra.append(poly + np.array([dx, dy]))
+                    extra_owner.append(int(placed[k]))
+    return polygons + extra, np.concatenate([owner, np.asarray(extra_owner, dtype=np.int64)])
 
 
 def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int64]) -> Any:
@@ -82,7 +118,12 @@ def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int6
             f"color_by = {color_by!r}: expected one of {', '.join(COLOR_BY)}, "
             "or one value per particle"
         )
-    values = np.asarray(color_by, dtype=np.float64)
+    try:
+        values = np.asarray(color_by, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ConfigError(
+            f"color_by: expected one of {', '.join(COLOR_BY)} or numbers, one per particle"
+        ) from None
     if values.ndim != 1 or values.shape[0] not in (packing.n_particles, len(placed)):
         raise ConfigError(
             f"color_by: {values.shape} values; expected one per drawn particle "
@@ -107,27 +148,32 @@ def draw_packing(
 ) -> PackingArtists:
     """Draw the placed particles of ``packing`` into ``ax`` (see :meth:`regopack.Packing.plot`)."""
     import matplotlib.pyplot as plt
+    from matplotlib.axes import Axes
     from matplotlib.collections import PolyCollection
     from matplotlib.patches import Patch
 
     if ax is None:
         _, ax = plt.subplots(figsize=(5.0, 5.0))
+    elif not isinstance(ax, Axes):
+        raise ConfigError(f"ax: expected matplotlib axes, not {type(ax).__name__}")
     placed = np.flatnonzero(packing.placed).astype(np.int64)
-    polygons = packing.polygons(placed)
+    polygons, owner = _wrapped_images(packing, placed)
+    rank = np.full(packing.n_particles, -1, dtype=np.int64)
+    rank[placed] = np.arange(len(placed))
     coll = PolyCollection(polygons, closed=True, edgecolors=edgecolor or "face")
     coll.set_linewidth(linewidth if edgecolor is not None else 0.0)
     coll.set_rasterized(len(placed) > RASTERISE_ABOVE)
     drawn_legend = drawn_bar = None
     if isinstance(color_by, str) and color_by == "mineral":
         colours = mineral_colours(packing.mineral_names)
-        coll.set_facecolor([colours[m] for m in packing.mineral[placed]])
+        coll.set_facecolor([colours[m] for m in packing.mineral[owner]])
         ax.add_collection(coll)
         if legend:
             counts = np.bincount(
                 packing.mineral[placed], minlength=len(packing.mineral_names)
             ).tolist()
             handles = [
-                Patch(facecolor=c, label=f"{name} ({counts[k]:,})")
+                Patch(facecolor=c, label=f"{_escape(name)} ({counts[k]:,})")
                 for k, (name, c) in enumerate(zip(packing.mineral_names, colours, strict=True))
             ]
             drawn_legend = ax.legend(
@@ -135,7 +181,7 @@ def draw_packing(
             )
     else:
         name, values = _values(packing, color_by, placed)
-        coll.set_array(values)
+        coll.set_array(np.asarray(values)[rank[owner]])
         coll.set_cmap(cmap)
         ax.add_collection(coll)
         if colorbar:
@@ -160,7 +206,7 @@ def summary_line(packing: Packing) -> str:
     >>> from regopack.testing import packing_from_polygons
     >>> p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
     >>> summary_line(p)
-    'packing, seed 0: 1 of 1 particles placed, φ = 0.250 in a 2 × 2 µm rectangle'
+    'test, seed 0: 1 of 1 particles placed, φ = 0.250 in a 2 × 2 µm rectangle'
     """
     dom = packing.domain
     kind = str(dom.to_dict().get("kind", type(dom).__name__.lower()))
@@ -168,6 +214,8 @@ def summary_line(packing: Packing) -> str:
         where = f"a circle {dom.width:g} µm across"
     elif kind == "polygon":
         where = f"a polygon {dom.width:g} × {dom.height:g} µm"
+    elif kind == "periodic":
+        where = f"a periodic {dom.width:g} × {dom.height:g} µm rectangle"
     else:
         where = f"a {dom.width:g} × {dom.height:g} µm {kind}"
     area = float(packing.area()[packing.placed].sum())
@@ -186,7 +234,7 @@ def packing_png(packing: Packing, size: float = 4.0, dpi: int = 72) -> bytes:
     fig = Figure(figsize=(size * 1.45, size))
     ax = fig.add_subplot()
     draw_packing(packing, ax)
-    ax.set_title(summary_line(packing), fontsize=7)
+    ax.set_title(_escape(summary_line(packing)), fontsize=7)
     fig.set_layout_engine("constrained")
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)

@@ -26,6 +26,7 @@ from regopack.domain import Domain, Rectangle, domain_from_dict
 from regopack.errors import GeometryError, PackingError, PackingFileError
 
 if TYPE_CHECKING:
+    from regopack.drawing import PackingArtists
     from regopack.interfaces import InsertionResult
     from regopack.population import Population
 
@@ -525,7 +526,7 @@ class Packing:
         ax: Any = None,
         color_by: str | ArrayLike = "mineral",
         **kwargs: Any,
-    ) -> Any:
+    ) -> PackingArtists:
         """Draw the placed particles with matplotlib.
 
         Parameters
@@ -540,6 +541,13 @@ class Packing:
         **kwargs
             ``cmap``, ``edgecolor``, ``linewidth``, ``legend``, ``colorbar``
             and ``label`` (of the colour bar).
+
+        Notes
+        -----
+        The mineral legend sits to the right of the axes: make the figure
+        with ``layout="constrained"``, or save it with ``bbox_inches="tight"``
+        (as notebooks do), to keep it inside the picture. In a periodic
+        domain the particles that reach past a side are drawn on both sides.
 
         Returns
         -------

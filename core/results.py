@@ -2,7 +2,7 @@
 
 :func:`regopack.analyze` returns an :class:`AnalysisResults`, a read-only
 mapping from analyzer name to :class:`AnalysisResult`. Tables are structured
-NumPy arrays (one field per column), so that ``res["rdf"].tables["total"]["g"]``
+NumPy arrays (one field per column), so that ``res["rdf"].tables["rdf_near"]["total"]``
 is a plain array; :meth:`AnalysisResult.to_pandas` gives a ``DataFrame`` when
 pandas is installed (it is not a dependency of regopack).
 """

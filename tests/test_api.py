@@ -139,6 +139,72 @@ def test_pack_refuses_a_bad_progress_and_an_occupied_folder(tmp_path):
     assert (tmp_path / "mine.txt").read_text() == "keep me"
 
 
+def test_pack_refuses_to_replace_the_folder_of_its_scene_file(tmp_path):
+    regopack.pack("small", out=tmp_path / "run", **TINY)
+    scene_file = tmp_path / "run" / "mine.toml"
+    scene_file.write_text(regopack.scene("small", **TINY).to_toml())
+    with pytest.raises(ConfigError, match="holds the scene file"):
+        regopack.pack(scene_file, out=tmp_path / "run")
+    assert scene_file.is_file()
+
+
+@pytest.mark.parametrize("out", ["", " ", 5])
+def test_blank_or_wrong_output_paths_are_refused(tmp_path, monkeypatch, tiny, out):
+    monkeypatch.chdir(tmp_path)
+    regopack.save(tiny, tmp_path / "p.npz")
+    exp = tmp_path / "exp.toml"
+    exp.write_text('name = "x"\nbase = "small"\n[sweep]\nseed = [1]\n')
+    calls = [
+        lambda: regopack.pack("small", out=out, **TINY),
+        lambda: regopack.analyze(tiny, "density", out=out),
+        lambda: regopack.export(tiny, "csv", out),
+        lambda: regopack.sweep(exp, out=out, workers=1),
+    ]
+    for call in calls:
+        with pytest.raises(ConfigError, match=r"empty path|expected a path"):
+            call()
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["exp.toml", "p.npz"]
+
+
+@pytest.mark.parametrize(
+    ("call", "match"),
+    [
+        (lambda p: regopack.analyze(5), "packing: expected a Packing"),
+        (lambda p: regopack.analyze(p, 5), "only: expected an analyzer name"),
+        (lambda p: regopack.analyze(p, [1]), "only: expected analyzer names"),
+        (lambda p: regopack.analyze(p, []), "only: no analyzer named"),
+        (lambda p: regopack.analyze(p, params=5), "params: expected a dictionary"),
+        (lambda p: regopack.analyze(p, "density", figures="no"), "figures: expected True"),
+        (lambda p: regopack.analyze(p, "density", tables="xls"), "tables"),
+        (lambda p: regopack.analyze(p, "density", registry=5), "registry: expected"),
+        (lambda p: regopack.analyze(p, __x=1), "empty part"),
+        (lambda p: regopack.verify(p, rel_tol="x"), "rel_tol"),
+        (lambda p: regopack.export(p, 5, "x.csv"), "to: expected the name"),
+        (lambda p: regopack.export(p, "csv", "x.csv", params=5), "params: expected"),
+        (lambda p: regopack.export(p, "csv", "x.csv", analyses=5), "analyses: expected"),
+        (lambda p: regopack.sweep(5), "experiment: expected"),
+        (lambda p: regopack.sweep("x.toml", workers="2"), "workers"),
+        (lambda p: regopack.sweep("x.toml", workers=1.5), "workers"),
+        (lambda p: regopack.sweep("x.toml", scheduler=5), "scheduler"),
+        (lambda p: regopack.scene("small", registry=5), "registry: expected"),
+        (lambda p: regopack.scene("small", domain____width=5), "empty part"),
+        (lambda p: regopack.scene("small", a__=5), "empty part"),
+        (lambda p: regopack.pack("small", verify="no"), "verify: expected"),
+    ],
+)
+def test_wrong_types_are_one_line_errors(tiny, tmp_path, monkeypatch, call, match):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ConfigError, match=match) as err:
+        call(tiny)
+    assert "\n" not in str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_numpy_scalars_count_as_numbers():
+    s = regopack.scene("small", count=np.int64(50), seed=np.int64(2), density__eta=np.float64(5))
+    assert (s.scene.count, s.seed, s.density.config.eta) == (50, 2, 5.0)
+
+
 # -- analyze -------------------------------------------------------------------------
 
 
@@ -252,9 +318,24 @@ def test_export_needs_a_path_for_a_packing_object(tmp_path, tiny):
     assert into_folder == tmp_path / "p.json"
 
 
-def test_export_parameters_are_validated(tmp_path, tiny):
-    with pytest.raises((RegopackError, ValueError)):
+def test_export_parameters_are_one_line_errors_naming_the_exporter(tmp_path, tiny):
+    with pytest.raises(RegopackError) as err:
         regopack.export(tiny, "lammps", tmp_path / "p.data", stiffnes=1.0)
+    assert "lammps" in str(err.value) and "stiffnes" in str(err.value)
+    assert "\n" not in str(err.value)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_export_never_overwrites_its_packing_file(tmp_path, tiny):
+    regopack.save(tiny, tmp_path / "p.npz")
+    with pytest.raises(ConfigError, match="is the packing file itself"):
+        regopack.export(tmp_path / "p.npz", "json", tmp_path / "p.npz")
+    assert regopack.load(tmp_path / "p.npz").n_particles == tiny.n_particles
+
+
+def test_export_analyses_may_be_a_comma_separated_text(tmp_path, tiny):
+    regopack.export(tiny, "vtk", tmp_path / "a.vtp", analyses="coordination,contacts")
+    assert (tmp_path / "a.vtp").is_file()
 
 
 # -- sweep ---------------------------------------------------------------------------

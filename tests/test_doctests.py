@@ -10,6 +10,11 @@ import pytest
 MODULES = [
     "regopack._toml",
     "regopack.analysis",
+    "regopack.api",
+    "regopack.colours",
+    "regopack.compilation",
+    "regopack.drawing",
+    "regopack.results",
     "regopack.manager",
     "regopack.outdir",
     "regopack.packing",

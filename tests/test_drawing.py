@@ -62,3 +62,42 @@ def test_notebook_pictures(tiny):
     html = tiny._repr_html_()
     assert "data:image/png;base64," in html
     assert f"{tiny.n_placed:,} of {tiny.n_particles:,} particles placed" in html
+
+
+def test_a_periodic_packing_is_drawn_with_the_images_across_its_sides():
+    p = regopack.pack(
+        "small", domain__kind="periodic", domain__width=100, domain__height=100, count=200
+    )
+    art = p.plot(Figure().add_subplot(), color_by="diameter")
+    placed = np.flatnonzero(p.placed)
+    crossing = 0
+    for poly in p.polygons(placed):
+        lo, hi = poly.min(axis=0), poly.max(axis=0)
+        nx = int(lo[0] < -50) + int(hi[0] > 50)
+        ny = int(lo[1] < -50) + int(hi[1] > 50)
+        crossing += (1 + nx) * (1 + ny) - 1
+    assert crossing > 0
+    assert len(art.particles.get_paths()) == p.n_placed + crossing
+    assert len(art.particles.get_array()) == p.n_placed + crossing
+
+
+def test_names_with_dollars_are_drawn_as_they_are():
+    p = regopack.pack(
+        "small", domain__width=60, domain__height=60, count=30, phases__0__name="x$^$"
+    )
+    assert p._repr_png_().startswith(b"\x89PNG")
+    assert "data:image/png" in p._repr_html_()
+    art = p.plot(Figure().add_subplot())
+    assert any("x$^$" in t.get_text().replace("\\$", "$") for t in art.legend.get_texts())
+
+
+def test_html_escapes_the_scene_name():
+    p = regopack.pack("small", domain__width=60, domain__height=60, count=30, name="a<b>")
+    assert "a&lt;b&gt;" in p._repr_html_() and "a<b>" not in p._repr_html_()
+
+
+def test_ax_must_be_axes(tiny):
+    with pytest.raises(ConfigError, match="ax: expected matplotlib axes"):
+        tiny.plot(5)
+    with pytest.raises(ConfigError, match="color_by"):
+        tiny.plot(Figure().add_subplot(), color_by=["a"] * tiny.n_placed)
