@@ -499,6 +499,7 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
             figures=not args.no_figures,
             packing_path=args.packing,
             table_format=args.tables,
+            registry=registry,
         )
     table = Table(title=f"regopack analyze: {args.packing}", show_header=False)
     table.add_column("quantity", style="bold")
