@@ -21,6 +21,7 @@ MODULES = [
     "regopack.plugins.eta",
     "regopack.plugins.rsa",
     "regopack.plugins.analysis.segment",
+    "regopack.plugins.analysis.figure_specs",
 ]
 
 
