@@ -22,6 +22,8 @@ MODULES = [
     "regopack.plugins.rsa",
     "regopack.plugins.analysis.segment",
     "regopack.plugins.analysis.figure_specs",
+    "regopack.plugins.csv_export",
+    "regopack.plugins.rounded_bodies",
 ]
 
 
