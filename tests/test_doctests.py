@@ -10,6 +10,7 @@ import pytest
 MODULES = [
     "regopack._toml",
     "regopack.analysis",
+    "regopack.experiment_plots",
     "regopack.manager",
     "regopack.outdir",
     "regopack.packing",
