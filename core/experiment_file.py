@@ -27,9 +27,7 @@ from pydantic import (
 
 from regopack import _toml
 from regopack.errors import ConfigError
-from regopack.scene import (
-    builtin_scenes,
-)
+from regopack.scene import builtin_scenes
 
 __all__ = ["MAX_RUNS", "Experiment", "experiment_from_dict", "load_experiment"]
 

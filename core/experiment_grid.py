@@ -19,12 +19,7 @@ from regopack.errors import ConfigError
 from regopack.experiment_file import Experiment, _check_axes
 from regopack.manager import Registry, default_registry
 from regopack.outdir import name_key
-from regopack.scene import (
-    ResolvedScene,
-    load_scene,
-    output_files,
-    resolve_scene,
-)
+from regopack.scene import ResolvedScene, load_scene, output_files, resolve_scene
 
 __all__ = ["ERROR_TXT", "SCENE_JSON", "RunSpec", "check_runs", "expand"]
 

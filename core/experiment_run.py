@@ -31,9 +31,7 @@ from regopack.experiment_workers import _dask, _Job, _one_line, _submit_dask, _s
 from regopack.outdir import check_replaceable, remove_leftovers, replace_folder
 from regopack.packing import write_json_atomic
 from regopack.run import RUN_FOLDER
-from regopack.scene import (
-    ResolvedScene,
-)
+from regopack.scene import ResolvedScene
 
 __all__ = ["EXPERIMENT_JSON", "default_experiment_dir", "run_experiment"]
 

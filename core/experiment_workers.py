@@ -26,10 +26,7 @@ from regopack.experiment_grid import SCENE_JSON
 from regopack.manager import default_registry
 from regopack.packing import Packing
 from regopack.run import run_scene
-from regopack.scene import (
-    load_scene,
-    resolve_scene,
-)
+from regopack.scene import load_scene, resolve_scene
 from regopack.verify import verify
 from regopack.voids import void_metrics
 

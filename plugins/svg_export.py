@@ -12,10 +12,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from regopack.domain import Circle, Rectangle
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing
-from regopack.plugins.export_common import (
-    _mineral_name,
-    _write_text,
-)
+from regopack.plugins.export_common import _mineral_name, _write_text
 
 __all__ = ["SvgConfig", "SvgExporter"]
 

@@ -12,11 +12,7 @@ from pydantic import BaseModel, ConfigDict
 from regopack.errors import ExportError
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing
-from regopack.plugins.export_common import (
-    IntArray,
-    _num,
-    _write_text,
-)
+from regopack.plugins.export_common import IntArray, _num, _write_text
 
 __all__ = ["VtkConfig", "VtkExporter"]
 
