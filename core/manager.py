@@ -8,7 +8,8 @@ hook specification.
 
 :class:`Registry` calls every hook once and flattens the spec records by plugin
 kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``,
-``"export"``).
+``"export"``); the figure specs of the analyses, which belong to no kind, are
+kept in order beside them (:meth:`Registry.figures`).
 """
 
 from __future__ import annotations
