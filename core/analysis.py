@@ -13,8 +13,9 @@ writes what the analyzers found into one directory:
     One file per table of :meth:`~regopack.interfaces.Analyzer.tables`: a
     header row, then numeric columns (booleans as 0/1).
 ``figures/*.png``, ``figures/*.svg``
-    The figures of the built-in analyzers (drawn with matplotlib, which is
-    imported only here).
+    The figures that plugins draw for the computed analyzers (see
+    :func:`regopack.hookspecs.regopack_analysis_figures`; the built-in
+    analysis plugin draws them with matplotlib).
 ``report.md``
     The main numbers as Markdown tables, with the figures embedded.
 
@@ -370,6 +371,26 @@ def _write_tables(
     return written, names
 
 
+def _draw_figures(
+    packing: Packing,
+    analyzers: Mapping[str, Analyzer],
+    out_dir: Path,
+    registry: Registry | None,
+) -> tuple[list[Path], dict[str, str]]:
+    """Call the figure specs of the computed analyzers; return the files and their captions."""
+    if registry is None:
+        from regopack.manager import default_registry
+
+        registry = default_registry()
+    paths: list[Path] = []
+    captions: dict[str, str] = {}
+    for spec in registry.figures():
+        if spec.analyzer in analyzers:
+            paths += [Path(p) for p in spec.draw(packing, analyzers, out_dir)]
+            captions.update(spec.captions)
+    return paths, captions
+
+
 def write_analysis(
     out_dir: str | Path,
     packing: Packing,
@@ -378,6 +399,7 @@ def write_analysis(
     figures: bool = True,
     packing_path: str | Path | None = None,
     table_format: TableFormat = "csv",
+    registry: Registry | None = None,
 ) -> AnalysisFiles:
     """Write the results, tables, figures and report of computed analyzers.
 
@@ -397,12 +419,16 @@ def write_analysis(
     analyzers
         Computed analyzers by name, as :func:`run_analyses` returns them.
     figures
-        Draw the figures (PNG and SVG, under ``figures/``); only the figures
-        whose analyzers were computed are drawn.
+        Draw the figures (PNG and SVG, under ``figures/``) of the figure specs
+        in ``registry`` whose analyzers were computed.
     packing_path
         The packing file, recorded in ``analysis.json`` and the report.
     table_format
         ``"csv"`` (default) or ``"npz"`` (one archive per table, one array per column).
+    registry
+        Registry whose figure specs (:meth:`~regopack.manager.Registry.figures`)
+        draw the figures; by default :func:`~regopack.manager.default_registry`,
+        built only when figures are drawn.
 
     Returns
     -------
@@ -425,6 +451,7 @@ def write_analysis(
             figures=figures,
             packing_path=packing_path,
             table_format=table_format,
+            registry=registry,
         )
     return files.moved(tmp, out)
 
@@ -437,6 +464,7 @@ def write_analysis_files(
     figures: bool = True,
     packing_path: str | Path | None = None,
     table_format: TableFormat = "csv",
+    registry: Registry | None = None,
 ) -> AnalysisFiles:
     """Write what :func:`write_analysis` writes, into ``out_dir`` as it is.
 
@@ -459,10 +487,7 @@ def write_analysis_files(
         figure_paths: list[Path] = []
         captions: Mapping[str, str] = {}
         if figures and analyzers:
-            from regopack.plugins.analysis import figures as figs
-
-            figure_paths = figs.figures_for(packing, analyzers, out / "figures")
-            captions = figs.CAPTIONS
+            figure_paths, captions = _draw_figures(packing, analyzers, out / "figures", registry)
         report_path = out / "report.md"
         text = _report(summary, tables, columns, figure_paths, captions, out)
         _write_bytes(report_path, text.encode("utf-8"))

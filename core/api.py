@@ -492,6 +492,7 @@ def analyze(
             figures=figures,
             packing_path=packing_path,
             table_format=tables,
+            registry=reg,
         )
     return results
 

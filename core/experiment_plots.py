@@ -12,6 +12,10 @@ and writes into ``<out>/plots/`` (PNG and SVG):
 - ``time_vs_n``: insertion time against the number of particles on log-log
   axes, one line per ``insertion.t`` and ``insertion.search``, with the fitted
   power-law exponent in the legend.
+
+Lines, legend entries and the sections of ``table3.md`` follow the values of
+the other varied fields, numbers by value (η = 5 before η = 10) and before
+any text.
 """
 
 from __future__ import annotations
@@ -106,6 +110,30 @@ def _groups(
     return out
 
 
+def _value_order(text: str) -> tuple[int, float, str]:
+    """Sort key of one cell: numbers by value, before any other text (sorted as text)."""
+    try:
+        number = float(text)
+    except ValueError:
+        return (1, 0.0, text)
+    return (1, 0.0, text) if math.isnan(number) else (0, number, text)
+
+
+def _sorted_groups(
+    rows: Sequence[dict[str, str]], params: Sequence[str]
+) -> list[tuple[tuple[str, ...], list[dict[str, str]]]]:
+    """:func:`_groups` ordered field by field, numeric values by value (5 before 10).
+
+    Examples
+    --------
+    >>> rows = [{"eta": e} for e in ("10", "0", "5", "auto")]
+    >>> [key for key, _ in _sorted_groups(rows, ["eta"])]
+    [('0',), ('5',), ('10',), ('auto',)]
+    """
+    groups = _groups(rows, params)
+    return sorted(groups.items(), key=lambda item: tuple(_value_order(v) for v in item[0]))
+
+
 @contextmanager
 def _figure(ncols: int = 1) -> Iterator[Any]:
     import matplotlib
@@ -164,7 +192,7 @@ def _plot_eta(params: list[str], rows: list[dict[str, str]], plots: Path) -> lis
     z = _first(rows, _Z)
     others = [p for p in params if p not in ("density.eta", "seed")]
     with _figure(2 if z else 1) as (fig, axes):
-        for k, (key, group) in enumerate(sorted(_groups(rows, others).items())):
+        for k, (key, group) in enumerate(_sorted_groups(rows, others)):
             colour, marker = _COLOURS[k % len(_COLOURS)], _MARKERS[k % len(_MARKERS)]
             by_eta = _groups(group, ["density.eta"])
             etas = sorted(by_eta, key=lambda e: _float(e[0]))
@@ -265,7 +293,7 @@ def _plot_seeds(params: list[str], rows: list[dict[str, str]], plots: Path) -> l
     if not columns:
         return []
     others = [p for p in params if p != "seed"]
-    groups = sorted(_groups(rows, others).items())
+    groups = _sorted_groups(rows, others)
     lines = ["# Repeatability over seeds", ""]
     for key, group in groups:
         label = _group_label(others, key)
@@ -322,7 +350,7 @@ def _plot_time(params: list[str], rows: list[dict[str, str]], plots: Path) -> li
     others = [p for p in params if p not in ("domain.width", "domain.height", "seed")]
     with _figure() as (fig, axes):
         ax = axes[0]
-        for k, (key, group) in enumerate(sorted(_groups(rows, others).items())):
+        for k, (key, group) in enumerate(_sorted_groups(rows, others)):
             n = np.array([_float(r.get(n_col)) for r in group])
             t = np.array([_float(r.get(time)) for r in group])
             keep = (n > 0) & (t > 0) & np.isfinite(n) & np.isfinite(t)

@@ -1,7 +1,8 @@
 """Hook specifications of regopack.
 
 Every hook returns an iterable of spec records (:mod:`regopack.plugin_types`)
-and is called once when the plugin manager is built; none is ``firstresult``.
+and is called once when the registry is built
+(:meth:`regopack.manager.Registry.from_manager`); none is ``firstresult``.
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ from regopack.plugin_types import (
     AnalyzerSpec,
     DensityControllerSpec,
     ExporterSpec,
+    FigureSpec,
     InserterSpec,
     ShapeSpec,
     SizeDistributionSpec,
@@ -123,5 +125,25 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
         @hookimpl
         def regopack_exporters():
             return [ExporterSpec("xyz", XyzConfig, XyzExporter)]
+    """
+    raise NotImplementedError
+
+
+@hookspec
+def regopack_analysis_figures() -> Iterable[FigureSpec]:
+    """Return the figures this plugin draws for analyzers (its own or other plugins').
+
+    Called once when the registry is built. Not ``firstresult``: the figure
+    specs of all plugins are collected, built-in plugins first, and
+    :func:`regopack.analysis.write_analysis` calls each spec whose analyzer was
+    computed, in that order. Several specs may name the same analyzer.
+
+    Example
+    -------
+    .. code-block:: python
+
+        @hookimpl
+        def regopack_analysis_figures():
+            return [FigureSpec("shares", draw_shares, {"shares": "Area share per mineral"})]
     """
     raise NotImplementedError

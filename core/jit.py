@@ -3,26 +3,58 @@
 numba invalidates a cached function only when its own file changes, not when
 a jitted function it calls from another file does, so an edited helper could
 run as stale machine code. Importing this module before numba points
-``NUMBA_CACHE_DIR`` at a folder named after a hash of all kernel sources of
-regopack (and the numba version), unless the user chose a folder already. Any
-change to a kernel then compiles afresh into a new folder.
+``NUMBA_CACHE_DIR`` at a folder named after a hash of all kernel sources (and
+the numba version), unless the user chose a folder already. Any change to a
+kernel then compiles afresh into a new folder.
+
+The kernel sources are the Python files of the packages that installed
+distributions name in the entry-point group :data:`KERNEL_SOURCES_GROUP`;
+regopack names its built-in plugins there (see ``pyproject.toml``). Each
+package is found by path (:func:`importlib.util.find_spec`), without
+importing it, so this module never imports a plugin.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib.util
 import os
 import sys
 from importlib import metadata
 from pathlib import Path
 
+KERNEL_SOURCES_GROUP = "regopack.kernel_sources"
+"""Entry-point group whose values name packages holding numba kernels."""
+
+BUILTIN_KERNEL_PACKAGES: tuple[str, ...] = ("regopack.plugins",)
+"""Packages hashed whatever the entry points say, so that an install whose
+entry points are stale (an old editable install) still keys the cache by the
+built-in kernels."""
+
+
+def _package_dir(name: str) -> Path | None:
+    """Folder of the package ``name``, found without running it (``None`` if not found)."""
+    try:
+        spec = importlib.util.find_spec(name)
+    except (ImportError, ValueError):
+        return None
+    if spec is None or not spec.submodule_search_locations:
+        return None
+    return Path(next(iter(spec.submodule_search_locations))).resolve()
+
+
+def _roots() -> list[Path]:
+    """Folders of the built-in kernel packages and those named in the entry points."""
+    names = {*BUILTIN_KERNEL_PACKAGES}
+    names |= {entry.value for entry in metadata.entry_points(group=KERNEL_SOURCES_GROUP)}
+    roots = {root for name in names if (root := _package_dir(name)) is not None}
+    return sorted(roots)
+
 
 def _sources() -> list[Path]:
-    """Python files of the built-in plugins (where every kernel lives)."""
-    import regopack.plugins
-
-    root = Path(str(regopack.plugins.__file__)).resolve().parent
-    return sorted(root.rglob("*.py"))
+    """Python files of the kernel packages (the built-in plugins, where every kernel lives)."""
+    files = {path.resolve() for root in _roots() for path in root.rglob("*.py")}
+    return sorted(files)
 
 
 def kernel_cache_dir() -> Path:

@@ -8,7 +8,8 @@ hook specification.
 
 :class:`Registry` calls every hook once and flattens the spec records by plugin
 kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``,
-``"export"``).
+``"export"``); the figure specs of the analyses, which belong to no kind, are
+kept in order beside them (:meth:`Registry.figures`).
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from pydantic import BaseModel
 
 from regopack import hookspecs
 from regopack.errors import PluginError
-from regopack.plugin_types import KINDS, PluginSpec
+from regopack.plugin_types import KINDS, FigureSpec, PluginSpec
 
 __all__ = [
     "BUILTIN_PLUGINS",
@@ -234,6 +235,8 @@ class Registry:
     infos
         ``infos[kind][name]``: where each implementation comes from (see
         :meth:`info`); by default only the ``origin`` is known.
+    figures
+        Figure specs (see :meth:`figures`), in the order they are drawn.
 
     Examples
     --------
@@ -246,6 +249,7 @@ class Registry:
         self,
         specs: Mapping[str, Mapping[str, tuple[PluginSpec[Any], str]]],
         infos: Mapping[str, Mapping[str, PluginInfo]] | None = None,
+        figures: Sequence[FigureSpec] = (),
     ) -> None:
         self._specs: dict[str, dict[str, tuple[PluginSpec[Any], str]]] = {
             kind: dict(specs.get(kind, {})) for kind in KINDS
@@ -253,6 +257,7 @@ class Registry:
         self._infos: dict[str, dict[str, PluginInfo]] = {
             kind: dict((infos or {}).get(kind, {})) for kind in KINDS
         }
+        self._figures: tuple[FigureSpec, ...] = tuple(figures)
 
     @classmethod
     def from_manager(cls, pm: pluggy.PluginManager) -> Registry:
@@ -295,7 +300,40 @@ class Registry:
                     infos[kind][record.name] = plugin_infos.get(
                         impl.plugin_name, PluginInfo(impl.plugin_name, _module_of(impl.plugin))
                     )
-        return cls(specs, infos)
+        return cls(specs, infos, cls._collect_figures(pm, origins))
+
+    @staticmethod
+    def _collect_figures(pm: pluggy.PluginManager, origins: Mapping[str, str]) -> list[FigureSpec]:
+        """Call :func:`regopack.hookspecs.regopack_analysis_figures` of every plugin, in order."""
+        figures: list[FigureSpec] = []
+        caller = pm.hook.regopack_analysis_figures
+        for impl in caller.get_hookimpls():
+            if impl.hookwrapper or getattr(impl, "wrapper", False):
+                continue
+            origin = origins.get(impl.plugin_name, impl.plugin_name)
+            records = impl.function()
+            if records is None:
+                continue
+            if isinstance(records, FigureSpec) or not isinstance(records, Iterable):
+                raise PluginError(
+                    f"plugin {origin!r}: regopack_analysis_figures must return an iterable "
+                    f"of FigureSpec, got {type(records).__name__}"
+                )
+            for record in records:
+                if not isinstance(record, FigureSpec):
+                    raise PluginError(
+                        f"plugin {origin!r}: regopack_analysis_figures returned a "
+                        f"{type(record).__name__}, expected FigureSpec"
+                    )
+                if not isinstance(record.analyzer, str) or not record.analyzer:
+                    raise PluginError(f"plugin {origin!r}: a FigureSpec names no analyzer")
+                if not callable(record.draw):
+                    raise PluginError(
+                        f"plugin {origin!r}: the FigureSpec of {record.analyzer!r} has no "
+                        "callable draw"
+                    )
+                figures.append(record)
+        return figures
 
     @staticmethod
     def _check_record(
@@ -367,6 +405,18 @@ class Registry:
             origin = self._specs[kind][name][1]
             return PluginInfo(plugin=origin, module=origin)
         return found
+
+    def figures(self, analyzer: str | None = None) -> tuple[FigureSpec, ...]:
+        """Figure specs of the plugins, built-in plugins first, or those of ``analyzer``.
+
+        Examples
+        --------
+        >>> [f.analyzer for f in default_registry(autoload=False).figures("rdf")]
+        ['rdf']
+        """
+        if analyzer is None:
+            return self._figures
+        return tuple(f for f in self._figures if f.analyzer == analyzer)
 
     def __contains__(self, item: object) -> bool:
         """Whether ``(kind, name)`` is registered."""

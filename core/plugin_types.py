@@ -7,9 +7,10 @@ builds the implementation from a validated config.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-from dataclasses import dataclass
-from typing import Any, Generic, TypeVar
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from pydantic import BaseModel
 
@@ -21,6 +22,9 @@ from regopack.interfaces import (
     ShapeGenerator,
     SizeDistribution,
 )
+
+if TYPE_CHECKING:
+    from regopack.packing import Packing
 
 T = TypeVar("T")
 
@@ -84,3 +88,37 @@ KINDS: dict[str, type[PluginSpec[Any]]] = {
     "export": ExporterSpec,
 }
 """Plugin kinds by the scene section that selects them."""
+
+
+FigureMaker = Callable[["Packing", Mapping[str, Analyzer], Path], Sequence[Path]]
+"""``draw(packing, analyzers, out_dir)``: draw into ``out_dir``, return the files written."""
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """Figures of one analyzer, drawn into an analysis folder.
+
+    Returned by :func:`regopack.hookspecs.regopack_analysis_figures`. Unlike the
+    records of :data:`KINDS`, a figure spec has no parameters and no name of
+    its own: it belongs to the analyzer it draws.
+
+    Attributes
+    ----------
+    analyzer
+        Name of the analyzer whose results the figures show;
+        :func:`regopack.analysis.write_analysis` calls :attr:`draw` only when
+        that analyzer was computed.
+    draw
+        ``draw(packing, analyzers, out_dir)`` receives the packing, every
+        computed analyzer by name and the figures folder (``figures/`` of the
+        analysis; create it when writing into it). It returns the files it
+        wrote: each PNG file is embedded in ``report.md``, and an SVG file of
+        the same stem is linked beside it.
+    captions
+        Caption of each figure in ``report.md``, by file stem (default: the
+        stem with its hyphens as spaces).
+    """
+
+    analyzer: str
+    draw: FigureMaker
+    captions: Mapping[str, str] = field(default_factory=dict)

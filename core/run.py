@@ -526,6 +526,7 @@ def _write_run(
                 analyzers,
                 figures=figures,
                 packing_path=packing_path,
+                registry=resolved.registry,
             )
         if resolved.exports:
             checkpoint("exports")

@@ -106,10 +106,16 @@ def _fmt(value: Any) -> str:
 
 
 def _results_table(outcome: ExperimentResult) -> Table:
-    """One row per run: its id, status, the first metrics and the error of a failed run."""
+    """One row per run: its id, status, the first metrics and the error of a failed run.
+
+    Run ids are shown whole (folded onto several lines when the terminal is
+    narrow), so that no two runs look alike.
+    """
     metrics = list(outcome.metrics[:_TABLE_METRICS])
     table = Table(title=f"regopack sweep: {outcome.experiment.experiment_name}")
-    table.add_column("run", style="bold")
+    # a narrow terminal folds a long run id onto more lines; cutting it short
+    # ("eta=0,seed=1,wid…") could show two runs under the same text
+    table.add_column("run", style="bold", overflow="fold")
     table.add_column("status")
     for name in metrics:
         table.add_column(name, justify="right")

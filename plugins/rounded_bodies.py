@@ -24,6 +24,7 @@ __all__ = [
     "CLEAN_TOLERANCE",
     "clean_outline",
     "erode_convex",
+    "polygon_moments",
     "rounded_moments",
 ]
 
@@ -200,6 +201,36 @@ def _sector_raw_moments(
     )
 
 
+def polygon_moments(v: FloatArray) -> tuple[float, FloatArray, float, float, float]:
+    """Area, centroid and second moments of a counter-clockwise polygon.
+
+    Returns
+    -------
+    tuple
+        ``(area, centroid, ixx, iyy, ixy)`` with ``ixx = ∫ y² dA``,
+        ``iyy = ∫ x² dA`` and ``ixy = ∫ x y dA``, about the centroid.
+
+    Examples
+    --------
+    >>> sq = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    >>> a, c, ixx, iyy, ixy = polygon_moments(sq + 3.0)
+    >>> float(a), c.tolist(), round(ixx, 12), round(iyy, 12), round(ixy, 12)
+    (4.0, [3.0, 3.0], 1.333333333333, 1.333333333333, 0.0)
+    """
+    x0, y0 = v[:, 0], v[:, 1]
+    x1, y1 = np.roll(x0, -1), np.roll(y0, -1)
+    cross = x0 * y1 - x1 * y0
+    area = float(cross.sum()) / 2.0
+    cx = float(((x0 + x1) * cross).sum()) / (6.0 * area)
+    cy = float(((y0 + y1) * cross).sum()) / (6.0 * area)
+    x0, x1, y0, y1 = x0 - cx, x1 - cx, y0 - cy, y1 - cy
+    cross = x0 * y1 - x1 * y0
+    ixx = float(((y0 * y0 + y0 * y1 + y1 * y1) * cross).sum()) / 12.0
+    iyy = float(((x0 * x0 + x0 * x1 + x1 * x1) * cross).sum()) / 12.0
+    ixy = float(((x0 * y1 + 2 * x0 * y0 + 2 * x1 * y1 + x1 * y0) * cross).sum()) / 24.0
+    return area, np.array([cx, cy]), ixx, iyy, ixy
+
+
 def rounded_moments(core: FloatArray, r: float) -> tuple[float, FloatArray, float, float, float]:
     """Area, centroid and second moments of a core grown by the radius ``r``.
 
@@ -221,7 +252,7 @@ def rounded_moments(core: FloatArray, r: float) -> tuple[float, FloatArray, floa
     tuple
         ``(area, centroid, ixx, iyy, ixy)`` with ``ixx = ∫ y² dA``,
         ``iyy = ∫ x² dA`` and ``ixy = ∫ x y dA`` about the centroid, as
-        :func:`regopack.plugins.exporters.polygon_moments` returns them.
+        :func:`polygon_moments` returns them.
 
     Examples
     --------

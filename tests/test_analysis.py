@@ -302,3 +302,57 @@ def test_importing_does_not_load_matplotlib():
         [sys.executable, "-c", code], capture_output=True, text=True, check=True
     )
     assert result.stdout.strip() == "False"
+
+
+# ---------------------------------------------------------------------------
+# figures come from the registry's figure specs
+
+
+class _StemFigure:
+    """A plugin that adds one figure to the ``density`` analyzer."""
+
+    def __init__(self) -> None:
+        self.calls: list[list[str]] = []
+
+    @hookimpl
+    def regopack_analysis_figures(self):
+        from regopack.plugin_types import FigureSpec
+
+        def draw(packing, analyzers, out_dir):
+            self.calls.append(list(analyzers))
+            out_dir.mkdir(parents=True, exist_ok=True)
+            path = out_dir / "extra-density.png"
+            path.write_bytes(b"png")
+            return [path]
+
+        return [FigureSpec("density", draw, {"extra-density": "An added figure"})]
+
+
+def test_figures_are_drawn_by_the_registry_figure_specs(packing, tmp_path):
+    plugin = _StemFigure()
+    registry = make_registry(plugin, builtins=("regopack.plugins.analysis",))
+    done = run_analyses(packing, registry, [("density", {"margin": 0.0})])
+    files = write_analysis(tmp_path, packing, done, registry=registry)
+    assert plugin.calls == [["density"]]
+    stems = [p.stem for p in files.figures]
+    assert stems[:2] == ["packing", "packing"]  # built-in figures first (PNG and SVG)
+    assert stems[-1] == "extra-density"
+    report = files.report.read_text(encoding="utf-8")
+    assert "### An added figure" in report
+    assert "](figures/extra-density.png)" in report
+
+
+def test_a_figure_spec_is_skipped_when_its_analyzer_was_not_computed(packing, tmp_path):
+    plugin = _StemFigure()
+    registry = make_registry(plugin, builtins=("regopack.plugins.analysis",))
+    done = run_analyses(packing, registry, [("rdf", {})])
+    files = write_analysis(tmp_path, packing, done, registry=registry)
+    assert plugin.calls == []
+    assert [p.stem for p in files.figures] == ["rdf", "rdf"]
+
+
+def test_a_registry_without_figure_specs_draws_none(packing, registry, tmp_path):
+    done = run_analyses(packing, registry, [("density", {"margin": 0.0})])
+    files = write_analysis(tmp_path, packing, done, registry=make_registry(builtins=()))
+    assert files.figures == ()
+    assert not (tmp_path / "figures").exists()

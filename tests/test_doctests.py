@@ -14,6 +14,7 @@ MODULES = [
     "regopack.colours",
     "regopack.compilation",
     "regopack.drawing",
+    "regopack.experiment_plots",
     "regopack.results",
     "regopack.manager",
     "regopack.outdir",
@@ -26,6 +27,9 @@ MODULES = [
     "regopack.plugins.eta",
     "regopack.plugins.rsa",
     "regopack.plugins.analysis.segment",
+    "regopack.plugins.analysis.figure_specs",
+    "regopack.plugins.csv_export",
+    "regopack.plugins.rounded_bodies",
 ]
 
 

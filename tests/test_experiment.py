@@ -11,6 +11,7 @@ import pytest
 from rich.console import Console
 
 from regopack import experiment as experiment_module
+from regopack import experiment_file, experiment_grid, experiment_run, experiment_workers
 from regopack.errors import ConfigError
 from regopack.experiment import (
     DEFAULT_METRICS,
@@ -202,7 +203,7 @@ def test_every_run_is_validated_before_anything_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     calls: list[str] = []
-    monkeypatch.setattr(experiment_module, "run_scene", lambda *a, **k: calls.append("run"))
+    monkeypatch.setattr(experiment_workers, "run_scene", lambda *a, **k: calls.append("run"))
     path = write(tmp_path / "exp.toml", 'base = "small"\n[sweep]\n"density.eta" = [0, 5, -1]\n')
     with pytest.raises(ConfigError, match=r"\(run eta=-1\)$"):
         run_experiment(path, tmp_path / "out", workers=1)
@@ -304,7 +305,7 @@ def test_a_rerun_skips_the_finished_runs(
 ) -> None:
     root, first, _ = tiny_sweep
     calls: list[Any] = []
-    monkeypatch.setattr(experiment_module, "run_scene", lambda *a, **k: calls.append(a))
+    monkeypatch.setattr(experiment_workers, "run_scene", lambda *a, **k: calls.append(a))
     mtimes = {i: (root / "out" / i / "packing.npz").stat().st_mtime_ns for i in IDS}
     again = run_experiment(root / "tiny.toml", root / "out", workers=1)
     assert calls == []
@@ -328,21 +329,21 @@ def test_only_the_unfinished_runs_run_again(tmp_path: Path) -> None:
 def test_an_interrupted_sweep_keeps_a_correct_csv_and_resumes(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    real = experiment_module.run_scene
+    real = experiment_workers.run_scene
 
     def interrupted(resolved: Any, out_dir: Any, *args: Any, **kwargs: Any) -> Any:
         if Path(out_dir).name == IDS[2]:
             raise KeyboardInterrupt
         return real(resolved, out_dir, *args, **kwargs)
 
-    monkeypatch.setattr(experiment_module, "run_scene", interrupted)
+    monkeypatch.setattr(experiment_workers, "run_scene", interrupted)
     path = write(tmp_path / "tiny.toml", TINY)
     with pytest.raises(KeyboardInterrupt):
         run_experiment(path, tmp_path / "out", workers=1)
     rows = read_csv(tmp_path / "out" / "results.csv")
     assert [(row["run_id"], row["status"]) for row in rows] == [(i, "done") for i in IDS[:2]]
 
-    monkeypatch.setattr(experiment_module, "run_scene", real)
+    monkeypatch.setattr(experiment_workers, "run_scene", real)
     outcome = run_experiment(path, tmp_path / "out", workers=1)
     assert [r.reused for r in outcome.runs] == [True, True, False, False]
     assert [row["run_id"] for row in read_csv(tmp_path / "out" / "results.csv")] == IDS
@@ -378,14 +379,14 @@ def test_worker_processes_give_the_same_results(
 def test_a_failing_run_is_recorded_and_the_others_finish(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    real = experiment_module.run_scene
+    real = experiment_workers.run_scene
 
     def flaky(resolved: Any, out_dir: Any, *args: Any, **kwargs: Any) -> Any:
         if Path(out_dir).name == IDS[1]:
             raise RuntimeError("the disk\nis on fire")
         return real(resolved, out_dir, *args, **kwargs)
 
-    monkeypatch.setattr(experiment_module, "run_scene", flaky)
+    monkeypatch.setattr(experiment_workers, "run_scene", flaky)
     path = write(tmp_path / "tiny.toml", TINY)
     outcome = run_experiment(path, tmp_path / "out", workers=1)
     assert not outcome.ok
@@ -399,7 +400,7 @@ def test_a_failing_run_is_recorded_and_the_others_finish(
     assert rows[1]["error"] == "RuntimeError: the disk is on fire"
     assert rows[1]["placed"] == "" and rows[2]["placed"] != ""
 
-    monkeypatch.setattr(experiment_module, "run_scene", real)
+    monkeypatch.setattr(experiment_workers, "run_scene", real)
     retried = run_experiment(path, tmp_path / "out", workers=1)
     assert retried.ok
     assert [r.reused for r in retried.runs] == [True, False, True, True]
@@ -413,7 +414,7 @@ def test_an_unwritable_run_folder_fails_that_run_only(
     import errno
     from contextlib import contextmanager
 
-    real_run, real_replace = experiment_module.run_scene, experiment_module.replace_folder
+    real_run, real_replace = experiment_workers.run_scene, experiment_run.replace_folder
 
     def refuse(name: Any) -> None:
         if Path(name).name == IDS[1]:
@@ -429,8 +430,8 @@ def test_an_unwritable_run_folder_fails_that_run_only(
         with real_replace(folder, kind) as tmp:
             yield tmp
 
-    monkeypatch.setattr(experiment_module, "run_scene", run_scene)
-    monkeypatch.setattr(experiment_module, "replace_folder", replace_folder)
+    monkeypatch.setattr(experiment_workers, "run_scene", run_scene)
+    monkeypatch.setattr(experiment_run, "replace_folder", replace_folder)
     path = write(tmp_path / "tiny.toml", TINY)
     outcome = run_experiment(path, tmp_path / "out", workers=1)
     assert [r.run_id for r in outcome.failed] == [IDS[1]]
@@ -503,7 +504,7 @@ def test_a_failed_run_replaces_the_older_run_in_its_folder(
     def broken(*args: Any, **kwargs: Any) -> Any:
         raise RuntimeError("no room")
 
-    monkeypatch.setattr(experiment_module, "run_scene", broken)
+    monkeypatch.setattr(experiment_workers, "run_scene", broken)
     write(path, path.read_text().replace("count = 150", "count = 120"))
     outcome = run_experiment(path, tmp_path / "out", workers=1)
     assert [r.status for r in outcome.runs] == ["failed", "failed"]
@@ -584,7 +585,7 @@ def test_sweep_command_exits_1_when_a_run_fails(
     def broken(*args: Any, **kwargs: Any) -> Any:
         raise ConfigError("no room")
 
-    monkeypatch.setattr(experiment_module, "run_scene", broken)
+    monkeypatch.setattr(experiment_workers, "run_scene", broken)
     path = write(tmp_path / "exp.toml", TINY)
     args = parse(["sweep", str(path), "--out", str(tmp_path / "out"), "--workers", "1", "--quiet"])
     console = Console(record=True, width=120)
@@ -596,6 +597,7 @@ def test_sweep_command_exits_1_when_a_run_fails(
 def test_docstring_examples() -> None:
     import doctest
 
-    result = doctest.testmod(experiment_module, optionflags=doctest.ELLIPSIS)
-    assert result.attempted > 0
-    assert result.failed == 0
+    for module in (experiment_file, experiment_grid):
+        result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+        assert result.attempted > 0
+        assert result.failed == 0

@@ -193,3 +193,51 @@ def test_default_window_is_interior() -> None:
     metrics = void_metrics(packing)
     assert metrics["void_spans"] is True
     assert metrics["void_pixel"] == pytest.approx(0.25 * 2 * packing.radius.min())
+
+
+def _numeric_results(out: Path) -> None:
+    """A finished sweep of eta and count (values whose text order is not their order)."""
+    out.mkdir()
+    (out / "experiment.json").write_text('{"parameters": ["density.eta", "count", "seed"]}')
+    with (out / "results.csv").open("w", newline="") as fh:
+        writer = csv.writer(fh)
+        writer.writerow(["run_id", "density.eta", "count", "seed", "status", "phi_interior"])
+        for eta in (0, 10, 5):
+            for count in (1000, 50):
+                for seed in (1, 2):
+                    phi = 0.8 - 0.001 * eta + 0.0001 * seed
+                    writer.writerow(["x", eta, count, seed, "done", phi])
+
+
+def test_table3_sections_follow_numeric_order(tmp_path: Path) -> None:
+    out = tmp_path / "sweep"
+    _numeric_results(out)
+    plot_experiment(out)
+    table = (out / "plots" / "table3.md").read_text(encoding="utf-8")
+    sections = [line for line in table.splitlines() if line.startswith("## ")]
+    assert sections == [
+        "## eta = 0, count = 50",
+        "## eta = 0, count = 1000",
+        "## eta = 5, count = 50",
+        "## eta = 5, count = 1000",
+        "## eta = 10, count = 50",
+        "## eta = 10, count = 1000",
+    ]
+
+
+def test_legend_entries_follow_numeric_order(tmp_path: Path, monkeypatch) -> None:
+    from regopack import experiment_plots
+
+    legends: dict[str, list[str]] = {}
+    real_save = experiment_plots._save
+
+    def save(fig, plots, stem):
+        legend = fig.axes[0].get_legend()
+        legends[stem] = [t.get_text() for t in legend.get_texts()] if legend else []
+        return real_save(fig, plots, stem)
+
+    monkeypatch.setattr(experiment_plots, "_save", save)
+    out = tmp_path / "sweep"
+    _numeric_results(out)
+    plot_experiment(out)
+    assert legends["phi_vs_eta"] == ["count = 50", "count = 1000"]

@@ -15,6 +15,7 @@ from regopack.manager import (
     HOOK_OF_KIND,
     Registry,
     build_plugin_manager,
+    default_registry,
 )
 from regopack.plugin_types import KINDS, PluginSpec, ShapeSpec, SizeDistributionSpec
 
@@ -239,3 +240,30 @@ def test_info_defaults_to_the_origin_for_a_hand_made_registry():
     reg = Registry({"shape": {"hexagon": (spec, "my-plugin")}})
     info = reg.info("shape", "hexagon")
     assert (info.plugin, info.module, info.distribution) == ("my-plugin", "my-plugin", None)
+
+
+def test_the_builtin_figure_specs_follow_the_analyzers():
+    reg = default_registry(autoload=False)
+    assert [f.analyzer for f in reg.figures()] == [
+        "density",
+        "network",
+        "contacts",
+        "coordination",
+        "rdf",
+        "homogeneity",
+        "psd",
+        "local_fraction",
+    ]
+    assert {f.analyzer for f in reg.figures()} <= set(reg.names("analysis"))
+    assert reg.figures("coordination")[0].captions.keys() == {"z-vs-tol", "z-per-mineral"}
+    assert reg.figures("nothing") == ()
+
+
+def test_a_figure_hook_returning_other_records_is_refused():
+    class BadFigures:
+        @hookimpl
+        def regopack_analysis_figures(self):
+            return [ShapeSpec("zigzag", ShapeConfig, lambda c: None)]
+
+    with pytest.raises(PluginError, match="returned a ShapeSpec, expected FigureSpec"):
+        fake_registry(BadFigures())

@@ -8,10 +8,11 @@ from __future__ import annotations
 from collections.abc import Iterable
 
 from regopack.hookspecs import hookimpl
-from regopack.plugin_types import AnalyzerSpec
+from regopack.plugin_types import AnalyzerSpec, FigureSpec
 from regopack.plugins.analysis.contacts import Contacts, ContactsConfig
 from regopack.plugins.analysis.coordination import Coordination, CoordinationConfig
 from regopack.plugins.analysis.density import Density, DensityConfig
+from regopack.plugins.analysis.figure_specs import figure_specs
 from regopack.plugins.analysis.homogeneity import Homogeneity, HomogeneityConfig
 from regopack.plugins.analysis.local_fraction import LocalFraction, LocalFractionConfig
 from regopack.plugins.analysis.network import Network, NetworkConfig
@@ -57,3 +58,9 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Local packing fraction of every particle from its Laguerre or Voronoi cell.",
         ),
     ]
+
+
+@hookimpl
+def regopack_analysis_figures() -> Iterable[FigureSpec]:
+    """Register the figures of the built-in analyzers (drawn with matplotlib)."""
+    return figure_specs()

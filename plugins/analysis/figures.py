@@ -44,6 +44,7 @@ from regopack.interfaces import Analyzer
 from regopack.packing import Packing, _atomic_file
 from regopack.plugins.analysis.contacts import Contacts
 from regopack.plugins.analysis.coordination import Coordination
+from regopack.plugins.analysis.figure_specs import CAPTIONS, STEMS
 from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
@@ -64,19 +65,6 @@ PALETTE: tuple[str, ...] = (
     "#999999",  # grey
 )
 """Okabe–Ito colours, assigned to the minerals in scene order (cycled after eight)."""
-
-CAPTIONS: dict[str, str] = {
-    "packing": "Packing coloured by mineral, with a zoomed view (cf. paper Fig. 10)",
-    "contact-network": "Contact network, line width proportional to A_c (cf. paper Fig. 12)",
-    "contact-histograms": "Distributions of A_c, b_c, R_c and δ (cf. paper Fig. 13)",
-    "z-vs-tol": "Coordination number against the contact tolerance (cf. paper Fig. 14)",
-    "z-per-mineral": "Coordination number per mineral (cf. paper Fig. 15)",
-    "rdf": "Radial distribution function per mineral, near and far field (cf. paper Fig. 16)",
-    "homogeneity": "Number density, area fraction and mean diameter over rings and tiles",
-    "psd": "Size distribution of the placed particles against the requested one",
-    "local-fraction": "Local packing fraction of the particles from their Laguerre cells",
-}
-"""Caption of each figure, by file stem."""
 
 WIDTH = 7.0
 """Width of the figures in inches (a two-column journal page)."""
@@ -602,6 +590,7 @@ def figures_for(
     out_dir: str | Path,
     *,
     formats: Sequence[str] = ("png", "svg"),
+    of: str | None = None,
 ) -> list[Path]:
     """Draw the figures whose analyzers were computed; return the files written.
 
@@ -618,6 +607,9 @@ def figures_for(
         Directory of the figures (created if needed).
     formats
         File formats to write, among those matplotlib supports (``"pdf"`` too).
+    of
+        Draw only the figures of this analyzer (see
+        :data:`~regopack.plugins.analysis.figure_specs.STEMS`); by default all.
 
     Returns
     -------
@@ -657,6 +649,8 @@ def figures_for(
 
         lf = local_fraction
         jobs.append(("local-fraction", lambda: draw_local_fraction(packing, lf)))
+    if of is not None:
+        jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS.get(of, ())]
     if not jobs:
         return []
     out.mkdir(parents=True, exist_ok=True)

@@ -265,3 +265,23 @@ def test_a_packing_with_nothing_placed(kind, registry, tmp_path):
         assert ET.parse(path).getroot().findall(f".//{SVG}polygon") == []
     if kind == "vtk":
         assert vtk_cells(path)["piece"]["NumberOfPolys"] == "0"
+
+
+def test_the_plugin_registers_each_format_module_under_its_name():
+    from regopack.plugins import (
+        csv_export,
+        exporters,
+        json_export,
+        lammps_export,
+        svg_export,
+        vtk_export,
+    )
+
+    specs = list(exporters.regopack_exporters())
+    assert [(s.name, s.config_model, s.factory) for s in specs] == [
+        ("csv", csv_export.CsvConfig, csv_export.CsvExporter),
+        ("json", json_export.JsonConfig, json_export.JsonExporter),
+        ("svg", svg_export.SvgConfig, svg_export.SvgExporter),
+        ("vtk", vtk_export.VtkConfig, vtk_export.VtkExporter),
+        ("lammps", lammps_export.LammpsConfig, lammps_export.LammpsExporter),
+    ]

@@ -113,3 +113,13 @@ def test_a_packing_without_contacts_still_draws(tmp_path):
 
 def test_docstring_examples():
     assert doctest.testmod(figures).failed == 0
+
+
+def test_write_analysis_draws_what_figures_for_draws(packing, analyzers, tmp_path):
+    from regopack.plugins.analysis.figure_specs import STEMS as OF_ANALYZER
+
+    drawn = figures.figures_for(packing, analyzers, tmp_path / "all", formats=("png",))
+    files = write_analysis(tmp_path / "analysis", packing, analyzers)
+    pngs = [p.name for p in files.figures if p.suffix == ".png"]
+    assert pngs == [p.name for p in drawn]
+    assert set(figures.CAPTIONS) == {s for stems in OF_ANALYZER.values() for s in stems}

@@ -1,0 +1,67 @@
+"""Which figures the built-in analyzers draw, for the analysis folder.
+
+:func:`figure_specs` gives one :class:`~regopack.plugin_types.FigureSpec` per
+analyzer that has figures, in the order the figures are drawn; the plugin
+returns them from :func:`regopack.hookspecs.regopack_analysis_figures`. The
+drawing itself lives in :mod:`regopack.plugins.analysis.figures`, which is
+imported (with matplotlib) only when a figure is drawn.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+from regopack.interfaces import Analyzer
+from regopack.packing import Packing
+from regopack.plugin_types import FigureMaker, FigureSpec
+
+__all__ = ["CAPTIONS", "STEMS", "figure_specs"]
+
+CAPTIONS: dict[str, str] = {
+    "packing": "Packing coloured by mineral, with a zoomed view (cf. paper Fig. 10)",
+    "contact-network": "Contact network, line width proportional to A_c (cf. paper Fig. 12)",
+    "contact-histograms": "Distributions of A_c, b_c, R_c and δ (cf. paper Fig. 13)",
+    "z-vs-tol": "Coordination number against the contact tolerance (cf. paper Fig. 14)",
+    "z-per-mineral": "Coordination number per mineral (cf. paper Fig. 15)",
+    "rdf": "Radial distribution function per mineral, near and far field (cf. paper Fig. 16)",
+    "homogeneity": "Number density, area fraction and mean diameter over rings and tiles",
+    "psd": "Size distribution of the placed particles against the requested one",
+    "local-fraction": "Local packing fraction of the particles from their Laguerre cells",
+}
+"""Caption of each figure, by file stem."""
+
+STEMS: dict[str, tuple[str, ...]] = {
+    "density": ("packing",),
+    "network": ("contact-network",),
+    "contacts": ("contact-histograms",),
+    "coordination": ("z-vs-tol", "z-per-mineral"),
+    "rdf": ("rdf",),
+    "homogeneity": ("homogeneity",),
+    "psd": ("psd",),
+    "local_fraction": ("local-fraction",),
+}
+"""File stems of the figures of each analyzer, in drawing order."""
+
+
+def _maker(analyzer: str) -> FigureMaker:
+    def draw(packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path) -> Sequence[Path]:
+        from regopack.plugins.analysis.figures import figures_for
+
+        return figures_for(packing, analyzers, out_dir, of=analyzer)
+
+    return draw
+
+
+def figure_specs() -> list[FigureSpec]:
+    """One figure spec per analyzer of :data:`STEMS`, in drawing order.
+
+    Examples
+    --------
+    >>> [(f.analyzer, list(f.captions)) for f in figure_specs()][3]
+    ('coordination', ['z-vs-tol', 'z-per-mineral'])
+    """
+    return [
+        FigureSpec(name, _maker(name), {stem: CAPTIONS[stem] for stem in stems})
+        for name, stems in STEMS.items()
+    ]
