@@ -36,6 +36,8 @@ DEFAULT_METRICS: tuple[str, ...] = (
     "phi_interior",
     "wall_time_s",
     "insert_time_s",
+    "insertion_time_s",
+    "compile_time_s",
     "candidate_analyses",
 )
 """Summary keys collected when an experiment lists no ``metrics``.
