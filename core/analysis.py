@@ -105,7 +105,9 @@ def _build(
     try:
         config = spec.config_model.model_validate(dict(params))
     except ValidationError as err:
-        raise ConfigError(_describe_validation_error(err, source=None, prefix=(name,))) from err
+        raise ConfigError(
+            _describe_validation_error(err, source=None, prefix=(name,), model=spec.config_model)
+        ) from err
     analyzer = spec.factory(config)
     if not isinstance(analyzer, Analyzer):
         origin = registry.origin("analysis", name)
