@@ -28,6 +28,7 @@ MODULES = [
     "regopack.plugins.octagon",
     "regopack.plugins.eta",
     "regopack.plugins.rsa",
+    "regopack.plugins.analysis.figures",
     "regopack.plugins.analysis.segment",
     "regopack.plugins.analysis.figure_specs",
     "regopack.plugins.csv_export",
