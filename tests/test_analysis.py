@@ -278,6 +278,8 @@ def test_rewriting_leaves_no_temporary_files(packing, registry, tmp_path):
 def test_main_numbers_skip_what_was_not_run():
     rows = dict(main_numbers({"tol": None, "rdf": {"first_peak_r": 4.5, "far_mean": 1.1}}))
     assert rows == {"first g(r) peak": "4.5 µm", "far-field mean g(r)": "1.1"}
+    peak = {"first_peak_r": 4.434, "first_peak_r_err": 0.2287}
+    assert dict(main_numbers({"tol": None, "rdf": peak}))["first g(r) peak"] == "4.43 ± 0.23 µm"
 
 
 def test_run_scene_writes_the_analysis_beside_the_packing(registry, tmp_path):

@@ -29,6 +29,7 @@ MODULES = [
     "regopack.plugins.eta",
     "regopack.plugins.rsa",
     "regopack.plugins.analysis.figures",
+    "regopack.plugins.analysis.rdf_peak",
     "regopack.plugins.analysis.segment",
     "regopack.plugins.analysis.figure_specs",
     "regopack.plugins.csv_export",

@@ -51,6 +51,7 @@ from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
+from regopack.plugins.analysis.rdf_peak import count_bins, merge_bins
 
 __all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
 
@@ -588,13 +589,37 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             _note(ax, f"no {title} (window too small)")
             continue
         r = curves["r"]
-        per = mineral_centred_rdf(curves, names, counts) if len(names) > 1 else {}
-        for name, colour in zip(names, colours, strict=True):
+        step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        fine = rdf.curves_fine[key]
+        per = mineral_centred_rdf(fine, names, counts) if len(names) > 1 else {}
+        shell = np.pi * ((r + 0.5 * step) ** 2 - (r - 0.5 * step) ** 2)
+        n_all = max(float(sum(counts)), 1.0)
+        for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
             if name in per:
-                ax.plot(r, per[name], color=colour, linewidth=0.8, label=name)
+                # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
+                per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
+                factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
+                ax.plot(
+                    r,
+                    merge_bins(per[name], shell, factor),
+                    color=colour,
+                    linewidth=0.8,
+                    label=name,
+                    drawstyle="steps-mid" if factor > 1 else "default",
+                )
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        peak = rdf.peak if key == "near" else None
+        if peak is not None and np.isfinite(peak.r_err):
+            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
+            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
+            ax.text(
+                peak.r,
+                0.04,
+                f" first peak {peak.r:.2f} ± {peak.r_err:.2f} µm",
+                transform=ax.get_xaxis_transform(),
+                fontsize=6.5,
+            )
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel("centre distance r (µm)")
         ax.set_ylabel("g(r)")
@@ -606,7 +631,7 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             labels,
             loc="outside lower center",
             ncol=min(len(handles), 7),
-            title="centres around the particles of",
+            title="centres around the particles of (a rare mineral's bins merged, as steps)",
             title_fontsize=7,
         )
     return fig

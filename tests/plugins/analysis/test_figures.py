@@ -83,7 +83,7 @@ def test_mineral_centred_rdf_averages_back_to_the_total(packing, analyzers):
     names = packing.mineral_names
     sel = interior_mask(packing, rdf.results()["interior_margin"])
     counts = np.bincount(packing.mineral[sel], minlength=len(names))
-    curves = rdf.curves["near"]
+    curves = rdf.curves_fine["near"]  # the pair curves before their bins are merged
     per = figures.mineral_centred_rdf(curves, names, counts.tolist())
     weighted = sum(counts[k] * per[name] for k, name in enumerate(names) if name in per)
     assert np.allclose(weighted / counts.sum(), curves["total"])
