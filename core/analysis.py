@@ -105,7 +105,9 @@ def _build(
     try:
         config = spec.config_model.model_validate(dict(params))
     except ValidationError as err:
-        raise ConfigError(_describe_validation_error(err, source=None, prefix=(name,))) from err
+        raise ConfigError(
+            _describe_validation_error(err, source=None, prefix=(name,), model=spec.config_model)
+        ) from err
     analyzer = spec.factory(config)
     if not isinstance(analyzer, Analyzer):
         origin = registry.origin("analysis", name)
@@ -552,7 +554,12 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
             rows.append((f"Z {mineral} (interior)", _fmt(z)))
     rdf = summary.get("rdf")
     if isinstance(rdf, dict):
-        rows.append(("first g(r) peak", f"{_fmt(rdf.get('first_peak_r'))} µm"))
+        peak, err = rdf.get("first_peak_r"), rdf.get("first_peak_r_err")
+        if isinstance(peak, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
+            digits = max(0, 1 - math.floor(math.log10(err)))  # two significant digits of err
+            rows.append(("first g(r) peak", f"{peak:.{digits}f} ± {err:.{digits}f} µm"))
+        else:
+            rows.append(("first g(r) peak", f"{_fmt(peak)} µm"))
         rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
     network = summary.get("network")
     if isinstance(network, dict):

@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import signal
 import sys
 import threading
@@ -510,11 +511,12 @@ def _cmd_plugins(args: argparse.Namespace, out: Console, err: Console) -> int:
             + "\n"
         )
         return EXIT_OK
+    # names are never cut: they take the room they need, the other columns wrap
     overview = Table(title="regopack plugins", title_justify="left")
-    overview.add_column("kind")
-    overview.add_column("name", style="bold")
-    overview.add_column("origin module", overflow="fold")
-    overview.add_column("package", overflow="fold")
+    overview.add_column("kind", no_wrap=True)
+    overview.add_column("name", style="bold", no_wrap=True)
+    overview.add_column("origin module", overflow="fold", ratio=3)
+    overview.add_column("package", overflow="fold", ratio=2)
     for entry in entries:
         overview.add_row(
             *(Text(t) for t in (entry["kind"], entry["name"], entry["module"], _package(entry)))
@@ -538,9 +540,9 @@ def _cmd_plugins(args: argparse.Namespace, out: Console, err: Console) -> int:
             continue
         fields = Table(box=box.SIMPLE_HEAD, show_edge=False, padding=(0, 1, 0, 2), expand=True)
         fields.add_column("parameter", style="cyan", no_wrap=True)
-        fields.add_column("type")
-        fields.add_column("default")
-        fields.add_column("description", ratio=1)
+        fields.add_column("type", overflow="fold", ratio=2)
+        fields.add_column("default", overflow="fold", ratio=2)
+        fields.add_column("description", overflow="fold", ratio=5)
         for field in entry["fields"]:
             fields.add_row(
                 *(
@@ -615,11 +617,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     if handler is None:
         parser.print_help(sys.stderr)
         return EXIT_USAGE
-    out = Console(file=sys.stdout)
-    err = Console(file=sys.stderr)
+    out = _Console(file=sys.stdout)
+    err = _Console(file=sys.stderr)
     try:
         with _signals_raise():
             return handler(args, out, err)
+    except BrokenPipeError:  # the reader went away, e.g. `regopack plugins | head -1`
+        _discard_stdout()
+        return EXIT_OK
     except (RegopackError, ValidationError, tomllib.TOMLDecodeError, FileNotFoundError) as exc:
         print(f"regopack: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
@@ -629,6 +634,28 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("regopack: interrupted; no partial files were written", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+class _Console(Console):
+    """A rich console that lets a closed pipe raise :class:`BrokenPipeError`.
+
+    rich's own handling exits with status 1; :func:`main` ends quietly with 0.
+    """
+
+    def on_broken_pipe(self) -> None:
+        """Raise :class:`BrokenPipeError` (handled by :func:`main`)."""
+        raise BrokenPipeError
+
+
+def _discard_stdout() -> None:
+    """Point standard output at the null device, so that the final flush cannot fail."""
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, OSError, ValueError):
+        return
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, fd)
+    os.close(devnull)
 
 
 @contextmanager

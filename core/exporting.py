@@ -22,28 +22,63 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from regopack.errors import ExportError, PluginError
+from pydantic import ValidationError
+
+from regopack.errors import ConfigError, ExportError, PluginError
 from regopack.interfaces import Analyzer, Exporter
 from regopack.manager import Registry
+from regopack.messages import describe_validation_error
 from regopack.packing import Packing
 
 __all__ = ["build_exporter", "export_packing", "output_path"]
 
 
 def build_exporter(
-    registry: Registry, kind: str, params: Mapping[str, Any] | None = None
+    registry: Registry,
+    kind: str,
+    params: Mapping[str, Any] | None = None,
+    *,
+    source: str | None = None,
 ) -> Exporter:
     """Validate ``params`` with the exporter's config model and build the exporter.
+
+    Parameters
+    ----------
+    registry
+        Registry to look the exporter up in.
+    kind
+        Name of the exporter.
+    params
+        Its parameters.
+    source
+        Where the parameters came from (e.g. ``"--set"``), named in messages.
 
     Raises
     ------
     PluginError
         If no exporter is registered as ``kind`` (the message lists the known ones),
         or the plugin does not build an :class:`~regopack.interfaces.Exporter`.
-    pydantic.ValidationError
-        If a parameter is unknown or out of range.
+    ConfigError
+        One line naming the exporter, the parameter, its value and the allowed
+        parameters, if a parameter is unknown or out of range.
+
+    Examples
+    --------
+    >>> from regopack.manager import default_registry
+    >>> try:
+    ...     build_exporter(default_registry(), "svg", {"widht_px": 300})
+    ... except ConfigError as err:
+    ...     print(err)
+    exporter 'svg': widht_px = 300: unknown field; did you mean 'width_px'? allowed: ...
     """
-    exporter = registry.get("export", kind).build(dict(params or {}))
+    spec = registry.get("export", kind)
+    try:
+        config = spec.config_model.model_validate(dict(params or {}))
+    except ValidationError as err:
+        text = describe_validation_error(err, source=None, model=spec.config_model)
+        where = f"{source}: " if source else ""
+        raise ConfigError(f"{where}exporter {kind!r}: {text}") from err
+    exporter = spec.factory(config)
     if not isinstance(exporter, Exporter):
         raise PluginError(
             f"export plugin {kind!r} ({registry.origin('export', kind)}) built a "

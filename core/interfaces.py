@@ -105,7 +105,8 @@ class InsertionResult:
     insertion_index
         ``(n,)`` order in which particles were placed, ``-1`` where not placed.
     stats
-        Counters of the run (e.g. candidate analyses performed).
+        Counters of the run (e.g. candidate analyses performed) as ``int``,
+        and timings or lengths as ``float``; they are written to JSON as they are.
     """
 
     centre: FloatArray

@@ -27,6 +27,7 @@ from pydantic import BaseModel
 
 from regopack import hookspecs
 from regopack.errors import PluginError
+from regopack.messages import closest
 from regopack.plugin_types import KINDS, FigureSpec, PluginSpec
 
 __all__ = [
@@ -372,14 +373,16 @@ class Registry:
         ------
         PluginError
             One line naming the unknown name and the known ones, e.g.
-            ``unknown shape kind 'octagn'; known kinds: octagon``.
+            ``unknown shape kind 'octagn'; did you mean 'octagon'? known kinds: octagon``.
         """
         specs = self._kind(kind)
         try:
             return specs[name][0]
         except KeyError:
             known = ", ".join(sorted(specs)) or "(none)"
-            raise PluginError(f"unknown {kind} kind {name!r}; known kinds: {known}") from None
+            guess = closest(name, sorted(specs))
+            hint = f" did you mean {guess!r}?" if guess is not None else ""
+            raise PluginError(f"unknown {kind} kind {name!r};{hint} known kinds: {known}") from None
 
     def names(self, kind: str) -> list[str]:
         """Sorted names registered for ``kind``."""

@@ -40,6 +40,7 @@ from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, Rectangle
 from regopack.domain import Domain as DomainGeometry
 from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.manager import Registry
+from regopack.messages import describe_validation_error, dotted, format_value, where
 from regopack.outdir import MARKER, NAME_RULE, name_key, name_problem
 from regopack.plugin_types import PluginSpec
 
@@ -351,18 +352,9 @@ class Scene(BaseModel):
 # errors
 
 
-def _format_value(value: Any) -> str | None:
-    if isinstance(value, Mapping) or (
-        isinstance(value, Sequence) and not isinstance(value, str | bytes)
-    ):
-        return None
-    if isinstance(value, bool | int | float | str):
-        return _toml._value(value)
-    return repr(value)
-
-
-def _dotted(loc: Sequence[int | str]) -> str:
-    return ".".join(str(p) for p in loc)
+_format_value = format_value
+_dotted = dotted
+_where = where
 
 
 def _describe_validation_error(
@@ -371,29 +363,13 @@ def _describe_validation_error(
     source: str | None,
     prefix: Sequence[int | str] = (),
     overridden: Mapping[str, str] | None = None,
+    model: type[BaseModel] | None = None,
+    also: Sequence[str] = (),
 ) -> str:
-    """One line describing the first error of ``err``."""
-    errors = err.errors(include_url=False)
-    first = errors[0]
-    loc = _dotted([*prefix, *first["loc"]])
-    msg = first["msg"].removeprefix("Value error, ")
-    value = None if first["type"] == "missing" else _format_value(first.get("input"))
-    text = f"{loc} = {value}: {msg}" if value is not None else f"{loc}: {msg}"
-    where = _where(loc, source, overridden or {})
-    if where:
-        text = f"{where}: {text}"
-    if len(errors) > 1:
-        more = len(errors) - 1
-        text += f" (and {more} more error{'s' if more > 1 else ''})"
-    return " ".join(text.split())
-
-
-def _where(loc: str, source: str | None, overridden: Mapping[str, str]) -> str | None:
-    """Where the value at ``loc`` came from: a command-line option or the file."""
-    for key, label in overridden.items():
-        if loc == key or loc.startswith(key + ".") or key.startswith(loc + "."):
-            return label
-    return source
+    """One line describing the first error of ``err`` (see :mod:`regopack.messages`)."""
+    return describe_validation_error(
+        err, source=source, prefix=prefix, overridden=overridden, model=model, also=also
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -589,7 +565,7 @@ def scene_from_dict(
         scene = Scene.model_validate(data)
     except ValidationError as err:
         raise ConfigError(
-            _describe_validation_error(err, source=source, overridden=overridden)
+            _describe_validation_error(err, source=source, overridden=overridden, model=Scene)
         ) from err
     scene._source = source
     scene._overridden = dict(overridden or {})
@@ -787,7 +763,12 @@ def _resolve_ref(
     except ValidationError as err:
         raise ConfigError(
             _describe_validation_error(
-                err, source=scene.source, prefix=loc, overridden=scene._overridden
+                err,
+                source=scene.source,
+                prefix=loc,
+                overridden=scene._overridden,
+                model=spec.config_model,
+                also=("kind",),
             )
         ) from err
     return ResolvedPlugin(kind=ref.kind, spec=spec, config=config, origin=origin)

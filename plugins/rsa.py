@@ -528,7 +528,7 @@ class RandomSequentialAddition(InsertionStrategy):
         ``stats`` holds ``attempts`` (centres drawn), ``rejected_attempts``
         (centres that overlapped), ``not_tried`` (particles skipped after
         ``stop_after_failures``), ``prepare_time_s`` and ``insert_time_s``, and
-        ``controller_ignored = 1.0`` when the controller is not the identity.
+        ``controller_ignored = 1`` when the controller is not the identity.
         """
         cfg = self.config
         n = len(population)
@@ -554,14 +554,14 @@ class RandomSequentialAddition(InsertionStrategy):
         centre = np.column_stack([grid.cx, grid.cy])
         not_tried = n - int(grid.ipar[I_STOP_AT]) if grid.ipar[I_STOPPED] else 0
         stats = {
-            "attempts": float(grid.ipar[I_ATTEMPTS]),
-            "rejected_attempts": float(grid.ipar[I_REJECTED]),
-            "not_tried": float(not_tried),
+            "attempts": int(grid.ipar[I_ATTEMPTS]),
+            "rejected_attempts": int(grid.ipar[I_REJECTED]),
+            "not_tried": int(not_tried),
             "prepare_time_s": prepared - started,
             "insert_time_s": time.perf_counter() - prepared,
         }
         if not controller.identity:
-            stats["controller_ignored"] = 1.0
+            stats["controller_ignored"] = 1
         return InsertionResult(centre=centre, insertion_index=index, stats=stats)
 
 

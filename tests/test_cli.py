@@ -72,7 +72,7 @@ def test_config_default_is_table1(capsys):
         (
             ["config", "--set", "phases.0.shape.kind=octagn"],
             "regopack: error: --set: phases.0.shape.kind: "
-            "unknown shape kind 'octagn'; known kinds: octagon",
+            "unknown shape kind 'octagn'; did you mean 'octagon'? known kinds: octagon",
         ),
         (["run", "nope.toml"], "regopack: error: nope.toml: no such scene file"),
         (["run", "--set", "oops"], "regopack: error: --set 'oops': expected key=value"),

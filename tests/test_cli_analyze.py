@@ -88,7 +88,10 @@ def test_rdf_only_with_figures(packing_file, tmp_path, capsys):
         (["{p}", "--tol", "abc"], "analyze: argument --tol: invalid float value: 'abc'"),
         (["{p}", "--tol", "1"], "contacts: tol_max (0.5) must be at least tol (1.0)"),
         (["{p}", "--set", "tol=1"], "--set 'tol=1': expected NAME.FIELD=VALUE"),
-        (["{p}", "--set", "contacts.bogus=1"], "contacts.bogus = 1: Extra inputs are not"),
+        (
+            ["{p}", "--set", "contacts.bogus=1"],
+            "contacts.bogus = 1: unknown field; allowed: tol, tol_max, margin",
+        ),
         (["{p}", "--set", "nope.x=1"], "unknown analyzer 'nope'"),
         (["{p}", "--only", "rdf", "--tol", "0.1"], "parameters given for analyzer 'contacts'"),
         (["{p}", "--tables", "xls"], "analyze: argument --tables: invalid choice: 'xls'"),

@@ -154,7 +154,7 @@ def test_expansion_is_deterministic() -> None:
         ),
         (
             'base = "small"\n[sweep]\n"domain.widht" = [100]\n',
-            "exp.toml: sweep.domain.widht = 100: Extra inputs are not permitted",
+            "exp.toml: sweep.domain.widht = 100: unknown field; did you mean 'width'?",
         ),
         (
             'base = "small"\n[set]\n"insertion.t" = 2\n',

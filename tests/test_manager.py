@@ -89,7 +89,10 @@ def test_unknown_name_lists_known_sorted():
     reg = fake_registry(MoreShapes())
     with pytest.raises(PluginError) as info:
         reg.get("shape", "octagn")
-    assert str(info.value) == "unknown shape kind 'octagn'; known kinds: octagon, zigzag"
+    assert (
+        str(info.value)
+        == "unknown shape kind 'octagn'; did you mean 'octagon'? known kinds: octagon, zigzag"
+    )
 
 
 def test_unknown_name_with_nothing_registered():

@@ -223,14 +223,20 @@ def test_bad_overrides(override, message):
         (
             'kind = "change5"',
             'kind = "chang5"',
-            "scene.toml: size.kind: unknown size kind 'chang5'; known kinds: change5",
+            "scene.toml: size.kind: unknown size kind 'chang5'; did you mean 'change5'? "
+            "known kinds: change5",
         ),
         (
             'shape = { kind = "octagon", psi = 2.0',
             'shape = { kind = "octagn", psi = 2.0',
-            "scene.toml: phases.3.shape.kind: unknown shape kind 'octagn'; known kinds: octagon",
+            "scene.toml: phases.3.shape.kind: unknown shape kind 'octagn'; "
+            "did you mean 'octagon'? known kinds: octagon",
         ),
-        ("eta = 0.0", "etta = 1", "scene.toml: density.etta = 1: Extra inputs are not permitted"),
+        (
+            "eta = 0.0",
+            "etta = 1",
+            "scene.toml: density.etta = 1: unknown field; did you mean 'eta'? allowed: kind, eta",
+        ),
         (
             "fraction = 0.343",
             "fraction = 0.243",
@@ -300,7 +306,8 @@ def test_override_errors_name_the_option(registry):
     )
     assert (
         error_of("small", registry, ["size.kind=chang5"])
-        == "--set: size.kind: unknown size kind 'chang5'; known kinds: change5"
+        == "--set: size.kind: unknown size kind 'chang5'; did you mean 'change5'? "
+        "known kinds: change5"
     )
     assert (
         error_of("small", registry, seed=-1)

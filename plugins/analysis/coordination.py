@@ -184,11 +184,11 @@ class Coordination(Analyzer):
             "z_domain": float(z[placed].mean()) if placed.any() else None,
             "z_interior": float(z[interior].mean()) if interior.any() else None,
             "n_interior": int(interior.sum()),
-            "rattlers_interior": int(np.sum(z[interior] == 0)),
+            "rattlers_interior": int(rattler[interior].sum()),
+            "isolated_interior": int(np.sum(z[interior] == 0)),
             "rattler_min_contacts": k,
             "rattlers": int(rattler.sum()),
             "rattler_fraction": float(rattler.sum() / placed.sum()) if placed.any() else None,
-            "rattlers_interior_dem": int(rattler[interior].sum()),
             "rattler_fraction_interior": float(rattler[interior].mean())
             if interior.any()
             else None,

@@ -17,8 +17,9 @@ file stem                 needs                   shows (figure of the paper)
 ``local-fraction``        ``local_fraction``      map of local φ per particle, histogram
 ========================  ======================  ==========================================
 
-Figures are sized for a journal page (7 in wide, 8 pt text) and use one
-colour-blind-safe palette (Okabe and Ito) for the minerals, in scene order.
+Figures are sized for a journal page (7 in wide, 8 pt text) and colour the
+minerals by name from one colour-blind-safe palette (Okabe and Ito; see
+:mod:`regopack.colours`), so a mineral keeps its colour in every scene.
 Lengths are in the scene's unit, micrometres. Collections with many items are
 rasterised inside the SVG files to keep them small; axes and text stay vector.
 """
@@ -40,6 +41,7 @@ from matplotlib.patches import ConnectionPatch, Patch, Rectangle
 from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter
 from numpy.typing import NDArray
 
+from regopack.colours import PALETTE, mineral_colours
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing, _atomic_file
 from regopack.plugins.analysis.contacts import Contacts
@@ -49,22 +51,12 @@ from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
+from regopack.plugins.analysis.rdf_peak import count_bins, merge_bins
 
 __all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
 
 FloatArray = NDArray[np.float64]
 
-PALETTE: tuple[str, ...] = (
-    "#E69F00",  # orange
-    "#56B4E9",  # sky blue
-    "#009E73",  # bluish green
-    "#F0E442",  # yellow
-    "#0072B2",  # blue
-    "#D55E00",  # vermillion
-    "#CC79A7",  # reddish purple
-    "#999999",  # grey
-)
-"""Okabe–Ito colours, assigned to the minerals in scene order (cycled after eight)."""
 
 WIDTH = 7.0
 """Width of the figures in inches (a two-column journal page)."""
@@ -102,17 +94,6 @@ _AC = r"$A_\mathrm{c}$"
 
 TOTAL = "#000000"
 """Colour of whole-packing curves (all minerals together)."""
-
-
-def mineral_colours(names: Sequence[str]) -> list[str]:
-    """Colour of each mineral, in scene order.
-
-    Examples
-    --------
-    >>> mineral_colours(["pyroxene", "feldspar"])
-    ['#E69F00', '#56B4E9']
-    """
-    return [PALETTE[k % len(PALETTE)] for k in range(len(names))]
 
 
 # ---------------------------------------------------------------------------
@@ -155,15 +136,67 @@ def _frame(ax: Axes, bounds: Sequence[float]) -> None:
     ax.set_ylabel("y (µm)")
 
 
+NICE_STEPS = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0)
+"""Mantissas of the round lengths that zoom windows take."""
+
+
+def nice_length(length: float, most: float | None = None) -> float:
+    """Round ``length`` to the nearest (in ratio) of 1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 8 × 10^k.
+
+    With ``most``, the result is the largest such length not above ``most``
+    when the nearest one is (and ``most`` itself when no round length is).
+
+    Examples
+    --------
+    >>> nice_length(128.447), nice_length(100.0), nice_length(0.0173)
+    (120.0, 100.0, 0.015)
+    >>> nice_length(128.447, most=110.0)
+    100.0
+    """
+    if not (length > 0 and np.isfinite(length)):
+        return length
+    exponent = 10.0 ** np.floor(np.log10(length))
+    candidates = [float(f"{m * exponent * s:.6g}") for s in (0.1, 1.0) for m in NICE_STEPS]
+    if most is not None:
+        below = [c for c in candidates if c <= most]
+        if not below:
+            return most
+        if min(candidates, key=lambda c: abs(np.log(c / length))) > most:
+            return max(below)
+        candidates = below
+    return min(candidates, key=lambda c: abs(np.log(c / length)))
+
+
+def length_text(value: float) -> str:
+    """Format a length for a title: three significant digits, no exponent below 10^6.
+
+    Examples
+    --------
+    >>> length_text(128.447), length_text(1600.0), length_text(0.012345)
+    ('128', '1600', '0.0123')
+    """
+    return f"{float(f'{value:.3g}'):g}"
+
+
 def _zoom_window(packing: Packing) -> tuple[float, float, float, float]:
-    """Square window at the domain's centre: an eighth of its size, at least 20 mean radii."""
+    """Square window at the domain's centre: an eighth of its size, at least 20 mean radii.
+
+    The side is rounded to a round length (:func:`nice_length`), at most the
+    domain's shorter side.
+    """
     dom = packing.domain
     short = min(dom.width, dom.height)
     placed = packing.placed
     mean_r = float(packing.radius[placed].mean()) if placed.any() else short / 40
-    side = min(short, max(short / 8, 20.0 * mean_r))
+    side = nice_length(min(short, max(short / 8, 20.0 * mean_r)), most=short)
     cx, cy = dom.center
     return cx - side / 2, cx + side / 2, cy - side / 2, cy + side / 2
+
+
+def _zoom_size(window: Sequence[float]) -> str:
+    """``"120 × 120 µm"`` for a window ``(x0, x1, y0, y1)``."""
+    x0, x1, y0, y1 = window
+    return f"{length_text(x1 - x0)} × {length_text(y1 - y0)} µm"
 
 
 def _in_window(packing: Packing, window: Sequence[float]) -> NDArray[np.int64]:
@@ -217,7 +250,7 @@ def _title(packing: Packing) -> str:
     name = packing.scene.get("name", "packing")
     return (
         f"{name}, seed {packing.seed}: {packing.n_placed:,} particles, "
-        f"{dom.width:g} × {dom.height:g} µm"
+        f"{length_text(dom.width)} × {length_text(dom.height)} µm"
     )
 
 
@@ -239,8 +272,7 @@ def draw_packing(packing: Packing) -> Figure:
     near = _in_window(packing, window)
     zoom.add_collection(_polygons(packing, near, colours, edgecolors="#222222", linewidths=0.3))
     _frame(zoom, window)
-    x0, x1, y0, y1 = window
-    zoom.set_title(f"zoom: {x1 - x0:g} × {y1 - y0:g} µm at the centre")
+    zoom.set_title(f"zoom: {_zoom_size(window)} at the centre")
     _link_zoom(fig, ax, zoom, window, "black")
     _mineral_legend(fig, packing, colours)
     return fig
@@ -292,7 +324,7 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
     _frame(zoom, window)
     ax.set_title(f"{len(area):,} contacts at tol = {contacts.config.tol:g} µm")
     widths_note = f" (widths × {factor:.2g})" if factor > 1.05 else ""
-    zoom.set_title(f"zoom, {x1 - x0:g} × {y1 - y0:g} µm at the centre{widths_note}")
+    zoom.set_title(f"zoom, {_zoom_size(window)} at the centre{widths_note}")
     _link_zoom(fig, ax, zoom, window, "#D55E00")
     if len(area):
         top = float(area.max())
@@ -557,13 +589,37 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             _note(ax, f"no {title} (window too small)")
             continue
         r = curves["r"]
-        per = mineral_centred_rdf(curves, names, counts) if len(names) > 1 else {}
-        for name, colour in zip(names, colours, strict=True):
+        step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        fine = rdf.curves_fine[key]
+        per = mineral_centred_rdf(fine, names, counts) if len(names) > 1 else {}
+        shell = np.pi * ((r + 0.5 * step) ** 2 - (r - 0.5 * step) ** 2)
+        n_all = max(float(sum(counts)), 1.0)
+        for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
             if name in per:
-                ax.plot(r, per[name], color=colour, linewidth=0.8, label=name)
+                # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
+                per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
+                factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
+                ax.plot(
+                    r,
+                    merge_bins(per[name], shell, factor),
+                    color=colour,
+                    linewidth=0.8,
+                    label=name,
+                    drawstyle="steps-mid" if factor > 1 else "default",
+                )
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        peak = rdf.peak if key == "near" else None
+        if peak is not None and np.isfinite(peak.r_err):
+            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
+            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
+            ax.text(
+                peak.r,
+                0.04,
+                f" first peak {peak.r:.2f} ± {peak.r_err:.2f} µm",
+                transform=ax.get_xaxis_transform(),
+                fontsize=6.5,
+            )
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel("centre distance r (µm)")
         ax.set_ylabel("g(r)")
@@ -575,7 +631,7 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             labels,
             loc="outside lower center",
             ncol=min(len(handles), 7),
-            title="centres around the particles of",
+            title="centres around the particles of (a rare mineral's bins merged, as steps)",
             title_fontsize=7,
         )
     return fig

@@ -20,6 +20,7 @@ from regopack.plugins.analysis.figures import (
     _in_window,
     _link_zoom,
     _note,
+    _zoom_size,
     _zoom_window,
 )
 from regopack.plugins.analysis.local_fraction import LocalFraction
@@ -117,8 +118,7 @@ def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
     edges.set_linewidth(0.5)
     zoom.add_collection(edges)
     _frame(zoom, window)
-    x0, x1, y0, y1 = window
-    zoom.set_title(f"zoom {x1 - x0:g} × {y1 - y0:g} µm; cells white")
+    zoom.set_title(f"zoom {_zoom_size(window)}; cells white")
     _link_zoom(fig, ax, zoom, window, "black")
     _histogram(hist, lf)
     hist.set_title(f"σ(φᵢ) = {res['phi_std_interior'] or float('nan'):.3f} (interior)")

@@ -13,7 +13,10 @@
   periodic image (``r < min(a, b) / 2``).
 
 Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
-(``N_A (N_A - 1)`` when ``A = B``).
+(``N_A (N_A - 1)`` when ``A = B``); a pair's bins are merged until each holds
+enough pairs (:func:`regopack.plugins.analysis.rdf_peak.count_bins`). The first
+peak of the near-field curve is fitted, with its standard error
+(:func:`regopack.plugins.analysis.rdf_peak.first_peak`).
 """
 
 from __future__ import annotations
@@ -36,6 +39,7 @@ from regopack.plugins.analysis.common import (
     interior_window,
     periodic_images,
 )
+from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
 
 FloatArray = NDArray[np.float64]
 
@@ -57,6 +61,15 @@ class RdfConfig(BaseModel):
     )
     far_bin: float = Field(2.0, gt=0, description="Bin width in the far field.")
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
+    min_pairs_per_bin: float = Field(
+        100.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Bins of a mineral-pair curve are merged until an uncorrelated pattern would put "
+            "this many pairs into each at the middle of the range (0: no merging)."
+        ),
+    )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
     )
@@ -237,6 +250,12 @@ class Rdf(Analyzer):
             pts = np.concatenate([pts, ext.centre[ghosts]])
             kinds = np.concatenate([kinds, packing.mineral[origin[ghosts]]]).astype(np.int64)
         self.curves: dict[str, dict[str, FloatArray]] = {}
+        self.curves_fine: dict[str, dict[str, FloatArray]] = {}
+        self.expected: dict[str, FloatArray] = {}
+        pair_bins: dict[str, dict[str, float]] = {}
+        n_pts = len(pts) if n_real is None else n_real
+        kind_counts = np.bincount(kinds[:n_pts], minlength=len(packing.mineral_names))
+        area = w.area if isinstance(w, Circle | ConvexPolygon) else a * b
         notes = []
         for field_name, (lo, hi), width in (
             ("near", cfg.near, cfg.near_bin),
@@ -264,16 +283,32 @@ class Rdf(Analyzer):
                 n_real=n_real,
             )
             centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
+            edges = lo + width * np.arange(bins + 1)
+            shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+            self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / area
             curves: dict[str, FloatArray] = {"r": centres, "total": total}
+            fine: dict[str, FloatArray] = {"r": centres, "total": total}
+            r_mid = 0.5 * (lo + hi)
+            widths: dict[str, float] = {}
             if n_kinds > 1:
                 for p, na in enumerate(names):
                     for q in range(p, n_kinds):
-                        curves[f"{na}-{names[q]}"] = per[p, q]
+                        key = f"{na}-{names[q]}"
+                        cp, cq = float(kind_counts[p]), float(kind_counts[q])
+                        norm = cp * (cp - 1.0) / 2.0 if p == q else cp * cq
+                        per_bin = norm * 2.0 * np.pi * r_mid * width / area
+                        factor = count_bins(per_bin, cfg.min_pairs_per_bin, bins)
+                        fine[key] = per[p, q]
+                        curves[key] = merge_bins(per[p, q], shell, factor)
+                        widths[key] = float(width * factor)
             self.curves[field_name] = curves
+            self.curves_fine[field_name] = fine
+            pair_bins[field_name] = widths
         near = self.curves.get("near")
         peak = None
-        if near is not None and np.isfinite(near["total"]).any():
-            peak = float(near["r"][int(np.nanargmax(near["total"]))])
+        if near is not None:
+            peak = first_peak(near["r"], near["total"], self.expected["near"])
+        self.peak = peak
         far = self.curves.get("far")
         self._results = {
             "eta": eta_of(packing),
@@ -281,14 +316,19 @@ class Rdf(Analyzer):
             "n_points": int(sel.sum()),
             "window_kind": w.kind,
             "window": [a, b],
-            "first_peak_r": peak,
+            "first_peak_r": None if peak is None else peak.r,
+            "first_peak_r_err": None if peak is None else peak.r_err,
+            "first_peak_g": None if peak is None else peak.g,
+            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
+            "first_peak_highest_bin_r": None if peak is None else peak.highest_bin_r,
+            "pair_bins": pair_bins,
             "far_mean": float(np.nanmean(far["total"])) if far is not None else None,
             "notes": notes,
         }
         return self
 
     def results(self) -> dict[str, Any]:
-        """Scalars: first peak position, far-field mean of g, points used."""
+        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
         if self._results is None:
             raise RuntimeError("call compute() first")
         return dict(self._results)

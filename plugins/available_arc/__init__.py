@@ -200,9 +200,9 @@ class AvailableArc(InsertionStrategy):
         index[order] = np.arange(order.shape[0])
         centre = np.column_stack([st.packed.cx, st.packed.cy])
         stats = {
-            "candidate_analyses": float(st.counter(kernel.I_ANALYSES)),
-            "empty_analyses": float(st.counter(kernel.I_EMPTY)),
-            **({"rescued": float(counts[0])} if exact else {}),
+            "candidate_analyses": st.counter(kernel.I_ANALYSES),
+            "empty_analyses": st.counter(kernel.I_EMPTY),
+            **({"rescued": int(counts[0])} if exact else {}),
             "prepare_time_s": prepared - started,
             "insert_time_s": time.perf_counter() - prepared,
         }
@@ -248,12 +248,12 @@ def _pack_sweep(
     centre = np.column_stack([st.packed.cx, st.packed.cy])
     refused = int(sw.zs[sweep.Z_REFUSED])
     stats = {
-        "candidate_analyses": float(st.counter(kernel.I_ANALYSES)),
-        "empty_analyses": float(st.counter(kernel.I_EMPTY)),
+        "candidate_analyses": st.counter(kernel.I_ANALYSES),
+        "empty_analyses": st.counter(kernel.I_EMPTY),
         "zone": float(zone),
-        "zone_raises": float(sw.zs[sweep.Z_RAISES]),
-        "refused": float(refused),
-        "not_offered": float(n - placed - refused),
+        "zone_raises": int(sw.zs[sweep.Z_RAISES]),
+        "refused": refused,
+        "not_offered": n - placed - refused,
         "prepare_time_s": prepared - started,
         "insert_time_s": time.perf_counter() - prepared,
     }

@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 
 from regopack.analysis import run_analyses
+from regopack.colours import mineral_colours
 from regopack.errors import ExportError
 from regopack.exporting import build_exporter, export_packing, output_path
 from regopack.manager import default_registry
 from regopack.packing import Packing, load, save
-from regopack.plugins.analysis.figures import PALETTE
 from regopack.plugins.exporters import (
     CsvExporter,
     JsonConfig,
@@ -155,7 +155,7 @@ def test_svg_is_well_formed_with_one_polygon_per_placed_particle(packing, tmp_pa
     groups = root.findall(f".//{SVG}g[@class='mineral']")
     for g in groups:
         k = int(g.attrib["id"].removeprefix("mineral-"))
-        assert g.attrib["fill"] == PALETTE[k % len(PALETTE)]
+        assert g.attrib["fill"] == mineral_colours(packing.mineral_names)[k]
         assert g.attrib["data-mineral"] == packing.mineral_names[k]
     assert "scale(1,-1)" in root.find(f"{SVG}g").attrib["transform"]
 

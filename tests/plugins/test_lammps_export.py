@@ -202,11 +202,10 @@ def test_scales_that_overflow_are_one_error(small, tmp_path):
 
 
 def test_old_rounding_field_is_refused(registry):
-    from pydantic import ValidationError
-
+    from regopack.errors import ConfigError
     from regopack.exporting import build_exporter
 
-    with pytest.raises(ValidationError):
+    with pytest.raises(ConfigError, match=r"exporter 'lammps': rounding = 0\.05: unknown field"):
         build_exporter(registry, "lammps", {"rounding": 0.05})
 
 

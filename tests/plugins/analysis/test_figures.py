@@ -83,7 +83,7 @@ def test_mineral_centred_rdf_averages_back_to_the_total(packing, analyzers):
     names = packing.mineral_names
     sel = interior_mask(packing, rdf.results()["interior_margin"])
     counts = np.bincount(packing.mineral[sel], minlength=len(names))
-    curves = rdf.curves["near"]
+    curves = rdf.curves_fine["near"]  # the pair curves before their bins are merged
     per = figures.mineral_centred_rdf(curves, names, counts.tolist())
     weighted = sum(counts[k] * per[name] for k, name in enumerate(names) if name in per)
     assert np.allclose(weighted / counts.sum(), curves["total"])
@@ -123,3 +123,57 @@ def test_write_analysis_draws_what_figures_for_draws(packing, analyzers, tmp_pat
     pngs = [p.name for p in files.figures if p.suffix == ".png"]
     assert pngs == [p.name for p in drawn]
     assert set(figures.CAPTIONS) == {s for stems in OF_ANALYZER.values() for s in stems}
+
+
+def test_zoom_titles_show_a_round_length(packing, analyzers):
+    """The zoom's side is a round length, and the titles print it as such."""
+    placed = packing.placed
+    raw = max(200.0 / 8, 20.0 * float(packing.radius[placed].mean()))
+    assert raw != pytest.approx(round(raw))  # the side the zoom had, e.g. 64.2735 µm
+    side = figures.nice_length(raw)
+    fig = figures.draw_packing(packing)
+    assert fig.axes[1].get_title() == f"zoom: {side:g} × {side:g} µm at the centre"
+    x0, x1 = fig.axes[1].get_xlim()
+    assert x1 - x0 == pytest.approx(side)
+    network = figures.draw_network(packing, analyzers["contacts"])
+    assert network.axes[1].get_title().startswith(f"zoom, {side:g} × {side:g} µm")
+
+
+def test_nice_lengths():
+    assert [figures.nice_length(v) for v in (128.447, 100.0, 33.0, 7.1, 0.0173)] == [
+        120.0,
+        100.0,
+        30.0,
+        8.0,
+        0.015,
+    ]
+    assert figures.nice_length(128.447, most=110.0) == 100.0
+    assert figures.nice_length(0.5, most=0.3) == 0.3
+    assert figures.length_text(128.447) == "128"
+
+
+def test_a_mineral_has_its_colour_whatever_the_phase_order(packing):
+    """Glass is bluish green in every scene; the legend and the particles agree."""
+    from regopack.colours import MINERAL_COLOURS, mineral_colours
+
+    names = list(packing.mineral_names)
+    assert mineral_colours(names) == mineral_colours(names[::-1])[::-1]
+    assert mineral_colours(["olivine", "glass"]) == [
+        MINERAL_COLOURS["olivine"],
+        MINERAL_COLOURS["glass"],
+    ]
+    assert mineral_colours(["Glass", "plagioclase"]) == ["#009E73", "#56B4E9"]
+    # unknown names: fixed by the name, distinct within a scene
+    odd = mineral_colours(["troilite", "agglutinate", "spinel"])
+    assert len(set(odd)) == 3 and not set(odd) & set(MINERAL_COLOURS.values())
+    assert mineral_colours(["spinel"]) == mineral_colours(["spinel", "glass"])[:1]
+    # the packing figure colours each particle by its mineral's name
+    fig = figures.draw_packing(packing)
+    legend = {
+        t.get_text().split(" (")[0]: h.get_facecolor()
+        for t, h in zip(fig.legends[0].get_texts(), fig.legends[0].legend_handles, strict=True)
+    }
+    from matplotlib.colors import to_rgba
+
+    for name, colour in zip(names, mineral_colours(names), strict=True):
+        assert legend[name] == pytest.approx(to_rgba(colour))

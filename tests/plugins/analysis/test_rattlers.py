@@ -89,11 +89,15 @@ def test_coordination_reports_rattlers_and_z_mechanical(done):
     placed = packing.placed
     interior = contacts.interior
     z = coord.per_particle
-    # the old key is unchanged: interior particles without a contact
-    assert res["rattlers_interior"] == int(np.sum(z[interior] == 0))
     rattler = coord.rattler
     assert res["rattlers"] == int(rattler.sum()) > 0
-    assert res["rattlers_interior_dem"] >= res["rattlers_interior"]
+    # interior rattlers by the DEM definition: fewer than 2 contacts, removed iteratively
+    assert res["rattlers_interior"] == int(rattler[interior].sum())
+    assert res["rattlers_interior"] > int(np.sum(interior & (z < 2)))
+    assert "rattlers_interior_dem" not in res
+    # interior particles without any contact, under their own name
+    assert res["isolated_interior"] == int(np.sum(z[interior] == 0))
+    assert res["rattlers_interior"] > res["isolated_interior"]
     assert res["rattler_fraction"] == pytest.approx(rattler.sum() / placed.sum())
     # every particle left has at least two contacts with particles left
     zm = coord.z_mechanical

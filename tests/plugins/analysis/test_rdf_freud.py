@@ -60,7 +60,9 @@ def packing() -> Packing:
 @pytest.fixture(scope="module")
 def curves(packing) -> dict:
     (lo_n, hi_n, w_n), (lo_f, hi_f, w_f) = BINS["near"], BINS["far"]
-    cfg = RdfConfig(near=(lo_n, hi_n), near_bin=w_n, far=(lo_f, hi_f), far_bin=w_f)
+    cfg = RdfConfig(
+        near=(lo_n, hi_n), near_bin=w_n, far=(lo_f, hi_f), far_bin=w_f, min_pairs_per_bin=0
+    )
     rdf = Rdf(cfg).compute(packing, {})
     assert rdf.results()["window_kind"] == "periodic"
     assert rdf.results()["n_points"] == packing.n_placed

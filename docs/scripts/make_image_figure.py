@@ -3,8 +3,8 @@
 Run from the repository root (needs the ``docs`` extra for matplotlib and the
 ``test`` extra for PoreSpy)::
 
-    python docs/make_image_figure.py                   # packs the ``small`` scene first
-    python docs/make_image_figure.py --packing runs/table1/packing.npz
+    python docs/scripts/make_image_figure.py                   # packs the ``small`` scene first
+    python docs/scripts/make_image_figure.py --packing runs/table1/packing.npz
 
 Writes ``docs/images/export-image.png`` (the binary and minerals images as
 written, and a close-up of the pixels under the exact outlines) and
@@ -33,19 +33,20 @@ from matplotlib.patches import Patch
 from PIL import Image
 
 import regopack
+from regopack.colours import mineral_colours
 from regopack.exporting import export_packing
 from regopack.manager import default_registry
 from regopack.packing import Packing
 from regopack.plugins.image_export import image_paths
 
 HERE = Path(__file__).resolve().parent
-IMAGES = HERE / "images"
+IMAGES_DIR = HERE.parent / "images"
+"""The documentation's pictures, ``docs/images``."""
+IMAGES = IMAGES_DIR
 WIDTH = 7.0
 """Figure width in inches (a two-column page); fonts of 8 pt stay legible at half of it."""
 
 DPI = 200
-PALETTE = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7")
-"""Okabe-Ito colours, one per mineral in scene order (those of the analysis figures)."""
 
 STYLE: dict[str, Any] = {
     "font.size": 8,
@@ -90,7 +91,7 @@ def draw_files(packing: Packing, files: dict[str, Path], meta: dict[str, Any], o
     binary = np.asarray(Image.open(files["binary"]))
     minerals = np.asarray(Image.open(files["minerals"]))
     names = meta["mineral_names"]
-    colours = ["#000000", *(PALETTE[k % len(PALETTE)] for k in range(len(names)))]
+    colours = ["#000000", *mineral_colours(names)]  # by name, as in the analysis figures
     cmap = ListedColormap([*colours, *["#808080"] * (256 - len(colours))])
 
     with plt.rc_context(STYLE):

@@ -2,8 +2,8 @@
 
 Run from the repository root (needs the ``docs`` extra, i.e. matplotlib)::
 
-    python docs/make_figures.py                       # packs the default scene first
-    python docs/make_figures.py --packing runs/table1-seed1/packing.npz
+    python docs/scripts/make_table1_figure.py                       # packs the default scene first
+    python docs/scripts/make_table1_figure.py --packing runs/table1-seed1/packing.npz
 
 The picture is written to ``docs/images/table1.png`` unless ``--out`` says otherwise.
 """
@@ -27,15 +27,15 @@ from matplotlib.patches import ConnectionPatch, Patch, Rectangle
 from PIL import Image
 
 import regopack
+from regopack.colours import mineral_colours
 from regopack.packing import Packing
 
 HERE = Path(__file__).resolve().parent
-DEFAULT_OUT = HERE / "images" / "table1.png"
+IMAGES_DIR = HERE.parent / "images"
+"""The documentation's pictures, ``docs/images``."""
+DEFAULT_OUT = IMAGES_DIR / "table1.png"
 ZOOM = (0.0, 100.0, 0.0, 100.0)
 """Window of the zoomed view, ``(xmin, xmax, ymin, ymax)`` in micrometres."""
-
-PALETTE = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7")
-"""Okabe-Ito colours (distinguishable with colour-vision deficiencies), one per mineral."""
 
 
 def run_default_scene(seed: int | None) -> Packing:
@@ -89,7 +89,7 @@ def draw(packing: Packing, out: Path, *, width_px: int = 1600, dpi: int = 200) -
         The file written.
     """
     names = packing.mineral_names
-    colours = np.array([PALETTE[k % len(PALETTE)] for k in range(len(names))])
+    colours = np.array(mineral_colours(names))  # by name, as in the analysis figures
     placed = np.flatnonzero(packing.placed)
     dom = packing.domain
 

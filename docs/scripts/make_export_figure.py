@@ -2,8 +2,8 @@
 
 Run from the repository root (needs the ``test`` extra, which installs ``vtk``)::
 
-    python docs/make_export_figure.py                 # packs the ``small`` scene first
-    python docs/make_export_figure.py --packing runs/small-seed1/packing.npz
+    python docs/scripts/make_export_figure.py                 # packs the ``small`` scene first
+    python docs/scripts/make_export_figure.py --packing runs/small-seed1/packing.npz
 
 Writes ``docs/images/export-vtk.png``: the ``.vtp`` file read back by VTK's XML
 reader and drawn off screen, cells coloured by their ``mineral`` cell data.
@@ -18,10 +18,12 @@ from pathlib import Path
 import vtk
 
 import regopack
+from regopack.colours import mineral_colours
 from regopack.exporting import export_packing
 
 HERE = Path(__file__).resolve().parent
-PALETTE = ("#E69F00", "#56B4E9", "#009E73", "#F0E442", "#0072B2", "#D55E00", "#CC79A7")
+IMAGES_DIR = HERE.parent / "images"
+"""The documentation's pictures, ``docs/images``."""
 
 
 def _rgb(hex_colour: str) -> tuple[float, float, float]:
@@ -29,15 +31,16 @@ def _rgb(hex_colour: str) -> tuple[float, float, float]:
     return (int(h[0:2], 16) / 255, int(h[2:4], 16) / 255, int(h[4:6], 16) / 255)
 
 
-def render(vtp: Path, out: Path, n_minerals: int, size: int = 900) -> None:
+def render(vtp: Path, out: Path, names: list[str], size: int = 900) -> None:
     """Draw the cells of ``vtp`` coloured by mineral into the PNG ``out``."""
     reader = vtk.vtkXMLPolyDataReader()
     reader.SetFileName(str(vtp))
     reader.Update()
     table = vtk.vtkLookupTable()
+    n_minerals = len(names)
     table.SetNumberOfTableValues(n_minerals)
-    for k in range(n_minerals):
-        table.SetTableValue(k, *_rgb(PALETTE[k % len(PALETTE)]), 1.0)
+    for k, colour in enumerate(mineral_colours(names)):  # by name, as in the analysis figures
+        table.SetTableValue(k, *_rgb(colour), 1.0)
     table.Build()
     mapper = vtk.vtkPolyDataMapper()
     mapper.SetInputConnection(reader.GetOutputPort())
@@ -76,7 +79,7 @@ def main() -> None:
         description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
     )
     parser.add_argument("--packing", type=Path, help="packing file (default: pack the small scene)")
-    parser.add_argument("--out", type=Path, default=HERE / "images" / "export-vtk.png")
+    parser.add_argument("--out", type=Path, default=IMAGES_DIR / "export-vtk.png")
     args = parser.parse_args()
     from regopack.manager import default_registry
 
@@ -91,7 +94,7 @@ def main() -> None:
             packing = regopack.load(args.packing)
         vtp = export_packing(packing, "vtk", Path(tmp) / "packing.vtp", registry=default_registry())
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        render(vtp, args.out, len(packing.mineral_names))
+        render(vtp, args.out, list(packing.mineral_names))
     print(f"wrote {args.out}")
 
 

@@ -1,0 +1,205 @@
+"""The first peak of g(r) with its uncertainty, and g(r) bins chosen from the pair counts.
+
+A histogram estimate of g(r) has, in a bin that an uncorrelated pattern would
+fill with E pairs, about g E pairs, so its value is uncertain by
+``sqrt(g / E)`` (Poisson). Two consequences:
+
+- the highest bin is a noisy estimate of the peak's position.
+  :func:`first_peak` fits a parabola, by weighted least squares, to the bins at
+  the top of the peak (where a Savitzky–Golay smoothing of the curve is above
+  half-way from 1 to its maximum, at least five bins) and reports its
+  vertex, with the standard error propagated from the fit's covariance
+  (scaled up by the reduced χ² when the parabola fits worse than the noise);
+- a pair of rare minerals has few pairs per bin. :func:`count_bins` merges
+  adjacent bins until an uncorrelated pattern would put ``min_count`` pairs into
+  each one at a reference distance.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["PeakFit", "count_bins", "first_peak", "merge_bins"]
+
+TOP_SHARE = 0.5
+"""Bins whose smoothed g is above this share of the way from 1 to the maximum are fitted."""
+
+MIN_FIT_BINS = 5
+"""Fewest bins a parabola is fitted to."""
+
+SMOOTH_BINS = 7
+"""Window (bins) of the Savitzky–Golay smoothing that locates the peak."""
+
+
+@dataclass(frozen=True)
+class PeakFit:
+    """The first peak of g(r).
+
+    Attributes
+    ----------
+    r, r_err
+        Position of the peak and its standard error (length unit).
+    g
+        Height of the fitted parabola at ``r``.
+    r_lo, r_hi
+        Range of the bin centres that were fitted.
+    highest_bin_r
+        Centre of the highest bin (the unfitted estimate).
+    """
+
+    r: float
+    r_err: float
+    g: float
+    r_lo: float
+    r_hi: float
+    highest_bin_r: float
+
+
+def _smooth(g: FloatArray) -> FloatArray:
+    """Savitzky–Golay smoothing (quadratic, :data:`SMOOTH_BINS` bins) of a finite curve."""
+    from scipy.signal import savgol_filter
+
+    window = min(SMOOTH_BINS, g.size if g.size % 2 else g.size - 1)
+    if window < 3:
+        return g.copy()
+    return np.asarray(savgol_filter(g, window, 2, mode="interp"), dtype=np.float64)
+
+
+def first_peak(r: FloatArray, g: FloatArray, expected: FloatArray) -> PeakFit | None:
+    """Fit the highest peak of ``g(r)`` (see the module's description).
+
+    Parameters
+    ----------
+    r
+        Bin centres, evenly spaced.
+    g
+        g(r) in each bin (NaN where undefined).
+    expected
+        Pairs an uncorrelated pattern puts into each bin; ``g`` is uncertain
+        by ``sqrt(g / expected)``.
+
+    Returns
+    -------
+    PeakFit or None
+        ``None`` when no bin is finite. With fewer than five finite bins, or
+        when the parabola has no maximum inside the fitted bins, the peak is
+        the smoothed curve's highest bin and its error half the fitted range.
+
+    Examples
+    --------
+    A peak at 3.27 between bins of 0.1, with 300 r pairs per bin expected:
+
+    >>> rng = np.random.default_rng(1)
+    >>> r = np.arange(0.05, 10.0, 0.1)
+    >>> expected = 300 * r
+    >>> g = rng.poisson((1 + np.exp(-((r - 3.27) ** 2) / 0.5)) * expected) / expected
+    >>> fit = first_peak(r, g, expected)
+    >>> abs(fit.r - 3.27) < 2 * fit.r_err < 0.05, round(fit.highest_bin_r, 2)
+    (True, 3.35)
+    """
+    r = np.asarray(r, dtype=np.float64)
+    g = np.asarray(g, dtype=np.float64)
+    ok = np.isfinite(g)
+    if not ok.any():
+        return None
+    highest = float(r[int(np.nanargmax(g))])
+    idx = np.flatnonzero(ok)
+    r_ok, g_ok = r[idx], g[idx]
+    e_ok = np.maximum(np.asarray(expected, dtype=np.float64)[idx], 1e-300)
+    smooth = _smooth(g_ok)
+    top = int(np.argmax(smooth))
+    if r_ok.size < MIN_FIT_BINS:
+        return PeakFit(float(r_ok[top]), math.nan, float(g_ok[top]), r_ok[0], r_ok[-1], highest)
+    level = smooth[top] - (1.0 - TOP_SHARE) * (smooth[top] - min(1.0, smooth[top]))
+    lo = top
+    while lo > 0 and smooth[lo - 1] >= level:
+        lo -= 1
+    hi = top
+    while hi < r_ok.size - 1 and smooth[hi + 1] >= level:
+        hi += 1
+    while hi - lo + 1 < MIN_FIT_BINS:
+        lo, hi = (lo - 1, hi) if lo > 0 else (lo, hi + 1)
+    x = r_ok[lo : hi + 1] - r_ok[top]
+    y = g_ok[lo : hi + 1]
+    # Poisson error of each bin, from the smoothed g so that no bin gets zero weight
+    sigma = np.sqrt(np.maximum(smooth[lo : hi + 1], 1.0 / e_ok[lo : hi + 1]) / e_ok[lo : hi + 1])
+    design = np.column_stack([np.ones_like(x), x, x * x]) / sigma[:, None]
+    coef, *_ = np.linalg.lstsq(design, y / sigma, rcond=None)
+    c0, c1, c2 = (float(c) for c in coef)
+    fallback = PeakFit(
+        float(r_ok[top]),
+        0.5 * float(r_ok[hi] - r_ok[lo]),
+        float(smooth[top]),
+        float(r_ok[lo]),
+        float(r_ok[hi]),
+        highest,
+    )
+    if not c2 < 0:
+        return fallback
+    vertex = -c1 / (2.0 * c2)
+    if not float(x[0]) <= vertex <= float(x[-1]):
+        return fallback
+    cov = np.linalg.pinv(design.T @ design)
+    dof = x.size - 3
+    if dof > 0:
+        chi2 = float(np.sum(((y - (c0 + c1 * x + c2 * x * x)) / sigma) ** 2)) / dof
+        cov = cov * max(1.0, chi2)
+    jac = np.array([0.0, -1.0 / (2.0 * c2), c1 / (2.0 * c2 * c2)])
+    err = float(np.sqrt(max(float(jac @ cov @ jac), 0.0)))
+    return PeakFit(
+        float(r_ok[top] + vertex),
+        err,
+        c0 + c1 * vertex + c2 * vertex * vertex,
+        float(r_ok[lo]),
+        float(r_ok[hi]),
+        highest,
+    )
+
+
+def count_bins(expected_per_bin: float, min_count: float, bins: int) -> int:
+    """Adjacent bins to merge so that a merged bin expects at least ``min_count`` pairs.
+
+    Examples
+    --------
+    >>> count_bins(30.0, 100, 100), count_bins(500.0, 100, 100), count_bins(0.01, 100, 100)
+    (4, 1, 100)
+    """
+    if min_count <= 0 or expected_per_bin >= min_count:
+        return 1
+    if not expected_per_bin > 0:
+        return bins
+    return int(min(bins, math.ceil(min_count / expected_per_bin)))
+
+
+def merge_bins(g: FloatArray, shell: FloatArray, factor: int) -> FloatArray:
+    """g(r) over groups of ``factor`` bins, repeated over each group's bins.
+
+    The merged value is the shell-area-weighted mean of the group (what the
+    estimator gives for the merged bin); a last group shorter than
+    ``factor`` joins the one before it. NaN bins are left out of a group's mean.
+
+    Examples
+    --------
+    >>> merge_bins(np.array([1.0, 3.0, 2.0, 2.0, 5.0]), np.ones(5), 2).tolist()
+    [2.0, 2.0, 3.0, 3.0, 3.0]
+    """
+    g = np.asarray(g, dtype=np.float64)
+    if factor <= 1 or g.size == 0:
+        return g.copy()
+    groups = np.arange(g.size) // factor
+    last = groups[-1]
+    if g.size % factor and last > 0:
+        groups[groups == last] = last - 1
+    ok = np.isfinite(g)
+    weight = np.where(ok, shell, 0.0)
+    top = np.bincount(groups, weights=np.where(ok, g, 0.0) * weight)
+    bottom = np.bincount(groups, weights=weight)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        merged = np.where(bottom > 0, top / np.where(bottom > 0, bottom, 1.0), np.nan)
+    return np.asarray(merged[groups], dtype=np.float64)

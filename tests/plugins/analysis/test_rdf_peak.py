@@ -1,0 +1,105 @@
+"""The fitted first peak of g(r) and the pair-curve bins chosen from the counts."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from regopack.plugins.analysis.rdf import Rdf, RdfConfig, rdf_histogram
+from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
+
+R = np.arange(0.05, 10.0, 0.1)
+
+
+def contact_peak(r: np.ndarray, r0: float) -> np.ndarray:
+    """A smooth g(r): nothing below 1.5, a hump at ``r0``, 1 far away."""
+    hump = 0.8 * np.exp(-((r - r0) ** 2) / (2 * 0.6**2))
+    return np.where(r < 1.5, 0.0, 1.0 + hump - np.exp(-(((r - 1.5) / 0.5) ** 2)))
+
+
+@pytest.mark.parametrize("per_bin", [30.0, 300.0])
+def test_a_noisy_peak_is_recovered_within_its_reported_uncertainty(per_bin):
+    """Poisson noise on a known g(r): the fitted peak lies within its error bars."""
+    rng = np.random.default_rng(7)
+    expected = per_bin * R  # pairs an uncorrelated pattern puts into each shell
+    errors, sigmas, highest = [], [], []
+    for _ in range(200):
+        r0 = 3.27 + rng.uniform(-0.05, 0.05)
+        g = rng.poisson(contact_peak(R, r0) * expected) / expected
+        fit = first_peak(R, g, expected)
+        assert fit is not None and fit.r_lo <= fit.r <= fit.r_hi
+        errors.append(fit.r - r0)
+        sigmas.append(fit.r_err)
+        highest.append(fit.highest_bin_r - r0)
+    errors, sigmas = np.abs(errors), np.asarray(sigmas)
+    assert 0.55 <= np.mean(errors < sigmas) <= 0.9  # about 68 % within one standard error
+    assert np.mean(errors < 2 * sigmas) >= 0.9
+    assert np.mean(errors < 3 * sigmas) >= 0.97
+    # the highest bin, the former estimate, is much farther off
+    assert np.sqrt(np.mean(errors**2)) < 0.6 * np.sqrt(np.mean(np.square(highest)))
+
+
+def test_a_smooth_peak_is_found_between_the_bins():
+    fit = first_peak(R, contact_peak(R, 3.27), 1e12 * R)
+    assert fit.r == pytest.approx(3.27, abs=0.01)
+    assert fit.highest_bin_r == pytest.approx(3.25)
+    assert fit.g == pytest.approx(contact_peak(np.array([3.27]), 3.27)[0], abs=0.02)
+
+
+def test_degenerate_curves():
+    assert first_peak(R, np.full(R.size, np.nan), R) is None
+    few = first_peak(R[:3], np.array([0.0, 2.0, 1.0]), R[:3])
+    assert few is not None and few.r == pytest.approx(R[1])
+    flat = first_peak(R, np.ones(R.size), 100 * R)  # no peak: the error says so
+    assert flat is not None and flat.r_err > 0.1
+
+
+def test_merged_bins_are_what_wider_bins_give():
+    rng = np.random.default_rng(3)
+    a, b, n = 60.0, 50.0, 800
+    x, y = rng.uniform(0, a, n), rng.uniform(0, b, n)
+    kind = np.zeros(n, dtype=np.int64)
+    fine, _ = rdf_histogram(x, y, kind, 1, 0.0, 0.5, 24, a, b)
+    wide, _ = rdf_histogram(x, y, kind, 1, 0.0, 2.0, 6, a, b)
+    edges = 0.5 * np.arange(25)
+    shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+    merged = merge_bins(fine, shell, 4)
+    np.testing.assert_allclose(merged[::4], wide, rtol=1e-12)
+    assert count_bins(25.0, 100, 24) == 4 and count_bins(0.0, 100, 24) == 24
+    assert count_bins(5.0, 0, 24) == 1
+
+
+@pytest.fixture(scope="module")
+def packing():
+    from regopack.manager import default_registry
+    from regopack.run import run_scene
+    from regopack.scene_model import load_scene, resolve_scene
+
+    resolved = resolve_scene(load_scene("small", ["count=600"]), default_registry(autoload=False))
+    return run_scene(resolved, None).packing
+
+
+def test_the_analyzer_reports_the_fitted_peak_and_the_pair_bins(packing):
+    rdf = Rdf(RdfConfig(far=(20.0, 50.0))).compute(packing, {})
+    res = rdf.results()
+    lo, hi = res["first_peak_fit_range"]
+    assert lo <= res["first_peak_r"] <= hi
+    assert 0 < res["first_peak_r_err"] < hi - lo
+    assert res["first_peak_g"] > 1.0
+    assert 0.0 < res["first_peak_highest_bin_r"] < 10.0  # a noisy bin, maybe far from the fit
+    widths = res["pair_bins"]["near"]
+    assert min(widths.values()) >= 0.1 and widths["others-others"] > widths["pyroxene-feldspar"]
+    near, fine = rdf.curves["near"], rdf.curves_fine["near"]
+    assert np.array_equal(near["total"], fine["total"])
+    # a merged pair curve is flat over each of its bins and less noisy than the fine one
+    k = round(widths["pyroxene-feldspar"] / 0.1)
+    assert k > 1
+    tail = slice(60, 60 + 3 * k)  # well past the contact peak
+    assert np.ptp(near["pyroxene-feldspar"][tail.start : tail.start + k]) == 0.0
+    assert np.std(np.diff(near["pyroxene-feldspar"][tail][::k])) < np.std(
+        np.diff(fine["pyroxene-feldspar"][tail])
+    )
+    unmerged = Rdf(RdfConfig(far=(20.0, 50.0), min_pairs_per_bin=0)).compute(packing, {})
+    for key, curve in unmerged.curves["near"].items():
+        np.testing.assert_array_equal(curve, fine[key])
+    assert set(unmerged.results()["pair_bins"]["near"].values()) == {0.1}

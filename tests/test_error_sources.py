@@ -1,0 +1,98 @@
+"""Error lines name where the bad value came from and suggest the field that was meant."""
+
+from __future__ import annotations
+
+import pytest
+from cli_helpers import one_error_line
+
+from regopack.cli import main
+from regopack.manager import default_registry
+from regopack.messages import closest, fields_at
+from regopack.packing import save
+from regopack.scene_model import Domain, Scene
+from regopack.testing import packing_from_polygons
+
+SCENE_FIELDS = "name, seed, count, domain, size, phases, insertion, density, outputs"
+
+
+def test_a_misspelt_section_in_set_names_set_and_the_closest_field(capsys):
+    assert main(["config", "small", "--set", "domian.width=300"]) == 2
+    assert one_error_line(capsys) == (
+        "regopack: error: --set: domian: unknown field; did you mean 'domain'? "
+        f"allowed: {SCENE_FIELDS}"
+    )
+
+
+@pytest.mark.parametrize(
+    ("override", "expected"),
+    [
+        ("domain.hieght=3", "--set: domain.hieght = 3: unknown field; did you mean 'height'?"),
+        ("size.d_minn=5", "--set: size.d_minn = 5: unknown field; did you mean 'd_min'? "
+         "allowed: kind, d_min, d_max, d0, alpha"),
+        ("phases.0.shape.psii=3", "--set: phases.0.shape.psii = 3: unknown field; "
+         "did you mean 'psi'? allowed: kind, psi, a, m"),
+        ("phases.0.nme=3", "--set: phases.0.nme = 3: unknown field; did you mean 'name'?"),
+        ("density.foo=3", "--set: density.foo = 3: unknown field; allowed: kind, eta"),
+        ("size.kind=chang5", "--set: size.kind: unknown size kind 'chang5'; "
+         "did you mean 'change5'?"),
+    ],
+)  # fmt: skip
+def test_misspelt_fields_get_a_suggestion(capsys, override, expected):
+    assert main(["config", "small", "--set", override]) == 2
+    assert one_error_line(capsys).startswith(f"regopack: error: {expected}")
+
+
+def test_a_value_that_set_makes_inconsistent_names_set_not_the_file(capsys):
+    assert main(["config", "small", "--set", "size.d_min=50"]) == 2
+    line = one_error_line(capsys)
+    assert line.startswith("regopack: error: --set: size: ")
+    assert "d_min (50.0)" in line and "small.toml" not in line
+
+
+def test_a_mistake_of_the_file_names_the_file_beside_an_unrelated_set(tmp_path, capsys):
+    text = main_scene_text().replace("d_max = 40.0", "d_max = 1.0")
+    (tmp_path / "bad.toml").write_text(text, encoding="utf-8")
+    assert main(["config", str(tmp_path / "bad.toml"), "--set", "density.eta=5"]) == 2
+    line = one_error_line(capsys)
+    assert line.startswith(f"regopack: error: {tmp_path / 'bad.toml'}: size: ")
+
+
+def main_scene_text() -> str:
+    from importlib import resources
+
+    return resources.files("regopack.scenes").joinpath("small.toml").read_text(encoding="utf-8")
+
+
+def test_a_bad_exporter_parameter_names_the_exporter_and_its_parameters(tmp_path, capsys):
+    path = tmp_path / "p.npz"
+    save(packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]]), path)
+    assert main(["export", str(path), "--to", "lammps", "--set", "stiffnes=1"]) == 2
+    line = one_error_line(capsys)
+    assert line.startswith(
+        "regopack: error: exporter 'lammps': stiffnes = 1: unknown field; "
+        "did you mean 'stiffness'? allowed: units, length_scale, density, "
+    )
+    assert not list(tmp_path.glob("p.*data"))
+
+
+def test_the_exporter_names_the_source_of_its_parameters():
+    from regopack.errors import ConfigError
+    from regopack.exporting import build_exporter
+
+    with pytest.raises(ConfigError) as info:
+        build_exporter(default_registry(), "svg", {"width_px": -1}, source="--set")
+    assert str(info.value).startswith("--set: exporter 'svg': width_px = -1: ")
+
+
+def test_closest():
+    assert closest("domian", ["name", "domain", "density"]) == "domain"
+    assert closest("ETA", ["eta", "kind"]) == "eta"
+    assert closest("zzz", ["eta", "kind"]) is None
+
+
+def test_fields_at_walks_lists_and_sections():
+    assert fields_at(Scene, ()) == SCENE_FIELDS.split(", ")
+    assert fields_at(Scene, ("domain",)) == list(Domain.model_fields)
+    assert fields_at(Scene, ("phases", 0)) == ["name", "fraction", "shape"]
+    assert fields_at(Scene, ("size",)) == ["kind"]  # a plugin's section: its own model
+    assert fields_at(Scene, ("nothing",)) is None
