@@ -530,6 +530,7 @@ def export(
     analyses: AnalysisResults | Sequence[str] | None = None,
     registry: Registry | None = None,
     params: Mapping[str, Any] | None = None,
+    params_source: str | None = None,
     **kwargs: Any,
 ) -> Path:
     """Write a packing in another format, as ``regopack export`` does.
@@ -550,6 +551,9 @@ def export(
         per-particle results the exporter adds (e.g. Z in the VTK file).
     params, **kwargs
         The exporter's parameters (``stiffness=1e5``); keywords win over ``params``.
+    params_source
+        What error messages call the parameters (the command line passes
+        ``"--set"``); by default the message starts with the exporter.
 
     Returns
     -------
@@ -567,7 +571,7 @@ def export(
             f"params: expected a dictionary of {to}'s parameters, not {type(params).__name__}"
         )
     merged = {**(params or {}), **{k: _plain(v) for k, v in kwargs.items()}}
-    exporter = build_exporter(reg, to, merged)
+    exporter = build_exporter(reg, to, merged, source=params_source)
     loaded = _packing(packing)
     if path is None:
         if isinstance(packing, Packing):

@@ -462,7 +462,14 @@ def _cmd_export(args: argparse.Namespace, out: Console, err: Console) -> int:
 
     params = _exporter_params(args.overrides)
     names = _analyzer_names(args.analyses)
-    written = export(args.packing, args.to, args.out, analyses=names or None, params=params)
+    written = export(
+        args.packing,
+        args.to,
+        args.out,
+        analyses=names or None,
+        params=params,
+        params_source="--set",
+    )
     out.print(f"wrote {written}", soft_wrap=True, markup=False, highlight=False)
     return EXIT_OK
 

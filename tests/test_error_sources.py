@@ -69,7 +69,7 @@ def test_a_bad_exporter_parameter_names_the_exporter_and_its_parameters(tmp_path
     assert main(["export", str(path), "--to", "lammps", "--set", "stiffnes=1"]) == 2
     line = one_error_line(capsys)
     assert line.startswith(
-        "regopack: error: exporter 'lammps': stiffnes = 1: unknown field; "
+        "regopack: error: --set: exporter 'lammps': stiffnes = 1: unknown field; "
         "did you mean 'stiffness'? allowed: units, length_scale, density, "
     )
     assert not list(tmp_path.glob("p.*data"))

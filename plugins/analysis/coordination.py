@@ -120,6 +120,19 @@ class Coordination(Analyzer):
     Rattlers are removed from the contact graph of the placed particles by
     :func:`remove_rattlers`; the mechanical coordination number Z_m is the mean
     contact count of the particles left, counting only contacts among them.
+
+    Attributes
+    ----------
+    per_particle
+        ``(n,)`` contacts of every **drawn** particle, in draw order like every
+        packing array (0 for a particle not placed): ``per_particle[packing.placed]``
+        are those of the placed ones. The table ``particles`` has one row per
+        placed particle instead, with its index in the column ``particle``.
+    rattler, z_mechanical
+        ``(n,)`` per drawn particle too: whether it is a rattler (never for a
+        particle not placed), and its contacts among the non-rattlers.
+    interior
+        ``(n,)`` whether the particle is placed with its centre in the interior window.
     """
 
     name = "coordination"
