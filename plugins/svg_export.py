@@ -55,7 +55,7 @@ class SvgExporter(Exporter):
         self, packing: Packing, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the picture; return ``path``."""
-        from regopack.plugins.analysis.figures import mineral_colours
+        from regopack.colours import mineral_colours
 
         cfg = self.config
         path = Path(path)
