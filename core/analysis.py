@@ -28,7 +28,9 @@ from __future__ import annotations
 import io
 import json
 import math
-from collections.abc import Mapping, Sequence
+import os
+import warnings
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Literal
@@ -41,6 +43,7 @@ from regopack.interfaces import Analyzer
 from regopack.manager import Registry
 from regopack.outdir import mark_folder, rebase, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
+from regopack.plugin_types import FigureSpec
 
 __all__ = [
     "DEFAULT_ANALYSES",
@@ -387,10 +390,57 @@ def _draw_figures(
     paths: list[Path] = []
     captions: dict[str, str] = {}
     for spec in registry.figures():
-        if spec.analyzer in analyzers:
-            paths += [Path(p) for p in spec.draw(packing, analyzers, out_dir)]
-            captions.update(spec.captions)
+        if spec.analyzer not in analyzers:
+            continue
+        drawn = _drawn_files(spec, packing, analyzers, out_dir)
+        paths += [p for p in drawn if p not in paths]
+        for stem, text in spec.captions.items():
+            captions.setdefault(stem, text)  # an earlier (built-in) caption stays
     return paths, captions
+
+
+class FigureWarning(UserWarning):
+    """A figure of a plugin could not be drawn; the rest of the analysis is written."""
+
+
+def _drawn_files(
+    spec: FigureSpec, packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path
+) -> list[Path]:
+    """Call ``spec.draw`` and return the files it wrote inside ``out_dir``.
+
+    A figure is an addition to the results: when a plugin's ``draw`` raises,
+    or returns something other than files inside ``out_dir``, a
+    :class:`FigureWarning` says so and the figure is left out, so that the
+    tables, the results and the packing of a run are still written.
+    """
+    what = f"the figures of {spec.analyzer!r} ({getattr(spec.draw, '__module__', '?')})"
+    try:
+        returned = spec.draw(packing, analyzers, out_dir)
+    except Exception as exc:  # a plugin's own failure must not lose the analysis
+        warnings.warn(f"{what} were not drawn: {exc}", FigureWarning, stacklevel=2)
+        return []
+    if isinstance(returned, str | bytes | os.PathLike) or not isinstance(returned, Iterable):
+        warnings.warn(
+            f"{what} were left out: draw returned {type(returned).__name__}, not a list of files",
+            FigureWarning,
+            stacklevel=2,
+        )
+        return []
+    files: list[Path] = []
+    root = Path(out_dir).resolve()
+    for item in returned:
+        if not isinstance(item, str | os.PathLike):
+            warnings.warn(f"{what}: {item!r} is not a file name", FigureWarning, stacklevel=2)
+            continue
+        path = Path(item)
+        full = (path if path.is_absolute() else Path(out_dir) / path).resolve()
+        if not full.is_relative_to(root) or not full.is_file():
+            warnings.warn(
+                f"{what}: {item} is not a file in the figures folder", FigureWarning, stacklevel=2
+            )
+            continue
+        files.append(Path(out_dir) / full.relative_to(root))
+    return files
 
 
 def write_analysis(

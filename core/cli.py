@@ -627,7 +627,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     out = _Console(file=sys.stdout)
     err = _Console(file=sys.stderr)
     try:
-        with _signals_raise():
+        with _signals_raise(), _warnings_as_lines():
             return handler(args, out, err)
     except BrokenPipeError:  # the reader went away, e.g. `regopack plugins | head -1`
         _discard_stdout()
@@ -663,6 +663,28 @@ def _discard_stdout() -> None:
     devnull = os.open(os.devnull, os.O_WRONLY)
     os.dup2(devnull, fd)
     os.close(devnull)
+
+
+@contextmanager
+def _warnings_as_lines() -> Iterator[None]:
+    """Within the block, regopack's own warnings print as one ``regopack: warning:`` line."""
+    import warnings
+
+    from regopack.analysis import FigureWarning
+
+    previous = warnings.showwarning
+
+    def show(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
+        if isinstance(category, type) and issubclass(category, FigureWarning):
+            print(f"regopack: warning: {' '.join(str(message).split())}", file=sys.stderr)
+        else:
+            previous(message, category, *args, **kwargs)
+
+    warnings.showwarning = show
+    try:
+        yield
+    finally:
+        warnings.showwarning = previous
 
 
 @contextmanager

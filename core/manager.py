@@ -333,6 +333,14 @@ class Registry:
                         f"plugin {origin!r}: the FigureSpec of {record.analyzer!r} has no "
                         "callable draw"
                     )
+                captions = record.captions
+                if not isinstance(captions, Mapping) or not all(
+                    isinstance(k, str) and isinstance(v, str) for k, v in captions.items()
+                ):
+                    raise PluginError(
+                        f"plugin {origin!r}: the captions of the FigureSpec of "
+                        f"{record.analyzer!r} must map file stems to texts"
+                    )
                 figures.append(record)
         return figures
 

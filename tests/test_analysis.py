@@ -358,3 +358,68 @@ def test_a_registry_without_figure_specs_draws_none(packing, registry, tmp_path)
     files = write_analysis(tmp_path, packing, done, registry=make_registry(builtins=()))
     assert files.figures == ()
     assert not (tmp_path / "figures").exists()
+
+
+class _BrokenFigure:
+    """A plugin whose figure fails in one of several ways."""
+
+    def __init__(self, how: str) -> None:
+        self.how = how
+
+    @hookimpl
+    def regopack_analysis_figures(self):
+        from regopack.plugin_types import FigureSpec
+
+        def draw(packing, analyzers, out_dir):
+            if self.how == "raises":
+                raise RuntimeError("draw failed")
+            if self.how == "none":
+                return None
+            if self.how == "text":
+                return "x.png"
+            if self.how == "outside":
+                return [out_dir.parent.parent / "elsewhere.png"]
+            return []
+
+        return [FigureSpec("density", draw, {"packing": "HIJACKED"})]
+
+
+@pytest.mark.parametrize("how", ["raises", "none", "text", "outside"])
+def test_a_failing_plugin_figure_loses_only_itself(packing, tmp_path, how):
+    registry = make_registry(_BrokenFigure(how), builtins=("regopack.plugins.analysis",))
+    done = run_analyses(packing, registry, [("density", {"margin": 0.0})])
+    from regopack.analysis import FigureWarning
+
+    with pytest.warns(FigureWarning):
+        files = write_analysis(tmp_path / "a", packing, done, registry=registry)
+    assert files.results.is_file()
+    assert [p.stem for p in files.figures] == ["packing", "packing"]
+    report = files.report.read_text(encoding="utf-8")
+    assert "HIJACKED" not in report
+
+
+def test_captions_that_are_not_texts_are_refused_when_the_registry_is_built():
+    from regopack.plugin_types import FigureSpec
+
+    class _BadCaptions:
+        @hookimpl
+        def regopack_analysis_figures(self):
+            return [FigureSpec("density", lambda p, a, o: [], ["a"])]
+
+    with pytest.raises(PluginError, match="captions"):
+        make_registry(_BadCaptions(), builtins=())
+
+
+def test_the_command_prints_a_failing_figure_as_one_warning_line(tmp_path, capsys, monkeypatch):
+    import regopack
+    from regopack import cli
+
+    registry = make_registry(_BrokenFigure("raises"))
+    monkeypatch.setattr("regopack.manager.default_registry", lambda **kw: registry)
+    p = regopack.pack("small", domain__width=60, domain__height=60, count=30, registry=registry)
+    regopack.save(p, tmp_path / "p.npz")
+    code = cli.main(["analyze", str(tmp_path / "p.npz"), "--only", "density"])
+    err = capsys.readouterr().err
+    assert code == 0
+    assert "regopack: warning: the figures of 'density'" in err and "draw failed" in err
+    assert (tmp_path / "analysis" / "analysis.json").is_file()
