@@ -300,7 +300,9 @@ class Rdf(Analyzer):
                         factor = count_bins(per_bin, cfg.min_pairs_per_bin, bins)
                         fine[key] = per[p, q]
                         curves[key] = merge_bins(per[p, q], shell, factor)
-                        widths[key] = float(width * factor)
+                        # the widest merged bin: a short last group joins the one before
+                        groups = max(bins // factor, 1)
+                        widths[key] = float(width * (bins - factor * (groups - 1)))
             self.curves[field_name] = curves
             self.curves_fine[field_name] = fine
             pair_bins[field_name] = widths
@@ -321,6 +323,7 @@ class Rdf(Analyzer):
             "first_peak_g": None if peak is None else peak.g,
             "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
             "first_peak_highest_bin_r": None if peak is None else peak.highest_bin_r,
+            "first_peak_fitted": None if peak is None else peak.fitted,
             "pair_bins": pair_bins,
             "far_mean": float(np.nanmean(far["total"])) if far is not None else None,
             "notes": notes,

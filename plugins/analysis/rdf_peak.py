@@ -8,8 +8,11 @@ fill with E pairs, about g E pairs, so its value is uncertain by
   :func:`first_peak` fits a parabola, by weighted least squares, to the bins at
   the top of the peak (where a Savitzky–Golay smoothing of the curve is above
   half-way from 1 to its maximum, at least five bins) and reports its
-  vertex, with the standard error propagated from the fit's covariance
-  (scaled up by the reduced χ² when the parabola fits worse than the noise);
+  vertex. Its standard error is the larger of the error propagated from the
+  fit's covariance (scaled up by the reduced χ² when the parabola fits worse
+  than the noise) and the spread of the peaks fitted to Poisson resamples of
+  the curve, which also covers a fitted window that jumps between competing
+  maxima;
 - a pair of rare minerals has few pairs per bin. :func:`count_bins` merges
   adjacent bins until an uncorrelated pattern would put ``min_count`` pairs into
   each one at a reference distance.
@@ -36,6 +39,12 @@ MIN_FIT_BINS = 5
 SMOOTH_BINS = 7
 """Window (bins) of the Savitzky–Golay smoothing that locates the peak."""
 
+RESAMPLES = 200
+"""Poisson resamples of the curve that measure the spread of the fitted peak."""
+
+RESAMPLE_SEED = 20260612
+"""Seed of the resampling generator: the same packing always reports the same error."""
+
 
 @dataclass(frozen=True)
 class PeakFit:
@@ -51,6 +60,9 @@ class PeakFit:
         Range of the bin centres that were fitted.
     highest_bin_r
         Centre of the highest bin (the unfitted estimate).
+    fitted
+        False when no parabola could be fitted and ``r`` is the smoothed
+        curve's highest bin.
     """
 
     r: float
@@ -59,6 +71,7 @@ class PeakFit:
     r_lo: float
     r_hi: float
     highest_bin_r: float
+    fitted: bool = True
 
 
 def _smooth(g: FloatArray) -> FloatArray:
@@ -71,7 +84,48 @@ def _smooth(g: FloatArray) -> FloatArray:
     return np.asarray(savgol_filter(g, window, 2, mode="interp"), dtype=np.float64)
 
 
-def first_peak(r: FloatArray, g: FloatArray, expected: FloatArray) -> PeakFit | None:
+def _fit(r: FloatArray, g: FloatArray, e: FloatArray) -> tuple[float, float, float, int, int, bool]:
+    """Fit the top of the highest peak: ``(r, error, g, lo, hi, fitted)`` (bin indices lo, hi)."""
+    smooth = _smooth(g)
+    top = int(np.argmax(smooth))
+    if r.size < MIN_FIT_BINS:
+        half = 0.5 * float(r[-1] - r[0]) if r.size > 1 else 0.0
+        return float(r[top]), half, float(smooth[top]), 0, r.size - 1, False
+    level = smooth[top] - (1.0 - TOP_SHARE) * (smooth[top] - min(1.0, smooth[top]))
+    lo = top
+    while lo > 0 and smooth[lo - 1] >= level:
+        lo -= 1
+    hi = top
+    while hi < r.size - 1 and smooth[hi + 1] >= level:
+        hi += 1
+    while hi - lo + 1 < MIN_FIT_BINS:
+        lo, hi = (lo - 1, hi) if lo > 0 else (lo, hi + 1)
+    x = r[lo : hi + 1] - r[top]
+    y = g[lo : hi + 1]
+    # Poisson error of each bin, from the smoothed g so that no bin gets zero weight
+    sigma = np.sqrt(np.maximum(smooth[lo : hi + 1], 1.0 / e[lo : hi + 1]) / e[lo : hi + 1])
+    design = np.column_stack([np.ones_like(x), x, x * x]) / sigma[:, None]
+    coef, *_ = np.linalg.lstsq(design, y / sigma, rcond=None)
+    c0, c1, c2 = (float(c) for c in coef)
+    half = 0.5 * float(r[hi] - r[lo])
+    if not c2 < 0:
+        return float(r[top]), half, float(smooth[top]), lo, hi, False
+    vertex = -c1 / (2.0 * c2)
+    if not float(x[0]) <= vertex <= float(x[-1]):
+        return float(r[top]), half, float(smooth[top]), lo, hi, False
+    cov = np.linalg.pinv(design.T @ design)
+    dof = x.size - 3
+    if dof > 0:
+        chi2 = float(np.sum(((y - (c0 + c1 * x + c2 * x * x)) / sigma) ** 2)) / dof
+        cov = cov * max(1.0, chi2)
+    jac = np.array([0.0, -1.0 / (2.0 * c2), c1 / (2.0 * c2 * c2)])
+    err = float(np.sqrt(max(float(jac @ cov @ jac), 0.0)))
+    return float(r[top] + vertex), err, c0 + c1 * vertex + c2 * vertex * vertex, lo, hi, True
+
+
+def first_peak(
+    r: FloatArray, g: FloatArray, expected: FloatArray, resamples: int = RESAMPLES
+) -> PeakFit | None:
     """Fit the highest peak of ``g(r)`` (see the module's description).
 
     Parameters
@@ -83,13 +137,18 @@ def first_peak(r: FloatArray, g: FloatArray, expected: FloatArray) -> PeakFit | 
     expected
         Pairs an uncorrelated pattern puts into each bin; ``g`` is uncertain
         by ``sqrt(g / expected)``.
+    resamples
+        Poisson resamples of the curve whose spread of fitted peaks bounds the
+        error from below (0: the fit's own error only).
 
     Returns
     -------
     PeakFit or None
-        ``None`` when no bin is finite. With fewer than five finite bins, or
-        when the parabola has no maximum inside the fitted bins, the peak is
-        the smoothed curve's highest bin and its error half the fitted range.
+        ``None`` when no bin is finite with pairs expected, or when g is zero
+        in every bin (no pair at all). With fewer than five such bins, or when
+        the parabola has no maximum inside the fitted bins, the peak is the
+        smoothed curve's highest bin, ``fitted`` is false and the error is at
+        least half the fitted range.
 
     Examples
     --------
@@ -100,65 +159,34 @@ def first_peak(r: FloatArray, g: FloatArray, expected: FloatArray) -> PeakFit | 
     >>> expected = 300 * r
     >>> g = rng.poisson((1 + np.exp(-((r - 3.27) ** 2) / 0.5)) * expected) / expected
     >>> fit = first_peak(r, g, expected)
-    >>> abs(fit.r - 3.27) < 2 * fit.r_err < 0.05, round(fit.highest_bin_r, 2)
-    (True, 3.35)
+    >>> abs(fit.r - 3.27) < 2 * fit.r_err < 0.05, round(fit.highest_bin_r, 2), fit.fitted
+    (True, 3.35, True)
     """
     r = np.asarray(r, dtype=np.float64)
     g = np.asarray(g, dtype=np.float64)
-    ok = np.isfinite(g)
-    if not ok.any():
+    expected = np.asarray(expected, dtype=np.float64)
+    ok = np.isfinite(g) & np.isfinite(expected) & (expected > 0)
+    if not ok.any() or not np.any(g[ok] > 0):
         return None
-    highest = float(r[int(np.nanargmax(g))])
     idx = np.flatnonzero(ok)
-    r_ok, g_ok = r[idx], g[idx]
-    e_ok = np.maximum(np.asarray(expected, dtype=np.float64)[idx], 1e-300)
-    smooth = _smooth(g_ok)
-    top = int(np.argmax(smooth))
-    if r_ok.size < MIN_FIT_BINS:
-        return PeakFit(float(r_ok[top]), math.nan, float(g_ok[top]), r_ok[0], r_ok[-1], highest)
-    level = smooth[top] - (1.0 - TOP_SHARE) * (smooth[top] - min(1.0, smooth[top]))
-    lo = top
-    while lo > 0 and smooth[lo - 1] >= level:
-        lo -= 1
-    hi = top
-    while hi < r_ok.size - 1 and smooth[hi + 1] >= level:
-        hi += 1
-    while hi - lo + 1 < MIN_FIT_BINS:
-        lo, hi = (lo - 1, hi) if lo > 0 else (lo, hi + 1)
-    x = r_ok[lo : hi + 1] - r_ok[top]
-    y = g_ok[lo : hi + 1]
-    # Poisson error of each bin, from the smoothed g so that no bin gets zero weight
-    sigma = np.sqrt(np.maximum(smooth[lo : hi + 1], 1.0 / e_ok[lo : hi + 1]) / e_ok[lo : hi + 1])
-    design = np.column_stack([np.ones_like(x), x, x * x]) / sigma[:, None]
-    coef, *_ = np.linalg.lstsq(design, y / sigma, rcond=None)
-    c0, c1, c2 = (float(c) for c in coef)
-    fallback = PeakFit(
-        float(r_ok[top]),
-        0.5 * float(r_ok[hi] - r_ok[lo]),
-        float(smooth[top]),
-        float(r_ok[lo]),
-        float(r_ok[hi]),
-        highest,
-    )
-    if not c2 < 0:
-        return fallback
-    vertex = -c1 / (2.0 * c2)
-    if not float(x[0]) <= vertex <= float(x[-1]):
-        return fallback
-    cov = np.linalg.pinv(design.T @ design)
-    dof = x.size - 3
-    if dof > 0:
-        chi2 = float(np.sum(((y - (c0 + c1 * x + c2 * x * x)) / sigma) ** 2)) / dof
-        cov = cov * max(1.0, chi2)
-    jac = np.array([0.0, -1.0 / (2.0 * c2), c1 / (2.0 * c2 * c2)])
-    err = float(np.sqrt(max(float(jac @ cov @ jac), 0.0)))
+    r_ok, g_ok, e_ok = r[idx], g[idx], expected[idx]
+    highest = float(r_ok[int(np.argmax(g_ok))])
+    peak_r, err, peak_g, lo, hi, fitted = _fit(r_ok, g_ok, e_ok)
+    if resamples > 0 and r_ok.size >= MIN_FIT_BINS:
+        # the error of the parabola alone misses how the fitted window itself
+        # moves with the noise (between competing maxima): resample the counts
+        rng = np.random.default_rng(RESAMPLE_SEED)
+        counts = g_ok * e_ok
+        found = [_fit(r_ok, rng.poisson(counts) / e_ok, e_ok)[0] for _ in range(int(resamples))]
+        err = max(err, float(np.std(found, ddof=1)))
     return PeakFit(
-        float(r_ok[top] + vertex),
-        err,
-        c0 + c1 * vertex + c2 * vertex * vertex,
+        float(peak_r),
+        float(err),
+        float(peak_g),
         float(r_ok[lo]),
         float(r_ok[hi]),
         highest,
+        bool(fitted),
     )
 
 

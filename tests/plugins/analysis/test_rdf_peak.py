@@ -84,7 +84,8 @@ def test_the_analyzer_reports_the_fitted_peak_and_the_pair_bins(packing):
     res = rdf.results()
     lo, hi = res["first_peak_fit_range"]
     assert lo <= res["first_peak_r"] <= hi
-    assert 0 < res["first_peak_r_err"] < hi - lo
+    assert 0 < res["first_peak_r_err"] < 10.0
+    assert res["first_peak_fitted"] in (True, False)
     assert res["first_peak_g"] > 1.0
     assert 0.0 < res["first_peak_highest_bin_r"] < 10.0  # a noisy bin, maybe far from the fit
     widths = res["pair_bins"]["near"]
@@ -92,9 +93,11 @@ def test_the_analyzer_reports_the_fitted_peak_and_the_pair_bins(packing):
     near, fine = rdf.curves["near"], rdf.curves_fine["near"]
     assert np.array_equal(near["total"], fine["total"])
     # a merged pair curve is flat over each of its bins and less noisy than the fine one
-    k = round(widths["pyroxene-feldspar"] / 0.1)
-    assert k > 1
-    tail = slice(60, 60 + 3 * k)  # well past the contact peak
+    curve = near["pyroxene-feldspar"]
+    k = int(np.min(np.diff(np.flatnonzero(np.diff(curve) != 0))))  # the regular group size
+    assert k > 1 and round(widths["pyroxene-feldspar"] / 0.1) >= k
+    start = (60 // k) * k  # groups start at multiples of k
+    tail = slice(start, start + 3 * k)  # well past the contact peak
     assert np.ptp(near["pyroxene-feldspar"][tail.start : tail.start + k]) == 0.0
     assert np.std(np.diff(near["pyroxene-feldspar"][tail][::k])) < np.std(
         np.diff(fine["pyroxene-feldspar"][tail])
@@ -103,3 +106,49 @@ def test_the_analyzer_reports_the_fitted_peak_and_the_pair_bins(packing):
     for key, curve in unmerged.curves["near"].items():
         np.testing.assert_array_equal(curve, fine[key])
     assert set(unmerged.results()["pair_bins"]["near"].values()) == {0.1}
+
+
+def test_no_pair_at_all_gives_no_peak():
+    r = np.arange(0.05, 10.0, 0.1)
+    assert first_peak(r, np.zeros_like(r), np.full_like(r, 5.0)) is None
+    assert first_peak(r, np.full_like(r, np.nan), np.full_like(r, 5.0)) is None
+    assert first_peak(r, np.ones_like(r), np.zeros_like(r)) is None
+
+
+def test_few_bins_give_half_their_range_as_the_error():
+    r = np.array([3.05, 3.15, 3.25])
+    fit = first_peak(r, np.array([1.0, 2.0, 1.5]), np.full(3, 100.0))
+    assert fit is not None and not fit.fitted
+    assert fit.r_err == pytest.approx(0.1)
+    assert all(isinstance(v, float) for v in (fit.r, fit.r_err, fit.r_lo, fit.r_hi))
+
+
+def test_the_error_covers_a_peak_that_jumps_between_two_maxima():
+    """Two humps of equal height: the fitted peak moves between them with the noise."""
+    r = np.arange(0.05, 10.0, 0.1)
+    expected = 40 * r
+    shape = 1 + 0.6 * np.exp(-((r - 3.5) ** 2) / 0.08) + 0.6 * np.exp(-((r - 4.6) ** 2) / 0.08)
+    rng = np.random.default_rng(5)
+    fits = [first_peak(r, rng.poisson(shape * expected) / expected, expected) for _ in range(40)]
+    spread = float(np.std([f.r for f in fits], ddof=1))
+    assert spread > 0.3  # the two maxima do compete
+    median_err = float(np.median([f.r_err for f in fits]))
+    assert median_err > 0.5 * spread
+    no_resampling = [
+        first_peak(r, rng.poisson(shape * expected) / expected, expected, resamples=0)
+        for _ in range(10)
+    ]
+    assert float(np.median([f.r_err for f in no_resampling])) < median_err
+
+
+def test_the_reported_pair_width_is_the_widest_merged_bin(packing):
+    rdf = Rdf(RdfConfig(far=(20.0, 50.0))).compute(packing, {})
+    widths = rdf.results()["pair_bins"]["near"]
+    for key, width in widths.items():
+        curve = rdf.curves["near"][key]
+        runs, start = [], 0
+        for k in range(1, len(curve) + 1):
+            if k == len(curve) or curve[k] != curve[start]:
+                runs.append(k - start)
+                start = k
+        assert max(runs) * 0.1 == pytest.approx(width), key
