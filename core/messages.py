@@ -11,6 +11,7 @@ the list of the fields that exist there, e.g.::
 from __future__ import annotations
 
 import difflib
+import re
 import types
 import typing
 from collections.abc import Mapping, Sequence
@@ -45,22 +46,32 @@ def dotted(loc: Sequence[int | str]) -> str:
     return ".".join(str(p) for p in loc)
 
 
-def where(loc: str, source: str | None, overridden: Mapping[str, str]) -> str | None:
+def where(
+    loc: str, source: str | None, overridden: Mapping[str, str], message: str | None = None
+) -> str | None:
     """Where the value at the dotted field ``loc`` came from: an option or the file.
 
-    An option that set ``loc``, a field inside it or a table holding it is
-    named; otherwise ``source``.
+    An option that set ``loc`` or a table holding it is named. An option that
+    set a field inside ``loc`` (an error of a whole table, such as two of its
+    fields that disagree) is named only when ``message`` is not given or
+    names that field; otherwise ``source``.
 
     Examples
     --------
     >>> where("size", "small.toml", {"size.d_min": "--set"})
     '--set'
+    >>> where("size", "small.toml", {"size.alpha": "--set"}, "d_max must exceed d_min")
+    'small.toml'
     >>> where("density.eta", "small.toml", {"size.d_min": "--set"})
     'small.toml'
     """
     for key, label in overridden.items():
-        if loc == key or loc.startswith(key + ".") or key.startswith(loc + "."):
+        if loc == key or loc.startswith(key + "."):
             return label
+        if key.startswith(loc + "."):
+            field = key[len(loc) + 1 :].split(".")[0]
+            if message is None or re.search(rf"\b{re.escape(field)}\b", message):
+                return label
     return source
 
 
@@ -175,7 +186,10 @@ def describe_validation_error(
         msg = _unknown_field(str(first["loc"][-1]), allowed)
     value = None if first["type"] == "missing" else format_value(first.get("input"))
     text = f"{loc} = {value}: {msg}" if value is not None else f"{loc}: {msg}"
-    origin = where(loc, source, overridden or {})
+    # an unknown table named by an option is that option's; a whole-table error is
+    # blamed on an option inside it only when it names the option's field
+    about = None if first["type"] == "extra_forbidden" else msg
+    origin = where(loc, source, overridden or {}, about)
     if origin:
         text = f"{origin}: {text}"
     if len(errors) > 1:

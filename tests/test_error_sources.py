@@ -96,3 +96,11 @@ def test_fields_at_walks_lists_and_sections():
     assert fields_at(Scene, ("phases", 0)) == ["name", "fraction", "shape"]
     assert fields_at(Scene, ("size",)) == ["kind"]  # a plugin's section: its own model
     assert fields_at(Scene, ("nothing",)) is None
+
+
+def test_a_set_in_the_same_table_is_not_blamed_for_the_file(tmp_path, capsys):
+    text = main_scene_text().replace("d_max = 40.0", "d_max = 1.0")
+    (tmp_path / "bad.toml").write_text(text, encoding="utf-8")
+    assert main(["config", str(tmp_path / "bad.toml"), "--set", "size.alpha=6"]) == 2
+    line = one_error_line(capsys)
+    assert line.startswith(f"regopack: error: {tmp_path / 'bad.toml'}: size: ")
