@@ -34,7 +34,7 @@ their public names.
 from __future__ import annotations
 
 from regopack.experiment_file import MAX_RUNS as MAX_RUNS
-from regopack.experiment_file import Experiment, experiment_from_dict, load_experiment
+from regopack.experiment_file import Experiment, SweepValues, experiment_from_dict, load_experiment
 from regopack.experiment_grid import ERROR_TXT as ERROR_TXT
 from regopack.experiment_grid import SCENE_JSON as SCENE_JSON
 from regopack.experiment_grid import RunSpec, check_runs, expand
@@ -57,6 +57,7 @@ __all__ = [
     "ExperimentResult",
     "RunResult",
     "RunSpec",
+    "SweepValues",
     "check_runs",
     "default_experiment_dir",
     "expand",

@@ -32,29 +32,36 @@ entry points are stale (an old editable install) still keys the cache by the
 built-in kernels."""
 
 
-def _package_dir(name: str) -> Path | None:
-    """Folder of the package ``name``, found without running it (``None`` if not found)."""
+def _source_files(name: str) -> list[Path]:
+    """Python files of the package or module ``name`` (none if it is not found).
+
+    The package itself is found by path, not run; for a dotted name, Python
+    imports the packages above it (``regopack`` for ``regopack.plugins``).
+    """
     try:
         spec = importlib.util.find_spec(name)
     except (ImportError, ValueError):
-        return None
-    if spec is None or not spec.submodule_search_locations:
-        return None
-    return Path(next(iter(spec.submodule_search_locations))).resolve()
+        return []
+    if spec is None:
+        return []
+    if spec.submodule_search_locations:
+        roots = [Path(p).resolve() for p in spec.submodule_search_locations]
+        return [path.resolve() for root in roots for path in root.rglob("*.py")]
+    if spec.origin and spec.origin.endswith(".py"):
+        return [Path(spec.origin).resolve()]
+    return []
 
 
-def _roots() -> list[Path]:
-    """Folders of the built-in kernel packages and those named in the entry points."""
+def _names() -> list[str]:
+    """Return the built-in kernel packages and the modules named in the entry points."""
     names = {*BUILTIN_KERNEL_PACKAGES}
-    names |= {entry.value for entry in metadata.entry_points(group=KERNEL_SOURCES_GROUP)}
-    roots = {root for name in names if (root := _package_dir(name)) is not None}
-    return sorted(roots)
+    names |= {entry.module for entry in metadata.entry_points(group=KERNEL_SOURCES_GROUP)}
+    return sorted(names)
 
 
 def _sources() -> list[Path]:
-    """Python files of the kernel packages (the built-in plugins, where every kernel lives)."""
-    files = {path.resolve() for root in _roots() for path in root.rglob("*.py")}
-    return sorted(files)
+    """Python files of the kernel packages and modules (the built-in plugins and others)."""
+    return sorted({path for name in _names() for path in _source_files(name)})
 
 
 def kernel_cache_dir() -> Path:

@@ -73,3 +73,23 @@ def test_the_scan_finds_every_form_of_import() -> None:
         "4",
         "10",
     ]
+
+
+def test_importing_every_core_module_loads_no_plugin() -> None:
+    """The same at run time: what the source scan cannot see (importlib, __import__)."""
+    import subprocess
+    import sys
+
+    modules = sorted(
+        f"regopack.{p.stem}"
+        for p in (Path(__file__).resolve().parents[1] / "core").glob("*.py")
+        if p.stem not in ("__init__", "__main__")
+    )
+    code = (
+        "import importlib, sys\n"
+        f"for name in {modules!r}:\n"
+        "    importlib.import_module(name)\n"
+        "print([m for m in sys.modules if m.startswith('regopack.plugins')])\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[]"

@@ -43,7 +43,7 @@ def test_the_kernel_packages_come_from_the_distribution_metadata() -> None:
 
     values = {e.value for e in metadata.entry_points(group=jit.KERNEL_SOURCES_GROUP)}
     assert "regopack.plugins" in values
-    assert [root.name for root in jit._roots()] == ["plugins"]
+    assert jit._names() == ["regopack.plugins"]
 
 
 def test_the_cache_key_is_found_without_importing_a_plugin() -> None:
@@ -59,5 +59,40 @@ def test_the_cache_key_is_found_without_importing_a_plugin() -> None:
 
 
 def test_an_unknown_kernel_package_adds_no_sources(monkeypatch: pytest.MonkeyPatch) -> None:
-    assert jit._package_dir("regopack_no_such_package") is None
-    assert jit._package_dir("regopack.jit") is None  # a module, not a package
+    assert jit._source_files("regopack_no_such_package") == []
+
+
+def test_a_one_file_module_is_hashed_too() -> None:
+    files = jit._source_files("regopack.jit")
+    assert [p.name for p in files] == ["jit.py"]
+
+
+def test_third_party_kernel_modules_change_the_key(tmp_path, monkeypatch) -> None:
+    """A package and a one-file module named in the entry points, with the ``module:attr`` form."""
+    import sys
+    from importlib import metadata
+
+    (tmp_path / "kpkg").mkdir()
+    (tmp_path / "kpkg" / "__init__.py").write_text("X = 1\n")
+    (tmp_path / "single.py").write_text("Y = 1\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    entries = [
+        metadata.EntryPoint("a", "kpkg:plugin", jit.KERNEL_SOURCES_GROUP),
+        metadata.EntryPoint("b", "single", jit.KERNEL_SOURCES_GROUP),
+    ]
+    real = metadata.entry_points
+    monkeypatch.setattr(
+        metadata,
+        "entry_points",
+        lambda group=None, **kw: (
+            entries if group == jit.KERNEL_SOURCES_GROUP else real(group=group, **kw)
+        ),
+    )
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+    first = jit.kernel_cache_dir()
+    (tmp_path / "single.py").write_text("Y = 2\n")
+    second = jit.kernel_cache_dir()
+    (tmp_path / "kpkg" / "__init__.py").write_text("X = 2\n")
+    third = jit.kernel_cache_dir()
+    assert len({first, second, third}) == 3
+    assert "kpkg" not in sys.modules and "single" not in sys.modules
