@@ -105,13 +105,16 @@ class AvailableArcConfig(BaseModel):
             "particle's equivalent diameter. Ignored by order = 'paper'."
         ),
     )
-    closing: Literal["paced", "prompt"] = Field(
+    closing: Literal["paced", "prompt", "tail"] = Field(
         "paced",
         description=(
             "How the sweep ends under the top wall: 'paced' (the last zone is offered as "
             "many particles as every zone before: denser and homogeneous to the top, but the "
-            "coarse particles it cannot take are refused) or 'prompt' (each refusal retires "
-            "a bin: the particles left out are a random tail, the top band is looser). "
+            "coarse particles it cannot take are refused), 'prompt' (each refusal retires "
+            "a bin: the particles left out are a random tail, the top band is looser) or "
+            "'tail' (the first refusal under the top ends the run: every particle offered "
+            "before it is placed, so the placed sizes are those drawn, and the rest of the "
+            "population is a random tail left out; the top band is loose). "
             "Ignored by order = 'paper'."
         ),
     )
@@ -228,7 +231,7 @@ def _pack_sweep(
     zone = cfg.zone
     if zone == 0.0:
         zone = ZONE_PER_RADIUS * float(population.radius.max()) if n else 1.0
-    sw = sweep.Sweep(n, height, zone, prompt=cfg.closing == "prompt")
+    sw = sweep.Sweep(n, height, zone, closing=cfg.closing)
     placed = 0
     for begin in range(0, n, PROGRESS_EVERY):
         if progress is not None:

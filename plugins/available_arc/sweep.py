@@ -22,7 +22,9 @@ every ``pace`` particles offered, ``pace`` being the mean number of particles
 offered per rise of the zone before, so the last zone is fed as long as every
 zone before it (the *paced* closing); in the *prompt* closing each refusal
 retires the lowest bin instead, as the rise it would have caused. When the
-zone has retired entirely, the remaining particles are *not offered*.
+zone has retired entirely, the remaining particles are *not offered*. In the
+*tail* closing the first refusal under the top ends the run at once: every
+particle offered before it was placed, the rest are not offered.
 
 The scalar state lives in ``zs`` (see the ``Z_*`` indices) so that the loop
 can run in chunks between progress reports.
@@ -75,7 +77,7 @@ FROZEN, ACTIVE, RETIRED = 0, 1, 2
 class Sweep:
     """Arrays of one sweep run: bins, flags and the stored screening radii."""
 
-    def __init__(self, n: int, height: float, zone: float, prompt: bool = False) -> None:
+    def __init__(self, n: int, height: float, zone: float, closing: str = "paced") -> None:
         # bins of zone / ZONE_BINS, but at least ZONE_BINS of them over the domain's
         # height (a zone taller than the domain) and at most MAX_BINS (a tiny zone)
         self.delta = max(min(zone, height) / ZONE_BINS, height / MAX_BINS)
@@ -88,8 +90,11 @@ class Sweep:
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
         self.zs[Z_NZONE] = max(1, round(zone / self.delta))
-        self.zs[Z_PROMPT] = 1 if prompt else 0
+        self.zs[Z_PROMPT] = CLOSINGS[closing]
 
+
+CLOSINGS: dict[str, int] = {"paced": 0, "prompt": 1, "tail": 2}
+"""Code of each closing in ``zs[Z_PROMPT]``."""
 
 STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
 """Values of ``Sweep.status`` per particle."""
@@ -349,6 +354,10 @@ def sweep_range(
                 zs[Z_LO] += 1
                 if zs[Z_LO] > zs[Z_HI]:
                     zs[Z_DONE] = 1
+            elif zs[Z_FULL] == 1 and zs[Z_PROMPT] == 2:
+                # tail closing: the first refusal under the top ends the run, so the
+                # particles left out are the rest of the stream, a random tail
+                zs[Z_DONE] = 1
             continue
         _register(k, zs, s, delta, bin_head, bin_next, flag)
         status[i] = STATUS_PLACED

@@ -187,7 +187,7 @@ def test_a_particle_larger_than_the_domain_is_refused() -> None:
     kind=st.sampled_from(["rectangle", "polygon", "circle", "periodic"]),
     eta=st.sampled_from([0.0, 30.0]),
     zone=st.sampled_from([0.0, 0.5, 3.0]),
-    closing=st.sampled_from(["paced", "prompt"]),
+    closing=st.sampled_from(["paced", "prompt", "tail"]),
 )
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_no_overlap_and_nothing_outside_at_the_extremes(
@@ -292,12 +292,34 @@ def test_the_paced_closing_places_more_and_the_prompt_one_refuses_fewer() -> Non
     assert runs["paced"].stats["not_offered"] < runs["prompt"].stats["not_offered"]
 
 
+@pytest.mark.parametrize("kind", list(DOMAINS))
+def test_the_tail_closing_places_every_particle_it_offers(kind: str) -> None:
+    """The particles left out are the end of the stream (a random tail), bar one refusal."""
+    domain = DOMAINS[kind]
+    n = round(1.2 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 4)
+    res = pack(pop, domain, rng, order="sweep", closing="tail")
+    _oracle(as_packing(pop, res, domain))
+    placed = res.placed
+    out = np.flatnonzero(~placed)
+    assert res.stats["not_offered"] > 0 and res.stats["refused"] >= 1
+    first_left = int(out[0])
+    # everything after the refusal that ended the run is not offered: a suffix
+    assert not placed[first_left:].any() or res.stats["refused"] > 1
+    last = int(np.flatnonzero(placed).max())
+    assert np.count_nonzero(~placed[: last + 1]) == res.stats["refused"] - 1
+    assert res.stats["not_offered"] == n - last - 2
+    pop2, rng2 = change5_population(n, 4)
+    paced = pack(pop2, domain, rng2, order="sweep", closing="paced")
+    assert res.stats["refused"] < paced.stats["refused"]
+
+
 def test_a_particle_too_large_for_the_front_does_not_carry_the_zone_away() -> None:
     # a disk wider than the domain comes second: its rises must be undone
     domain = Rectangle.centred(10.0, 100.0)
     radius = np.ones(200)
     radius[1] = 6.0
-    for closing in ("paced", "prompt"):
+    for closing in ("paced", "prompt", "tail"):
         rng = np.random.default_rng(1)
         pop = disks_and_octagons(radius, rng, share=1.0)
         res = pack(pop, domain, rng, order="sweep", closing=closing)
@@ -335,7 +357,7 @@ def test_zones_far_below_and_far_above_the_domain_size_work(zone: float) -> None
         ("insertion.order=spiral", 'insertion.order = "spiral"', "'paper' or 'sweep'"),
         ("insertion.zone=-1", "insertion.zone = -1", "greater than or equal to 0"),
         ("insertion.zone=nan", "insertion.zone = nan", "finite"),
-        ("insertion.closing=late", 'insertion.closing = "late"', "'paced' or 'prompt'"),
+        ("insertion.closing=late", 'insertion.closing = "late"', "'paced', 'prompt' or 'tail'"),
         ("insertion.screening=none", 'insertion.screening = "none"', "'paper' or 'exact'"),
     ],
 )
