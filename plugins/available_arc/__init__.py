@@ -113,8 +113,8 @@ class AvailableArcConfig(BaseModel):
             "coarse particles it cannot take are refused), 'prompt' (each refusal retires "
             "a bin: the particles left out are a random tail, the top band is looser) or "
             "'tail' (the first refusal under the top ends the run: every particle offered "
-            "before it is placed, so the placed sizes are those drawn, and the rest of the "
-            "population is a random tail left out; the top band is loose). "
+            "before it is placed, so the placed sizes are a sample of those drawn, and the "
+            "rest of the population is a random tail left out; the top band is loose). "
             "Ignored by order = 'paper'."
         ),
     )
