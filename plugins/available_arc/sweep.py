@@ -24,7 +24,8 @@ zone before it (the *paced* closing); in the *prompt* closing each refusal
 retires the lowest bin instead, as the rise it would have caused. When the
 zone has retired entirely, the remaining particles are *not offered*. In the
 *tail* closing the first refusal under the top ends the run at once: every
-particle offered before it was placed, the rest are not offered.
+particle offered before it was placed, the rest are not offered. The refusal
+of the particle whose rises took the zone to the top does not end it.
 
 The scalar state lives in ``zs`` (see the ``Z_*`` indices) so that the loop
 can run in chunks between progress reports.
@@ -323,6 +324,7 @@ def sweep_range(
         elif zs[Z_FULL] == 0:
             zs[Z_OFFERED] += 1
         mq = K.begin_particle(i, g, s, w)
+        was_full = zs[Z_FULL]
         raises = 0
         lo0 = zs[Z_LO]
         hi0 = zs[Z_HI]
@@ -354,9 +356,11 @@ def sweep_range(
                 zs[Z_LO] += 1
                 if zs[Z_LO] > zs[Z_HI]:
                     zs[Z_DONE] = 1
-            elif zs[Z_FULL] == 1 and zs[Z_PROMPT] == 2:
+            elif was_full == 1 and zs[Z_PROMPT] == 2:
                 # tail closing: the first refusal under the top ends the run, so the
-                # particles left out are the rest of the stream, a random tail
+                # particles left out are the rest of the stream, a random tail. The
+                # particle whose rises took the zone to the top does not count: it
+                # fits nowhere, while the top bins have just opened for the others
                 zs[Z_DONE] = 1
             continue
         _register(k, zs, s, delta, bin_head, bin_next, flag)
