@@ -18,7 +18,7 @@ import importlib
 import importlib.metadata
 import os
 import types
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -214,6 +214,31 @@ def _plugin_infos(pm: pluggy.PluginManager) -> dict[str, PluginInfo]:
     return out
 
 
+def _hook_records(
+    pm: pluggy.PluginManager, hook_name: str, record_type: type, origins: Mapping[str, str]
+) -> Iterator[tuple[Any, str, Any]]:
+    """Yield ``(hookimpl, origin, record)`` for every record the hook's implementations return.
+
+    Wrappers are skipped and an implementation may return ``None``; anything
+    that is not an iterable of records (a bare record included) is refused
+    in one line naming the plugin.
+    """
+    for impl in getattr(pm.hook, hook_name).get_hookimpls():
+        if impl.hookwrapper or getattr(impl, "wrapper", False):
+            continue
+        origin = origins.get(impl.plugin_name, impl.plugin_name)
+        records = impl.function()
+        if records is None:
+            continue
+        if isinstance(records, record_type) or not isinstance(records, Iterable):
+            raise PluginError(
+                f"plugin {origin!r}: {hook_name} must return an iterable of "
+                f"{record_type.__name__}, got {type(records).__name__}"
+            )
+        for record in records:
+            yield impl, origin, record
+
+
 def _origins(pm: pluggy.PluginManager) -> dict[str, str]:
     """Map plugin names to the distribution that installed them, where known."""
     out: dict[str, str] = {}
@@ -276,72 +301,46 @@ class Registry:
         infos: dict[str, dict[str, PluginInfo]] = {kind: {} for kind in KINDS}
         for kind, hook_name in HOOK_OF_KIND.items():
             record_type = KINDS[kind]
-            caller = getattr(pm.hook, hook_name)
-            for impl in caller.get_hookimpls():
-                if impl.hookwrapper or getattr(impl, "wrapper", False):
-                    continue
-                origin = origins.get(impl.plugin_name, impl.plugin_name)
-                records = impl.function()
-                if records is None:
-                    continue
-                if isinstance(records, PluginSpec) or not isinstance(records, Iterable):
+            for impl, origin, record in _hook_records(pm, hook_name, record_type, origins):
+                cls._check_record(record, record_type, origin, hook_name)
+                previous = specs[kind].get(record.name)
+                if previous is not None:
                     raise PluginError(
-                        f"plugin {origin!r}: {hook_name} must return an iterable of "
-                        f"{record_type.__name__}, got {type(records).__name__}"
+                        f"{kind} kind {record.name!r} is provided by two plugins: "
+                        f"{previous[1]!r} and {origin!r}"
                     )
-                for record in records:
-                    cls._check_record(record, record_type, origin, hook_name)
-                    previous = specs[kind].get(record.name)
-                    if previous is not None:
-                        raise PluginError(
-                            f"{kind} kind {record.name!r} is provided by two plugins: "
-                            f"{previous[1]!r} and {origin!r}"
-                        )
-                    specs[kind][record.name] = (record, origin)
-                    infos[kind][record.name] = plugin_infos.get(
-                        impl.plugin_name, PluginInfo(impl.plugin_name, _module_of(impl.plugin))
-                    )
+                specs[kind][record.name] = (record, origin)
+                infos[kind][record.name] = plugin_infos.get(
+                    impl.plugin_name, PluginInfo(impl.plugin_name, _module_of(impl.plugin))
+                )
         return cls(specs, infos, cls._collect_figures(pm, origins))
 
     @staticmethod
     def _collect_figures(pm: pluggy.PluginManager, origins: Mapping[str, str]) -> list[FigureSpec]:
         """Call :func:`regopack.hookspecs.regopack_analysis_figures` of every plugin, in order."""
         figures: list[FigureSpec] = []
-        caller = pm.hook.regopack_analysis_figures
-        for impl in caller.get_hookimpls():
-            if impl.hookwrapper or getattr(impl, "wrapper", False):
-                continue
-            origin = origins.get(impl.plugin_name, impl.plugin_name)
-            records = impl.function()
-            if records is None:
-                continue
-            if isinstance(records, FigureSpec) or not isinstance(records, Iterable):
+        hook_name = "regopack_analysis_figures"
+        for _, origin, record in _hook_records(pm, hook_name, FigureSpec, origins):
+            if not isinstance(record, FigureSpec):
                 raise PluginError(
-                    f"plugin {origin!r}: regopack_analysis_figures must return an iterable "
-                    f"of FigureSpec, got {type(records).__name__}"
+                    f"plugin {origin!r}: regopack_analysis_figures returned a "
+                    f"{type(record).__name__}, expected FigureSpec"
                 )
-            for record in records:
-                if not isinstance(record, FigureSpec):
-                    raise PluginError(
-                        f"plugin {origin!r}: regopack_analysis_figures returned a "
-                        f"{type(record).__name__}, expected FigureSpec"
-                    )
-                if not isinstance(record.analyzer, str) or not record.analyzer:
-                    raise PluginError(f"plugin {origin!r}: a FigureSpec names no analyzer")
-                if not callable(record.draw):
-                    raise PluginError(
-                        f"plugin {origin!r}: the FigureSpec of {record.analyzer!r} has no "
-                        "callable draw"
-                    )
-                captions = record.captions
-                if not isinstance(captions, Mapping) or not all(
-                    isinstance(k, str) and isinstance(v, str) for k, v in captions.items()
-                ):
-                    raise PluginError(
-                        f"plugin {origin!r}: the captions of the FigureSpec of "
-                        f"{record.analyzer!r} must map file stems to texts"
-                    )
-                figures.append(record)
+            if not isinstance(record.analyzer, str) or not record.analyzer:
+                raise PluginError(f"plugin {origin!r}: a FigureSpec names no analyzer")
+            if not callable(record.draw):
+                raise PluginError(
+                    f"plugin {origin!r}: the FigureSpec of {record.analyzer!r} has no callable draw"
+                )
+            captions = record.captions
+            if not isinstance(captions, Mapping) or not all(
+                isinstance(k, str) and isinstance(v, str) for k, v in captions.items()
+            ):
+                raise PluginError(
+                    f"plugin {origin!r}: the captions of the FigureSpec of "
+                    f"{record.analyzer!r} must map file stems to texts"
+                )
+            figures.append(record)
         return figures
 
     @staticmethod
