@@ -1,4 +1,4 @@
-"""regopack: dense 2D packings of lunar regolith particles.
+"""regopack: dense packings of lunar regolith particles.
 
 The Python API mirrors the commands (see :mod:`regopack.api`)::
 
@@ -23,13 +23,17 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.0.0"
 
-from regopack.packing import Packing, load, save
+from regopack.packing import Packing
+from regopack.packing3d import Packing3D
+from regopack.packing3d import load_packing as load
+from regopack.packing3d import save_packing as save
 
 if TYPE_CHECKING:
     from regopack.api import analyze, export, pack, pack_and_summarise, scene, sweep, verify
 
 __all__ = [
     "Packing",
+    "Packing3D",
     "__version__",
     "analyze",
     "export",

@@ -7,6 +7,7 @@ implementation.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
@@ -18,6 +19,7 @@ from numpy.typing import NDArray
 
 from regopack.domain import Domain
 from regopack.population import Population, ShapeBatch
+from regopack.solids import SolidBatch
 
 if TYPE_CHECKING:
     from regopack.packing import Packing
@@ -41,6 +43,15 @@ class SizeDistribution(ABC):
         """Expected particle area E[pi r^2]; sets the particle count of ``count = "auto"``."""
 
     @property
+    def mean_volume(self) -> float:
+        """Expected particle volume E[4/3 pi r^3]; sets ``count = "auto"`` of a 3D scene.
+
+        NaN (the default) when the distribution does not know it: a 3D scene
+        with this distribution then needs an explicit ``count``.
+        """
+        return math.nan
+
+    @property
     @abstractmethod
     def r_min(self) -> float:
         """Smallest radius the distribution can return."""
@@ -60,6 +71,18 @@ class ShapeGenerator(ABC):
 
         Outlines are counter-clockwise and relative to the particle's reference
         point, which must lie strictly inside.
+        """
+
+
+class SolidGenerator(ABC):
+    """Generator of convex solids of prescribed volume (the shapes of 3D scenes)."""
+
+    @abstractmethod
+    def generate(self, radius: FloatArray, rng: np.random.Generator) -> SolidBatch:
+        """Return one convex solid per radius, of volume ``4/3 pi r^3``.
+
+        Solids are relative to the particle's reference point, which must lie
+        strictly inside; every random choice comes from ``rng``.
         """
 
 

@@ -50,6 +50,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.size_distributions",
     "regopack.plugins.shapes",
     "regopack.plugins.disk",
+    "regopack.plugins.sphere",
     "regopack.plugins.rsa",
     "regopack.plugins.exporters",
     "regopack.plugins.image_export",

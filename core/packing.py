@@ -109,6 +109,105 @@ def _segment_reduce(
     return out
 
 
+def check_particles(
+    radius: FloatArray,
+    mineral: IntArray,
+    mineral_names: Any,
+    index: IntArray,
+    centre: FloatArray,
+    rounding: FloatArray | None,
+    stats: Any,
+) -> None:
+    """Check what 2D and 3D packings share, once their arrays' shapes and values are checked.
+
+    Radii positive; minerals index the names; the order of placement numbers
+    the placed particles ``0 .. n_placed - 1``; centres finite exactly where
+    placed; rounding radii finite and ``>= 0``; distinct non-empty mineral
+    names; numeric stats.
+
+    Raises
+    ------
+    PackingError
+        One line naming the array (or attribute) and what is wrong with it.
+    """
+    n = radius.shape[0]
+    if n and radius.min() <= 0:
+        j = _first(radius <= 0)
+        raise PackingError(
+            f"array 'radius' has the value {radius[j]} at particle {j}; radii are > 0"
+        )
+    n_phases = len(mineral_names)
+    if n and (mineral.min() < 0 or mineral.max() >= n_phases):
+        j = _first((mineral < 0) | (mineral >= n_phases))
+        raise PackingError(
+            f"array 'mineral' has the value {mineral[j]} at particle {j}, which is not a "
+            f"phase index in [0, {n_phases}) ({n_phases} mineral names)"
+        )
+    if n and (index.min() < -1 or index.max() >= n):
+        j = _first((index < -1) | (index >= n))
+        raise PackingError(
+            f"array 'insertion_index' has the value {index[j]} at particle {j}, outside [-1, {n})"
+        )
+    placed = index >= 0
+    finite_centre = np.isfinite(centre).all(axis=1)
+    if not np.array_equal(finite_centre, placed):
+        j = _first(finite_centre != placed)
+        state = "placed" if placed[j] else "not placed"
+        raise PackingError(
+            f"array 'centre' is {centre[j]} at particle {j}, which is {state} "
+            f"(insertion_index {index[j]}): a centre is finite exactly where the particle "
+            "is placed"
+        )
+    if not np.isnan(centre[~placed]).all():
+        j = _first(~placed & ~np.isnan(centre).all(axis=1))
+        raise PackingError(f"array 'centre' is {centre[j]} at particle {j}, not placed: not NaN")
+    n_placed = int(np.count_nonzero(placed))
+    uses = np.bincount(index[placed], minlength=n)
+    if n_placed and uses.max() > 1:
+        value = _first(uses > 1)
+        a, b = np.flatnonzero(index == value)[:2]
+        raise PackingError(
+            f"array 'insertion_index' gives the value {value} to particles {a} and {b}; "
+            "every placed particle has its own"
+        )
+    if n_placed and not uses[:n_placed].all():
+        raise PackingError(
+            f"array 'insertion_index' skips {_first(uses[:n_placed] == 0)}: the "
+            f"{n_placed} placed particles are numbered 0 to {n_placed - 1}"
+        )
+    if rounding is not None:
+        rho = rounding
+        if not isinstance(rho, np.ndarray) or rho.dtype != np.float64 or rho.shape != (n,):
+            what = f"shape {rho.shape}" if isinstance(rho, np.ndarray) else type(rho).__name__
+            raise PackingError(
+                f"array 'rounding' has {what}, expected float64 of shape ({n},) "
+                "(one radius per particle)"
+            )
+        bad = ~(np.isfinite(rho) & (rho >= 0))
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"array 'rounding' has the value {rho[j]} at particle {j}; a rounding "
+                "radius is finite and >= 0"
+            )
+    names = mineral_names
+    if not isinstance(names, tuple) or not all(isinstance(m, str) for m in names):
+        raise PackingError(f"'mineral_names' must be a list of strings, not {names!r}")
+    for k, m in enumerate(names):
+        if not m.strip():
+            raise PackingError(f"'mineral_names' has an empty name (phase {k})")
+    if len(set(names)) != len(names):
+        repeated = sorted({m for m in names if names.count(m) > 1})
+        raise PackingError(f"'mineral_names' repeats {', '.join(map(repr, repeated))}")
+    if not isinstance(stats, dict):
+        raise PackingError(f"'stats' is a {type(stats).__name__}, not a dict")
+    for key, stat in stats.items():
+        if not isinstance(stat, int | float | np.integer | np.floating) or isinstance(
+            stat, bool | np.bool_
+        ):
+            raise PackingError(f"'stats' has {key!r} = {_short(stat)}, not a number")
+
+
 @dataclass(frozen=True, eq=False)
 class Packing:
     """All drawn particles of a run, in draw order, and where each was placed.
@@ -255,84 +354,9 @@ class Packing:
                     else f"particle {row}"
                 )
                 raise PackingError(f"array {name!r} has the non-finite value {arr[row]} at {which}")
-        if n and radius.min() <= 0:
-            j = _first(radius <= 0)
-            raise PackingError(
-                f"array 'radius' has the value {radius[j]} at particle {j}; radii are > 0"
-            )
-        n_phases = len(self.mineral_names)
-        if n and (mineral.min() < 0 or mineral.max() >= n_phases):
-            j = _first((mineral < 0) | (mineral >= n_phases))
-            raise PackingError(
-                f"array 'mineral' has the value {mineral[j]} at particle {j}, which is not a "
-                f"phase index in [0, {n_phases}) ({n_phases} mineral names)"
-            )
-        if n and (index.min() < -1 or index.max() >= n):
-            j = _first((index < -1) | (index >= n))
-            raise PackingError(
-                f"array 'insertion_index' has the value {index[j]} at particle {j}, "
-                f"outside [-1, {n})"
-            )
-        placed = index >= 0
-        finite_centre = np.isfinite(centre).all(axis=1)
-        if not np.array_equal(finite_centre, placed):
-            j = _first(finite_centre != placed)
-            state = "placed" if placed[j] else "not placed"
-            raise PackingError(
-                f"array 'centre' is {centre[j]} at particle {j}, which is {state} "
-                f"(insertion_index {index[j]}): a centre is finite exactly where the particle "
-                "is placed"
-            )
-        if not np.isnan(centre[~placed]).all():
-            j = _first(~placed & ~np.isnan(centre).all(axis=1))
-            raise PackingError(
-                f"array 'centre' is {centre[j]} at particle {j}, not placed: not NaN"
-            )
-        n_placed = int(np.count_nonzero(placed))
-        uses = np.bincount(index[placed], minlength=n)
-        if n_placed and uses.max() > 1:
-            value = _first(uses > 1)
-            a, b = np.flatnonzero(index == value)[:2]
-            raise PackingError(
-                f"array 'insertion_index' gives the value {value} to particles {a} and {b}; "
-                "every placed particle has its own"
-            )
-        if n_placed and not uses[:n_placed].all():
-            raise PackingError(
-                f"array 'insertion_index' skips {_first(uses[:n_placed] == 0)}: the "
-                f"{n_placed} placed particles are numbered 0 to {n_placed - 1}"
-            )
-        if self.rounding is not None:
-            rho = self.rounding
-            if not isinstance(rho, np.ndarray) or rho.dtype != np.float64 or rho.shape != (n,):
-                what = f"shape {rho.shape}" if isinstance(rho, np.ndarray) else type(rho).__name__
-                raise PackingError(
-                    f"array 'rounding' has {what}, expected float64 of shape ({n},) "
-                    "(one radius per particle)"
-                )
-            bad = ~(np.isfinite(rho) & (rho >= 0))
-            if bad.any():
-                j = _first(bad)
-                raise PackingError(
-                    f"array 'rounding' has the value {rho[j]} at particle {j}; a rounding "
-                    "radius is finite and >= 0"
-                )
-        names = self.mineral_names
-        if not isinstance(names, tuple) or not all(isinstance(m, str) for m in names):
-            raise PackingError(f"'mineral_names' must be a list of strings, not {names!r}")
-        for k, m in enumerate(names):
-            if not m.strip():
-                raise PackingError(f"'mineral_names' has an empty name (phase {k})")
-        if len(set(names)) != len(names):
-            repeated = sorted({m for m in names if names.count(m) > 1})
-            raise PackingError(f"'mineral_names' repeats {', '.join(map(repr, repeated))}")
-        if not isinstance(self.stats, dict):
-            raise PackingError(f"'stats' is a {type(self.stats).__name__}, not a dict")
-        for key, stat in self.stats.items():
-            if not isinstance(stat, int | float | np.integer | np.floating) or isinstance(
-                stat, bool | np.bool_
-            ):
-                raise PackingError(f"'stats' has {key!r} = {_short(stat)}, not a number")
+        check_particles(
+            radius, mineral, self.mineral_names, index, centre, self.rounding, self.stats
+        )
         if not isinstance(self.domain, Domain):
             raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a Domain")
         area = self.domain.area
@@ -723,7 +747,10 @@ def _invalid(path: Path, why: str) -> PackingFileError:
 
 
 KNOWN_FORMAT_VERSIONS = (1, 2)
-"""Packing format versions that :func:`load` reads."""
+"""Packing format versions that :func:`load` reads (2D)."""
+
+FORMAT_VERSION_3D = 3
+"""Format version of 3D packing files (:mod:`regopack.packing3d`)."""
 
 
 def _is_int(value: Any) -> bool:
@@ -764,16 +791,16 @@ def _read_meta(path: Path, npz: Any) -> dict[str, Any]:
             f"meta 'format_version' is {_short(version)}, a {type(version).__name__}, "
             "not an integer",
         )
-    if version > FORMAT_VERSION:
+    if version > FORMAT_VERSION_3D:
         raise PackingFileError(
             f"{path}: written in packing format version {version}, but this regopack "
-            f"reads versions up to {FORMAT_VERSION}; upgrade regopack"
+            f"reads versions up to {FORMAT_VERSION_3D}; upgrade regopack"
         )
-    if version not in KNOWN_FORMAT_VERSIONS:
+    if version not in (*KNOWN_FORMAT_VERSIONS, FORMAT_VERSION_3D):
         raise _invalid(
             path,
             f"meta 'format_version' is {version}, not a known version "
-            f"({', '.join(map(str, KNOWN_FORMAT_VERSIONS))})",
+            f"({', '.join(map(str, (*KNOWN_FORMAT_VERSIONS, FORMAT_VERSION_3D)))})",
         )
     return meta
 
@@ -803,8 +830,15 @@ def _read_domain(path: Path, data: Any) -> Domain:
         raise _invalid(path, f"meta 'domain' (kind {kind}): {why}") from err
 
 
-def _read_meta_keys(path: Path, meta: Mapping[str, Any]) -> dict[str, Any]:
-    """Return the keyword arguments of :class:`Packing` that ``meta`` holds, types checked."""
+def _read_meta_keys(
+    path: Path,
+    meta: Mapping[str, Any],
+    read_domain: Callable[[Path, Any], Any] | None = None,
+) -> dict[str, Any]:
+    """Return the keyword arguments of :class:`Packing` that ``meta`` holds, types checked.
+
+    ``read_domain`` reads the ``domain`` record (default: a 2D domain).
+    """
     for key in ("domain", "mineral_names"):
         if key not in meta:
             raise _invalid(path, f"meta {key!r} is missing")
@@ -828,7 +862,7 @@ def _read_meta_keys(path: Path, meta: Mapping[str, Any]) -> dict[str, Any]:
             raise _invalid(path, f"meta 'stats' has {key!r} = {_short(value)}, not a number")
     return {
         "mineral_names": tuple(names),
-        "domain": _read_domain(path, meta["domain"]),
+        "domain": (read_domain or _read_domain)(path, meta["domain"]),
         "scene": scene,
         "seed": seed,
         "version": version,
@@ -836,8 +870,26 @@ def _read_meta_keys(path: Path, meta: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def open_packing_file(path: str | Path) -> Path:
+    """Check that ``path`` names an NPZ archive; return it as a path.
+
+    Raises
+    ------
+    PackingFileError
+        When it is missing, a directory, or not an NPZ archive.
+    """
+    path = Path(path)
+    if not path.exists():
+        raise PackingFileError(f"{path}: no such file")
+    if path.is_dir():
+        raise PackingFileError(f"{path}: is a directory, not a packing file")
+    if not zipfile.is_zipfile(path):
+        raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
+    return path
+
+
 def load(path: str | Path) -> Packing:
-    """Read a packing written by :func:`save`, checking it against the format.
+    """Read a 2D packing written by :func:`save`, checking it against the format.
 
     Every array is checked (dtype, shape, finite values, index ranges, the
     order of placement; see :meth:`Packing.validate`), and so is every
@@ -852,16 +904,15 @@ def load(path: str | Path) -> Packing:
         (``invalid packing file: array 'mineral' has the value 7 at particle
         3, ...``, naming the array or ``meta`` key and what is wrong).
     """
-    path = Path(path)
-    if not path.exists():
-        raise PackingFileError(f"{path}: no such file")
-    if path.is_dir():
-        raise PackingFileError(f"{path}: is a directory, not a packing file")
-    if not zipfile.is_zipfile(path):
-        raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
+    path = open_packing_file(path)
     try:
         with np.load(path, allow_pickle=False) as npz:
             meta = _read_meta(path, npz)
+            if meta["format_version"] == FORMAT_VERSION_3D:
+                raise PackingFileError(
+                    f"{path}: a 3D packing (format version {FORMAT_VERSION_3D}); this reads "
+                    "2D packings only (regopack.load reads both)"
+                )
             arrays: dict[str, Any] = {}
             for name, (dtype, ndim) in _ARRAYS.items():
                 if name not in npz.files:

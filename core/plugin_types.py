@@ -21,6 +21,7 @@ from regopack.interfaces import (
     InsertionStrategy,
     ShapeGenerator,
     SizeDistribution,
+    SolidGenerator,
 )
 
 if TYPE_CHECKING:
@@ -59,12 +60,22 @@ class SizeDistributionSpec(PluginSpec[SizeDistribution]):
     """Spec of a size distribution plugin."""
 
 
-class ShapeSpec(PluginSpec[ShapeGenerator]):
-    """Spec of a shape generator plugin."""
+@dataclass(frozen=True)
+class ShapeSpec(PluginSpec[ShapeGenerator | SolidGenerator]):
+    """Spec of a shape generator plugin.
+
+    ``dimension`` is 2 for outlines (a :class:`~regopack.interfaces.ShapeGenerator`)
+    and 3 for solids (a :class:`~regopack.interfaces.SolidGenerator`).
+    """
+
+    dimension: int = 2
 
 
+@dataclass(frozen=True)
 class InserterSpec(PluginSpec[InsertionStrategy]):
-    """Spec of an insertion strategy plugin."""
+    """Spec of an insertion strategy plugin; ``dimensions`` lists the dimensions it packs."""
+
+    dimensions: tuple[int, ...] = (2,)
 
 
 class DensityControllerSpec(PluginSpec[DensityController]):

@@ -38,6 +38,7 @@ from pydantic import (
 from regopack import _toml
 from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, Rectangle
 from regopack.domain import Domain as DomainGeometry
+from regopack.domain3d import Box, PeriodicBox
 from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.manager import Registry
 from regopack.messages import describe_validation_error, dotted, format_value, where
@@ -76,6 +77,11 @@ T = TypeVar("T")
 FiniteFloat = Annotated[float, Field(allow_inf_nan=False)]
 Point = Annotated[tuple[FiniteFloat, FiniteFloat], Field(strict=False)]
 """A point ``[x, y]``: a TOML array is taken as a tuple, its items stay strict numbers."""
+Centre = Annotated[tuple[FiniteFloat, ...], Field(strict=False)]
+"""A domain's centre: ``[x, y]``, or ``[x, y, z]`` for a box (checked with the kind)."""
+
+DOMAINS_3D = ("box", "periodic-box")
+"""Domain kinds that make a scene three-dimensional."""
 
 STRICT = ConfigDict(extra="forbid", strict=True)
 """Model configuration of the scene sections: unknown keys and coerced values are errors.
@@ -87,21 +93,24 @@ expected; an integer is still a valid float (``width = 200``).
 
 
 class Domain(BaseModel):
-    """The container: a walled rectangle, convex polygon or circle, or a periodic rectangle.
+    """The container: a walled rectangle, polygon, circle or box, or a periodic rectangle or box.
 
     ``kind = "rectangle"`` (the default) and ``"periodic"`` use ``width``,
     ``height`` and ``center``; ``"circle"`` uses ``radius`` and ``center``;
-    ``"polygon"`` uses ``vertices``. A field that does not belong to the kind
-    is an error.
+    ``"polygon"`` uses ``vertices``; ``"box"`` and ``"periodic-box"`` use
+    ``width`` (x), ``depth`` (y), ``height`` (z, the vertical) and a
+    three-number ``center``: they make the scene three-dimensional. A field
+    that does not belong to the kind is an error.
     """
 
     model_config = STRICT
 
-    kind: Literal["rectangle", "periodic", "polygon", "circle"] = Field(
+    kind: Literal["rectangle", "periodic", "polygon", "circle", "box", "periodic-box"] = Field(
         "rectangle",
         description=(
             "Shape of the container: 'rectangle' (walls), 'periodic' (a rectangle whose "
-            "opposite sides are identified), 'polygon' (convex, walls) or 'circle' (wall)."
+            "opposite sides are identified), 'polygon' (convex, walls) or 'circle' (wall); "
+            "in 3D 'box' (walls) or 'periodic-box'."
         ),
     )
     width: float = Field(
@@ -114,10 +123,23 @@ class Domain(BaseModel):
         800.0,
         gt=0,
         allow_inf_nan=False,
-        description="Extent along y (micrometres); rectangle and periodic.",
+        description=(
+            "Extent along y (micrometres), the vertical; rectangle and periodic "
+            "(boxes: along z, the vertical)."
+        ),
     )
-    center: Point = Field(
-        (0.0, 0.0), description="Centre (micrometres); rectangle, periodic and circle."
+    depth: float = Field(
+        800.0,
+        gt=0,
+        allow_inf_nan=False,
+        description="Extent along y (micrometres) of a box or periodic box.",
+    )
+    center: Centre = Field(
+        (0.0, 0.0),
+        description=(
+            "Centre (micrometres): [x, y] of a rectangle, periodic rectangle or circle; "
+            "[x, y, z] of a box (default: the origin)."
+        ),
     )
     radius: float | None = Field(
         None, gt=0, allow_inf_nan=False, description="Radius of the circle (micrometres)."
@@ -133,6 +155,8 @@ class Domain(BaseModel):
         "periodic": ("width", "height", "center"),
         "circle": ("radius", "center"),
         "polygon": ("vertices",),
+        "box": ("width", "height", "depth", "center"),
+        "periodic-box": ("width", "height", "depth", "center"),
     }
     _REQUIRED: ClassVar[dict[str, tuple[str, ...]]] = {
         "circle": ("radius",),
@@ -150,6 +174,22 @@ class Domain(BaseModel):
         for name in self._REQUIRED.get(self.kind, ()):
             if getattr(self, name) is None:
                 raise ValueError(f"kind {self.kind!r} needs {name}")
+        points = 3 if self.kind in DOMAINS_3D else 2
+        if len(self.center) != points:
+            if "center" in self.model_fields_set:
+                raise ValueError(
+                    f"center: kind {self.kind!r} takes {points} coordinates "
+                    f"({'[x, y, z]' if points == 3 else '[x, y]'}), not {len(self.center)}"
+                )
+            object.__setattr__(self, "center", (0.0,) * points)
+        if self.kind in DOMAINS_3D:
+            if not math.isfinite(self.to_box().volume):
+                raise ValueError(
+                    f"width x depth x height = {self.width:g} x {self.depth:g} x "
+                    f"{self.height:g} gives a {self.kind} whose volume overflows 64-bit floats "
+                    "(inf); give a smaller domain"
+                )
+            return self
         if self.kind == "polygon":
             try:
                 self.to_domain()
@@ -168,17 +208,33 @@ class Domain(BaseModel):
             )
         return self
 
+    @property
+    def dimension(self) -> int:
+        """3 for a box or periodic box, 2 otherwise."""
+        return 3 if self.kind in DOMAINS_3D else 2
+
+    def to_box(self) -> Box:
+        """Return a 3D domain as a :class:`regopack.domain3d.Box`."""
+        if self.kind not in DOMAINS_3D:
+            raise GeometryError(f"the domain is a 2D {self.kind}, not a box")
+        cls = PeriodicBox if self.kind == "periodic-box" else Box
+        cx, cy, cz = (float(c) for c in self.center)
+        return cls.centred(self.width, self.height, self.depth, (cx, cy, cz))
+
     def to_domain(self) -> DomainGeometry:
-        """Return the container as a :class:`regopack.domain.Domain`."""
+        """Return a 2D container as a :class:`regopack.domain.Domain`."""
+        if self.kind in DOMAINS_3D:
+            raise GeometryError(f"the domain is a 3D {self.kind}; see to_box")
         if self.kind == "circle":
             assert self.radius is not None
             return Circle(self.center[0], self.center[1], self.radius)
         if self.kind == "polygon":
             assert self.vertices is not None
             return ConvexPolygon(tuple(self.vertices))
+        cx, cy = (float(c) for c in self.center)
         if self.kind == "periodic":
-            return PeriodicRectangle.centred(self.width, self.height, self.center)
-        return Rectangle.centred(self.width, self.height, self.center)
+            return PeriodicRectangle.centred(self.width, self.height, (cx, cy))
+        return Rectangle.centred(self.width, self.height, (cx, cy))
 
     def to_rectangle(self) -> Rectangle:
         """Return a rectangular domain as a :class:`regopack.domain.Rectangle`."""
@@ -811,6 +867,7 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
             for i, item in enumerate(items)
         )
 
+    _check_dimensions(scene, registry, phases, insertion)
     analyses = resolve_list("analysis", "analyses", scene.outputs.analyses)
     exports = resolve_list("export", "exports", scene.outputs.exports)
     _check_output_files(scene, analyses, exports)
@@ -824,6 +881,47 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
         registry=registry,
         exports=exports,
     )
+
+
+def _dimensions_of(spec: PluginSpec[Any], category: str) -> tuple[int, ...]:
+    """Dimensions a shape or inserter plugin works in (2D unless its spec says otherwise)."""
+    if category == "shape":
+        return (int(getattr(spec, "dimension", 2)),)
+    return tuple(getattr(spec, "dimensions", (2,)))
+
+
+def _check_dimensions(
+    scene: Scene,
+    registry: Registry,
+    phases: Sequence[ResolvedPhase],
+    insertion: ResolvedPlugin[Any],
+) -> None:
+    """Refuse, in one line, a shape or an inserter of another dimension than the domain's."""
+    dim = scene.domain.dimension
+    picks = [
+        (("phases", i, "shape", "kind"), "shape", p.shape, "shape") for i, p in enumerate(phases)
+    ] + [(("insertion", "kind"), "insertion", insertion, "inserter")]
+    for loc, category, plugin, noun in picks:
+        if dim in _dimensions_of(plugin.spec, category):
+            continue
+        fitting = [
+            n
+            for n in registry.names(category)
+            if dim in _dimensions_of(registry.get(category, n), category)
+        ]
+        blame = "domain.kind" if scene.origin("domain.kind") != scene.source else _dotted(loc)
+        source = _where(blame, scene.source, scene._overridden)
+        own = "/".join(f"{d}D" for d in _dimensions_of(plugin.spec, category))
+        text = (
+            f"{_dotted(loc)} = {plugin.kind!r} is a {own} {noun}, but domain.kind = "
+            f"{scene.domain.kind!r} makes the scene {dim}D; "
+            + (
+                f"{dim}D {noun}s: {', '.join(fitting)}"
+                if fitting
+                else f"no {dim}D {noun} is installed"
+            )
+        )
+        raise ConfigError(f"{source}: {text}" if source else text)
 
 
 # ---------------------------------------------------------------------------

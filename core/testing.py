@@ -31,10 +31,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from regopack.domain import Domain, Rectangle
-from regopack.interfaces import DensityController, ShapeGenerator, SizeDistribution
+from regopack.interfaces import (
+    DensityController,
+    ShapeGenerator,
+    SizeDistribution,
+    SolidGenerator,
+)
 from regopack.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
 from regopack.packing import Packing
 from regopack.population import ShapeBatch
+from regopack.solids import SolidBatch
 from regopack.verification import VerifyReport, assert_valid_packing, verify
 
 __all__ = [
@@ -44,6 +50,7 @@ __all__ = [
     "check_density_controller",
     "check_shape_generator",
     "check_size_distribution",
+    "check_solid_generator",
     "extreme_radii",
     "make_registry",
     "packing_from_polygons",
@@ -348,6 +355,109 @@ def check_shape_generator(
         raise AssertionError(
             f"{who} is not deterministic: two calls with generators seeded {seed} gave "
             "different outlines; draw random numbers only from the generator passed in"
+        )
+    return batch
+
+
+def _check_solid(batch: SolidBatch, j: int, r: float, who: str, rtol: float) -> None:
+    """One solid: a sphere of radius ``r``, or a closed convex polyhedron of volume 4/3 pi r^3."""
+    where = f"{who}: solid {j} (radius {r:g})"
+    verts, loops = batch.solid(j)
+    rho = float(batch.rounding_radius[j])
+    expected = 4.0 / 3.0 * math.pi * r**3
+    if not loops:
+        if verts.shape[0] != 1 or np.any(verts != 0.0) or rho <= 0:
+            raise AssertionError(
+                f"{where} has no faces; only a sphere (the vertex (0, 0, 0) rounded by its "
+                "radius) may have none"
+            )
+    else:
+        f0, f1 = int(batch.face_offsets[j]), int(batch.face_offsets[j + 1])
+        normals, support = batch.normals[f0:f1], batch.support[f0:f1]
+        scale = float(np.max(np.linalg.norm(verts, axis=1)))
+        if np.any(np.abs(np.linalg.norm(normals, axis=1) - 1.0) > 1e-9):
+            raise AssertionError(f"{where} has face normals that are not unit vectors")
+        if float(np.min(support)) <= 1e-9 * scale:
+            raise AssertionError(
+                f"{where}: the reference point (0, 0, 0) is not strictly inside "
+                f"(a face plane at distance {float(np.min(support)):.3g})"
+            )
+        outside = verts @ normals.T - support
+        if float(np.max(outside)) > 1e-9 * scale:
+            raise AssertionError(
+                f"{where} is not convex: a vertex lies {float(np.max(outside)):.3g} outside "
+                "a face's plane"
+            )
+        used = np.zeros(verts.shape[0], dtype=bool)
+        for f, loop in enumerate(loops):
+            p = verts[loop]
+            used[loop] = True
+            if p.shape[0] < 3 or np.max(np.abs(p @ normals[f] - support[f])) > 1e-9 * scale:
+                raise AssertionError(
+                    f"{where}: face {f} is not a planar loop of 3 or more vertices"
+                )
+            area = 0.5 * np.cross(p - p[0], np.roll(p, -1, axis=0) - p[0]).sum(axis=0)
+            if float(np.dot(area, normals[f])) <= 0:
+                raise AssertionError(
+                    f"{where}: face {f} is not counter-clockwise seen from outside"
+                )
+        if not used.all():
+            raise AssertionError(f"{where} has vertices on no face")
+        if rho != 0:
+            raise AssertionError(f"{where}: rounded polyhedra are not checked yet")
+    volume = float(batch.volume[j])
+    if abs(volume - expected) > rtol * expected:
+        raise AssertionError(
+            f"{where} has volume {volume:.9g}, expected 4/3 pi r^3 = {expected:.9g}"
+        )
+
+
+def check_solid_generator(
+    generator: SolidGenerator,
+    radii: ArrayLike = DEFAULT_RADII,
+    seed: int = 0,
+    *,
+    rtol: float = 1e-6,
+) -> SolidBatch:
+    """Check the contract of a 3D shape generator; raise :class:`AssertionError` if broken.
+
+    The rules checked: ``generate`` returns a
+    :class:`~regopack.solids.SolidBatch` with one solid per radius (also for
+    no radii); each solid is a sphere (the vertex ``(0, 0, 0)`` rounded by
+    its radius) or a sharp convex polyhedron whose faces are planar loops,
+    counter-clockwise seen from outside, with unit normals, every vertex on
+    some face and inside every face's plane, the reference point strictly
+    inside, and the volume ``4/3 pi r^3`` within ``rtol``; rotations are
+    unit quaternions; the same seed gives the same solids, and numpy's
+    global random generator is not used.
+
+    Returns
+    -------
+    SolidBatch
+        The solids generated for ``radii``, for further checks.
+    """
+    who = _name(generator)
+    r = _as_array(radii, "radii").reshape(-1)
+    with _global_random_untouched(f"{who}.generate"):
+        empty = generator.generate(np.zeros(0), np.random.default_rng(seed))
+        batch = generator.generate(r.copy(), np.random.default_rng(seed))
+        again = generator.generate(r.copy(), np.random.default_rng(seed))
+    for got, n, label in ((empty, 0, f"{who} (no radii)"), (batch, r.shape[0], who)):
+        if not isinstance(got, SolidBatch):
+            raise AssertionError(f"{label}.generate returned a {_name(got)}, not a SolidBatch")
+        if len(got) != n:
+            raise AssertionError(f"{label} returned {len(got)} solids for {n} radii")
+    if not (np.isfinite(batch.vertices).all() and np.isfinite(batch.rotation).all()):
+        raise AssertionError(f"{who}: vertices or rotations are not all finite")
+    if np.any(np.abs(np.linalg.norm(batch.rotation, axis=1) - 1.0) > 1e-9):
+        raise AssertionError(f"{who}: rotations are not unit quaternions")
+    for j in range(r.shape[0]):
+        _check_solid(batch, j, float(r[j]), who, rtol)
+    fields = ("vertices", "offsets", "face_vertices", "normals", "support", "rotation")
+    if not all(np.array_equal(getattr(batch, f), getattr(again, f)) for f in fields):
+        raise AssertionError(
+            f"{who} is not deterministic: two calls with generators seeded {seed} gave "
+            "different solids; draw random numbers only from the generator passed in"
         )
     return batch
 

@@ -133,6 +133,11 @@ class Change5(SizeDistribution):
         return math.pi / 4.0 * self._moment(2)
 
     @property
+    def mean_volume(self) -> float:
+        """Expected particle volume E[pi d^3 / 6] (3D scenes)."""
+        return math.pi / 6.0 * self._moment(3)
+
+    @property
     def r_min(self) -> float:
         """Smallest radius, d_min / 2."""
         return 0.5 * self.config.d_min

@@ -327,6 +327,11 @@ class _Diameters(SizeDistribution):
         return math.pi / 4.0 * self.moment(2)
 
     @property
+    def mean_volume(self) -> float:
+        """Expected particle volume ``E[pi d^3 / 6]`` (3D scenes)."""
+        return math.pi / 6.0 * self.moment(3)
+
+    @property
     def r_min(self) -> float:
         """Smallest radius the sampler can return."""
         return 0.5 * self.d_lo

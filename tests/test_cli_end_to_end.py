@@ -26,7 +26,14 @@ def test_default_registry_has_the_builtins():
         "tabulated",
         "uniform",
     ]
-    assert reg.names("shape") == ["disk", "octagon", "random-polygon", "regular", "template"]
+    assert reg.names("shape") == [
+        "disk",
+        "octagon",
+        "random-polygon",
+        "regular",
+        "sphere",
+        "template",
+    ]
     assert reg.names("insertion") == ["available-arc", "rsa"]
     assert reg.names("density") == ["eta"]
     assert reg.names("export") == ["csv", "gsd", "image", "json", "lammps", "svg", "vtk"]

@@ -12,7 +12,13 @@ import regopack
 from regopack.domain import Rectangle
 from regopack.errors import PackingFileError
 from regopack.interfaces import InsertionResult
-from regopack.packing import FORMAT_VERSION, Packing, load, save, write_json_atomic
+from regopack.packing import (
+    FORMAT_VERSION_3D,
+    Packing,
+    load,
+    save,
+    write_json_atomic,
+)
 from regopack.population import Population, ShapeBatch
 from regopack.testing import packing_from_polygons
 
@@ -162,7 +168,8 @@ def test_load_accepts_str_and_is_exported(tmp_path):
     p = random_packing(5)
     save(p, str(tmp_path / "p.npz"))
     assert_identical(p, regopack.load(str(tmp_path / "p.npz")))
-    assert regopack.save is save
+    regopack.save(p, tmp_path / "q.npz")
+    assert_identical(p, load(tmp_path / "q.npz"))
 
 
 def test_save_keeps_the_name(tmp_path):
@@ -265,11 +272,12 @@ def test_load_newer_format_version(tmp_path):
 
     def bump(contents):
         meta = json.loads(str(contents["meta"]))
-        meta["format_version"] = FORMAT_VERSION + 1
+        meta["format_version"] = FORMAT_VERSION_3D + 1
         contents["meta"] = np.array(json.dumps(meta))
 
     rewrite(path, bump)
-    with pytest.raises(PackingFileError, match=rf"format version {FORMAT_VERSION + 1}.*upgrade"):
+    newer = FORMAT_VERSION_3D + 1
+    with pytest.raises(PackingFileError, match=rf"format version {newer}.*upgrade"):
         load(path)
 
 

@@ -19,6 +19,7 @@ from regopack.testing import (
     check_density_controller,
     check_shape_generator,
     check_size_distribution,
+    check_solid_generator,
 )
 
 # ---------------------------------------------------------------------------
@@ -64,9 +65,12 @@ def test_every_registered_plugin_with_defaults_keeps_its_contract():
             spec = registry.get(kind, name)
             if any(f.is_required() for f in spec.config_model.model_fields.values()):
                 continue  # needs parameters we cannot guess (e.g. a file)
-            check(spec.build({}))
+            if getattr(spec, "dimension", 2) == 3:
+                check_solid_generator(spec.build({}))
+            else:
+                check(spec.build({}))
             checked.append(name)
-    assert {"octagon", "change5", "eta"} <= set(checked)
+    assert {"octagon", "change5", "eta", "sphere"} <= set(checked)
 
 
 # ---------------------------------------------------------------------------

@@ -52,6 +52,7 @@ def test_ks_detects_a_wrong_exponent(dist: Change5) -> None:
 def test_sample_mean_matches_moment(dist: Change5) -> None:
     r = dist.sample(200000, np.random.default_rng(5))
     assert np.mean(math.pi * r**2) == pytest.approx(dist.mean_area, rel=0.01)
+    assert np.mean(4.0 / 3.0 * math.pi * r**3) == pytest.approx(dist.mean_volume, rel=0.02)
 
 
 def test_ppf_inverts_cdf(dist: Change5) -> None:

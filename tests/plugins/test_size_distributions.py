@@ -47,8 +47,12 @@ def write_table(path: Path, sizes: Any, percent: Any, header: str = "size_um,pas
 
 
 def assert_moments_match(d: np.ndarray, dist: Any, z: float = 5.0) -> None:
-    """Sample mean diameter and mean area agree with the analytic values within z SE."""
-    for values, expected in ((d, dist.mean_diameter), (math.pi / 4 * d**2, dist.mean_area)):
+    """Sample mean diameter, area and volume agree with the analytic values within z SE."""
+    for values, expected in (
+        (d, dist.mean_diameter),
+        (math.pi / 4 * d**2, dist.mean_area),
+        (math.pi / 6 * d**3, dist.mean_volume),
+    ):
         se = values.std() / math.sqrt(len(values))
         assert abs(values.mean() - expected) < z * se + 1e-12 * abs(expected)
 

@@ -1,0 +1,438 @@
+"""The result of a 3D run: every drawn solid, where it went, and how the run was set up.
+
+A :class:`Packing3D` is the 3D counterpart of :class:`regopack.packing.Packing`.
+It is saved as an NPZ file in packing format version 3 (see
+``docs/reference/packing-format.md``) by :func:`save3d`; :func:`load_packing`
+reads a 2D or a 3D packing file, whichever it is. Writes are atomic.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import zipfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.domain3d import Box, domain3d_from_dict
+from regopack.errors import GeometryError, PackingError, PackingFileError
+from regopack.packing import (
+    FILE_MAGIC,
+    FORMAT_VERSION_3D,
+    Packing,
+    _as_array,
+    _atomic_file,
+    _first,
+    _invalid,
+    _json_default,
+    _read_array,
+    _read_meta,
+    _read_meta_keys,
+    _short,
+    check_particles,
+    load,
+    open_packing_file,
+    save,
+)
+from regopack.solids import SolidBatch
+
+if TYPE_CHECKING:
+    from regopack.interfaces import InsertionResult
+    from regopack.population import Population
+
+__all__ = ["Packing3D", "load_packing", "save3d", "save_packing"]
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+_ARRAYS3D: dict[str, tuple[type[np.generic], int]] = {
+    "radius": (np.float64, 1),
+    "mineral": (np.int64, 1),
+    "vertices": (np.float64, 2),
+    "offsets": (np.int64, 1),
+    "face_vertices": (np.int64, 1),
+    "face_vertex_offsets": (np.int64, 1),
+    "face_offsets": (np.int64, 1),
+    "normals": (np.float64, 2),
+    "support": (np.float64, 1),
+    "rotation": (np.float64, 2),
+    "centre": (np.float64, 2),
+    "insertion_index": (np.int64, 1),
+}
+"""Arrays of every 3D packing (and of its file): dtype and number of dimensions."""
+
+_COLUMNS = {"vertices": 3, "normals": 3, "rotation": 4, "centre": 3}
+_FINITE3D = ("radius", "vertices", "normals", "support", "rotation")
+UNIT_TOLERANCE = 1e-9
+"""Largest departure from length 1 of a face normal or a rotation quaternion."""
+
+
+def _check_offsets(name: str, offsets: IntArray, rows: int, total: int, least: int) -> None:
+    """``offsets`` has ``rows + 1`` entries from 0 to ``total``, each step at least ``least``."""
+    if offsets.shape[0] != rows + 1:
+        raise PackingError(f"array {name!r} has {offsets.shape[0]} entries, expected {rows + 1}")
+    if offsets[0] != 0:
+        raise PackingError(f"array {name!r} starts at {offsets[0]}, not 0")
+    steps = np.diff(offsets)
+    if rows and steps.min() < least:
+        j = _first(steps < least)
+        raise PackingError(
+            f"array {name!r} gives entry {j} {steps[j]} items "
+            f"({offsets[j]} to {offsets[j + 1]}); at least {least}"
+        )
+    if offsets[-1] != total:
+        raise PackingError(f"array {name!r} ends at {offsets[-1]}, expected {total}")
+
+
+@dataclass(frozen=True, eq=False)
+class Packing3D:
+    """All drawn solids of a 3D run, in draw order, and where each was placed.
+
+    Attributes
+    ----------
+    radius
+        ``(n,)`` equivalent radius (volume = 4/3 pi r^3).
+    mineral, mineral_names
+        Phase index of each particle and the phase names, as in 2D.
+    vertices, offsets, face_vertices, face_vertex_offsets, face_offsets, normals, support, rotation
+        The solids, relative to their centres, as in :class:`regopack.solids.SolidBatch`.
+    centre
+        ``(n, 3)`` position of each particle's centre; NaN where not placed.
+    insertion_index
+        ``(n,)`` order of placement, ``-1`` where not placed.
+    domain
+        The container (a walled or periodic box).
+    scene, seed, version, stats
+        As in 2D.
+    rounding
+        ``(n,)`` rounding radius of each solid (a sphere is one vertex rounded
+        by its radius), or ``None`` when every solid is a sharp polyhedron.
+    """
+
+    radius: FloatArray
+    mineral: IntArray
+    mineral_names: tuple[str, ...]
+    vertices: FloatArray
+    offsets: IntArray
+    face_vertices: IntArray
+    face_vertex_offsets: IntArray
+    face_offsets: IntArray
+    normals: FloatArray
+    support: FloatArray
+    rotation: FloatArray
+    centre: FloatArray
+    insertion_index: IntArray
+    domain: Box
+    scene: dict[str, Any] = field(default_factory=dict)
+    seed: int = 0
+    version: str = "0.0.0"
+    stats: dict[str, float] = field(default_factory=dict)
+    rounding: FloatArray | None = None
+
+    dimension = 3
+    """Spatial dimension of the packing."""
+
+    def __post_init__(self) -> None:
+        """Convert the arrays to their dtypes (where no value changes) and :meth:`validate`."""
+        for name, (dtype, _) in _ARRAYS3D.items():
+            object.__setattr__(self, name, _as_array(name, getattr(self, name), dtype))
+        if self.rounding is not None:
+            object.__setattr__(self, "rounding", _as_array("rounding", self.rounding, np.float64))
+        if isinstance(self.mineral_names, list | tuple):
+            object.__setattr__(self, "mineral_names", tuple(self.mineral_names))
+        self.validate()
+
+    def validate(self) -> None:
+        """Check the packing against packing format version 3; raise if it breaks it.
+
+        As :meth:`regopack.packing.Packing.validate`, with the solids' arrays:
+        ``offsets`` gives every particle a vertex; ``face_offsets`` rises
+        (a sphere has no face) and ``face_vertex_offsets`` gives every face at
+        least three vertices; every face vertex indexes its own particle's
+        vertices; face normals and rotations are unit vectors; the domain is
+        a box of positive finite volume.
+
+        Raises
+        ------
+        PackingError
+            One line naming the array (or attribute) and what is wrong with it.
+        """
+        for name, (dtype, ndim) in _ARRAYS3D.items():
+            arr = getattr(self, name)
+            if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
+                got = arr.dtype if isinstance(arr, np.ndarray) else type(arr).__name__
+                raise PackingError(f"array {name!r} has dtype {got}, expected {np.dtype(dtype)}")
+            if arr.ndim != ndim:
+                raise PackingError(
+                    f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array"
+                )
+        for name, cols in _COLUMNS.items():
+            shape = getattr(self, name).shape
+            if shape[1] != cols:
+                raise PackingError(
+                    f"array {name!r} has shape {shape}, expected ({shape[0]}, {cols})"
+                )
+        n = self.radius.shape[0]
+        for name in ("mineral", "rotation", "centre", "insertion_index"):
+            rows = getattr(self, name).shape[0]
+            if rows != n:
+                raise PackingError(
+                    f"array {name!r} has {rows} rows, expected one per particle "
+                    f"({n}, the length of 'radius')"
+                )
+        faces = self.normals.shape[0]
+        if self.support.shape[0] != faces:
+            raise PackingError(
+                f"array 'support' has {self.support.shape[0]} entries, expected one per face "
+                f"({faces}, the rows of 'normals')"
+            )
+        _check_offsets("offsets", self.offsets, n, self.vertices.shape[0], 1)
+        _check_offsets("face_offsets", self.face_offsets, n, faces, 0)
+        _check_offsets(
+            "face_vertex_offsets", self.face_vertex_offsets, faces, self.face_vertices.shape[0], 3
+        )
+        if faces:
+            owner = np.repeat(np.arange(n), np.diff(self.face_offsets))
+            loop_owner = np.repeat(owner, np.diff(self.face_vertex_offsets))
+            count = np.diff(self.offsets)[loop_owner]
+            bad = (self.face_vertices < 0) | (self.face_vertices >= count)
+            if bad.any():
+                k = _first(bad)
+                raise PackingError(
+                    f"array 'face_vertices' has the value {self.face_vertices[k]} at entry {k} "
+                    f"(particle {loop_owner[k]}, which has {count[k]} vertices)"
+                )
+        for name in _FINITE3D:
+            arr = getattr(self, name)
+            finite = np.isfinite(arr)
+            if not finite.all():
+                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
+                raise PackingError(
+                    f"array {name!r} has the non-finite value {arr[row]} at row {row}"
+                )
+        for name in ("normals", "rotation"):
+            arr = getattr(self, name)
+            off = np.abs(np.sqrt(np.einsum("ij,ij->i", arr, arr)) - 1.0) > UNIT_TOLERANCE
+            if off.any():
+                row = _first(off)
+                raise PackingError(f"array {name!r} has the non-unit row {arr[row]} at row {row}")
+        check_particles(
+            self.radius,
+            self.mineral,
+            self.mineral_names,
+            self.insertion_index,
+            self.centre,
+            self.rounding,
+            self.stats,
+        )
+        if not isinstance(self.domain, Box):
+            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a 3D box")
+        volume = self.domain.volume
+        if not (math.isfinite(volume) and volume > 0):
+            raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite volume")
+
+    @classmethod
+    def from_parts(
+        cls,
+        population: Population,
+        result: InsertionResult,
+        domain: Box,
+        scene_dict: Mapping[str, Any],
+        seed: int,
+        stats: Mapping[str, float] | None = None,
+    ) -> Packing3D:
+        """Combine a 3D population and an insertion result into a packing."""
+        from regopack import __version__
+
+        shapes = population.shapes
+        if not isinstance(shapes, SolidBatch):
+            raise PackingError("a 3D packing needs a population of solids")
+        n = len(population)
+        return cls(
+            radius=np.asarray(population.radius, dtype=np.float64),
+            mineral=np.asarray(population.mineral, dtype=np.int64),
+            mineral_names=tuple(population.mineral_names),
+            vertices=shapes.vertices,
+            offsets=shapes.offsets,
+            face_vertices=shapes.face_vertices,
+            face_vertex_offsets=shapes.face_vertex_offsets,
+            face_offsets=shapes.face_offsets,
+            normals=shapes.normals,
+            support=shapes.support,
+            rotation=shapes.rotation,
+            centre=np.asarray(result.centre, dtype=np.float64).reshape(n, 3),
+            insertion_index=np.asarray(result.insertion_index, dtype=np.int64).reshape(n),
+            domain=domain,
+            scene=dict(scene_dict),
+            seed=int(seed),
+            version=__version__,
+            stats=dict(result.stats if stats is None else stats),
+            rounding=shapes.rounding,
+        )
+
+    # -- counts and masks ---------------------------------------------------
+
+    @property
+    def n_particles(self) -> int:
+        """Number of drawn particles (placed or not)."""
+        return int(self.radius.shape[0])
+
+    @property
+    def placed(self) -> NDArray[np.bool_]:
+        """Mask of the placed particles."""
+        return self.insertion_index >= 0
+
+    @property
+    def n_placed(self) -> int:
+        """Number of placed particles."""
+        return int(np.count_nonzero(self.placed))
+
+    def placed_in_order(self) -> IntArray:
+        """Return the indices of the placed particles, in the order they were placed."""
+        idx = np.flatnonzero(self.placed)
+        return idx[np.argsort(self.insertion_index[idx], kind="stable")].astype(np.int64)
+
+    # -- geometry ---------------------------------------------------------------
+
+    @property
+    def solids(self) -> SolidBatch:
+        """The particles' solids, relative to their centres."""
+        return SolidBatch(
+            vertices=self.vertices,
+            offsets=self.offsets,
+            face_vertices=self.face_vertices,
+            face_vertex_offsets=self.face_vertex_offsets,
+            face_offsets=self.face_offsets,
+            normals=self.normals,
+            support=self.support,
+            rotation=self.rotation,
+            rounding=self.rounding,
+        )
+
+    @property
+    def rounded(self) -> bool:
+        """True when some particle is rounded (a sphere or a rounded polyhedron)."""
+        return self.rounding is not None and bool(np.any(self.rounding > 0))
+
+    def world_vertices(self, j: int) -> FloatArray:
+        """Vertices of particle ``j`` in the packing's frame (NaN when not placed)."""
+        out: FloatArray = self.vertices[self.offsets[j] : self.offsets[j + 1]] + self.centre[j]
+        return out
+
+    @property
+    def phi(self) -> float:
+        """Volume fraction of the box filled by the placed particles.
+
+        In a walled box every placed solid lies inside; in a periodic box
+        every part of a solid lies in the box once, in some image.
+        """
+        volume = self.solids.volume[self.placed].sum()
+        return float(volume / self.domain.volume)
+
+    def __repr__(self) -> str:
+        sx, sy, sz = self.domain.size
+        return (
+            f"<Packing3D: {self.n_placed} of {self.n_particles} placed in a "
+            f"{sx:g} × {sy:g} × {sz:g} {self.domain.kind}, phi {self.phi:.4f}>"
+        )
+
+
+def _meta3d(packing: Packing3D) -> dict[str, Any]:
+    return {
+        "format": FILE_MAGIC,
+        "format_version": FORMAT_VERSION_3D,
+        "dimension": 3,
+        "version": packing.version,
+        "mineral_names": list(packing.mineral_names),
+        "domain": packing.domain.to_dict(),
+        "scene": packing.scene,
+        "seed": packing.seed,
+        "stats": packing.stats,
+    }
+
+
+def save3d(packing: Packing3D, path: str | Path) -> None:
+    """Write ``packing`` to ``path`` (NPZ, format version 3), atomically.
+
+    Raises
+    ------
+    PackingError
+        When the packing breaks the format; nothing is written then.
+    """
+    packing.validate()
+    arrays: dict[str, Any] = {name: getattr(packing, name) for name in _ARRAYS3D}
+    if packing.rounding is not None:
+        arrays["rounding"] = packing.rounding
+    meta = json.dumps(_meta3d(packing), default=_json_default)
+    savez: Callable[..., None] = np.savez
+    with _atomic_file(Path(path)) as fh:
+        savez(fh, meta=np.array(meta), **arrays)
+
+
+def save_packing(packing: Packing | Packing3D, path: str | Path) -> None:
+    """Write a 2D or 3D packing to ``path``, atomically, in the format of its dimension.
+
+    Raises
+    ------
+    PackingError
+        When the packing breaks its format; nothing is written then.
+    """
+    if isinstance(packing, Packing3D):
+        save3d(packing, path)
+    elif isinstance(packing, Packing):
+        save(packing, path)
+    else:
+        raise PackingError(f"{type(packing).__name__} is not a packing")
+
+
+def _read_box(path: Path, data: Any) -> Box:
+    if not isinstance(data, dict):
+        raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
+    try:
+        return domain3d_from_dict(data)
+    except (KeyError, TypeError, ValueError, GeometryError) as err:
+        why = f"no {err}" if isinstance(err, KeyError) else str(err)
+        raise _invalid(path, f"meta 'domain' (kind {_short(data.get('kind'))}): {why}") from err
+
+
+def load_packing(path: str | Path) -> Packing | Packing3D:
+    """Read a 2D or 3D packing file, checking it against its format.
+
+    A 2D file (format versions 1 and 2) gives a :class:`~regopack.packing.Packing`
+    (see :func:`regopack.packing.load`), a 3D file (version 3) a
+    :class:`Packing3D`, checked as thoroughly. Nothing is unpickled.
+
+    Raises
+    ------
+    PackingFileError
+        One line naming the file and what is wrong with it.
+    """
+    path = open_packing_file(path)
+    try:
+        with np.load(path, allow_pickle=False) as npz:
+            meta = _read_meta(path, npz)
+            if meta["format_version"] != FORMAT_VERSION_3D:
+                return load(path)
+            if meta.get("dimension") != 3:
+                raise _invalid(path, f"meta 'dimension' is {_short(meta.get('dimension'))}, not 3")
+            arrays: dict[str, Any] = {}
+            for name, (dtype, ndim) in _ARRAYS3D.items():
+                if name not in npz.files:
+                    raise _invalid(path, f"missing array {name!r}")
+                arrays[name] = _read_array(path, npz, name, dtype, ndim)
+            if "rounding" in npz.files:
+                arrays["rounding"] = _read_array(path, npz, "rounding", np.float64, 1)
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
+        raise PackingFileError(
+            f"{path}: not a regopack packing file ({' '.join(str(err).split())})"
+        ) from err
+    keys = _read_meta_keys(path, meta, _read_box)
+    try:
+        return Packing3D(**arrays, **keys)
+    except PackingError as err:
+        raise _invalid(path, str(err)) from err

@@ -1,0 +1,148 @@
+"""3D packings: validation, the version-3 file, and reading 2D or 3D files with one call."""
+
+from __future__ import annotations
+
+import json
+import zipfile
+
+import numpy as np
+import pytest
+
+import regopack
+from regopack.domain import Rectangle
+from regopack.domain3d import Box, PeriodicBox
+from regopack.errors import PackingError, PackingFileError
+from regopack.packing import load
+from regopack.packing3d import Packing3D, load_packing, save3d
+from regopack.testing import packing_from_polygons
+
+
+def _cube_arrays(half: float) -> dict[str, np.ndarray]:
+    """One axis-aligned cube of half-side ``half``: vertices and faces as in a solid batch."""
+    v = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
+    # vertex index = 4 * (x > 0) + 2 * (y > 0) + (z > 0); loops counter-clockwise from outside
+    loops = [
+        [0, 1, 3, 2],  # x = -h
+        [4, 6, 7, 5],  # x = +h
+        [0, 4, 5, 1],  # y = -h
+        [2, 3, 7, 6],  # y = +h
+        [0, 2, 6, 4],  # z = -h
+        [1, 5, 7, 3],  # z = +h
+    ]
+    normals = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], float)
+    return {
+        "vertices": v,
+        "face_vertices": np.array(loops, dtype=np.int64).ravel(),
+        "normals": normals,
+        "support": np.full(6, half),
+    }
+
+
+def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) -> Packing3D:
+    """Cubes at ``centres`` (NaN rows: not placed) in a 10-µm box."""
+    n = len(centres)
+    cube = _cube_arrays(half)
+    placed = ~np.isnan(np.asarray(centres, float)).any(axis=1)
+    index = np.full(n, -1)
+    index[placed] = np.arange(int(placed.sum()))
+    args: dict[str, object] = {
+        "radius": np.full(n, half * (6 / np.pi) ** (1 / 3)),
+        "mineral": np.zeros(n, dtype=np.int64),
+        "mineral_names": ("glass",),
+        "vertices": np.tile(cube["vertices"], (n, 1)),
+        "offsets": np.arange(n + 1) * 8,
+        "face_vertices": np.tile(cube["face_vertices"], n),
+        "face_vertex_offsets": np.arange(6 * n + 1) * 4,
+        "face_offsets": np.arange(n + 1) * 6,
+        "normals": np.tile(cube["normals"], (n, 1)),
+        "support": np.tile(cube["support"], n),
+        "rotation": np.tile([1.0, 0, 0, 0], (n, 1)),
+        "centre": np.asarray(centres, float),
+        "insertion_index": index,
+        "domain": Box(0, 10, 0, 10, 0, 10),
+    }
+    args.update(kw)
+    return Packing3D(**args)  # type: ignore[arg-type]
+
+
+def test_cubes_have_their_volume_fraction() -> None:
+    p = cube_packing([[1, 1, 1], [3, 1, 1], [np.nan] * 3])
+    assert p.n_placed == 2 and p.placed_in_order().tolist() == [0, 1]
+    assert p.solids.volume.tolist() == pytest.approx([1.0, 1.0, 1.0])
+    assert p.phi == pytest.approx(2.0 / 1000.0)
+    assert p.world_vertices(1).min(axis=0).tolist() == [2.5, 0.5, 0.5]
+    assert "2 of 3 placed" in repr(p)
+
+
+def test_file_round_trip_and_one_reader_for_both_dimensions(tmp_path) -> None:
+    p3 = cube_packing([[1, 1, 1], [np.nan] * 3], domain=PeriodicBox(0, 4, 0, 5, 0, 6))
+    save3d(p3, tmp_path / "p3.npz")
+    back = load_packing(tmp_path / "p3.npz")
+    assert isinstance(back, Packing3D) and type(back.domain) is PeriodicBox
+    for name in ("vertices", "face_vertices", "normals", "centre", "rotation", "insertion_index"):
+        assert np.array_equal(getattr(back, name), getattr(p3, name), equal_nan=name == "centre")
+    regopack.save(p3, tmp_path / "again.npz")
+    assert isinstance(regopack.load(tmp_path / "again.npz"), Packing3D)
+    square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    p2 = packing_from_polygons([square, square + 2.0], Rectangle(0, 5, 0, 5))
+    regopack.save(p2, tmp_path / "p2.npz")
+    assert isinstance(regopack.load(tmp_path / "p2.npz"), regopack.Packing)
+
+
+def test_the_2d_reader_refuses_a_3d_file_in_one_line(tmp_path) -> None:
+    save3d(cube_packing([[1, 1, 1]]), tmp_path / "p3.npz")
+    with pytest.raises(PackingFileError, match=r"p3\.npz: a 3D packing .* 2D packings only") as err:
+        load(tmp_path / "p3.npz")
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        ({"normals": np.tile([[2.0, 0, 0]], (6, 1))}, "non-unit row"),
+        ({"rotation": np.array([[0.5, 0, 0, 0]])}, "'rotation' has the non-unit"),
+        ({"face_vertices": np.full(24, 8)}, "'face_vertices' has the value 8"),
+        ({"face_vertex_offsets": np.array([0, 2, 6, 10, 14, 18, 24])}, "at least 3"),
+        ({"face_offsets": np.array([0, 5])}, "'face_offsets' ends at 5"),
+        ({"centre": np.array([[1.0, 1.0]])}, r"'centre' has shape \(1, 2\)"),
+        ({"support": np.full(5, 0.5)}, "'support' has 5 entries"),
+        ({"vertices": np.full((8, 3), np.inf)}, "non-finite"),
+        ({"mineral": np.array([3])}, "'mineral' has the value 3"),
+        ({"domain": "box"}, "not a 3D box"),
+    ],
+)
+def test_broken_packings_are_refused_naming_the_array(
+    change: dict[str, object], message: str
+) -> None:
+    with pytest.raises(PackingError, match=message):
+        cube_packing([[1, 1, 1]], **change)
+
+
+def _rewrite(path, edit) -> None:  # type: ignore[no-untyped-def]
+    with np.load(path, allow_pickle=False) as npz:
+        contents = {k: npz[k] for k in npz.files}
+    edit(contents)
+    np.savez(path, **contents)
+
+
+def test_a_damaged_3d_file_is_refused_naming_the_file(tmp_path) -> None:
+    path = tmp_path / "p.npz"
+    save3d(cube_packing([[1, 1, 1]]), path)
+
+    def bad_domain(contents: dict[str, np.ndarray]) -> None:
+        meta = json.loads(str(contents["meta"]))
+        meta["domain"] = {"kind": "box", "bounds": [0, 1, 0, 1, 1, 0]}
+        contents["meta"] = np.array(json.dumps(meta))
+
+    _rewrite(path, bad_domain)
+    with pytest.raises(PackingFileError, match=r"p\.npz: invalid packing file: meta 'domain'"):
+        load_packing(path)
+
+    save3d(cube_packing([[1, 1, 1]]), path)
+    _rewrite(path, lambda c: c.pop("normals"))
+    with pytest.raises(PackingFileError, match="missing array 'normals'"):
+        load_packing(path)
+    path.write_bytes(b"not a zip")
+    assert not zipfile.is_zipfile(path)
+    with pytest.raises(PackingFileError, match="not an NPZ archive"):
+        load_packing(path)
