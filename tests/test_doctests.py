@@ -34,6 +34,9 @@ MODULES = [
     "regopack.plugins.analysis.figure_specs",
     "regopack.plugins.csv_export",
     "regopack.plugins.rounded_bodies",
+    "regopack.plugins.polyhedra.directions",
+    "regopack.plugins.polyhedra.generator",
+    "regopack.plugins.polyhedra.rotations",
 ]
 
 

@@ -1,0 +1,36 @@
+"""Random convex polyhedra with a shape coefficient psi: the geometry for 3D packings.
+
+- :mod:`~regopack.plugins.polyhedra.directions`: fixed unit direction sets
+  (the truncated octahedron's 14 by default) and their validation;
+- :mod:`~regopack.plugins.polyhedra.generator`: :func:`random_polyhedra`;
+- :mod:`~regopack.plugins.polyhedra.batch`: :class:`PolyhedronBatch`;
+- :mod:`~regopack.plugins.polyhedra.rotations`: uniform random rotations;
+- :mod:`~regopack.plugins.polyhedra.kernel`: the compiled vertex enumeration.
+
+Not yet a shape plugin: nothing here is registered with the plugin manager.
+"""
+
+from __future__ import annotations
+
+from regopack.plugins.polyhedra.batch import PolyhedronBatch
+from regopack.plugins.polyhedra.directions import (
+    check_directions,
+    cube,
+    fibonacci,
+    rhombic_dodecahedron,
+    truncated_octahedron,
+)
+from regopack.plugins.polyhedra.generator import polyhedra_from_support, random_polyhedra
+from regopack.plugins.polyhedra.rotations import random_rotations
+
+__all__ = [
+    "PolyhedronBatch",
+    "check_directions",
+    "cube",
+    "fibonacci",
+    "polyhedra_from_support",
+    "random_polyhedra",
+    "random_rotations",
+    "rhombic_dodecahedron",
+    "truncated_octahedron",
+]
