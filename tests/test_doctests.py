@@ -24,6 +24,7 @@ MODULES = [
     "regopack.scene_model",
     "regopack.testing",
     "regopack.verification",
+    "regopack.verification3d",
     "regopack.plugins.change5",
     "regopack.plugins.octagon",
     "regopack.plugins.eta",
