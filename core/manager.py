@@ -51,6 +51,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.shapes",
     "regopack.plugins.disk",
     "regopack.plugins.sphere",
+    "regopack.plugins.polyhedra.shape",
     "regopack.plugins.rsa",
     "regopack.plugins.exporters",
     "regopack.plugins.image_export",

@@ -29,6 +29,7 @@ def test_default_registry_has_the_builtins():
     assert reg.names("shape") == [
         "disk",
         "octagon",
+        "polyhedron",
         "random-polygon",
         "regular",
         "sphere",

@@ -37,6 +37,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.shapes",
         "regopack.plugins.disk",
         "regopack.plugins.sphere",
+        "regopack.plugins.polyhedra.shape",
         "regopack.plugins.rsa",
         "regopack.plugins.exporters",
         "regopack.plugins.image_export",

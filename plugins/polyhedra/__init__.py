@@ -5,9 +5,8 @@
 - :mod:`~regopack.plugins.polyhedra.generator`: :func:`random_polyhedra`;
 - :mod:`~regopack.plugins.polyhedra.batch`: :class:`PolyhedronBatch`;
 - :mod:`~regopack.plugins.polyhedra.rotations`: uniform random rotations;
-- :mod:`~regopack.plugins.polyhedra.kernel`: the compiled vertex enumeration.
-
-Not yet a shape plugin: nothing here is registered with the plugin manager.
+- :mod:`~regopack.plugins.polyhedra.kernel`: the compiled vertex enumeration;
+- :mod:`~regopack.plugins.polyhedra.shape`: the ``polyhedron`` shape plugin.
 """
 
 from __future__ import annotations
