@@ -35,6 +35,7 @@ import numpy as np
 from regopack.errors import ConfigError
 from regopack.interfaces import ProgressCallback
 from regopack.packing import Packing, load
+from regopack.packing3d import Packing3D
 from regopack.results import AnalysisResults
 
 if TYPE_CHECKING:
@@ -42,6 +43,7 @@ if TYPE_CHECKING:
     from regopack.experiment_api import SweepTable
     from regopack.manager import Registry
     from regopack.run import RunOutcome
+    from regopack.run3d import RunOutcome3D
     from regopack.scene_model import ResolvedScene
     from regopack.verification import VerifyReport
 
@@ -260,7 +262,7 @@ def pack_and_summarise(
     figures: bool = True,
     registry: Registry | None = None,
     **overrides: Any,
-) -> RunOutcome:
+) -> RunOutcome | RunOutcome3D:
     """Pack a scene and summarise the run, as ``regopack run`` does.
 
     Takes the arguments of :func:`pack`, plus ``figures`` (draw the figures
@@ -284,6 +286,12 @@ def pack_and_summarise(
         if isinstance(source, str | os.PathLike) and Path(source).is_file():
             refuse_inside(Path(source), folder, "scene file")
         check_replaceable(folder, RUN_FOLDER)
+    if resolved.scene.domain.dimension == 3:
+        from regopack.run3d import check_scene3d, run_scene3d
+
+        check_scene3d(resolved)
+        with _progress(progress, f"packing {resolved.name}") as callback:
+            return run_scene3d(resolved, folder, progress=callback, verify=verify)
     check_scene(resolved)
     with _progress(progress, f"packing {resolved.name}") as callback:
         return run_scene(
@@ -304,8 +312,8 @@ def pack(
     out: str | os.PathLike[str] | None = None,
     verify: bool | None = None,
     **overrides: Any,
-) -> Packing:
-    """Pack a scene, as ``regopack run`` does.
+) -> Packing | Packing3D:
+    """Pack a scene, as ``regopack run`` does (a :class:`Packing3D` for a 3D scene).
 
     Parameters
     ----------

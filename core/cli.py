@@ -292,7 +292,7 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     tried, placed = outcome.summary["tried"], outcome.summary["placed"]
     checked = outcome.summary.get("verify")
     violated = False
-    if checked is not None and not checked["ok"]:
+    if checked is not None and not checked.get("ok", True):
         violated = True
         print(
             f"regopack: warning: the packing is violated: {checked['overlap_pairs']:,} "

@@ -141,6 +141,7 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     from regopack.api import analyze, export, pack, scene
     from regopack.errors import RegopackError
     from regopack.manager import default_registry
+    from regopack.packing import Packing
 
     registry = default_registry()
     analyzers = sorted(registry.names("analysis"))
@@ -153,6 +154,8 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
             except RegopackError:
                 continue  # a plugin of this variant is not installed
             packing = pack(resolved)
+            if not isinstance(packing, Packing):
+                continue  # 3D packings have no analyses or exports yet
             # the analyses and exports of every variant: some kernels have a
             # signature per domain kind (periodic images) or per particle kind
             results = analyze(packing, analyzers, registry=registry)

@@ -594,7 +594,9 @@ def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     if "eta" in summary:
         rows.insert(2, ("η", fmt(summary["eta"], "g")))
     checked = summary.get("verify")
-    if checked is not None:
+    if checked is not None and "skipped" in checked:
+        rows.append(("verified", f"skipped: {checked['skipped']}"))
+    elif checked is not None:
         rows.append(
             (
                 "verified",

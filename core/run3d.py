@@ -1,0 +1,351 @@
+"""A 3D run: draw the solids, insert them, measure, verify and write the run folder.
+
+The counterpart of :mod:`regopack.run` for scenes whose domain is a box
+(:attr:`regopack.scene_model.Domain.dimension` is 3). The random draws
+happen in the order of 2D: the radii, the minerals, then each phase's solids.
+:func:`regopack.run.run_scene` hands 3D scenes to :func:`run_scene3d`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.compilation import CompileTime, compile_timer
+from regopack.domain3d import Box
+from regopack.errors import ConfigError, GeometryError, PluginError
+from regopack.interfaces import (
+    DensityController,
+    InsertionResult,
+    InsertionStrategy,
+    ProgressCallback,
+    SizeDistribution,
+    SolidGenerator,
+)
+from regopack.outdir import check_replaceable, replace_folder
+from regopack.packing import write_json_atomic
+from regopack.packing3d import Packing3D, save3d
+from regopack.population import Population
+from regopack.scene_model import ResolvedScene
+from regopack.solids import SolidBatch, concat_solids
+
+IntArray = NDArray[np.int64]
+FloatArray = NDArray[np.float64]
+
+__all__ = ["RunOutcome3D", "check_scene3d", "draw_population3d", "phi_in_box", "run_scene3d"]
+
+
+@dataclass(frozen=True)
+class RunOutcome3D:
+    """Result of :func:`run_scene3d`: the packing, its summary and the files written."""
+
+    packing: Packing3D
+    summary: dict[str, Any]
+    packing_path: Path | None = None
+    summary_path: Path | None = None
+    analysis: None = None
+    exports: tuple[Path, ...] = ()
+
+
+def _located(scene: ResolvedScene, loc: str, text: str) -> str:
+    from regopack.run import _located as located
+
+    return located(scene, loc, text)
+
+
+def _box(scene: ResolvedScene) -> Box:
+    return scene.scene.domain.to_box()
+
+
+def check_scene3d(scene: ResolvedScene) -> int:
+    """Check that a 3D scene can be drawn at all; return its particle count.
+
+    Refused in one line: particles whose volume overflows, a smallest
+    particle larger than the box, ``count = "auto"`` with a size
+    distribution that does not know its mean volume, and a count whose
+    memory exceeds the machine's.
+    """
+    from regopack.run import BYTES_PER_PARTICLE, _build, _bytes, memory_limit
+
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
+    vol_max = 4.0 / 3.0 * math.pi * r_max**3
+    if not math.isfinite(vol_max):
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the largest particle (diameter {2 * r_max:g}) has a volume of {vol_max:g}: "
+                "its size overflows 64-bit floats; give smaller sizes",
+            )
+        )
+    box = _box(scene)
+    if 4.0 / 3.0 * math.pi * r_min**3 > box.volume:
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the smallest particle (diameter {2 * r_min:g}) is larger than the box "
+                f"(volume {box.volume:g}), so no particle can be placed",
+            )
+        )
+    count = scene.scene.count
+    if count == "auto":
+        mean = float(size_dist.mean_volume)
+        if not (math.isfinite(mean) and mean > 0):
+            raise ConfigError(
+                _located(
+                    scene,
+                    "count",
+                    f"count = 'auto' needs the mean particle volume, which the "
+                    f"{scene.size.kind!r} size distribution does not give; give a count",
+                )
+            )
+        auto = box.volume / mean
+        if not math.isfinite(auto):
+            raise ConfigError(
+                _located(scene, "count", "box volume / mean particle volume is not finite")
+            )
+        n = round(auto)
+    else:
+        n = int(count)
+    limit = memory_limit()
+    if limit is not None and n * BYTES_PER_PARTICLE > limit[0]:
+        raise ConfigError(
+            _located(
+                scene,
+                "count",
+                f"{n:,} particles need at least {_bytes(n * BYTES_PER_PARTICLE)} of memory; "
+                f"this machine's {limit[1]} is {_bytes(limit[0])}",
+            )
+        )
+    return n
+
+
+def draw_population3d(scene: ResolvedScene, rng: np.random.Generator) -> Population:
+    """Draw every solid of a 3D scene up front, in insertion order (the 2D draw order)."""
+    from regopack.run import _build
+
+    n = check_scene3d(scene)
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
+    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
+        raise PluginError(
+            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
+            f"(expected ({n},), all finite and positive)"
+        )
+    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    parts: list[tuple[IntArray, SolidBatch]] = []
+    for p, phase in enumerate(scene.phases):
+        generator: SolidGenerator = _build(phase.shape, SolidGenerator, "shape")
+        idx = np.flatnonzero(minerals == p).astype(np.int64)
+        batch = generator.generate(radii[idx], rng)
+        if not isinstance(batch, SolidBatch) or len(batch) != len(idx):
+            raise PluginError(
+                f"shape plugin {phase.shape.kind!r} returned {type(batch).__name__} "
+                f"for {len(idx)} radii (phase {phase.name!r}); expected one solid per radius"
+            )
+        if not np.isfinite(batch.vertices).all():
+            raise GeometryError(
+                _located(
+                    scene,
+                    f"phases.{p}.shape",
+                    f"the {phase.shape.kind!r} solids of phase {phase.name!r} have non-finite "
+                    "vertices (64-bit float overflow); give smaller sizes",
+                )
+            )
+        parts.append((idx, batch))
+    shapes = concat_solids(parts, n)
+    return Population(
+        radius=radii,
+        mineral=minerals,
+        mineral_names=scene.phase_names,
+        shapes=shapes,  # type: ignore[arg-type]
+    )
+
+
+def _clip(points: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
+    """Points whose hull is the part of ``points``' hull with ``normal . x <= offset``.
+
+    The points on that side, and where the segments from them to the points
+    on the other side cross the plane (the edges' crossings among them).
+    """
+    side = points @ normal - offset
+    inside = points[side <= 0]
+    outside = points[side > 0]
+    if outside.shape[0] == 0 or inside.shape[0] == 0:
+        return inside
+    si = side[side <= 0][:, None]
+    so = side[side > 0][None, :]
+    t = si / (si - so)  # (n_in, n_out) in [0, 1)
+    cross = inside[:, None, :] + t[:, :, None] * (outside[None, :, :] - inside[:, None, :])
+    return np.vstack([inside, cross.reshape(-1, 3)])
+
+
+def phi_in_box(packing: Packing3D, window: Box) -> float:
+    """Volume fraction of ``window`` covered by the placed solids, clipped exactly.
+
+    A sharp polyhedron that crosses the window's faces is clipped by their
+    planes (the hull of its vertices inside and of the crossings of the
+    segments between its vertices, which holds its edges); a sphere
+    (rounded solid without faces) is clipped analytically only when it lies
+    wholly inside or outside, and raises ``NotImplementedError`` otherwise.
+    NaN for an empty window.
+    """
+    from scipy.spatial import ConvexHull
+
+    if not window.volume > 0:
+        return math.nan
+    solids = packing.solids
+    volume = solids.volume
+    lo = np.array([window.xmin, window.ymin, window.zmin])
+    hi = np.array([window.xmax, window.ymax, window.zmax])
+    rho = solids.rounding_radius
+    total = 0.0
+    for j in np.flatnonzero(packing.placed):
+        pts = packing.world_vertices(int(j))
+        vlo = pts.min(axis=0) - rho[j]
+        vhi = pts.max(axis=0) + rho[j]
+        if np.all(vlo >= lo) and np.all(vhi <= hi):
+            total += float(volume[j])
+            continue
+        if np.any(vhi <= lo) or np.any(vlo >= hi):
+            continue
+        if rho[j] > 0:
+            raise NotImplementedError("clipping a rounded solid or sphere to a window")
+        for axis in range(3):
+            for sign, bound in ((-1.0, -lo[axis]), (1.0, hi[axis])):
+                if pts.shape[0] < 4:
+                    break
+                normal = np.zeros(3)
+                normal[axis] = sign
+                pts = _clip(pts, normal, bound)
+                if pts.shape[0] >= 4:
+                    try:
+                        pts = pts[ConvexHull(pts).vertices]
+                    except Exception:  # a flat remainder: no volume
+                        pts = pts[:0]
+        if pts.shape[0] >= 4:
+            try:
+                total += float(ConvexHull(pts).volume)
+            except Exception:  # a flat remainder: no volume
+                pass
+    return total / window.volume
+
+
+def verify_summary3d(packing: Packing3D) -> dict[str, Any]:
+    """Return the ``verify`` entry of a 3D run's summary, from the independent oracle."""
+    from regopack.verification3d import verify_polyhedra
+
+    if packing.rounded:
+        return {"skipped": "spheres and rounded solids are not verified yet"}
+    placed = packing.placed_in_order()
+    solids = [packing.world_vertices(int(j)) for j in placed]
+    box = packing.domain
+    report = verify_polyhedra(
+        solids,
+        None,
+        [box.xmin, box.ymin, box.zmin],
+        [box.xmax, box.ymax, box.zmax],
+        periodic=box.periodic,
+    )
+    return {
+        "ok": bool(report.ok),
+        "overlap_pairs": int(report.n_overlapping_pairs),
+        "worst_overlap": float(report.worst_overlap_fraction),
+        "outside": int(report.n_outside),
+    }
+
+
+def run_scene3d(
+    resolved: ResolvedScene,
+    out_dir: str | Path | None = None,
+    progress: ProgressCallback | None = None,
+    *,
+    verify: bool | None = None,
+) -> RunOutcome3D:
+    """Draw, insert, measure and write a 3D scene (see :func:`regopack.run.run_scene`).
+
+    ``verify`` (default: True) checks the packing with the independent
+    oracle :func:`regopack.verification3d.verify_polyhedra`.
+    """
+    from regopack.run import RUN_FOLDER
+
+    if resolved.scene.outputs.analyses or resolved.scene.outputs.exports:
+        raise ConfigError(
+            _located(
+                resolved,
+                "outputs",
+                "3D scenes have no analyses or exports yet; leave outputs.analyses and "
+                "outputs.exports empty",
+            )
+        )
+    if out_dir is not None:
+        check_replaceable(out_dir, RUN_FOLDER)
+    with compile_timer() as compiling:
+        return _run3d(resolved, out_dir, progress, verify, compiling)
+
+
+def _run3d(
+    resolved: ResolvedScene,
+    out_dir: str | Path | None,
+    progress: ProgressCallback | None,
+    verify: bool | None,
+    compiling: CompileTime,
+) -> RunOutcome3D:
+    from regopack.run import RUN_FOLDER, _build
+
+    start = time.perf_counter()
+    rng = np.random.default_rng(resolved.seed)
+    population = draw_population3d(resolved, rng)
+    inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
+    controller: DensityController = _build(resolved.density, DensityController, "density")
+    box = _box(resolved)
+    result: InsertionResult = inserter.pack(population, box, controller, rng, progress)  # type: ignore[arg-type]
+    wall = time.perf_counter() - start
+    compile_insertion = compiling.seconds
+    size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
+    packing = Packing3D.from_parts(
+        population, result, box, resolved.to_dict(), resolved.seed, result.stats
+    )
+    margin = 2.0 * float(size_dist.r_max)
+    try:
+        phi_interior = phi_in_box(packing, box.interior(margin))
+    except NotImplementedError:
+        phi_interior = math.nan
+    summary: dict[str, Any] = {
+        "scene": resolved.name,
+        "seed": resolved.seed,
+        "dimension": 3,
+        "tried": packing.n_particles,
+        "placed": packing.n_placed,
+        "not_placed": packing.n_particles - packing.n_placed,
+        "phi_domain": packing.phi,
+        "phi_interior": phi_interior,
+        "interior_margin": margin,
+        "wall_time_s": wall,
+        "insertion_time_s": max(wall - compile_insertion, 0.0),
+        "compile_time_s": compile_insertion,
+    }
+    for key, value in result.stats.items():
+        summary.setdefault(key, value)
+    if verify is None or verify:
+        summary["verify"] = verify_summary3d(packing)
+    summary["compile_time_s"] = compiling.seconds
+    if out_dir is None:
+        return RunOutcome3D(packing, summary)
+    out = Path(out_dir)
+    outputs = resolved.scene.outputs
+    with replace_folder(out, RUN_FOLDER) as tmp:
+        try:
+            save3d(packing, tmp / outputs.packing)
+            write_json_atomic(tmp / outputs.summary, summary)
+        except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
+            raise ConfigError(f"cannot write the run's output: {err}") from err
+    return RunOutcome3D(packing, summary, out / outputs.packing, out / outputs.summary)

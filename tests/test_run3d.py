@@ -1,0 +1,170 @@
+"""The 3D run path: draw, insert (a lattice stand-in), measure, verify and write the folder."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable
+
+import numpy as np
+import pydantic
+import pytest
+
+import regopack
+from regopack.domain3d import Box
+from regopack.errors import ConfigError
+from regopack.hookspecs import hookimpl
+from regopack.interfaces import InsertionResult, InsertionStrategy
+from regopack.packing3d import Packing3D, load_packing
+from regopack.plugin_types import InserterSpec
+from regopack.run3d import phi_in_box
+from regopack.testing import make_registry
+
+SCENE = {
+    "name": "lattice3d",
+    "seed": 4,
+    "count": 40,
+    "domain": {"kind": "box", "width": 60.0, "height": 40.0, "depth": 50.0},
+    "size": {"kind": "uniform", "d_min": 4.0, "d_max": 8.0},
+    "phases": [
+        {"name": "pyroxene", "fraction": 0.6, "shape": {"kind": "polyhedron", "psi": 0.5}},
+        {"name": "glass", "fraction": 0.4, "shape": {"kind": "polyhedron", "directions": "cube"}},
+    ],
+    "insertion": {"kind": "lattice3d"},
+    "density": {"kind": "eta"},
+}
+
+
+class _Config(pydantic.BaseModel):
+    model_config = pydantic.ConfigDict(extra="forbid")
+    spacing: float = pydantic.Field(0.0, description="lattice spacing (0: touching spheres)")
+
+
+class Lattice3D(InsertionStrategy):
+    """Places solids on a cubic lattice of cells wide enough for the largest one."""
+
+    def __init__(self, config: _Config) -> None:
+        self.spacing = config.spacing
+
+    def pack(self, population, domain, controller, rng, progress=None):  # type: ignore[no-untyped-def]
+        n = len(population)
+        cell = self.spacing or 2.0 * float(population.shapes.circumradius.max())
+        counts = [int(s // cell) for s in domain.size]
+        centre = np.full((n, 3), np.nan)
+        index = np.full(n, -1, dtype=np.int64)
+        lo = np.array([domain.xmin, domain.ymin, domain.zmin])
+        for i in range(min(n, math.prod(counts))):
+            cx, rest = divmod(i, counts[1] * counts[2])
+            cy, cz = divmod(rest, counts[2])
+            centre[i] = lo + (np.array([cx, cy, cz]) + 0.5) * cell
+            index[i] = i
+        return InsertionResult(centre, index, {"cells": float(math.prod(counts))})
+
+
+class _Plugin:
+    @hookimpl
+    def regopack_inserters(self) -> Iterable[InserterSpec]:
+        return [
+            InserterSpec(name="lattice3d", config_model=_Config, factory=Lattice3D, dimensions=(3,))
+        ]
+
+
+@pytest.fixture
+def registry():  # type: ignore[no-untyped-def]
+    return make_registry(_Plugin())
+
+
+def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> None:  # type: ignore[no-untyped-def]
+    scene = regopack.scene(SCENE, registry=registry)
+    outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run")
+    packing = outcome.packing
+    assert isinstance(packing, Packing3D)
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["dimension"] == 3 and summary["tried"] == 40
+    assert summary["placed"] == packing.n_placed > 0
+    assert summary["phi_domain"] == pytest.approx(packing.phi)
+    assert summary["verify"] == {"ok": True, "overlap_pairs": 0, "worst_overlap": 0.0, "outside": 0}
+    back = load_packing(tmp_path / "run" / "packing.npz")
+    assert isinstance(back, Packing3D)
+    assert np.array_equal(back.vertices, packing.vertices)
+    # same scene and seed: the same solids, bit for bit
+    again = regopack.pack(scene)
+    assert isinstance(again, Packing3D)
+    assert np.array_equal(again.vertices, packing.vertices)
+    assert np.array_equal(again.rotation, packing.rotation)
+
+
+def test_overlaps_are_reported_by_the_oracle(registry) -> None:  # type: ignore[no-untyped-def]
+    scene = regopack.scene(SCENE, registry=registry, insertion__spacing=3.0)
+    outcome = regopack.pack_and_summarise(scene)
+    assert outcome.summary["verify"]["ok"] is False
+    assert outcome.summary["verify"]["overlap_pairs"] > 0
+
+
+def test_count_auto_uses_the_mean_volume(registry) -> None:  # type: ignore[no-untyped-def]
+    scene = regopack.scene(SCENE, registry=registry, count="auto")
+    packing = regopack.pack(scene, verify=False)
+    mean = math.pi / 6 * (8.0**4 - 4.0**4) / (4 * 4.0)  # E[d^3] of the uniform 4..8
+    assert packing.n_particles == round(60.0 * 40.0 * 50.0 / mean)
+
+
+def test_3d_outputs_that_do_not_exist_yet_are_refused(registry) -> None:  # type: ignore[no-untyped-def]
+    scene = regopack.scene({**SCENE, "outputs": {"analyses": ["density"]}}, registry=registry)
+    with pytest.raises(ConfigError, match="3D scenes have no analyses or exports yet"):
+        regopack.pack(scene)
+
+
+def _cube_packing(centres: list[list[float]], half: float) -> Packing3D:
+    from test_packing3d import cube_packing
+
+    return cube_packing(centres, half)
+
+
+def test_phi_in_a_window_clips_exactly() -> None:
+    # a unit cube at the centre of a 10-box, a window cutting it in half and in a quarter
+    p = _cube_packing([[5.0, 5.0, 5.0]], 0.5)
+    assert phi_in_box(p, Box(0, 10, 0, 10, 0, 10)) == pytest.approx(1e-3)
+    assert phi_in_box(p, Box(5, 10, 0, 10, 0, 10)) == pytest.approx(0.5 / 500)
+    assert phi_in_box(p, Box(5, 10, 5, 10, 0, 10)) == pytest.approx(0.25 / 250)
+    assert phi_in_box(p, Box(5.25, 10, 5, 10, 4.75, 5.75)) == pytest.approx(
+        (0.25 * 0.5 * 0.75) / (4.75 * 5 * 1.0)
+    )
+    assert phi_in_box(p, Box(6, 10, 0, 10, 0, 10)) == 0.0
+
+
+def test_phi_of_rotated_polyhedra_cut_by_a_window_corner_matches_sampling() -> None:
+    from test_packing3d import cube_packing
+
+    from regopack.plugins.polyhedra.shape import PolyhedronConfig, RandomPolyhedron
+
+    batch = RandomPolyhedron(PolyhedronConfig(psi=0.3)).generate(
+        np.array([1.0, 1.3]), np.random.default_rng(8)
+    )
+    base = cube_packing([[0, 0, 0], [0, 0, 0]], 0.5)
+    centres = np.array([[5.0, 5.0, 5.0], [2.0, 7.5, 5.2]])
+    p = Packing3D(
+        **{
+            **{k: getattr(base, k) for k in ("radius", "mineral", "mineral_names", "domain")},
+            "vertices": batch.vertices,
+            "offsets": batch.offsets,
+            "face_vertices": batch.face_vertices,
+            "face_vertex_offsets": batch.face_vertex_offsets,
+            "face_offsets": batch.face_offsets,
+            "normals": batch.normals,
+            "support": batch.support,
+            "rotation": batch.rotation,
+            "centre": centres,
+            "insertion_index": np.array([0, 1]),
+        }
+    )
+    window = Box(4.6, 9.0, 1.0, 5.3, 4.8, 9.0)
+    rng = np.random.default_rng(0)
+    pts = rng.uniform([4.6, 1.0, 4.8], [9.0, 5.3, 9.0], size=(400_000, 3))
+    inside = np.zeros(len(pts), dtype=bool)
+    for j in range(2):
+        f0, f1 = batch.face_offsets[j], batch.face_offsets[j + 1]
+        rel = pts - centres[j]
+        inside |= np.all(rel @ batch.normals[f0:f1].T <= batch.support[f0:f1], axis=1)
+    frac = inside.mean()
+    se = math.sqrt(frac * (1 - frac) / len(pts))
+    assert 0.0 < frac and abs(phi_in_box(p, window) - frac) < 5 * se
