@@ -46,6 +46,7 @@ if TYPE_CHECKING:
     from regopack.run3d import RunOutcome3D
     from regopack.scene_model import ResolvedScene
     from regopack.verification import VerifyReport
+    from regopack.verification3d import Report3D
 
 __all__ = [
     "analyze",
@@ -505,10 +506,14 @@ def analyze(
     return results
 
 
-def verify(packing: Packing | str | os.PathLike[str], rel_tol: float = 1e-9) -> VerifyReport:
+def verify(
+    packing: Packing | Packing3D | str | os.PathLike[str], rel_tol: float = 1e-9
+) -> VerifyReport | Report3D:
     """Check a packing for overlaps and particles outside the domain, as ``regopack verify``.
 
-    The check is independent of the insertion code (shapely polygons).
+    The check is independent of the insertion code: shapely polygons in 2D,
+    :func:`regopack.verification3d.verify_polyhedra` in 3D (which reports the
+    worst overlap as a fraction of the smaller volume).
 
     Returns
     -------
@@ -527,6 +532,14 @@ def verify(packing: Packing | str | os.PathLike[str], rel_tol: float = 1e-9) -> 
 
     if isinstance(rel_tol, bool) or not isinstance(rel_tol, int | float) or not rel_tol >= 0:
         raise ConfigError(f"rel_tol = {rel_tol!r}: expected a number >= 0")
+    if isinstance(packing, str | os.PathLike):
+        from regopack.packing3d import load_packing
+
+        packing = load_packing(Path(packing))
+    if isinstance(packing, Packing3D):
+        from regopack.run3d import verify_packing3d
+
+        return verify_packing3d(packing, rel_tol=float(rel_tol))
     return check(_packing(packing), rel_tol=float(rel_tol))
 
 

@@ -12,7 +12,7 @@ import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,6 +34,9 @@ from regopack.packing3d import Packing3D, save3d
 from regopack.population import Population
 from regopack.scene_model import ResolvedScene
 from regopack.solids import SolidBatch, concat_solids
+
+if TYPE_CHECKING:
+    from regopack.verification3d import Report3D
 
 IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
@@ -239,22 +242,36 @@ def phi_in_box(packing: Packing3D, window: Box) -> float:
     return total / window.volume
 
 
-def verify_summary3d(packing: Packing3D) -> dict[str, Any]:
-    """Return the ``verify`` entry of a 3D run's summary, from the independent oracle."""
+def verify_packing3d(packing: Packing3D, rel_tol: float = 1e-9) -> Report3D:
+    """Check a 3D packing of sharp polyhedra with the independent oracle.
+
+    Raises
+    ------
+    ConfigError
+        For spheres and rounded solids, which the oracle does not check yet.
+    """
     from regopack.verification3d import verify_polyhedra
 
     if packing.rounded:
-        return {"skipped": "spheres and rounded solids are not verified yet"}
+        raise ConfigError("verify: spheres and rounded solids are not verified yet")
     placed = packing.placed_in_order()
     solids = [packing.world_vertices(int(j)) for j in placed]
     box = packing.domain
-    report = verify_polyhedra(
+    return verify_polyhedra(
         solids,
         None,
         [box.xmin, box.ymin, box.zmin],
         [box.xmax, box.ymax, box.zmax],
         periodic=box.periodic,
+        rel_tol=rel_tol,
     )
+
+
+def verify_summary3d(packing: Packing3D) -> dict[str, Any]:
+    """Return the ``verify`` entry of a 3D run's summary, from the independent oracle."""
+    if packing.rounded:
+        return {"skipped": "spheres and rounded solids are not verified yet"}
+    report = verify_packing3d(packing)
     return {
         "ok": bool(report.ok),
         "overlap_pairs": int(report.n_overlapping_pairs),

@@ -168,3 +168,19 @@ def test_phi_of_rotated_polyhedra_cut_by_a_window_corner_matches_sampling() -> N
     frac = inside.mean()
     se = math.sqrt(frac * (1 - frac) / len(pts))
     assert 0.0 < frac and abs(phi_in_box(p, window) - frac) < 5 * se
+
+
+def test_regopack_verify_checks_3d_packing_files(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    from test_packing3d import cube_packing
+
+    from regopack.cli import EXIT_OK, EXIT_VIOLATED, main
+    from regopack.packing3d import save3d
+
+    save3d(cube_packing([[1, 1, 1], [2, 1, 1]], 0.5), tmp_path / "ok.npz")
+    assert main(["verify", str(tmp_path / "ok.npz")]) == EXIT_OK
+    save3d(cube_packing([[1, 1, 1], [1.9, 1, 1]], 0.5), tmp_path / "bad.npz")
+    assert main(["verify", str(tmp_path / "bad.npz")]) == EXIT_VIOLATED
+    text = capsys.readouterr().out
+    assert "overlap" in text
+    report = regopack.verify(tmp_path / "bad.npz")
+    assert not report and report.worst_overlap_fraction == pytest.approx(0.1)
