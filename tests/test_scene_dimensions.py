@@ -89,7 +89,7 @@ def test_a_2d_shape_in_a_3d_scene_is_refused_naming_the_file(tmp_path, registry)
     path.write_text(SCENE_3D.replace('kind = "sphere"', 'kind = "octagon"'), encoding="utf-8")
     msg = _error(path, registry)
     assert msg.startswith(f"{path}: phases.0.shape.kind = 'octagon' is a 2D shape")
-    assert "domain.kind = 'box' makes the scene 3D; 3D shapes: sphere" in msg
+    assert "domain.kind = 'box' makes the scene 3D; 3D shapes: polyhedron, sphere" in msg
 
 
 def test_a_3d_domain_set_on_a_2d_scene_blames_the_option(registry) -> None:  # type: ignore[no-untyped-def]
