@@ -42,6 +42,9 @@ from regopack.solids import SolidBatch
 
 FloatArray = NDArray[np.float64]
 
+FIBONACCI_DEFAULT = 20
+"""Directions of the 'fibonacci' set when ``m`` is not given."""
+
 DirectionSet = Literal["truncated-octahedron", "cube", "rhombic-dodecahedron", "fibonacci"]
 
 
@@ -93,16 +96,18 @@ class PolyhedronConfig(BaseModel):
             "'rhombic-dodecahedron' (12) or 'fibonacci' (m quasi-uniform directions)."
         ),
     )
-    m: int = Field(
-        20,
+    m: int | None = Field(
+        None,
         ge=4,
         le=64,
-        description="Number of directions of the 'fibonacci' set (4 to 64; only that set).",
+        description=(
+            "Number of directions of the 'fibonacci' set (4 to 64; default 20); only with that set."
+        ),
     )
 
     @model_validator(mode="after")
     def _m_only_for_fibonacci(self) -> PolyhedronConfig:
-        if "m" in self.model_fields_set and self.directions != "fibonacci":
+        if self.m is not None and self.directions != "fibonacci":
             raise ValueError(f"m applies only to directions = 'fibonacci', not {self.directions!r}")
         return self
 
@@ -126,7 +131,7 @@ class RandomPolyhedron(SolidGenerator):
     def __init__(self, config: PolyhedronConfig | None = None) -> None:
         self.config = config or PolyhedronConfig()
         make, base = DIRECTION_SETS[self.config.directions]
-        self.directions = make(self.config.m)
+        self.directions = make(FIBONACCI_DEFAULT if self.config.m is None else self.config.m)
         self.base = np.asarray(base(self.directions.shape[0]), dtype=np.float64)
 
     def generate(self, radius: FloatArray, rng: np.random.Generator) -> SolidBatch:

@@ -104,3 +104,12 @@ def test_m_only_with_fibonacci_and_registered_as_3d() -> None:
     spec = default_registry().get("shape", "polyhedron")
     assert getattr(spec, "dimension", 2) == 3
     assert spec.build({"psi": 2.0}).config.psi == 2.0
+
+
+def test_the_resolved_parameters_validate_again() -> None:
+    """Every default filled in (as a resolved scene writes them) is valid input."""
+    again = PolyhedronConfig.model_validate(PolyhedronConfig().model_dump())
+    assert again == PolyhedronConfig()
+    fib = PolyhedronConfig(directions="fibonacci")
+    assert fib.m is None and len(RandomPolyhedron(fib).directions) == 20
+    assert len(RandomPolyhedron(PolyhedronConfig(directions="fibonacci", m=9)).directions) == 9
