@@ -34,6 +34,7 @@ MODULES = [
     "regopack.plugins.analysis.figure_specs",
     "regopack.plugins.csv_export",
     "regopack.plugins.rounded_bodies",
+    "regopack.plugins.available_surface.polyhedron",
 ]
 
 
