@@ -38,6 +38,7 @@ MODULES = [
     "regopack.plugins.polyhedra.directions",
     "regopack.plugins.polyhedra.generator",
     "regopack.plugins.polyhedra.rotations",
+    "regopack.plugins.available_surface.polyhedron",
 ]
 
 
