@@ -35,7 +35,7 @@ def test_default_registry_has_the_builtins():
         "sphere",
         "template",
     ]
-    assert reg.names("insertion") == ["available-arc", "rsa"]
+    assert reg.names("insertion") == ["available-arc", "available-surface", "rsa"]
     assert reg.names("density") == ["eta"]
     assert reg.names("export") == ["csv", "gsd", "image", "json", "lammps", "svg", "vtk"]
     assert reg.origin("shape", "octagon") == "regopack.plugins.octagon"

@@ -1,4 +1,4 @@
-"""Compiled 3D geometry of the available-surface inserter (no inserter yet).
+"""The available-surface inserter (3D) and its compiled geometry.
 
 The 3D counterpart of :mod:`regopack.plugins.available_arc`: a new particle
 ``Q`` is placed touching an inserted particle ``P_k``, its centre drawn
@@ -13,5 +13,7 @@ interferer's envelope ``P_j ⊕ (-Q)``.
 - :mod:`~regopack.plugins.available_surface.envelope`: the envelope
   ``P ⊕ (-Q)`` (compiled);
 - :mod:`~regopack.plugins.available_surface.free_surface`: the free part of
-  an envelope's boundary and uniform sampling on it (compiled).
+  an envelope's boundary and uniform sampling on it (compiled);
+- :mod:`~regopack.plugins.available_surface.inserter`: the insertion loop and
+  the plugin ``available-surface``.
 """
