@@ -35,7 +35,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Iterable
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -51,6 +51,9 @@ from regopack.interfaces import (
 )
 from regopack.plugin_types import InserterSpec
 from regopack.population import Population
+
+if TYPE_CHECKING:
+    from regopack.plugins.available_surface.free_surface import Interferers
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -106,6 +109,24 @@ class _Grid:
         return out
 
 
+def _interferers(
+    planes: list[tuple[FloatArray, FloatArray]], centres: FloatArray, radii: FloatArray
+) -> Interferers:
+    """Pack the interferers' half-spaces, centres and circumradius bounds for the kernel."""
+    from regopack.plugins.available_surface.free_surface import Interferers
+
+    sizes = [len(h) for _, h in planes]
+    offsets = np.zeros(len(planes) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    return Interferers(
+        normals=np.concatenate([n for n, _ in planes]) if planes else np.zeros((0, 3)),
+        support=np.concatenate([h for _, h in planes]) if planes else np.zeros(0),
+        offsets=offsets,
+        centres=np.ascontiguousarray(centres.reshape(-1, 3)),
+        radii=np.ascontiguousarray(radii, dtype=np.float64),
+    )
+
+
 class AvailableSurface(InsertionStrategy):
     """Sequential insertion by available-surface analysis (see the module docstring)."""
 
@@ -125,9 +146,9 @@ class AvailableSurface(InsertionStrategy):
         from regopack.plugins.available_surface.envelope import minkowski_envelope
         from regopack.plugins.available_surface.free_surface import (
             free_surface,
-            interferers_from,
             sample_free_point,
         )
+        from regopack.plugins.available_surface.halfspaces import edge_arcs, halfspaces_of_arcs
         from regopack.plugins.available_surface.polyhedron import Polyhedron
         from regopack.solids import SolidBatch
 
@@ -167,6 +188,7 @@ class AvailableSurface(InsertionStrategy):
                 )
             )
         circum = shapes.circumradius
+        arcs: list[Any] = [None] * n  # edge arcs of each placed particle, made on first use
         lo = np.array([domain.xmin, domain.ymin, domain.zmin])
         hi = np.array([domain.xmax, domain.ymax, domain.zmax])
         centre = np.full((n, 3), np.nan)
@@ -193,27 +215,29 @@ class AvailableSurface(InsertionStrategy):
                     continue
             else:
                 x = None
-                envelopes: dict[int, Polyhedron] = {}
+                halfspaces: dict[int, tuple[FloatArray, FloatArray]] = {}
+                q_arcs = edge_arcs(q, -1.0)
                 for k in np.flatnonzero(radius[i] < t * rmin[:count]):
                     pk = int(order[k])
-                    if pk not in envelopes:
-                        envelopes[pk] = minkowski_envelope(polys[pk], q)
+                    envelope = minkowski_envelope(polys[pk], q)
                     reach = circum[pk] + reach_max + 2.0 * circum[i]
                     found = np.asarray(grid.near(centre[pk], reach), dtype=np.int64)
                     d = centre[found] - centre[pk]
                     lim = circum[pk] + circum[found] + 2.0 * circum[i]
                     hit = (np.einsum("ij,ij->i", d, d) < lim * lim) & (found != pk)
-                    near = found[hit].tolist()
-                    for j in near:
-                        if j not in envelopes:
-                            envelopes[j] = minkowski_envelope(polys[j], q)
-                    inter = interferers_from(
-                        [envelopes[j] for j in near],
-                        centre[near] if near else np.zeros((0, 3)),
-                        circum[near] + circum[i] if near else np.zeros(0),
+                    near = found[hit]
+                    for j in near.tolist():
+                        if j not in halfspaces:
+                            if arcs[j] is None:
+                                arcs[j] = edge_arcs(polys[j], 1.0)
+                            halfspaces[j] = halfspaces_of_arcs(polys[j], arcs[j], q, q_arcs)
+                    inter = _interferers(
+                        [halfspaces[j] for j in near.tolist()],
+                        centre[near],
+                        circum[near] + circum[i],
                     )
                     analyses += 1
-                    surface = free_surface(envelopes[pk], centre[pk], inter, adm_lo, adm_hi)
+                    surface = free_surface(envelope, centre[pk], inter, adm_lo, adm_hi)
                     if surface.area > 0.0:
                         u = rng.random(3)
                         x = sample_free_point(surface, u[0], u[1], u[2])
