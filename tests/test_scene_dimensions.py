@@ -108,7 +108,7 @@ def test_an_inserter_of_the_other_dimension_is_refused(tmp_path, registry) -> No
     path.write_text(SCENE_3D.replace('kind = "flat3d"', 'kind = "available-arc"'), encoding="utf-8")
     msg = _error(path, registry)
     assert "insertion.kind = 'available-arc' is a 2D inserter" in msg
-    assert "3D inserters: flat3d" in msg
+    assert "3D inserters: available-surface, flat3d" in msg
     msg = _error("small", registry, ("insertion={kind='flat3d'}",))
     assert "insertion.kind = 'flat3d' is a 3D inserter, but domain.kind = 'rectangle'" in msg
 
