@@ -1,11 +1,14 @@
 """Per-call time of the 3D available-surface kernels, after compilation.
 
-Times :func:`minkowski_envelope` for two random polyhedra and
-:func:`free_surface` for a candidate with 20 interferers around it (random
-polyhedra of the same size placed touching or overlapping the candidate's
-envelope). Each kernel runs in a compiled loop (the cost inside an inserter)
-and from Python (plus the boxing of the named tuples); the minimum over the
-repeats is printed, as the machine may be shared. Run from the repository root:
+Times :func:`minkowski_envelope` for two random polyhedra (convex hulls of
+``--points`` random points: 24 give about 30 faces, 9 about 14) and
+:func:`free_surface` for a candidate with 20 interferers around it: random
+polyhedra of about the same size, each touching the candidate or up to 30 %
+further out (they may overlap each other), so that their envelopes cover
+most of the candidate's. Each kernel runs in a compiled loop (the cost
+inside an inserter) and from Python (plus the boxing of the named tuples);
+the minimum over the repeats is printed, as the machine may be shared. Run
+from the repository root:
 
     python benchmarks/bench_surface_kernels.py
     python benchmarks/bench_surface_kernels.py --points 9 --interferers 20

@@ -196,13 +196,175 @@ def _sides(t: FloatArray, normals: FloatArray, sign: float) -> NDArray[np.int8]:
 
 
 @numba.njit(cache=True)
-def _grow_int(a: IntArray, need: int) -> IntArray:
-    """Return ``a`` or a copy with room for at least ``need`` entries."""
-    if need <= a.shape[0]:
-        return a
-    b = np.empty(max(need, 2 * a.shape[0]), dtype=np.int64)
-    b[: a.shape[0]] = a
-    return b
+def _build_faces(
+    first: int,
+    nfaces: int,
+    cand: FloatArray,
+    kind: IntArray,
+    ca: IntArray,
+    cb: IntArray,
+    dp: FloatArray,
+    dq: FloatArray,
+    p: Polyhedron,
+    q: Polyhedron,
+    pa: IntArray,
+    pb: IntArray,
+    qa: IntArray,
+    qb: IntArray,
+    tau: float,
+    normals: FloatArray,
+    support: FloatArray,
+    offsets: IntArray,
+    fhash: IntArray,
+    table: IntArray,
+    keys: IntArray,
+    sets: IntArray,
+    plane: FloatArray,
+    sums: FloatArray,
+    hull: IntArray,
+) -> tuple[int, int, int, int]:
+    """Turn the candidate directions from ``first`` on into faces.
+
+    For candidate ``c``: the support sets of ``P`` and ``-Q`` in direction
+    ``n`` (``dp[c] = n · p_i``, ``dq[c] = n · q_j``; the vertices within ``tau`` of
+    the maximum, plus the face or edges the candidate comes from), the face
+    polygon (the 2D hull of their pairwise sums, or a face's own loop when the
+    other support set is one vertex), then the face unless it has fewer than 3
+    corners or repeats a face already found (same corners). Faces are
+    appended to ``normals, support, offsets, keys`` and the hash ``table``.
+
+    Returns
+    -------
+    nfaces, next_candidate
+        Faces so far and the candidate to go on with (``len(cand)``: done).
+    need_keys, need_sums
+        Nonzero when ``keys`` or ``sums``/``hull`` are too small (the size needed).
+    """
+    vp = p.vertices
+    vq = q.vertices
+    kp = vp.shape[0]
+    kq = vq.shape[0]
+    nc = cand.shape[0]
+    table_size = table.shape[0]
+    for c in range(first, nc):
+        nx = cand[c, 0]
+        ny = cand[c, 1]
+        nz = cand[c, 2]
+        # support sets: the vertices within tau of the maximum, and the candidate's own
+        hp = -np.inf
+        for i in range(kp):
+            hp = max(hp, dp[c, i])
+        hq = -np.inf
+        for j in range(kq):
+            hq = max(hq, -dq[c, j])
+        np_ = 0
+        for i in range(kp):
+            if dp[c, i] >= hp - tau:
+                sets[np_] = i
+                np_ += 1
+        nq_ = 0
+        for j in range(kq):
+            if -dq[c, j] >= hq - tau:
+                sets[kp + nq_] = j
+                nq_ += 1
+        # the members the candidate comes from (almost always within tau already)
+        if kind[c] == 0:
+            for k in range(p.face_offsets[ca[c]], p.face_offsets[ca[c] + 1]):
+                v = p.face_vertices[k]
+                if dp[c, v] < hp - tau:
+                    sets[np_] = v
+                    np_ += 1
+        elif kind[c] == 1:
+            for k in range(q.face_offsets[ca[c]], q.face_offsets[ca[c] + 1]):
+                v = q.face_vertices[k]
+                if -dq[c, v] < hq - tau:
+                    sets[kp + nq_] = v
+                    nq_ += 1
+        else:
+            for v in (pa[ca[c]], pb[ca[c]]):
+                if dp[c, v] < hp - tau:
+                    sets[np_] = v
+                    np_ += 1
+            for v in (qa[cb[c]], qb[cb[c]]):
+                if -dq[c, v] < hq - tau:
+                    sets[kp + nq_] = v
+                    nq_ += 1
+        if np_ * nq_ < 3:
+            continue
+        start = offsets[nfaces]
+        if start + np_ + nq_ > keys.shape[0]:
+            return nfaces, c, start + np_ + nq_, 0
+        fsize = p.face_offsets[ca[c] + 1] - p.face_offsets[ca[c]] if kind[c] == 0 else 0
+        gsize = q.face_offsets[ca[c] + 1] - q.face_offsets[ca[c]] if kind[c] == 1 else 0
+        if kind[c] == 0 and nq_ == 1 and np_ == fsize:
+            # a face of P plus a vertex of -Q: the face's loop
+            corners = np_
+            f0 = p.face_offsets[ca[c]]
+            for k in range(corners):
+                keys[start + k] = p.face_vertices[f0 + k] * kq + sets[kp]
+        elif kind[c] == 1 and np_ == 1 and nq_ == gsize:
+            # a vertex of P plus a face of -Q: the face's loop, reversed
+            corners = nq_
+            g1 = q.face_offsets[ca[c] + 1] - 1
+            for k in range(corners):
+                keys[start + k] = sets[0] * kq + q.face_vertices[g1 - k]
+        else:
+            # the 2D convex hull of the pairwise sums in the face's plane
+            m = np_ * nq_
+            if m > sums.shape[1] or 2 * m + 1 > hull.shape[0]:
+                return nfaces, c, 0, m
+            e1x, e1y, e1z, e2x, e2y, e2z = plane_frame(nx, ny, nz)
+            for a in range(np_):
+                i = sets[a]
+                plane[0, a] = e1x * vp[i, 0] + e1y * vp[i, 1] + e1z * vp[i, 2]
+                plane[1, a] = e2x * vp[i, 0] + e2y * vp[i, 1] + e2z * vp[i, 2]
+            for b in range(nq_):
+                j = sets[kp + b]
+                plane[2, b] = -(e1x * vq[j, 0] + e1y * vq[j, 1] + e1z * vq[j, 2])
+                plane[3, b] = -(e2x * vq[j, 0] + e2y * vq[j, 1] + e2z * vq[j, 2])
+            for a in range(np_):
+                for b in range(nq_):
+                    sums[0, a * nq_ + b] = plane[0, a] + plane[2, b]
+                    sums[1, a * nq_ + b] = plane[1, a] + plane[3, b]
+            corners = convex_hull_2d(sums[0], sums[1], m, tau, hull)
+            if corners < 3:
+                continue
+            for k in range(corners):
+                keys[start + k] = sets[hull[k] // nq_] * kq + sets[kp + hull[k] % nq_]
+        # the face's key set: an order-free hash, then an exact comparison
+        h = 0
+        for k in range(corners):
+            x = keys[start + k] * HASH_MULT
+            h += x ^ (x >> 29)
+        slot = h & (table_size - 1)
+        duplicate = False
+        while table[slot] >= 0:
+            other = table[slot]
+            if fhash[other] == h and offsets[other + 1] - offsets[other] == corners:
+                duplicate = True
+                for k in range(corners):
+                    found = False
+                    for k2 in range(offsets[other], offsets[other + 1]):
+                        if keys[k2] == keys[start + k]:
+                            found = True
+                            break
+                    if not found:
+                        duplicate = False
+                        break
+                if duplicate:
+                    break
+            slot = (slot + 1) & (table_size - 1)
+        if duplicate:
+            continue
+        table[slot] = nfaces
+        fhash[nfaces] = h
+        normals[nfaces, 0] = nx
+        normals[nfaces, 1] = ny
+        normals[nfaces, 2] = nz
+        support[nfaces] = hp + hq
+        offsets[nfaces + 1] = start + corners
+        nfaces += 1
+    return nfaces, nc, 0, 0
 
 
 @numba.njit(cache=True)
@@ -318,133 +480,29 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     support = np.empty(nc)
     offsets = np.zeros(nc + 1, dtype=np.int64)
     fhash = np.empty(nc, dtype=np.int64)
-    keys = np.empty(4 * nc + 8, dtype=np.int64)
     table_size = 16
     while table_size < 2 * nc:
         table_size *= 2
     table = np.full(table_size, -1, dtype=np.int64)
-    in_p = np.zeros(kp, dtype=np.bool_)
-    in_q = np.zeros(kq, dtype=np.bool_)
-    ip = np.empty(kp, dtype=np.int64)
-    jq = np.empty(kq, dtype=np.int64)
-    px = np.empty(kp)
-    py = np.empty(kp)
-    qx = np.empty(kq)
-    qy = np.empty(kq)
-    sx_ = np.empty(16)
-    sy_ = np.empty(16)
-    hull = np.empty(17, dtype=np.int64)
+    keys = np.empty(4 * nc + 8, dtype=np.int64)
+    sets = np.empty(kp + kq, dtype=np.int64)  # support sets of P, then of -Q
+    plane = np.empty((4, kp + kq))  # their projections on a face's plane
+    sums = np.empty((2, 64))  # pairwise sums of the projections
+    hull = np.empty(129, dtype=np.int64)
     nfaces = 0
-    for c in range(nc):
-        nx = cand[c, 0]
-        ny = cand[c, 1]
-        nz = cand[c, 2]
-        # support sets: the vertices within tau of the maximum, and the candidate's own
-        hp = -np.inf
-        for i in range(kp):
-            hp = max(hp, dp[c, i])
-        hq = -np.inf
-        for j in range(kq):
-            hq = max(hq, -dq[c, j])
-        for i in range(kp):
-            in_p[i] = dp[c, i] >= hp - tau
-        for j in range(kq):
-            in_q[j] = -dq[c, j] >= hq - tau
-        if kind[c] == 0:
-            for k in range(p.face_offsets[ca[c]], p.face_offsets[ca[c] + 1]):
-                in_p[p.face_vertices[k]] = True
-        elif kind[c] == 1:
-            for k in range(q.face_offsets[ca[c]], q.face_offsets[ca[c] + 1]):
-                in_q[q.face_vertices[k]] = True
-        else:
-            in_p[pa[ca[c]]] = True
-            in_p[pb[ca[c]]] = True
-            in_q[qa[cb[c]]] = True
-            in_q[qb[cb[c]]] = True
-        np_ = 0
-        for i in range(kp):
-            if in_p[i]:
-                ip[np_] = i
-                np_ += 1
-        nq_ = 0
-        for j in range(kq):
-            if in_q[j]:
-                jq[nq_] = j
-                nq_ += 1
-        if np_ * nq_ < 3:
-            continue
-        start = offsets[nfaces]
-        keys = _grow_int(keys, start + np_ * nq_)
-        if kind[c] == 0 and nq_ == 1 and np_ == p.face_offsets[ca[c] + 1] - p.face_offsets[ca[c]]:
-            # a face of P plus a vertex of -Q: the face's loop
-            corners = np_
-            f0 = p.face_offsets[ca[c]]
-            for k in range(corners):
-                keys[start + k] = p.face_vertices[f0 + k] * kq + jq[0]
-        elif kind[c] == 1 and np_ == 1 and nq_ == q.face_offsets[ca[c] + 1] - q.face_offsets[ca[c]]:
-            # a vertex of P plus a face of -Q: the face's loop, reversed
-            corners = nq_
-            g1 = q.face_offsets[ca[c] + 1] - 1
-            for k in range(corners):
-                keys[start + k] = ip[0] * kq + q.face_vertices[g1 - k]
-        else:
-            # the 2D convex hull of the pairwise sums in the face's plane
-            e1x, e1y, e1z, e2x, e2y, e2z = plane_frame(nx, ny, nz)
-            for a in range(np_):
-                i = ip[a]
-                px[a] = e1x * vp[i, 0] + e1y * vp[i, 1] + e1z * vp[i, 2]
-                py[a] = e2x * vp[i, 0] + e2y * vp[i, 1] + e2z * vp[i, 2]
-            for b in range(nq_):
-                j = jq[b]
-                qx[b] = -(e1x * vq[j, 0] + e1y * vq[j, 1] + e1z * vq[j, 2])
-                qy[b] = -(e2x * vq[j, 0] + e2y * vq[j, 1] + e2z * vq[j, 2])
-            m = np_ * nq_
-            if m >= sx_.shape[0]:
-                sx_ = np.empty(2 * m)
-                sy_ = np.empty(2 * m)
-                hull = np.empty(2 * m + 1, dtype=np.int64)
-            for a in range(np_):
-                for b in range(nq_):
-                    sx_[a * nq_ + b] = px[a] + qx[b]
-                    sy_[a * nq_ + b] = py[a] + qy[b]
-            corners = convex_hull_2d(sx_, sy_, m, tau, hull)
-            if corners < 3:
-                continue
-            for k in range(corners):
-                keys[start + k] = ip[hull[k] // nq_] * kq + jq[hull[k] % nq_]
-        # the face's key set: an order-free hash, then an exact comparison
-        h = 0
-        for k in range(corners):
-            x = keys[start + k] * HASH_MULT
-            h += x ^ (x >> 29)
-        slot = h & (table_size - 1)
-        duplicate = False
-        while table[slot] >= 0:
-            other = table[slot]
-            if fhash[other] == h and offsets[other + 1] - offsets[other] == corners:
-                duplicate = True
-                for k in range(corners):
-                    found = False
-                    for k2 in range(offsets[other], offsets[other + 1]):
-                        if keys[k2] == keys[start + k]:
-                            found = True
-                            break
-                    if not found:
-                        duplicate = False
-                        break
-                if duplicate:
-                    break
-            slot = (slot + 1) & (table_size - 1)
-        if duplicate:
-            continue
-        table[slot] = nfaces
-        fhash[nfaces] = h
-        normals[nfaces, 0] = nx
-        normals[nfaces, 1] = ny
-        normals[nfaces, 2] = nz
-        support[nfaces] = hp + hq
-        offsets[nfaces + 1] = start + corners
-        nfaces += 1
+    c = 0
+    while c < nc:
+        nfaces, c, need_keys, need_sums = _build_faces(
+            c, nfaces, cand[:nc], kind, ca, cb, dp, dq, p, q, pa, pb, qa, qb, tau,
+            normals, support, offsets, fhash, table, keys, sets, plane, sums, hull,
+        )  # fmt: skip
+        if need_keys > 0:
+            grown = np.empty(max(need_keys, 2 * keys.shape[0]), dtype=np.int64)
+            grown[: keys.shape[0]] = keys
+            keys = grown
+        if need_sums > 0:
+            sums = np.empty((2, 2 * need_sums))
+            hull = np.empty(4 * need_sums + 1, dtype=np.int64)
 
     # number the vertices in order of first use
     total = offsets[nfaces]

@@ -11,19 +11,22 @@ axes) and outside the open interior of every interferer's envelope
 Method
 ------
 Each face of ``E_k`` is handled in its own plane (a 2D frame about its
-centroid). The face polygon is clipped by the box; then every interferer is
-subtracted in turn from every convex piece: ``int(E_j)`` meets the plane in an
+centroid). The face polygon is clipped by the box; then the interferers are
+subtracted in turn from its convex pieces. ``int(E_j)`` meets the plane in an
 open convex polygon, the intersection of one open half-plane per facet of
-``E_j``; the piece is split along each of those lines in turn, the part on
-the outer side of a line is kept as a free piece, and what remains after the
-last line (the part inside ``E_j``) is dropped. If the pieces are not cut at
-all (the piece lies outside one of the half-planes) the piece is kept whole,
-so the pieces stay convex and few.
+``E_j``: the face polygon is clipped by those half-planes first, which gives
+the part ``C`` of the face inside ``E_j`` and the few lines that bound it
+(facets whose line misses the face polygon play no part there). Every piece
+is then split along those lines in turn: the part on the outer side of a
+line is kept as a free piece, and what remains after the last line (inside
+``C``) is dropped. A piece clear of ``C``'s bounding box, or outside one of the
+lines, is kept whole, so the pieces stay convex and few.
 
 Interferers are culled first by bounding spheres (``radii``), then facet by
-facet: a facet whose plane does not reach ``E_k``'s circumsphere, or a face's
+facet: a facet whose plane misses ``E_k``'s circumsphere, or a face's
 circumcircle, either leaves the whole face outside ``E_j`` or constrains
-nothing there, and is skipped.
+nothing there (the facet that last separated a face from ``E_j`` is tried
+first on the next face).
 
 The pieces are returned with their areas; :func:`sample_free_point` picks a
 piece by area and a point uniformly in it (a triangle fan), so the point is
@@ -42,7 +45,10 @@ One length, ``tau = FREE_EPS * R_k`` (``R_k``: ``E_k``'s circumradius about
 - a piece thinner than ``THIN_FACTOR * tau`` (``2 area / perimeter``, its width
   for a strip) counts as no free surface, and an interferer that would only
   remove such a sliver from a piece leaves it whole. Tangent points and lines
-  (a slot into which ``Q`` fits exactly) thus give no free area.
+  (a slot into which ``Q`` fits exactly) thus give no free area, as long as
+  the facets that meet there are inclined by more than about 7 degrees to
+  the face: the shrinking widens such a line into a strip about
+  ``tau / sin(angle)`` wide on each side.
 
 A sampled centre may therefore make ``Q`` overlap a ``P_j`` or cross a wall by
 up to about ``THIN_FACTOR * tau`` (``1.6e-11 R_k``); ``tau`` sits well above
@@ -169,7 +175,7 @@ W_IX, W_IY = 2, 3  # its part inside a line
 W_OX, W_OY = 4, 5  # its part outside a line
 W_G = 6  # values of the line's function at its vertices
 W_FX, W_FY = 7, 8  # the face polygon, clipped by the box
-W_KX, W_KY = 9, 10  # the part of the face inside one interferer
+W_KX, W_KY = 9, 10  # the part of the face inside one interferer (by turns with W_IX, W_IY)
 N_WORK = 11
 # the array ``geom``: rows 0-2 hold the lines a, b, c of one interferer on one
 # face (inside: c - a s - b t >= 0); row G_FRAME the face's frame
@@ -340,11 +346,12 @@ def _covered_part(
     """Find the lines along which interferer ``q`` cuts the face polygon (``n`` vertices).
 
     Clips the polygon by the half-planes ``c - a s - b t >= 0`` of the
-    interferer's facets (its interior shrunk by ``tau``) into rows ``W_KX,
-    W_KY`` and writes the lines that cut it to rows 0-2 of ``geom``, and the
-    clipped polygon's bounding box to the frame. Returns the number of lines;
-    0 when the whole face is inside the interferer; -1 when the interferer
-    misses the face or covers only a sliver of it.
+    interferer's facets (its interior shrunk by ``tau``), in rows ``W_KX,
+    W_KY`` and ``W_IX, W_IY`` by turns, and writes the lines that cut it to
+    rows 0-2 of ``geom`` and the clipped polygon's bounding box to the frame.
+    Returns the number of lines; 0 when the whole face is inside the
+    interferer; -1 when the interferer misses the face or covers only a
+    sliver of it.
     """
     fr = G_FRAME
     o0 = geom[fr, F_O]
@@ -358,10 +365,12 @@ def _covered_part(
         and facets[k, 3] - (facets[k, 0] * o0 + facets[k, 1] * o1 + facets[k, 2] * o2) + rf <= tau
     ):
         return -1
-    copy_polygon(work, W_FX, W_FY, n, W_KX, W_KY)
+    # the clipped polygon alternates between two pairs of rows (the face's own first)
+    kx = W_FX
+    ky = W_FY
     kn = n
     nl = 0
-    bx, by, hx, hy = bounding_box(work, W_KX, W_KY, kn)
+    bx, by, hx, hy = bounding_box(work, kx, ky, kn)
     for k in range(index[0, q], index[0, q + 1]):
         nx = facets[k, 0]
         ny = facets[k, 1]
@@ -386,7 +395,7 @@ def _covered_part(
         gmin = np.inf
         gmax = -np.inf
         for i in range(kn):
-            gi = lc - la * work[W_KX, i] - lb * work[W_KY, i]
+            gi = lc - la * work[kx, i] - lb * work[ky, i]
             work[W_G, i] = gi
             gmin = min(gmin, gi)
             gmax = max(gmax, gi)
@@ -394,16 +403,18 @@ def _covered_part(
             continue
         if gmax <= 0.0:
             return -1
-        kn = clip_polygon(work, W_KX, W_KY, kn, W_G, W_IX, W_IY)
+        tx = W_KX if kx != W_KX else W_IX
+        kn = clip_polygon(work, kx, ky, kn, W_G, tx, tx + 1)
         if kn < 3:
             return -1
-        copy_polygon(work, W_IX, W_IY, kn, W_KX, W_KY)
-        bx, by, hx, hy = bounding_box(work, W_KX, W_KY, kn)
+        kx = tx
+        ky = tx + 1
+        bx, by, hx, hy = bounding_box(work, kx, ky, kn)
         geom[0, nl] = la
         geom[1, nl] = lb
         geom[2, nl] = lc
         nl += 1
-    if nl > 0 and is_thin(work, W_KX, W_KY, kn, thin):
+    if nl > 0 and is_thin(work, kx, ky, kn, thin):
         return -1
     geom[fr, F_BOX] = bx
     geom[fr, F_BOX + 1] = by
@@ -449,9 +460,12 @@ def _subtract(
         for i in range(pn):
             work[W_RX, i] = pieces[cx, p0 + i]
             work[W_RY, i] = pieces[cy, p0 + i]
+        # the part still to cut alternates between two pairs of rows
+        rx = W_RX
+        ry = W_RY
         rn = pn
         mark = nnext
-        bx, by, hx, hy = bounding_box(work, W_RX, W_RY, rn)
+        bx, by, hx, hy = bounding_box(work, rx, ry, rn)
         intact = (
             abs(bx - geom[fr, F_BOX]) >= hx + geom[fr, F_BOX + 2]
             or abs(by - geom[fr, F_BOX + 1]) >= hy + geom[fr, F_BOX + 3]
@@ -462,7 +476,7 @@ def _subtract(
             gmax = -np.inf
             for i in range(rn):
                 gmax = max(
-                    gmax, geom[2, li] - geom[0, li] * work[W_RX, i] - geom[1, li] * work[W_RY, i]
+                    gmax, geom[2, li] - geom[0, li] * work[rx, i] - geom[1, li] * work[ry, i]
                 )
             intact = gmax <= 0.0
         for li in range(nl):
@@ -474,7 +488,7 @@ def _subtract(
             gmin = np.inf
             gmax = -np.inf
             for i in range(rn):
-                gi = lc - la * work[W_RX, i] - lb * work[W_RY, i]
+                gi = lc - la * work[rx, i] - lb * work[ry, i]
                 work[W_G, i] = gi
                 gmin = min(gmin, gi)
                 gmax = max(gmax, gi)
@@ -483,7 +497,8 @@ def _subtract(
             if gmax <= 0.0:
                 intact = True  # the rest is outside: nothing is removed
                 break
-            nin, nout = split_polygon(work, W_RX, W_RY, rn, W_G, W_IX, W_IY, W_OX, W_OY)
+            tx = W_RX if rx != W_RX else W_IX
+            nin, nout = split_polygon(work, rx, ry, rn, W_G, tx, tx + 1, W_OX, W_OY)
             if not is_thin(work, W_OX, W_OY, nout, thin):
                 base = poff[nxt, nnext]
                 if nnext >= capp or base + nout > cap:
@@ -493,10 +508,11 @@ def _subtract(
                     pieces[ny_, base + i] = work[W_OY, i]
                 nnext += 1
                 poff[nxt, nnext] = base + nout
-            if is_thin(work, W_IX, W_IY, nin, thin):
+            if is_thin(work, tx, tx + 1, nin, thin):
                 intact = True  # only a sliver would be removed
                 break
-            copy_polygon(work, W_IX, W_IY, nin, W_RX, W_RY)
+            rx = tx
+            ry = tx + 1
             rn = nin
         if intact:  # drop the parts split off and keep the piece whole
             nnext = mark

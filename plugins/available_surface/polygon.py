@@ -55,54 +55,59 @@ def plane_frame(nx: float, ny: float, nz: float) -> tuple[float, float, float, f
 
 
 @numba.njit(cache=True)
-def _sweep_order(x: FloatArray, y: FloatArray, n: int) -> IntArray:
-    """Sort ``(x, y)[:n]`` along :data:`SWEEP_DIRECTION`, ties by the normal; return indices.
+def _sweep_order(x: FloatArray, y: FloatArray, n: int, order: IntArray, at: int) -> None:
+    """Sort ``(x, y)[:n]`` along :data:`SWEEP_DIRECTION`, ties by the normal one.
 
-    A direction that is not a lattice direction keeps points on a common
-    line (the side of a face, often axis-aligned) from being ordered by
-    rounding noise alone.
+    Writes the indices to ``order[at:at + n]``. A direction that is not a
+    lattice direction keeps points on a common line (the side of a face,
+    often axis-aligned) from being ordered by rounding noise alone.
     """
     c, s = SWEEP_DIRECTION
-    u = np.empty(n)
-    w = np.empty(n)
-    for i in range(n):
-        u[i] = c * x[i] + s * y[i]
-        w[i] = c * y[i] - s * x[i]
     if n > SMALL_SORT:
+        u = np.empty(n)
+        w = np.empty(n)
+        for i in range(n):
+            u[i] = c * x[i] + s * y[i]
+            w[i] = c * y[i] - s * x[i]
         by_w = np.argsort(w, kind="mergesort")
-        return by_w[np.argsort(u[by_w], kind="mergesort")]
-    order = np.empty(n, dtype=np.int64)
+        order[at : at + n] = by_w[np.argsort(u[by_w], kind="mergesort")]
+        return
     for i in range(n):
+        ui = c * x[i] + s * y[i]
+        wi = c * y[i] - s * x[i]
         j = i
         while j > 0:
-            o = order[j - 1]
-            if u[o] < u[i] or (u[o] == u[i] and w[o] <= w[i]):
+            o = order[at + j - 1]
+            uo = c * x[o] + s * y[o]
+            if uo < ui or (uo == ui and c * y[o] - s * x[o] <= wi):
                 break
-            order[j] = o
+            order[at + j] = o
             j -= 1
-        order[j] = i
-    return order
+        order[at + j] = i
 
 
 @numba.njit(cache=True)
 def convex_hull_2d(x: FloatArray, y: FloatArray, n: int, tol: float, out: IntArray) -> int:
     """Counter-clockwise convex hull of the points ``(x, y)[:n]``.
 
-    Writes the indices of the hull's corners to ``out`` (room for ``n + 1``)
-    and returns their number. A point closer than ``tol`` to the line through
-    its neighbours on the hull is not a corner (nor is a duplicate), so
-    points that all lie within ``tol`` of a line give at most 2 corners.
+    Writes the indices of the hull's corners to ``out`` and returns their
+    number; ``out`` needs room for ``2 n + 1`` (its tail holds the sweep
+    order). A point closer than ``tol`` to the line through its neighbours
+    on the hull is not a corner (nor is a duplicate), so points that all lie
+    within ``tol`` of a line give at most 2 corners. Andrew's monotone chain,
+    sweeping along :data:`SWEEP_DIRECTION`.
     """
     if n <= 1:
         if n == 1:
             out[0] = 0
         return n
-    order = _sweep_order(x, y, n)
+    at = n + 1
+    _sweep_order(x, y, n, out, at)
     k = 0
     for pass_ in range(2):
         floor = k + 1 if pass_ == 1 else 2
         for step in range(n) if pass_ == 0 else range(n - 2, -1, -1):
-            i = order[step]
+            i = out[at + step]
             while k >= floor:
                 o = out[k - 2]
                 a = out[k - 1]

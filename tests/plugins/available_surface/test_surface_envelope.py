@@ -160,6 +160,24 @@ def test_scales_and_size_ratios_of_boxes(seed: int, scale: float, ratio: float) 
     check_against_hull(transformed(p, scale), transformed(q, scale * ratio))
 
 
+def prism(sides: int, radius: float, height: float, turn: float = 0.0) -> Polyhedron:
+    """A right prism over a regular polygon, axis along z."""
+    a = turn + 2.0 * np.pi * np.arange(sides) / sides
+    ring = np.column_stack([radius * np.cos(a), radius * np.sin(a)])
+    return polyhedron_from_points(
+        np.vstack([np.column_stack([ring, np.full(sides, z)]) for z in (-height, height)])
+    )
+
+
+def test_parallel_faces_with_many_corners() -> None:
+    """Two 12-gon prisms: the caps add up to 24-gons (144 pairwise sums per cap)."""
+    p = prism(12, 1.0, 0.5)
+    q = prism(12, 0.4, 2.0, turn=0.1)
+    env = check_against_hull(p, q)
+    assert sorted(np.diff(env.face_offsets).tolist())[-2:] == [24, 24]
+    assert len(env.normals) == 2 + 24
+
+
 def test_swapping_p_and_q_reflects_the_envelope() -> None:
     """``E(P, Q)`` is ``-E(Q, P)``: same facets with the normals reversed."""
     rng = np.random.default_rng(7)

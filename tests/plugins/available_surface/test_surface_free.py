@@ -270,6 +270,33 @@ def test_uniform_over_the_free_pieces(seed: int) -> None:
     assert chisquare(obs, exp * obs.sum() / exp.sum()).pvalue > 1e-4
 
 
+def test_chi_square_over_the_pieces() -> None:
+    """Each point is found in its piece geometrically; counts against the pieces' areas."""
+    scene = crowded_scene(np.random.default_rng(31), 10, gap=(1.0, 1.6))
+    fs = run(scene)
+    ek = scene["ek"]
+    n = 20000
+    pts = samples(fs, n, 7)
+    rk = circumradius(ek)
+    owner = np.full(n, -1)
+    for i in range(len(fs.cumulative)):
+        corners = fs.points[fs.offsets[i] : fs.offsets[i + 1]]
+        normal = ek.normals[fs.face[i]]
+        on_plane = np.abs((pts - corners[0]) @ normal) <= 1e-9 * rk
+        edges = np.roll(corners, -1, 0) - corners
+        # inside: to the left of every edge, seen from outside
+        left = np.einsum("ijk,k->ij", np.cross(edges[None], pts[:, None] - corners[None]), normal)
+        inside = on_plane & np.all(left >= -1e-12 * rk**2, axis=1) & (owner < 0)
+        owner[inside] = i
+    assert np.all(owner >= 0)
+    counts = np.bincount(owner, minlength=len(fs.cumulative)).astype(float)
+    expected = n * np.diff(np.concatenate([[0.0], fs.cumulative])) / fs.area
+    keep = expected >= 5.0
+    obs = np.append(counts[keep], counts[~keep].sum())
+    exp = np.append(expected[keep], expected[~keep].sum())
+    assert chisquare(obs, exp * obs.sum() / exp.sum()).pvalue > 1e-4
+
+
 def _half_plane_corners(normal: np.ndarray) -> list[tuple[float, float]]:
     """Corners (unit scale, about 0) of a big square on the side ``normal`` points to."""
     u = normal / np.linalg.norm(normal)
@@ -324,6 +351,21 @@ def test_the_box_cuts_faces_and_a_face_on_the_box_is_free() -> None:
     # a box below the face removes it
     hi[2] = 1.1 - 1e-9
     assert run(scene, lo, hi).area == pytest.approx(2.2**2 + 3 * 1.6 * 2.2, rel=1e-7)
+
+
+def test_many_interferers_on_one_face() -> None:
+    """A grid of small cubes centred on one face cuts it into many pieces."""
+    small = box(0.01)
+    env = minkowski_envelope(box((5.0, 5.0, 1.0)), small)  # half sizes 5.01, 5.01, 1.01
+    holes = minkowski_envelope(box(0.19), small)  # half size 0.2
+    grid = np.array([(x, y, 1.01) for x in np.arange(-4.5, 5.0) for y in np.arange(-4.5, 5.0)])
+    scene = {"ek": env, "centre": np.zeros(3), "envelopes": [holes] * 100, "centres": grid}
+    fs = run(scene)
+    top = int(np.argmax(env.normals[:, 2]))
+    assert np.sum(fs.face == top) > 100  # more than the first buffers hold
+    assert fs.area == pytest.approx(total_area(env) - 100 * 0.4**2, rel=1e-10)
+    pts = samples(fs, 500, 3)
+    assert np.all(free_mask(pts, scene["envelopes"], grid, *OPEN))
 
 
 def test_a_candidate_inside_an_interferer_has_nothing_free() -> None:

@@ -64,7 +64,7 @@ def test_convex_hull_matches_shapely(seed: int, n: int, scale: float) -> None:
     pts = rng.normal(size=(n, 2)) * scale
     if n > 3 and rng.random() < 0.5:  # points on a lattice: many collinear and duplicates
         pts = np.round(rng.uniform(-3, 3, size=(n, 2))) * scale
-    out = np.empty(n + 1, dtype=np.int64)
+    out = np.empty(2 * n + 1, dtype=np.int64)
     k = convex_hull_2d(pts[:, 0].copy(), pts[:, 1].copy(), n, 1e-9 * scale, out)
     ref = shapely.MultiPoint(pts).convex_hull
     if ref.geom_type != "Polygon":
@@ -81,7 +81,7 @@ def test_convex_hull_matches_shapely(seed: int, n: int, scale: float) -> None:
 def test_collinear_points_are_not_corners() -> None:
     x = np.array([0.0, 1.0, 2.0, 2.0, 2.0, 1.0, 0.0, 0.0, 1.0, 1.0])
     y = np.array([0.0, 0.0, 0.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0, 0.0])
-    out = np.empty(11, dtype=np.int64)
+    out = np.empty(21, dtype=np.int64)
     k = convex_hull_2d(x, y, 10, 1e-12, out)
     assert k == 4
     assert sorted(zip(x[out[:k]], y[out[:k]], strict=True)) == [(0, 0), (0, 2), (2, 0), (2, 2)]
