@@ -75,18 +75,33 @@ class PeakFit:
 
 
 def _smooth(g: FloatArray) -> FloatArray:
-    """Savitzky–Golay smoothing (quadratic, :data:`SMOOTH_BINS` bins) of a finite curve."""
+    """Savitzky–Golay smoothing (quadratic, :data:`SMOOTH_BINS` bins) of finite curves.
+
+    ``g`` is one curve or a ``(m, n)`` stack of them, smoothed along the last axis.
+    """
     from scipy.signal import savgol_filter
 
-    window = min(SMOOTH_BINS, g.size if g.size % 2 else g.size - 1)
+    n = g.shape[-1]
+    window = min(SMOOTH_BINS, n if n % 2 else n - 1)
     if window < 3:
         return g.copy()
-    return np.asarray(savgol_filter(g, window, 2, mode="interp"), dtype=np.float64)
+    return np.asarray(savgol_filter(g, window, 2, mode="interp", axis=-1), dtype=np.float64)
 
 
-def _fit(r: FloatArray, g: FloatArray, e: FloatArray) -> tuple[float, float, float, int, int, bool]:
-    """Fit the top of the highest peak: ``(r, error, g, lo, hi, fitted)`` (bin indices lo, hi)."""
-    smooth = _smooth(g)
+def _fit(
+    r: FloatArray,
+    g: FloatArray,
+    e: FloatArray,
+    smooth: FloatArray | None = None,
+    position_only: bool = False,
+) -> tuple[float, float, float, int, int, bool]:
+    """Fit the top of the highest peak: ``(r, error, g, lo, hi, fitted)`` (bin indices lo, hi).
+
+    ``smooth`` is ``g`` smoothed, when already known; with ``position_only``
+    the error is not computed (returned as NaN).
+    """
+    if smooth is None:
+        smooth = _smooth(g)
     top = int(np.argmax(smooth))
     if r.size < MIN_FIT_BINS:
         half = 0.5 * float(r[-1] - r[0]) if r.size > 1 else 0.0
@@ -113,6 +128,8 @@ def _fit(r: FloatArray, g: FloatArray, e: FloatArray) -> tuple[float, float, flo
     vertex = -c1 / (2.0 * c2)
     if not float(x[0]) <= vertex <= float(x[-1]):
         return float(r[top]), half, float(smooth[top]), lo, hi, False
+    if position_only:
+        return float(r[top] + vertex), math.nan, math.nan, lo, hi, True
     cov = np.linalg.pinv(design.T @ design)
     dof = x.size - 3
     if dof > 0:
@@ -177,7 +194,12 @@ def first_peak(
         # moves with the noise (between competing maxima): resample the counts
         rng = np.random.default_rng(RESAMPLE_SEED)
         counts = g_ok * e_ok
-        found = [_fit(r_ok, rng.poisson(counts) / e_ok, e_ok)[0] for _ in range(int(resamples))]
+        samples = np.stack([rng.poisson(counts) / e_ok for _ in range(int(resamples))])
+        smoothed = _smooth(samples)
+        found = [
+            _fit(r_ok, samples[k], e_ok, smoothed[k], position_only=True)[0]
+            for k in range(samples.shape[0])
+        ]
         err = max(err, float(np.std(found, ddof=1)))
     return PeakFit(
         float(peak_r),
