@@ -207,7 +207,10 @@ def domain3d_from_dict(data: Mapping[str, Any]) -> Box:
     for b in bounds:
         if isinstance(b, bool | str | bytes) or b is None:
             raise TypeError(f"bounds: {b!r} is not a number")
-        v = float(b)
+        try:
+            v = float(b)
+        except OverflowError:
+            v = math.inf
         if not math.isfinite(v):
             raise ValueError(f"bounds: {v} is not finite")
         values.append(v)

@@ -78,6 +78,9 @@ def _check_offsets(name: str, offsets: IntArray, rows: int, total: int, least: i
         raise PackingError(f"array {name!r} has {offsets.shape[0]} entries, expected {rows + 1}")
     if offsets[0] != 0:
         raise PackingError(f"array {name!r} starts at {offsets[0]}, not 0")
+    if rows and (offsets.min() < 0 or offsets.max() > total):
+        j = _first((offsets < 0) | (offsets > total))
+        raise PackingError(f"array {name!r} has the value {offsets[j]} at entry {j}, outside [0, {total}]")
     steps = np.diff(offsets)
     if rows and steps.min() < least:
         j = _first(steps < least)

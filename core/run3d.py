@@ -78,7 +78,7 @@ def check_scene3d(scene: ResolvedScene) -> int:
 
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
     r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
-    vol_max = 4.0 / 3.0 * math.pi * r_max**3
+    vol_max = 4.0 / 3.0 * math.pi * r_max * r_max * r_max
     if not math.isfinite(vol_max):
         raise ConfigError(
             _located(
@@ -89,7 +89,7 @@ def check_scene3d(scene: ResolvedScene) -> int:
             )
         )
     box = _box(scene)
-    if 4.0 / 3.0 * math.pi * r_min**3 > box.volume:
+    if 4.0 / 3.0 * math.pi * r_min * r_min * r_min > box.volume:
         raise ConfigError(
             _located(
                 scene,
@@ -257,13 +257,29 @@ def verify_packing3d(packing: Packing3D, rel_tol: float = 1e-9) -> Report3D:
     placed = packing.placed_in_order()
     solids = [packing.world_vertices(int(j)) for j in placed]
     box = packing.domain
-    return verify_polyhedra(
+    report = verify_polyhedra(
         solids,
         None,
         [box.xmin, box.ymin, box.zmin],
         [box.xmax, box.ymax, box.zmax],
         periodic=box.periodic,
         rel_tol=rel_tol,
+    )
+    import dataclasses
+
+    ix = [int(j) for j in placed]
+
+    def pair(p: tuple[int, int]) -> tuple[int, int]:
+        a, b = sorted((ix[p[0]], ix[p[1]]))
+        return (a, b)
+
+    return dataclasses.replace(
+        report,
+        overlapping_pairs=tuple(sorted(pair(p) for p in report.overlapping_pairs)),
+        worst_pair=None if report.worst_pair is None else pair(report.worst_pair),
+        worst_outside=None
+        if report.worst_outside is None
+        else (ix[report.worst_outside[0]], report.worst_outside[1]),
     )
 
 
