@@ -94,7 +94,7 @@ def build_parser() -> argparse.ArgumentParser:
     """Build the argument parser of the ``regopack`` command."""
     parser = _ArgumentParser(
         prog="regopack",
-        description="Dense 2D packings of lunar regolith particles.",
+        description="Dense 2D and 3D packings of lunar regolith particles.",
     )
     parser.add_argument("--version", action="version", version=f"regopack {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
@@ -296,7 +296,8 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
         violated = True
         print(
             f"regopack: warning: the packing is violated: {checked['overlap_pairs']:,} "
-            f"overlapping pairs (worst {checked['worst_overlap']:.3g} of the smaller area), "
+            f"overlapping pairs (worst {checked['worst_overlap']:.3g} of the smaller "
+            f"{'volume' if outcome.summary.get('dimension') == 3 else 'area'}), "
             f"{checked['outside']:,} particles outside the domain; see 'verify' in "
             f"{outcome.summary_path}",
             file=sys.stderr,

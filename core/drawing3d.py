@@ -31,8 +31,15 @@ CIRCLE_SEGMENTS = 64
 
 
 def _convex_hull_2d(points: FloatArray) -> FloatArray:
-    """Counter-clockwise hull of 2D points (monotone chain)."""
-    pts = np.unique(np.round(points, 12), axis=0)
+    """Counter-clockwise hull of 2D points (monotone chain).
+
+    Points within 1e-12 of the points' spread of each other count as one.
+    """
+    scale = float(np.ptp(points, axis=0).max()) if points.shape[0] else 0.0
+    if scale > 0:
+        pts = np.unique(np.round(points / scale, 12), axis=0) * scale
+    else:
+        pts = np.unique(points, axis=0)
     if pts.shape[0] < 3:
         return pts
     pts = pts[np.lexsort((pts[:, 1], pts[:, 0]))]

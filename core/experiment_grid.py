@@ -236,6 +236,11 @@ def check_runs(
         except ConfigError as err:
             raise _scene_error(experiment, run, err) from err
     for run, resolved_scene in zip(runs, resolved, strict=True):
+        if resolved_scene.scene.domain.dimension == 3:
+            raise ConfigError(
+                f"{experiment.label}: run {run.run_id}: the scene is 3D (domain.kind = "
+                f"{resolved_scene.scene.domain.kind!r}); sweeps run 2D scenes only so far"
+            )
         _check_sweep_files(experiment, run, resolved_scene)
     for metric in experiment.metrics or ():
         parts = metric.split(".")

@@ -910,8 +910,14 @@ def load(path: str | Path) -> Packing:
             meta = _read_meta(path, npz)
             if meta["format_version"] == FORMAT_VERSION_3D:
                 raise PackingFileError(
-                    f"{path}: a 3D packing (format version {FORMAT_VERSION_3D}); this reads "
-                    "2D packings only (regopack.load reads both)"
+                    f"{path}: a 3D packing (format version {FORMAT_VERSION_3D}); only "
+                    "'regopack verify' reads 3D packings so far"
+                )
+            if meta.get("dimension", 2) != 2:
+                raise _invalid(
+                    path,
+                    f"meta 'dimension' is {_short(meta.get('dimension'))} in a format "
+                    f"version {meta['format_version']} file, which holds 2D packings",
                 )
             arrays: dict[str, Any] = {}
             for name, (dtype, ndim) in _ARRAYS.items():

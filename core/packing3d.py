@@ -68,6 +68,8 @@ _ARRAYS3D: dict[str, tuple[type[np.generic], int]] = {
 
 _COLUMNS = {"vertices": 3, "normals": 3, "rotation": 4, "centre": 3}
 _FINITE3D = ("radius", "vertices", "normals", "support", "rotation")
+PLANE_TOLERANCE = 1e-9
+"""Largest distance of a face vertex from the face's plane, relative to its face's size."""
 UNIT_TOLERANCE = 1e-9
 """Largest departure from length 1 of a face normal or a rotation quaternion."""
 
@@ -80,7 +82,9 @@ def _check_offsets(name: str, offsets: IntArray, rows: int, total: int, least: i
         raise PackingError(f"array {name!r} starts at {offsets[0]}, not 0")
     if rows and (offsets.min() < 0 or offsets.max() > total):
         j = _first((offsets < 0) | (offsets > total))
-        raise PackingError(f"array {name!r} has the value {offsets[j]} at entry {j}, outside [0, {total}]")
+        raise PackingError(
+            f"array {name!r} has the value {offsets[j]} at entry {j}, outside [0, {total}]"
+        )
     steps = np.diff(offsets)
     if rows and steps.min() < least:
         j = _first(steps < least)
@@ -157,8 +161,11 @@ class Packing3D:
         ``offsets`` gives every particle a vertex; ``face_offsets`` rises
         (a sphere has no face) and ``face_vertex_offsets`` gives every face at
         least three vertices; every face vertex indexes its own particle's
-        vertices; face normals and rotations are unit vectors; the domain is
-        a box of positive finite volume.
+        vertices; face normals and rotations are unit vectors; every face
+        vertex lies in its face's plane (within 1e-9 of the face's size), every
+        loop runs counter-clockwise seen from outside, every support value is
+        positive; a polyhedron is sharp with at least 4 faces and a solid
+        without faces is a sphere; the domain is a box of positive finite volume.
 
         Raises
         ------
@@ -224,6 +231,7 @@ class Packing3D:
             if off.any():
                 row = _first(off)
                 raise PackingError(f"array {name!r} has the non-unit row {arr[row]} at row {row}")
+        self._check_geometry()
         check_particles(
             self.radius,
             self.mineral,
@@ -238,6 +246,72 @@ class Packing3D:
         volume = self.domain.volume
         if not (math.isfinite(volume) and volume > 0):
             raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite volume")
+
+    def _check_geometry(self) -> None:
+        """Check that faces lie in their planes, run counter-clockwise, enclose the centre.
+
+        A solid without faces must be a sphere: one vertex at its centre, rounded.
+        """
+        n = self.radius.shape[0]
+        nfaces = np.diff(self.face_offsets)
+        nverts = np.diff(self.offsets)
+        rho = (
+            np.zeros(n)
+            if self.rounding is None
+            else np.asarray(self.rounding, dtype=np.float64).reshape(-1)
+        )
+        if rho.shape != (n,):
+            return  # check_particles names the shape of 'rounding'
+        first = self.vertices[self.offsets[:-1]] if n else np.zeros((0, 3))
+        sphere_ok = (nverts == 1) & (rho > 0) & np.all(first == 0.0, axis=1)
+        bad = (nfaces == 0) & ~sphere_ok
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"particle {j} has no faces but is not a sphere (a single vertex (0, 0, 0) "
+                "with a rounding radius > 0)"
+            )
+        bad = (nfaces > 0) & ((nfaces < 4) | (rho > 0))
+        if bad.any():
+            j = _first(bad)
+            what = "rounded" if rho[j] > 0 else f"has {nfaces[j]} faces"
+            raise PackingError(
+                f"particle {j} is a polyhedron that {what}: polyhedra are sharp and have "
+                "at least 4 faces"
+            )
+        faces = self.normals.shape[0]
+        if not faces:
+            return
+        sizes = np.diff(self.face_vertex_offsets)
+        face_of = np.repeat(np.arange(faces), sizes)
+        owner = np.repeat(np.repeat(np.arange(n), nfaces), sizes)
+        v = self.vertices[self.offsets[owner] + self.face_vertices]
+        scale = np.maximum(np.sqrt(np.einsum("ij,ij->i", v, v)), np.finfo(float).tiny)
+        size = np.maximum.reduceat(scale, self.face_vertex_offsets[:-1])[face_of]
+        off = np.abs(np.einsum("ij,ij->i", v, self.normals[face_of]) - self.support[face_of])
+        bad = off > PLANE_TOLERANCE * size
+        if bad.any():
+            k = _first(bad)
+            raise PackingError(
+                f"face {face_of[k]} (particle {owner[k]}) has a vertex {off[k]:.3g} off its "
+                "plane normals . x = support"
+            )
+        if np.any(self.support <= 0):
+            f = _first(self.support <= 0)
+            raise PackingError(
+                f"face {f} has the support value {self.support[f]}: every face plane lies "
+                "beyond the particle's centre (support > 0)"
+            )
+        nxt = np.arange(v.shape[0]) + 1
+        ends = self.face_vertex_offsets[1:] - 1
+        nxt[ends] = self.face_vertex_offsets[:-1]
+        twice_area = np.add.reduceat(np.cross(v, v[nxt]), self.face_vertex_offsets[:-1])
+        turn = np.einsum("ij,ij->i", twice_area, self.normals)
+        if np.any(turn <= 0):
+            f = _first(turn <= 0)
+            raise PackingError(
+                f"face {f} is not counter-clockwise seen from outside (or has no area)"
+            )
 
     @classmethod
     def from_parts(

@@ -65,6 +65,20 @@ def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) ->
     return Packing3D(**args)  # type: ignore[arg-type]
 
 
+def test_a_solid_without_faces_must_be_a_sphere() -> None:
+    with pytest.raises(PackingError, match="no faces but is not a sphere"):
+        cube_packing(
+            [[1, 1, 1]],
+            vertices=np.zeros((1, 3)),
+            offsets=np.array([0, 1]),
+            face_vertices=np.zeros(0, dtype=np.int64),
+            face_vertex_offsets=np.zeros(1, dtype=np.int64),
+            face_offsets=np.array([0, 0]),
+            normals=np.zeros((0, 3)),
+            support=np.zeros(0),
+        )
+
+
 def test_cubes_have_their_volume_fraction() -> None:
     p = cube_packing([[1, 1, 1], [3, 1, 1], [np.nan] * 3])
     assert p.n_placed == 2 and p.placed_in_order().tolist() == [0, 1]
@@ -91,7 +105,9 @@ def test_file_round_trip_and_one_reader_for_both_dimensions(tmp_path) -> None:
 
 def test_the_2d_reader_refuses_a_3d_file_in_one_line(tmp_path) -> None:
     save3d(cube_packing([[1, 1, 1]]), tmp_path / "p3.npz")
-    with pytest.raises(PackingFileError, match=r"p3\.npz: a 3D packing .* 2D packings only") as err:
+    with pytest.raises(
+        PackingFileError, match=r"p3\.npz: a 3D packing .* reads 3D packings"
+    ) as err:
         load(tmp_path / "p3.npz")
     assert "\n" not in str(err.value)
 
@@ -109,6 +125,13 @@ def test_the_2d_reader_refuses_a_3d_file_in_one_line(tmp_path) -> None:
         ({"vertices": np.full((8, 3), np.inf)}, "non-finite"),
         ({"mineral": np.array([3])}, "'mineral' has the value 3"),
         ({"domain": "box"}, "not a 3D box"),
+        ({"support": np.full(6, 5.0)}, "off its plane"),
+        ({"support": np.full(6, -0.5), "normals": -_cube_arrays(0.5)["normals"]}, "support > 0"),
+        (
+            {"face_vertices": _cube_arrays(0.5)["face_vertices"].reshape(6, 4)[:, ::-1].ravel()},
+            "not counter-clockwise",
+        ),
+        ({"rounding": np.array([0.1])}, "rounded"),
     ],
 )
 def test_broken_packings_are_refused_naming_the_array(

@@ -184,3 +184,63 @@ def test_regopack_verify_checks_3d_packing_files(tmp_path, capsys) -> None:  # t
     assert "overlap" in text
     report = regopack.verify(tmp_path / "bad.npz")
     assert not report and report.worst_overlap_fraction == pytest.approx(0.1)
+
+
+SURFACE_SCENE = """\
+name = "s3"
+seed = 1
+count = 10
+[domain]
+kind = "box"
+width = 40.0
+height = 40.0
+depth = 40.0
+[size]
+kind = "monodisperse"
+d = 4.0
+[[phases]]
+name = "glass"
+fraction = 1.0
+shape = { kind = "polyhedron" }
+[insertion]
+kind = "available-surface"
+[density]
+kind = "eta"
+"""
+
+
+@pytest.mark.parametrize(
+    ("d", "message"), [(1e-110, "underflows 64-bit floats"), (1e110, "overflows 64-bit floats")]
+)
+def test_sizes_beyond_64_bit_volumes_are_refused_in_one_line(
+    tmp_path, d: float, message: str
+) -> None:  # type: ignore[no-untyped-def]
+    (tmp_path / "s3.toml").write_text(SURFACE_SCENE, encoding="utf-8")
+    with pytest.raises(ConfigError, match=message) as err:
+        regopack.pack(tmp_path / "s3.toml", size={"kind": "monodisperse", "d": d})
+    assert "\n" not in str(err.value)
+
+
+def test_a_sweep_of_a_3d_scene_is_refused_before_it_runs(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    from regopack.experiment import check_runs, load_experiment
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "s3.toml").write_text(SURFACE_SCENE, encoding="utf-8")
+    (tmp_path / "exp.toml").write_text(
+        'base = "s3.toml"\n[sweep]\nseed = [1, 2]\n', encoding="utf-8"
+    )
+    with pytest.raises(ConfigError, match=r"the scene is 3D .* sweeps run 2D scenes only"):
+        check_runs(load_experiment("exp.toml"))
+
+
+def test_a_real_3d_scene_runs_from_the_command_line(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    from regopack.cli import EXIT_OK, main
+
+    (tmp_path / "s3.toml").write_text(SURFACE_SCENE, encoding="utf-8")
+    assert (
+        main(["run", str(tmp_path / "s3.toml"), "--out", str(tmp_path / "run"), "--quiet"])
+        == EXIT_OK
+    )
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    assert summary["placed"] == 10 and summary["verify"]["ok"] is True
+    assert main(["verify", str(tmp_path / "run" / "packing.npz")]) == EXIT_OK
