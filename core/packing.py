@@ -331,6 +331,14 @@ class Packing:
             )
         if offsets[0] != 0:
             raise PackingError(f"array 'offsets' starts at {offsets[0]}, not 0")
+        inner, last = offsets[:-1], offsets[-1]
+        if n and (inner.min() < 0 or inner.max() > last):
+            # checked before the differences, which wrap around in int64
+            j = _first((inner < 0) | (inner > last))
+            raise PackingError(
+                f"array 'offsets' has the value {offsets[j]} at entry {j}, outside "
+                f"[0, {last}] (its last entry)"
+            )
         counts = np.diff(offsets)
         if n and counts.min() < 1:
             j = _first(counts < 1)

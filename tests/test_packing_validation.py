@@ -195,6 +195,13 @@ DEFECTS: dict[str, tuple[Change, str]] = {
     "offsets repeated": (set_value("offsets", 4, 12), "array 'offsets' does not rise strictly"),
     "offsets start": (set_array("offsets", lambda o: o + 1), "array 'offsets' starts at 1, not 0"),
     "offsets end": (set_value("offsets", -1, 10**6), "array 'offsets' ends at 1000000"),
+    "offsets wrapping around": (
+        set_array(
+            "offsets",
+            lambda o: np.concatenate([[0, 2**62, -(2**63), -(2**62)], o[4:]]).astype(np.int64),
+        ),
+        "array 'offsets' has the value 4611686018427387904 at entry 1, outside",
+    ),
     "offsets short": (set_array("offsets", lambda o: o[:-1]), "array 'offsets' has 49 entries"),
     # shapes
     "orientation short": (
