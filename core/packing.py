@@ -208,8 +208,46 @@ def check_particles(
             raise PackingError(f"'stats' has {key!r} = {_short(stat)}, not a number")
 
 
+class PlacedParticles:
+    """Counts and masks of the placed particles, shared by 2D and 3D packings."""
+
+    radius: FloatArray
+    insertion_index: IntArray
+
+    @property
+    def n_particles(self) -> int:
+        """Number of drawn particles (placed or not)."""
+        return int(self.radius.shape[0])
+
+    @property
+    def placed(self) -> NDArray[np.bool_]:
+        """Mask of the placed particles."""
+        return self.insertion_index >= 0
+
+    @property
+    def n_placed(self) -> int:
+        """Number of placed particles."""
+        return int(np.count_nonzero(self.placed))
+
+    def placed_in_order(self) -> IntArray:
+        """Return the indices of the placed particles, in the order they were placed."""
+        idx = np.flatnonzero(self.placed)
+        return idx[np.argsort(self.insertion_index[idx], kind="stable")].astype(np.int64)
+
+
+def check_array_types(obj: object, arrays: Mapping[str, tuple[type[np.generic], int]]) -> None:
+    """Check that every array named in ``arrays`` has its dtype and number of dimensions."""
+    for name, (dtype, ndim) in arrays.items():
+        arr = getattr(obj, name)
+        if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
+            got = arr.dtype if isinstance(arr, np.ndarray) else type(arr).__name__
+            raise PackingError(f"array {name!r} has dtype {got}, expected {np.dtype(dtype)}")
+        if arr.ndim != ndim:
+            raise PackingError(f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array")
+
+
 @dataclass(frozen=True, eq=False)
-class Packing:
+class Packing(PlacedParticles):
     """All drawn particles of a run, in draw order, and where each was placed.
 
     Attributes
@@ -302,15 +340,7 @@ class Packing:
         PackingError
             One line naming the array (or attribute) and what is wrong with it.
         """
-        for name, (dtype, ndim) in _ARRAYS.items():
-            arr = getattr(self, name)
-            if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
-                got = arr.dtype if isinstance(arr, np.ndarray) else type(arr).__name__
-                raise PackingError(f"array {name!r} has dtype {got}, expected {np.dtype(dtype)}")
-            if arr.ndim != ndim:
-                raise PackingError(
-                    f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array"
-                )
+        check_array_types(self, _ARRAYS)
         radius, mineral, vertices, offsets = self.radius, self.mineral, self.vertices, self.offsets
         centre, index = self.centre, self.insertion_index
         n = radius.shape[0]
@@ -410,29 +440,9 @@ class Packing:
     # -- counts and masks ---------------------------------------------------
 
     @property
-    def n_particles(self) -> int:
-        """Number of drawn particles (placed or not)."""
-        return int(self.radius.shape[0])
-
-    @property
-    def placed(self) -> NDArray[np.bool_]:
-        """Mask of the placed particles."""
-        return self.insertion_index >= 0
-
-    @property
-    def n_placed(self) -> int:
-        """Number of placed particles."""
-        return int(np.count_nonzero(self.placed))
-
-    @property
     def not_placed(self) -> IntArray:
         """Indices of the particles that were not placed."""
         return np.flatnonzero(~self.placed).astype(np.int64)
-
-    def placed_in_order(self) -> IntArray:
-        """Return the indices of the placed particles, in the order they were placed."""
-        idx = np.flatnonzero(self.placed)
-        return idx[np.argsort(self.insertion_index[idx], kind="stable")].astype(np.int64)
 
     # -- geometry ---------------------------------------------------------------
 

@@ -25,6 +25,7 @@ from regopack.packing import (
     FILE_MAGIC,
     FORMAT_VERSION_3D,
     Packing,
+    PlacedParticles,
     _as_array,
     _atomic_file,
     _first,
@@ -34,6 +35,7 @@ from regopack.packing import (
     _read_meta,
     _read_meta_keys,
     _short,
+    check_array_types,
     check_particles,
     load,
     open_packing_file,
@@ -97,7 +99,7 @@ def _check_offsets(name: str, offsets: IntArray, rows: int, total: int, least: i
 
 
 @dataclass(frozen=True, eq=False)
-class Packing3D:
+class Packing3D(PlacedParticles):
     """All drawn solids of a 3D run, in draw order, and where each was placed.
 
     Attributes
@@ -172,15 +174,7 @@ class Packing3D:
         PackingError
             One line naming the array (or attribute) and what is wrong with it.
         """
-        for name, (dtype, ndim) in _ARRAYS3D.items():
-            arr = getattr(self, name)
-            if not isinstance(arr, np.ndarray) or arr.dtype != dtype:
-                got = arr.dtype if isinstance(arr, np.ndarray) else type(arr).__name__
-                raise PackingError(f"array {name!r} has dtype {got}, expected {np.dtype(dtype)}")
-            if arr.ndim != ndim:
-                raise PackingError(
-                    f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array"
-                )
+        check_array_types(self, _ARRAYS3D)
         for name, cols in _COLUMNS.items():
             shape = getattr(self, name).shape
             if shape[1] != cols:
@@ -353,26 +347,6 @@ class Packing3D:
         )
 
     # -- counts and masks ---------------------------------------------------
-
-    @property
-    def n_particles(self) -> int:
-        """Number of drawn particles (placed or not)."""
-        return int(self.radius.shape[0])
-
-    @property
-    def placed(self) -> NDArray[np.bool_]:
-        """Mask of the placed particles."""
-        return self.insertion_index >= 0
-
-    @property
-    def n_placed(self) -> int:
-        """Number of placed particles."""
-        return int(np.count_nonzero(self.placed))
-
-    def placed_in_order(self) -> IntArray:
-        """Return the indices of the placed particles, in the order they were placed."""
-        idx = np.flatnonzero(self.placed)
-        return idx[np.argsort(self.insertion_index[idx], kind="stable")].astype(np.int64)
 
     # -- geometry ---------------------------------------------------------------
 

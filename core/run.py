@@ -38,7 +38,7 @@ from regopack.outdir import (
     replace_folder,
 )
 from regopack.packing import Packing, save, write_json_atomic
-from regopack.population import IntArray, Population, ShapeBatch, concat_shapes
+from regopack.population import FloatArray, IntArray, Population, ShapeBatch, concat_shapes
 from regopack.scene_model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.sieve import unplaced_per_class
 
@@ -248,6 +248,27 @@ def check_scene(scene: ResolvedScene) -> int:
     return n
 
 
+def draw_sizes_and_minerals(
+    scene: ResolvedScene, rng: np.random.Generator, n: int
+) -> tuple[FloatArray, IntArray]:
+    """Draw the ``n`` radii, then the minerals (2D and 3D scenes draw them alike).
+
+    Raises
+    ------
+    PluginError
+        When the size plugin returns other than ``n`` finite positive radii.
+    """
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
+    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
+        raise PluginError(
+            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
+            f"(expected ({n},), all finite and positive)"
+        )
+    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    return radii, minerals
+
+
 def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
     """Draw every particle of ``scene`` up front, in insertion order.
 
@@ -257,14 +278,7 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     shapes of that phase's particles (``shape.generate(radii[idx], rng)``).
     """
     n = check_scene(scene)
-    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
-    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
-    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
-        raise PluginError(
-            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
-            f"(expected ({n},), all finite and positive)"
-        )
-    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    radii, minerals = draw_sizes_and_minerals(scene, rng, n)
     parts: list[tuple[IntArray, ShapeBatch]] = []
     for p, phase in enumerate(scene.phases):
         generator: ShapeGenerator = _build(phase.shape, ShapeGenerator, "shape")

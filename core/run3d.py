@@ -149,17 +149,10 @@ def check_scene3d(scene: ResolvedScene) -> int:
 
 def draw_population3d(scene: ResolvedScene, rng: np.random.Generator) -> Population:
     """Draw every solid of a 3D scene up front, in insertion order (the 2D draw order)."""
-    from regopack.run import _build
+    from regopack.run import _build, draw_sizes_and_minerals
 
     n = check_scene3d(scene)
-    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
-    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
-    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
-        raise PluginError(
-            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
-            f"(expected ({n},), all finite and positive)"
-        )
-    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    radii, minerals = draw_sizes_and_minerals(scene, rng, n)
     parts: list[tuple[IntArray, SolidBatch]] = []
     for p, phase in enumerate(scene.phases):
         generator: SolidGenerator = _build(phase.shape, SolidGenerator, "shape")

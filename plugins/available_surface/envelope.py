@@ -368,6 +368,74 @@ def _build_faces(
 
 
 @numba.njit(cache=True)
+def edge_pair_directions(
+    tp: FloatArray,
+    up: FloatArray,
+    pl: IntArray,
+    pr: IntArray,
+    tq: FloatArray,
+    uq: FloatArray,
+    ql: IntArray,
+    qr: IntArray,
+    side_p: NDArray[np.int8],
+    side_q: NDArray[np.int8],
+    cand: FloatArray,
+    kind: IntArray,
+    ca: IntArray,
+    cb: IntArray,
+    nc: int,
+) -> int:
+    """Append the directions where an edge arc of ``P`` crosses one of ``-Q``.
+
+    Each crossing goes to ``cand[nc]`` (unit normal ``± t × s``) with
+    ``kind = 2`` and the two edges in ``ca``, ``cb``; returns the new count.
+    """
+    nep = tp.shape[0]
+    neq = tq.shape[0]
+    for e in range(nep):
+        tx = tp[e, 0]
+        ty = tp[e, 1]
+        tz = tp[e, 2]
+        for e2 in range(neq):
+            if side_p[e, ql[e2]] * side_p[e, qr[e2]] > 0:
+                continue
+            if side_q[e2, pl[e]] * side_q[e2, pr[e]] > 0:
+                continue
+            sx = tq[e2, 0]
+            sy = tq[e2, 1]
+            sz = tq[e2, 2]
+            dx = ty * sz - tz * sy
+            dy = tz * sx - tx * sz
+            dz = tx * sy - ty * sx
+            dn = math.sqrt(dx * dx + dy * dy + dz * dz)
+            if dn < PARALLEL_EPS:
+                continue
+            dx /= dn
+            dy /= dn
+            dz /= dn
+            a1 = dx * up[e, 0] + dy * up[e, 1] + dz * up[e, 2]
+            a2 = dx * up[e, 3] + dy * up[e, 4] + dz * up[e, 5]
+            b1 = dx * uq[e2, 0] + dy * uq[e2, 1] + dz * uq[e2, 2]
+            b2 = dx * uq[e2, 3] + dy * uq[e2, 4] + dz * uq[e2, 5]
+            lo = min(min(a1, a2), min(b1, b2))
+            hi = max(max(a1, a2), max(b1, b2))
+            if lo >= -ANGLE_EPS:
+                sgn = 1.0
+            elif hi <= ANGLE_EPS:
+                sgn = -1.0
+            else:
+                continue
+            cand[nc, 0] = sgn * dx
+            cand[nc, 1] = sgn * dy
+            cand[nc, 2] = sgn * dz
+            kind[nc] = 2
+            ca[nc] = e
+            cb[nc] = e2
+            nc += 1
+    return nc
+
+
+@numba.njit(cache=True)
 def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     """Return the envelope ``E = P ⊕ (-Q)`` as a :class:`Polyhedron`.
 
@@ -430,46 +498,9 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     # the other's great circle
     side_p = _sides(tp, q.normals, -1.0)  # faces of -Q against the edges of P
     side_q = _sides(tq, p.normals, 1.0)  # faces of P against the edges of -Q
-    for e in range(nep):
-        tx = tp[e, 0]
-        ty = tp[e, 1]
-        tz = tp[e, 2]
-        for e2 in range(neq):
-            if side_p[e, ql[e2]] * side_p[e, qr[e2]] > 0:
-                continue
-            if side_q[e2, pl[e]] * side_q[e2, pr[e]] > 0:
-                continue
-            sx = tq[e2, 0]
-            sy = tq[e2, 1]
-            sz = tq[e2, 2]
-            dx = ty * sz - tz * sy
-            dy = tz * sx - tx * sz
-            dz = tx * sy - ty * sx
-            dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if dn < PARALLEL_EPS:
-                continue
-            dx /= dn
-            dy /= dn
-            dz /= dn
-            a1 = dx * up[e, 0] + dy * up[e, 1] + dz * up[e, 2]
-            a2 = dx * up[e, 3] + dy * up[e, 4] + dz * up[e, 5]
-            b1 = dx * uq[e2, 0] + dy * uq[e2, 1] + dz * uq[e2, 2]
-            b2 = dx * uq[e2, 3] + dy * uq[e2, 4] + dz * uq[e2, 5]
-            lo = min(min(a1, a2), min(b1, b2))
-            hi = max(max(a1, a2), max(b1, b2))
-            if lo >= -ANGLE_EPS:
-                sgn = 1.0
-            elif hi <= ANGLE_EPS:
-                sgn = -1.0
-            else:
-                continue
-            cand[nc, 0] = sgn * dx
-            cand[nc, 1] = sgn * dy
-            cand[nc, 2] = sgn * dz
-            kind[nc] = 2
-            ca[nc] = e
-            cb[nc] = e2
-            nc += 1
+    nc = edge_pair_directions(
+        tp, up, pl, pr, tq, uq, ql, qr, side_p, side_q, cand, kind, ca, cb, nc
+    )
 
     # support values of P and -Q in every candidate direction
     dp = np.dot(cand[:nc], np.ascontiguousarray(vp.T))

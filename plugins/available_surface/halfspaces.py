@@ -13,7 +13,6 @@ envelope exactly.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import numba
@@ -22,10 +21,9 @@ from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.available_surface.envelope import (
-    ANGLE_EPS,
-    PARALLEL_EPS,
     _edge_arcs,
     _sides,
+    edge_pair_directions,
     polyhedron_edges,
 )
 from regopack.plugins.available_surface.polyhedron import Polyhedron
@@ -93,43 +91,12 @@ def halfspaces_of_arcs(
         nc += 1
     side_p = _sides(tp, q.normals, -1.0)
     side_q = _sides(tq, p.normals, 1.0)
-    for e in range(nep):
-        tx = tp[e, 0]
-        ty = tp[e, 1]
-        tz = tp[e, 2]
-        for e2 in range(neq):
-            if side_p[e, ql[e2]] * side_p[e, qr[e2]] > 0:
-                continue
-            if side_q[e2, pl[e]] * side_q[e2, pr[e]] > 0:
-                continue
-            sx = tq[e2, 0]
-            sy = tq[e2, 1]
-            sz = tq[e2, 2]
-            dx = ty * sz - tz * sy
-            dy = tz * sx - tx * sz
-            dz = tx * sy - ty * sx
-            dn = math.sqrt(dx * dx + dy * dy + dz * dz)
-            if dn < PARALLEL_EPS:
-                continue
-            dx /= dn
-            dy /= dn
-            dz /= dn
-            a1 = dx * up[e, 0] + dy * up[e, 1] + dz * up[e, 2]
-            a2 = dx * up[e, 3] + dy * up[e, 4] + dz * up[e, 5]
-            b1 = dx * uq[e2, 0] + dy * uq[e2, 1] + dz * uq[e2, 2]
-            b2 = dx * uq[e2, 3] + dy * uq[e2, 4] + dz * uq[e2, 5]
-            lo = min(min(a1, a2), min(b1, b2))
-            hi = max(max(a1, a2), max(b1, b2))
-            if lo >= -ANGLE_EPS:
-                sgn = 1.0
-            elif hi <= ANGLE_EPS:
-                sgn = -1.0
-            else:
-                continue
-            cand[nc, 0] = sgn * dx
-            cand[nc, 1] = sgn * dy
-            cand[nc, 2] = sgn * dz
-            nc += 1
+    cap = cand.shape[0]
+    nc = edge_pair_directions(
+        tp, up, pl, pr, tq, uq, ql, qr, side_p, side_q, cand,
+        np.empty(cap, dtype=np.int64), np.empty(cap, dtype=np.int64),
+        np.empty(cap, dtype=np.int64), nc,
+    )  # fmt: skip
     normals = cand[:nc].copy()
     support = np.empty(nc)
     for c in range(nc):
