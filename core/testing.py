@@ -389,7 +389,17 @@ def _check_solid(batch: SolidBatch, j: int, r: float, who: str, rtol: float) -> 
                 "a face's plane"
             )
         used = np.zeros(verts.shape[0], dtype=bool)
+        edges: dict[tuple[int, int], int] = {}
         for f, loop in enumerate(loops):
+            if loop.size and (loop.min() < 0 or loop.max() >= verts.shape[0]):
+                raise AssertionError(
+                    f"{where}: face {f} has a vertex index outside [0, {verts.shape[0]}) "
+                    "(indices are local to the particle)"
+                )
+            if np.unique(loop).size != loop.size:
+                raise AssertionError(f"{where}: face {f} repeats a vertex")
+            for a, b in zip(loop.tolist(), np.roll(loop, -1).tolist(), strict=True):
+                edges[(a, b)] = edges.get((a, b), 0) + 1
             p = verts[loop]
             used[loop] = True
             if p.shape[0] < 3 or np.max(np.abs(p @ normals[f] - support[f])) > 1e-9 * scale:
@@ -403,6 +413,14 @@ def _check_solid(batch: SolidBatch, j: int, r: float, who: str, rtol: float) -> 
                 )
         if not used.all():
             raise AssertionError(f"{where} has vertices on no face")
+        # closed: every edge runs once each way, in two faces
+        if any(n != 1 or edges.get((b, a)) != 1 for (a, b), n in edges.items()):
+            raise AssertionError(
+                f"{where} is not a closed surface: an edge is not shared by exactly two "
+                "faces running it in opposite directions"
+            )
+        if np.unique(np.round(verts / max(scale, 1e-300), 12), axis=0).shape[0] != verts.shape[0]:
+            raise AssertionError(f"{where} has two vertices at the same place")
         if rho != 0:
             raise AssertionError(f"{where}: rounded polyhedra are not checked yet")
     volume = float(batch.volume[j])
@@ -424,9 +442,11 @@ def check_solid_generator(
     The rules checked: ``generate`` returns a
     :class:`~regopack.solids.SolidBatch` with one solid per radius (also for
     no radii); each solid is a sphere (the vertex ``(0, 0, 0)`` rounded by
-    its radius) or a sharp convex polyhedron whose faces are planar loops,
-    counter-clockwise seen from outside, with unit normals, every vertex on
-    some face and inside every face's plane, the reference point strictly
+    its radius) or a sharp convex polyhedron whose faces are planar loops of
+    local vertex indices without repeats, counter-clockwise seen from
+    outside, forming a closed surface (every edge in two faces, once each
+    way), with unit normals, distinct vertices, every vertex on some face and
+    inside every face's plane, the reference point strictly
     inside, and the volume ``4/3 pi r^3`` within ``rtol``; rotations are
     unit quaternions; the same seed gives the same solids, and numpy's
     global random generator is not used.

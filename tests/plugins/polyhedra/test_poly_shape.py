@@ -113,3 +113,25 @@ def test_the_resolved_parameters_validate_again() -> None:
     fib = PolyhedronConfig(directions="fibonacci")
     assert fib.m is None and len(RandomPolyhedron(fib).directions) == 20
     assert len(RandomPolyhedron(PolyhedronConfig(directions="fibonacci", m=9)).directions) == 9
+
+
+@pytest.mark.parametrize(
+    ("mutate", "message"),
+    [
+        (lambda fv: np.where(fv == 0, -1, fv), "index outside"),
+        (lambda fv: np.concatenate([fv[:1], fv[:1], fv[2:]]), "repeats a vertex|not a planar"),
+        (lambda fv: np.concatenate([fv[:3][::-1], fv[3:]]), "closed surface|counter-clockwise"),
+    ],
+)
+def test_the_contract_check_catches_broken_face_loops(mutate, message) -> None:  # type: ignore[no-untyped-def]
+    from dataclasses import replace
+
+    class Broken(RandomPolyhedron):
+        def generate(self, radius, rng):  # type: ignore[no-untyped-def]
+            batch = super().generate(radius, rng)
+            if len(batch) == 0:
+                return batch
+            return replace(batch, face_vertices=mutate(batch.face_vertices))
+
+    with pytest.raises(AssertionError, match=message):
+        check_solid_generator(Broken(PolyhedronConfig(directions="cube")), radii=[1.0, 2.0])
