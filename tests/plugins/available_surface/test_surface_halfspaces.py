@@ -16,8 +16,11 @@ from regopack.plugins.polyhedra.shape import PolyhedronConfig, RandomPolyhedron
 
 def _random_pair(seed: int, ratio: float, scale: float):  # type: ignore[no-untyped-def]
     rng = np.random.default_rng(seed)
-    pts_p = rng.normal(size=(20, 3)) * scale
-    pts_q = rng.normal(size=(16, 3)) * scale * ratio
+    # centred on their mean, so that the reference point lies inside each hull
+    pts_p = rng.normal(size=(20, 3))
+    pts_q = rng.normal(size=(16, 3))
+    pts_p = (pts_p - pts_p.mean(axis=0)) * scale
+    pts_q = (pts_q - pts_q.mean(axis=0)) * scale * ratio
     return polyhedron_from_points(pts_p), polyhedron_from_points(pts_q), pts_p, pts_q
 
 
