@@ -357,10 +357,13 @@ def _run3d(
         population, result, box, resolved.to_dict(), resolved.seed, result.stats
     )
     margin = 2.0 * float(size_dist.r_max)
-    try:
-        phi_interior = phi_in_box(packing, box.interior(margin))
-    except NotImplementedError:
-        phi_interior = math.nan
+    if box.periodic:
+        phi_interior = packing.phi  # no walls: the whole cell is interior
+    else:
+        try:
+            phi_interior = phi_in_box(packing, box.interior(margin))
+        except NotImplementedError:
+            phi_interior = math.nan
     summary: dict[str, Any] = {
         "scene": resolved.name,
         "seed": resolved.seed,
