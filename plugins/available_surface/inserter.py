@@ -154,7 +154,7 @@ class AvailableSurface(InsertionStrategy):
         radius = np.asarray(population.radius, dtype=np.float64)
         lo = np.array([domain.xmin, domain.ymin, domain.zmin])
         hi = np.array([domain.xmax, domain.ymax, domain.zmax])
-        st = SurfaceState(shapes, radius, lo, hi, periodic=bool(domain.periodic))
+        st = SurfaceState(shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t)
         stats: dict[str, float] = {}
         if cfg.order == "sweep":
             zone = (
@@ -172,7 +172,7 @@ class AvailableSurface(InsertionStrategy):
                 "not_offered": float(n - st.count - refused),
             }
         else:
-            _pack_paper(st, cfg.t, rng, progress)
+            _pack_paper(st, rng, progress)
         if progress is not None:
             progress(n, st.count, n)
         stats = {
@@ -185,7 +185,7 @@ class AvailableSurface(InsertionStrategy):
 
 
 def _pack_paper(
-    st: SurfaceState, t: float, rng: np.random.Generator, progress: ProgressCallback | None
+    st: SurfaceState, rng: np.random.Generator, progress: ProgressCallback | None
 ) -> None:
     """Insert in the paper's order: every placed particle, oldest first, screened by ``t``."""
     n = st.n
@@ -199,11 +199,9 @@ def _pack_paper(
             if st.fits_at(c):
                 st.insert(i, c)
             continue
-        for k in np.flatnonzero(st.radius[i] < t * st.rmin[: st.count]).tolist():
-            x = st.analyse(k, rng)
-            if x is not None:
-                st.insert(i, x)
-                break
+        _, x = st.scan(np.arange(st.count), rng)
+        if x is not None:
+            st.insert(i, x)
 
 
 @hookimpl

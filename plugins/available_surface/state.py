@@ -10,53 +10,27 @@ it returns the sampled centre, or ``None`` and records ``rmin_k``.
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.plugins.available_surface.envelope import minkowski_envelope
-from regopack.plugins.available_surface.free_surface import (
-    Interferers,
-    free_surface,
-    sample_free_point,
+from regopack.plugins.available_surface.analysis import (
+    FOUND,
+    FULL,
+    arcs_for,
+    cache_for,
+    grid_add,
+    grid_for,
+    scan,
+    solids_of,
 )
-from regopack.plugins.available_surface.halfspaces import edge_arcs, halfspaces_of_arcs
+from regopack.plugins.available_surface.halfspaces import edge_arcs
 from regopack.plugins.available_surface.polyhedron import Polyhedron
 from regopack.solids import SolidBatch
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class CellGrid:
-    """Placed particles binned in cubic cells (a dictionary of cell lists)."""
-
-    def __init__(self, cell: float) -> None:
-        self.cell = cell
-        self.cells: dict[tuple[int, int, int], list[int]] = {}
-
-    def key(self, x: FloatArray) -> tuple[int, int, int]:
-        """Cell of point ``x``."""
-        c = self.cell
-        return (math.floor(x[0] / c), math.floor(x[1] / c), math.floor(x[2] / c))
-
-    def add(self, j: int, x: FloatArray) -> None:
-        """File particle ``j`` at ``x``."""
-        self.cells.setdefault(self.key(x), []).append(j)
-
-    def near(self, x: FloatArray, reach: float) -> list[int]:
-        """Particles in the cells that a ball of radius ``reach`` about ``x`` meets."""
-        c = self.cell
-        lo = [math.floor((x[a] - reach) / c) for a in range(3)]
-        hi = [math.floor((x[a] + reach) / c) for a in range(3)]
-        out: list[int] = []
-        for ix in range(lo[0], hi[0] + 1):
-            for iy in range(lo[1], hi[1] + 1):
-                for iz in range(lo[2], hi[2] + 1):
-                    out.extend(self.cells.get((ix, iy, iz), ()))
-        return out
 
 
 def polyhedra_of(shapes: SolidBatch) -> list[Polyhedron]:
@@ -79,22 +53,6 @@ def polyhedra_of(shapes: SolidBatch) -> list[Polyhedron]:
     return polys
 
 
-def _interferers(
-    planes: list[tuple[FloatArray, FloatArray]], centres: FloatArray, radii: FloatArray
-) -> Interferers:
-    """Pack the interferers' half-spaces, centres and circumradius bounds for the kernel."""
-    sizes = [len(h) for _, h in planes]
-    offsets = np.zeros(len(planes) + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offsets[1:])
-    return Interferers(
-        normals=np.concatenate([n for n, _ in planes]) if planes else np.zeros((0, 3)),
-        support=np.concatenate([h for _, h in planes]) if planes else np.zeros(0),
-        offsets=offsets,
-        centres=np.ascontiguousarray(centres.reshape(-1, 3)),
-        radii=np.ascontiguousarray(radii, dtype=np.float64),
-    )
-
-
 class SurfaceState:
     """Placed particles of one run and the exact analysis of a candidate.
 
@@ -106,6 +64,8 @@ class SurfaceState:
         ``(n,)`` equivalent radii (the screening compares them).
     lo, hi
         Corners of the box.
+    t
+        Screening coefficient.
     periodic
         Whether the box's opposite faces are identified (no walls): then the
         interferers include the periodic images of the placed particles (and
@@ -119,10 +79,12 @@ class SurfaceState:
         lo: FloatArray,
         hi: FloatArray,
         periodic: bool = False,
+        t: float = 0.999,
     ):
         n = len(shapes)
         self.n = n
         self.period = (hi - lo) if periodic else None
+        self.t = t
         self.polys = polyhedra_of(shapes)
         self.circum = shapes.circumradius
         self.radius = radius
@@ -133,14 +95,17 @@ class SurfaceState:
         self.order = np.full(n, -1, dtype=np.int64)
         self.rmin = np.full(n, np.inf)
         self.count = 0
-        self.analyses = 0
-        self.empty = 0
+        self.counters = np.zeros(2, dtype=np.int64)
+        self._no_tried = np.zeros(0, dtype=np.int64)
         self.reach_max = 0.0
-        self.grid = CellGrid(2.0 * float(self.circum.max()) if n else 1.0)
-        self._arcs: list[Any] = [None] * n  # edge arcs of each placed particle, on first use
+        self.solids = solids_of(self.polys)
+        self.arcs = arcs_for(self.solids)
+        self.grid = grid_for(lo, hi, 2.0 * float(self.circum.max()) if n else 1.0, n)
+        self.cache = cache_for(n, 4096)
+        self._period = self.period if self.period is not None else np.zeros(0)
+        self._out = np.zeros(3)
         self._particle = -1
         self._q_arcs: Any = None
-        self._halfspaces: dict[int, tuple[FloatArray, FloatArray]] = {}
         self.adm_lo = lo
         self.adm_hi = hi
 
@@ -149,7 +114,7 @@ class SurfaceState:
         q = self.polys[i]
         self._particle = i
         self._q_arcs = None
-        self._halfspaces = {}
+        self.cache.fill[0] = 0
         if self.period is not None:
             self.adm_lo = np.full(3, -np.inf)
             self.adm_hi = np.full(3, np.inf)
@@ -162,79 +127,67 @@ class SurfaceState:
         """Whether the current particle's centre ``x`` keeps it inside the box."""
         return bool(np.all(x >= self.adm_lo) and np.all(x <= self.adm_hi))
 
-    def analyse(self, k: int, rng: np.random.Generator) -> FloatArray | None:
-        """Exact analysis of candidate ``k`` (insertion index) for the current particle.
+    def scan(
+        self,
+        candidates: IntArray,
+        rng: np.random.Generator,
+        screened: bool = True,
+        tried: IntArray | None = None,
+    ) -> tuple[int, FloatArray | None]:
+        """Offer the current particle to ``candidates`` (insertion indices) in turn.
 
-        Returns a centre drawn uniformly by area on the free surface, or
-        ``None`` after recording ``rmin_k`` (the candidate has no free area).
+        A candidate is analysed when the particle passes its screening (every
+        one when ``screened`` is False); the first with free area takes it.
+        Each analysed candidate gets ``tried[k] = i`` when ``tried`` is given.
+
+        Returns
+        -------
+        k, x
+            The candidate and a centre drawn uniformly by area on its free
+            surface, or ``(-1, None)``.
         """
         i = self._particle
-        q = self.polys[i]
         if self._q_arcs is None:
-            self._q_arcs = edge_arcs(q, -1.0)
-        circum = self.circum
-        centre = self.centre
-        pk = int(self.order[k])
-        envelope = minkowski_envelope(self.polys[pk], q)
-        reach = circum[pk] + self.reach_max + 2.0 * circum[i]
-        if self.period is None:
-            found = np.asarray(self.grid.near(centre[pk], reach), dtype=np.int64)
-            d = centre[found] - centre[pk]
-            lim = circum[pk] + circum[found] + 2.0 * circum[i]
-            hit = (np.einsum("ij,ij->i", d, d) < lim * lim) & (found != pk)
-            near = found[hit]
-            near_centres = centre[near]
-        else:
-            near, near_centres = self._periodic_neighbours(pk, i, reach)
-        halfspaces = self._halfspaces
-        arcs = self._arcs
-        for j in near.tolist():
-            if j not in halfspaces:
-                if arcs[j] is None:
-                    arcs[j] = edge_arcs(self.polys[j], 1.0)
-                halfspaces[j] = halfspaces_of_arcs(self.polys[j], arcs[j], q, self._q_arcs)
-        inter = _interferers(
-            [halfspaces[j] for j in near.tolist()], near_centres, circum[near] + circum[i]
-        )
-        self.analyses += 1
-        surface = free_surface(envelope, centre[pk], inter, self.adm_lo, self.adm_hi)
-        if surface.area > 0.0:
-            u = rng.random(3)
-            return np.asarray(sample_free_point(surface, u[0], u[1], u[2]))
-        self.empty += 1
-        self.rmin[k] = self.radius[i]
-        return None
+            self._q_arcs = edge_arcs(self.polys[i], -1.0)
+        cands = np.ascontiguousarray(candidates, dtype=np.int64)
+        t = self.t if screened else np.inf
+        begin = 0
+        while True:
+            code, at = scan(
+                cands, begin, i, t, self.radius, self.rmin,
+                self._no_tried if tried is None else tried, self.counters,
+                self._q_arcs, self.solids, self.arcs, self.grid, self.cache,
+                self.order, self.centre, self.circum, self.reach_max, self._period,
+                self.lo, self.hi, self.adm_lo, self.adm_hi, rng, self._out,
+            )  # fmt: skip
+            if code != FULL:
+                break
+            self._grow_cache()
+            begin = at
+        if code == FOUND:
+            return int(cands[at]), self._out.copy()
+        return -1, None
 
-    def _periodic_neighbours(self, pk: int, i: int, reach: float) -> tuple[IntArray, FloatArray]:
-        """Interferers of candidate ``pk`` among all periodic images, with their centres.
+    @property
+    def analyses(self) -> int:
+        """Candidates analysed so far."""
+        return int(self.counters[0])
 
-        An image ``c_j + s L`` (``s`` in ``{-1, 0, 1}^3``) lies near ``c_k`` when
-        ``c_j`` lies near ``c_k - s L``; shifts whose ball misses the box are skipped.
-        The candidate's own images count (a box smaller than a few particles).
-        """
-        assert self.period is not None
-        circum = self.circum
-        centre = self.centre
-        ck = centre[pk]
-        ids: list[int] = []
-        shifts: list[FloatArray] = []
-        for sx in (-1, 0, 1):
-            for sy in (-1, 0, 1):
-                for sz in (-1, 0, 1):
-                    shift = np.array([sx, sy, sz], dtype=np.float64) * self.period
-                    p = ck - shift
-                    if np.any(p + reach < self.lo) or np.any(p - reach > self.hi):
-                        continue
-                    found = self.grid.near(p, reach)
-                    ids.extend(found)
-                    shifts.extend([shift] * len(found))
-        idx = np.asarray(ids, dtype=np.int64)
-        at = centre[idx] + np.asarray(shifts, dtype=np.float64).reshape(-1, 3)
-        d = at - ck
-        lim = circum[pk] + circum[idx] + 2.0 * circum[i]
-        own = (idx == pk) & (np.einsum("ij,ij->i", d, d) == 0.0)
-        hit = (np.einsum("ij,ij->i", d, d) < lim * lim) & ~own
-        return idx[hit], np.ascontiguousarray(at[hit])
+    @property
+    def empty(self) -> int:
+        """Analyses that found no free area."""
+        return int(self.counters[1])
+
+    def _grow_cache(self) -> None:
+        """Double the half-space cache, keeping its rows."""
+        old = self.cache
+        rows = 2 * old.support.shape[0]
+        new = cache_for(self.n, rows)
+        new.normals[: old.support.shape[0]] = old.normals
+        new.support[: old.support.shape[0]] = old.support
+        for name in ("stamp", "start", "size", "fill"):
+            getattr(new, name)[:] = getattr(old, name)
+        self.cache = new
 
     def insert(self, i: int, x: FloatArray) -> int:
         """Place particle ``i`` at ``x`` (wrapped into a periodic box); return its index."""
@@ -246,6 +199,6 @@ class SurfaceState:
         self.index[i] = k
         self.order[k] = i
         self.count += 1
-        self.grid.add(i, self.centre[i])
+        grid_add(self.grid, i, self.centre[i])
         self.reach_max = max(self.reach_max, float(self.circum[i]))
         return k

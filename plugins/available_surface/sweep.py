@@ -128,23 +128,13 @@ class SurfaceSweep:
         st = self.state
         c = st.count
         open_ = (self.flag[:c] == ACTIVE) & (st.radius[i] < self.t * st.rmin[:c])
-        for k in np.flatnonzero(open_).tolist():
-            self.tried[k] = i
-            x = st.analyse(k, rng)
-            if x is not None:
-                return k, x
-        return -1, None
+        return st.scan(np.flatnonzero(open_), rng, tried=self.tried)
 
     def _exhaustive(self, i: int, rng: np.random.Generator) -> FloatArray | None:
         st = self.state
         c = st.count
         todo = (self.flag[:c] != RETIRED) & (self.tried[:c] != i)
-        for k in np.flatnonzero(todo).tolist():
-            self.tried[k] = i
-            x = st.analyse(k, rng)
-            if x is not None:
-                return x
-        return None
+        return st.scan(np.flatnonzero(todo), rng, screened=False, tried=self.tried)[1]
 
     # ------------------------------------------------------------------ loop
 

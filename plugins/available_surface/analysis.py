@@ -1,0 +1,430 @@
+"""Compiled analysis of one candidate: interferers, their envelopes, the free surface, a centre.
+
+:class:`SurfaceState` keeps the placed particles in flat arrays
+(:class:`Solids`, :class:`Arcs`, :class:`Grid`) so that the whole analysis of
+a candidate runs in one compiled call, :func:`analyse`:
+
+1. the envelope ``E_k = P_k ⊕ (-Q)``;
+2. the interferers: the placed particles (and, in a periodic box, their
+   images among the 27 shifts) in the grid cells that a ball about ``c_k``
+   reaches, kept when ``|c_j - c_k| < R_k + R_j + 2 R_Q``;
+3. each interferer's envelope as half-spaces, computed once per particle
+   being placed and kept in :class:`HalfspaceCache`;
+4. the free surface and, when it has area, a centre drawn uniformly by area
+   with three uniform numbers from the run's generator.
+
+The order of the interferers (cells in ascending x, y, z, and in each cell
+the order of insertion) is fixed, so the packing does not depend on how the
+analysis is run.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_surface.envelope import minkowski_envelope
+from regopack.plugins.available_surface.free_surface import (
+    Interferers,
+    free_surface,
+    sample_free_point,
+)
+from regopack.plugins.available_surface.halfspaces import (
+    EdgeArcs,
+    edge_arcs,
+    halfspaces_of_arcs,
+)
+from regopack.plugins.available_surface.polyhedron import Polyhedron
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+FOUND, EMPTY, FULL = 1, 0, -1
+"""Return codes of :func:`analyse`: a centre, no free area, the cache needs more room."""
+
+
+class Solids(NamedTuple):
+    """The population's polyhedra in flat arrays (see :func:`solid`)."""
+
+    vertices: FloatArray
+    vertex_offsets: IntArray
+    normals: FloatArray
+    support: FloatArray
+    face_offsets: IntArray
+    loops: IntArray
+    loop_offsets: IntArray
+    loop_starts: IntArray
+    loop_start_offsets: IntArray
+
+
+class Arcs(NamedTuple):
+    """Edge arcs of every particle, made on first use (``done``)."""
+
+    left: IntArray
+    right: IntArray
+    t: FloatArray
+    u: FloatArray
+    offsets: IntArray
+    done: NDArray[np.bool_]
+
+
+class Grid(NamedTuple):
+    """Placed particles in cubic cells: per-cell lists in insertion order.
+
+    Cell ``floor(x / cell) - origin`` per axis (cells aligned on multiples of
+    ``cell``); ``dims`` counts them per axis; ``head``/``tail`` per cell and
+    ``link`` per particle link the lists.
+    """
+
+    origin: IntArray
+    cell: FloatArray
+    dims: IntArray
+    head: IntArray
+    tail: IntArray
+    link: IntArray
+
+
+class HalfspaceCache(NamedTuple):
+    """Interferer envelopes of the particle being placed, as half-space rows.
+
+    ``stamp[j]`` is the particle whose envelope with ``P_j`` rows
+    ``start[j]:start[j] + size[j]`` hold; ``fill[0]`` is the next free row.
+    """
+
+    normals: FloatArray
+    support: FloatArray
+    stamp: IntArray
+    start: IntArray
+    size: IntArray
+    fill: IntArray
+
+
+def solids_of(polys: list[Polyhedron]) -> Solids:
+    """Pack :class:`Polyhedron` tuples into :class:`Solids`."""
+
+    def offsets(sizes: list[int]) -> IntArray:
+        out = np.zeros(len(sizes) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=out[1:])
+        return out
+
+    def cat(arrays: list[NDArray[Any]], shape: tuple[int, ...], dtype: type) -> NDArray[Any]:
+        return np.ascontiguousarray(np.concatenate(arrays) if arrays else np.zeros(shape, dtype))
+
+    return Solids(
+        vertices=cat([p.vertices for p in polys], (0, 3), np.float64),
+        vertex_offsets=offsets([len(p.vertices) for p in polys]),
+        normals=cat([p.normals for p in polys], (0, 3), np.float64),
+        support=cat([p.support for p in polys], (0,), np.float64),
+        face_offsets=offsets([len(p.normals) for p in polys]),
+        loops=cat([p.face_vertices for p in polys], (0,), np.int64),
+        loop_offsets=offsets([len(p.face_vertices) for p in polys]),
+        loop_starts=cat([p.face_offsets for p in polys], (0,), np.int64),
+        loop_start_offsets=offsets([len(p.face_offsets) for p in polys]),
+    )
+
+
+def arcs_for(solids: Solids) -> Arcs:
+    """Room for every particle's edge arcs (``E = loops / 2`` edges each)."""
+    n = solids.vertex_offsets.shape[0] - 1
+    offsets = solids.loop_offsets // 2
+    e = int(offsets[-1])
+    return Arcs(
+        left=np.zeros(e, dtype=np.int64),
+        right=np.zeros(e, dtype=np.int64),
+        t=np.zeros((e, 3)),
+        u=np.zeros((e, 6)),
+        offsets=np.ascontiguousarray(offsets),
+        done=np.zeros(n, dtype=np.bool_),
+    )
+
+
+def grid_for(lo: FloatArray, hi: FloatArray, cell: float, n: int) -> Grid:
+    """Return an empty grid of cells of side ``cell`` over the box ``[lo, hi]``."""
+    first = np.floor(np.asarray(lo) / cell).astype(np.int64)
+    dims = np.floor(np.asarray(hi) / cell).astype(np.int64) - first + 1
+    cells = int(np.prod(dims))
+    return Grid(
+        origin=first,
+        cell=np.array([cell]),
+        dims=dims,
+        head=np.full(cells, -1, dtype=np.int64),
+        tail=np.full(cells, -1, dtype=np.int64),
+        link=np.full(max(n, 1), -1, dtype=np.int64),
+    )
+
+
+def cache_for(n: int, rows: int) -> HalfspaceCache:
+    """Return an empty half-space cache of ``rows`` rows."""
+    return HalfspaceCache(
+        normals=np.zeros((rows, 3)),
+        support=np.zeros(rows),
+        stamp=np.full(max(n, 1), -1, dtype=np.int64),
+        start=np.zeros(max(n, 1), dtype=np.int64),
+        size=np.zeros(max(n, 1), dtype=np.int64),
+        fill=np.zeros(1, dtype=np.int64),
+    )
+
+
+@numba.njit(cache=True)
+def solid(s: Solids, j: int) -> Polyhedron:
+    """Particle ``j`` as a :class:`Polyhedron` (views of the flat arrays)."""
+    return Polyhedron(
+        s.vertices[s.vertex_offsets[j] : s.vertex_offsets[j + 1]],
+        s.normals[s.face_offsets[j] : s.face_offsets[j + 1]],
+        s.support[s.face_offsets[j] : s.face_offsets[j + 1]],
+        s.loops[s.loop_offsets[j] : s.loop_offsets[j + 1]],
+        s.loop_starts[s.loop_start_offsets[j] : s.loop_start_offsets[j + 1]],
+    )
+
+
+@numba.njit(cache=True)
+def arcs_of(a: Arcs, s: Solids, j: int) -> EdgeArcs:
+    """Edge arcs of particle ``j``, made on first use."""
+    e0 = a.offsets[j]
+    e1 = a.offsets[j + 1]
+    if not a.done[j]:
+        made = edge_arcs(solid(s, j), 1.0)
+        a.left[e0:e1] = made.left
+        a.right[e0:e1] = made.right
+        a.t[e0:e1] = made.t
+        a.u[e0:e1] = made.u
+        a.done[j] = True
+    return EdgeArcs(a.left[e0:e1], a.right[e0:e1], a.t[e0:e1], a.u[e0:e1])
+
+
+@numba.njit(cache=True)
+def _cell(g: Grid, x: float, axis: int) -> int:
+    return int(math.floor(x / g.cell[0]) - g.origin[axis])
+
+
+@numba.njit(cache=True)
+def grid_add(g: Grid, j: int, x: FloatArray) -> None:
+    """File particle ``j`` at ``x`` (inside the box) at the end of its cell's list."""
+    ix = min(max(_cell(g, x[0], 0), 0), g.dims[0] - 1)
+    iy = min(max(_cell(g, x[1], 1), 0), g.dims[1] - 1)
+    iz = min(max(_cell(g, x[2], 2), 0), g.dims[2] - 1)
+    c = (ix * g.dims[1] + iy) * g.dims[2] + iz
+    g.link[j] = -1
+    if g.tail[c] < 0:
+        g.head[c] = j
+    else:
+        g.link[g.tail[c]] = j
+    g.tail[c] = j
+
+
+@numba.njit(cache=True)
+def _gather(
+    g: Grid,
+    p: FloatArray,
+    reach: float,
+    shift: FloatArray,
+    ck: FloatArray,
+    pk: int,
+    i: int,
+    centre: FloatArray,
+    circum: FloatArray,
+    near: IntArray,
+    at: FloatArray,
+    count: int,
+) -> tuple[int, IntArray, FloatArray]:
+    """Append the interferers found in the cells about ``p`` (their images at ``+ shift``).
+
+    Returns the new count and the arrays, grown when full.
+    """
+    lo0 = max(_cell(g, p[0] - reach, 0), 0)
+    lo1 = max(_cell(g, p[1] - reach, 1), 0)
+    lo2 = max(_cell(g, p[2] - reach, 2), 0)
+    hi0 = min(_cell(g, p[0] + reach, 0), g.dims[0] - 1)
+    hi1 = min(_cell(g, p[1] + reach, 1), g.dims[1] - 1)
+    hi2 = min(_cell(g, p[2] + reach, 2), g.dims[2] - 1)
+    for ix in range(lo0, hi0 + 1):
+        for iy in range(lo1, hi1 + 1):
+            for iz in range(lo2, hi2 + 1):
+                j = g.head[(ix * g.dims[1] + iy) * g.dims[2] + iz]
+                while j >= 0:
+                    dx = centre[j, 0] + shift[0] - ck[0]
+                    dy = centre[j, 1] + shift[1] - ck[1]
+                    dz = centre[j, 2] + shift[2] - ck[2]
+                    d2 = dx * dx + dy * dy + dz * dz
+                    lim = circum[pk] + circum[j] + 2.0 * circum[i]
+                    if d2 < lim * lim and not (j == pk and d2 == 0.0):
+                        if count == near.shape[0]:
+                            grown = np.empty(2 * count, dtype=np.int64)
+                            grown[:count] = near
+                            near = grown
+                            grown_at = np.empty((2 * count, 3))
+                            grown_at[:count] = at
+                            at = grown_at
+                        near[count] = j
+                        at[count, 0] = centre[j, 0] + shift[0]
+                        at[count, 1] = centre[j, 1] + shift[1]
+                        at[count, 2] = centre[j, 2] + shift[2]
+                        count += 1
+                    j = g.link[j]
+    return count, near, at
+
+
+@numba.njit(cache=True)
+def analyse(
+    k: int,
+    i: int,
+    q_arcs: EdgeArcs,
+    s: Solids,
+    a: Arcs,
+    g: Grid,
+    cache: HalfspaceCache,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> int:
+    """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
+
+    ``period`` has length 0 for a walled box. Returns :data:`FOUND` (the
+    centre in ``out``), :data:`EMPTY`, or :data:`FULL` when the half-space
+    cache has no room for an interferer (nothing was drawn; grow it and call
+    again).
+    """
+    pk = order[k]
+    q = solid(s, i)
+    ck = centre[pk]
+    reach = circum[pk] + reach_max + 2.0 * circum[i]
+    near = np.empty(64, dtype=np.int64)
+    at = np.empty((64, 3))
+    count = 0
+    zero = np.zeros(3)
+    if period.shape[0] == 0:
+        count, near, at = _gather(g, ck, reach, zero, ck, pk, i, centre, circum, near, at, 0)
+    else:
+        shift = np.empty(3)
+        for sx in (-1, 0, 1):
+            for sy in (-1, 0, 1):
+                for sz in (-1, 0, 1):
+                    shift[0] = sx * period[0]
+                    shift[1] = sy * period[1]
+                    shift[2] = sz * period[2]
+                    skip = False
+                    for ax in range(3):
+                        pa = ck[ax] - shift[ax]
+                        if pa + reach < lo[ax] or pa - reach > hi[ax]:
+                            skip = True
+                    if skip:
+                        continue
+                    p = ck - shift
+                    count, near, at = _gather(
+                        g, p, reach, shift, ck, pk, i, centre, circum, near, at, count
+                    )
+    rows = 0
+    for m in range(count):
+        j = near[m]
+        if cache.stamp[j] != i:
+            hn, hh = halfspaces_of_arcs(solid(s, j), arcs_of(a, s, j), q, q_arcs)
+            f = cache.fill[0]
+            if f + hh.shape[0] > cache.support.shape[0]:
+                return FULL
+            cache.normals[f : f + hh.shape[0]] = hn
+            cache.support[f : f + hh.shape[0]] = hh
+            cache.stamp[j] = i
+            cache.start[j] = f
+            cache.size[j] = hh.shape[0]
+            cache.fill[0] = f + hh.shape[0]
+        rows += cache.size[j]
+    normals = np.empty((rows, 3))
+    support = np.empty(rows)
+    offsets = np.zeros(count + 1, dtype=np.int64)
+    radii = np.empty(count)
+    r = 0
+    for m in range(count):
+        j = near[m]
+        c0 = cache.start[j]
+        for h in range(cache.size[j]):
+            normals[r, 0] = cache.normals[c0 + h, 0]
+            normals[r, 1] = cache.normals[c0 + h, 1]
+            normals[r, 2] = cache.normals[c0 + h, 2]
+            support[r] = cache.support[c0 + h]
+            r += 1
+        offsets[m + 1] = r
+        radii[m] = circum[j] + circum[i]
+    inter = Interferers(normals, support, offsets, at[:count].copy(), radii)
+    envelope = minkowski_envelope(solid(s, pk), q)
+    surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
+    if surface.area > 0.0:
+        u1 = rng.random()  # three uniforms in the order of rng.random(3)
+        u2 = rng.random()
+        u3 = rng.random()
+        x = sample_free_point(surface, u1, u2, u3)
+        out[0] = x[0]
+        out[1] = x[1]
+        out[2] = x[2]
+        return FOUND
+    return EMPTY
+
+
+@numba.njit(cache=True)
+def scan(
+    candidates: IntArray,
+    begin: int,
+    i: int,
+    t: float,
+    radius: FloatArray,
+    rmin: FloatArray,
+    tried: IntArray,
+    counters: IntArray,
+    q_arcs: EdgeArcs,
+    s: Solids,
+    a: Arcs,
+    g: Grid,
+    cache: HalfspaceCache,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> tuple[int, int]:
+    """Offer particle ``i`` to ``candidates[begin:]`` in turn; stop at the first with free area.
+
+    A candidate is analysed when ``radius[i] < t * rmin[k]`` (``t = inf``: every
+    one); an empty one records ``rmin[k] = radius[i]``; each analysed one
+    records ``tried[k] = i`` (when ``tried`` is not empty). ``counters``
+    counts analyses and empty ones. Returns ``(code, position)``: :data:`FOUND`
+    and the candidate's position (the centre in ``out``), :data:`EMPTY` and
+    ``len(candidates)``, or :data:`FULL` and the position to resume from
+    after growing the cache.
+    """
+    r = radius[i]
+    for m in range(begin, candidates.shape[0]):
+        k = candidates[m]
+        if not r < t * rmin[k]:
+            continue
+        code = analyse(
+            k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
+            lo, hi, adm_lo, adm_hi, rng, out,
+        )  # fmt: skip
+        if code == FULL:
+            return FULL, m
+        counters[0] += 1
+        if tried.shape[0] > 0:
+            tried[k] = i
+        if code == FOUND:
+            return FOUND, m
+        counters[1] += 1
+        rmin[k] = r
+    return EMPTY, candidates.shape[0]
