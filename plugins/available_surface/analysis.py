@@ -287,12 +287,16 @@ def analyse(
     hi: FloatArray,
     adm_lo: FloatArray,
     adm_hi: FloatArray,
+    margin: float,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> int:
     """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
 
-    ``period`` has length 0 for a walled box. Returns :data:`FOUND` (the
+    ``period`` has length 0 for a walled box. ``margin`` (the packing
+    control) moves every interferer's facets out and the walls in by that
+    length, so the free surface keeps that distance from what covers it.
+    Returns :data:`FOUND` (the
     centre in ``out``), :data:`EMPTY`, or :data:`FULL` when the half-space
     cache has no room for an interferer (nothing was drawn; grow it and call
     again).
@@ -353,12 +357,15 @@ def analyse(
             normals[r, 0] = cache.normals[c0 + h, 0]
             normals[r, 1] = cache.normals[c0 + h, 1]
             normals[r, 2] = cache.normals[c0 + h, 2]
-            support[r] = cache.support[c0 + h]
+            support[r] = cache.support[c0 + h] + margin
             r += 1
         offsets[m + 1] = r
-        radii[m] = circum[j] + circum[i]
+        radii[m] = circum[j] + circum[i] + margin
     inter = Interferers(normals, support, offsets, at[:count].copy(), radii)
     envelope = minkowski_envelope(solid(s, pk), q)
+    if margin > 0.0:
+        adm_lo = adm_lo + margin
+        adm_hi = adm_hi - margin
     surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
     if surface.area > 0.0:
         u1 = rng.random()  # three uniforms in the order of rng.random(3)
@@ -370,6 +377,17 @@ def analyse(
         out[2] = x[2]
         return FOUND
     return EMPTY
+
+
+@numba.njit(cache=True)
+def eta_margin(eta: float, xi: float, r: float) -> float:
+    """Margin of the packing control: ``max(0, eta + xi - 1) / 100`` of the diameter ``2 r``.
+
+    The 2D control trims each free arc by ``delta = max(0, eta + xi - 1) / 100 *
+    2 r / (r_k + r)`` radians at both ends; on an envelope of equivalent
+    radius ``r_k + r`` that is this length.
+    """
+    return max(0.0, eta + xi - 1.0) / 100.0 * 2.0 * r
 
 
 @numba.njit(cache=True)
@@ -396,6 +414,8 @@ def scan(
     hi: FloatArray,
     adm_lo: FloatArray,
     adm_hi: FloatArray,
+    eta: float,
+    xi: FloatArray,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> tuple[int, int]:
@@ -403,8 +423,12 @@ def scan(
 
     A candidate is analysed when ``radius[i] < t * rmin[k]`` (``t = inf``: every
     one); an empty one records ``rmin[k] = radius[i]``; each analysed one
-    records ``tried[k] = i`` (when ``tried`` is not empty). ``counters``
-    counts analyses and empty ones. Returns ``(code, position)``: :data:`FOUND`
+    records ``tried[k] = i`` (when ``tried`` is not empty). With ``eta > 0``
+    each analysis first draws ``xi ~ U(0, 1)`` and keeps the free surface
+    ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
+    from the interferers and walls (:func:`eta_margin`). ``counters``
+    counts analyses and empty ones; ``xi[0]`` holds a drawn ``xi`` across a
+    :data:`FULL` return (negative: none). Returns ``(code, position)``: :data:`FOUND`
     and the candidate's position (the centre in ``out``), :data:`EMPTY` and
     ``len(candidates)``, or :data:`FULL` and the position to resume from
     after growing the cache.
@@ -414,12 +438,18 @@ def scan(
         k = candidates[m]
         if not r < t * rmin[k]:
             continue
+        margin = 0.0
+        if eta > 0.0:
+            if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
+                xi[0] = rng.random()
+            margin = eta_margin(eta, xi[0], r)
         code = analyse(
             k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
-            lo, hi, adm_lo, adm_hi, rng, out,
+            lo, hi, adm_lo, adm_hi, margin, rng, out,
         )  # fmt: skip
         if code == FULL:
             return FULL, m
+        xi[0] = -1.0
         counters[0] += 1
         if tried.shape[0] > 0:
             tried[k] = i

@@ -27,9 +27,10 @@ a particle that no candidate takes is not placed.
 
 Candidates are offered in the paper's order (``order = "paper"``) or in
 the sweep order (``order = "sweep"``, :mod:`.sweep`); the box may be walled
-or periodic (:class:`.state.SurfaceState`). This version packs sharp
-polyhedra with the ``eta`` controller at ``eta = 0``; spheres and the packing
-control coefficient come next.
+or periodic (:class:`.state.SurfaceState`); the ``eta`` controller keeps
+the free surface a margin from what covers it
+(:func:`.analysis.eta_margin`). This version packs sharp polyhedra; spheres
+come next.
 """
 
 from __future__ import annotations
@@ -146,15 +147,21 @@ class AvailableSurface(InsertionStrategy):
                 "insertion 'available-surface' packs sharp polyhedra only so far; "
                 "spheres and rounded solids are not supported yet"
             )
-        eta = getattr(controller, "eta", 0.0)
-        if eta != 0.0 and not getattr(controller, "identity", False):
-            raise ConfigError("insertion 'available-surface' supports density.eta = 0 only so far")
+        from regopack.plugins.eta import EtaController
+
+        if not isinstance(controller, EtaController):
+            raise ConfigError(
+                "insertion 'available-surface' needs the built-in 'eta' density controller "
+                "(density.kind = 'eta')"
+            )
         cfg = self.config
         n = len(population)
         radius = np.asarray(population.radius, dtype=np.float64)
         lo = np.array([domain.xmin, domain.ymin, domain.zmin])
         hi = np.array([domain.xmax, domain.ymax, domain.zmax])
-        st = SurfaceState(shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t)
+        st = SurfaceState(
+            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta
+        )
         stats: dict[str, float] = {}
         if cfg.order == "sweep":
             zone = (

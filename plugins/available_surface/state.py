@@ -66,6 +66,8 @@ class SurfaceState:
         Corners of the box.
     t
         Screening coefficient.
+    eta
+        Packing control coefficient (see :func:`.analysis.eta_margin`).
     periodic
         Whether the box's opposite faces are identified (no walls): then the
         interferers include the periodic images of the placed particles (and
@@ -80,11 +82,14 @@ class SurfaceState:
         hi: FloatArray,
         periodic: bool = False,
         t: float = 0.999,
+        eta: float = 0.0,
     ):
         n = len(shapes)
         self.n = n
         self.period = (hi - lo) if periodic else None
         self.t = t
+        self.eta = eta
+        self._xi = np.full(1, -1.0)
         self.polys = polyhedra_of(shapes)
         self.circum = shapes.circumradius
         self.radius = radius
@@ -158,7 +163,7 @@ class SurfaceState:
                 self._no_tried if tried is None else tried, self.counters,
                 self._q_arcs, self.solids, self.arcs, self.grid, self.cache,
                 self.order, self.centre, self.circum, self.reach_max, self._period,
-                self.lo, self.hi, self.adm_lo, self.adm_hi, rng, self._out,
+                self.lo, self.hi, self.adm_lo, self.adm_hi, self.eta, self._xi, rng, self._out,
             )  # fmt: skip
             if code != FULL:
                 break

@@ -120,7 +120,6 @@ def test_extremes_stay_overlap_free(
             {"phases": [{"name": "g", "fraction": 1.0, "shape": {"kind": "sphere"}}]},
             "sharp polyhedra only",
         ),
-        ({"density": {"kind": "eta", "eta": 5.0}}, "eta = 0 only"),
     ],
 )
 def test_what_it_does_not_pack_yet_is_refused_in_one_line(
@@ -232,3 +231,33 @@ def test_a_periodic_box_is_packed_across_its_faces(order: str) -> None:
         or np.any(packing.world_vertices(int(j)) > hi)
     ]
     assert crossing
+
+
+@pytest.mark.parametrize("order", ["paper", "sweep"])
+def test_eta_keeps_each_particle_its_margin_from_all_but_its_candidate(order: str) -> None:
+    eta = 50.0
+    packing = _pack(
+        scene(
+            count=40,
+            density={"kind": "eta", "eta": eta},
+            insertion={"kind": "available-surface", "order": order},
+        )
+    )
+    assert packing.n_placed >= 20
+    order_ = packing.placed_in_order()
+    solids = [packing.world_vertices(int(j)) for j in order_]
+    size = float(np.cbrt(packing.solids.volume.min()))
+    box = packing.domain
+    lo = np.array([box.xmin, box.ymin, box.zmin])
+    hi = np.array([box.xmax, box.ymax, box.zmax])
+    for a in range(1, len(order_)):
+        # margin >= (eta - 1) / 100 of the equivalent diameter (xi >= 0)
+        margin = (eta - 1.0) / 100.0 * 2.0 * float(packing.radius[order_[a]])
+        gaps = sorted(separating_gap(solids[a], solids[b]) for b in range(a))
+        assert gaps[0] == pytest.approx(0.0, abs=1e-8 * size)  # touches its candidate
+        if len(gaps) > 1:
+            assert gaps[1] >= margin * (1 - 1e-9)  # and keeps away from every other
+        assert np.all(solids[a] >= lo + margin * (1 - 1e-9))
+        assert np.all(solids[a] <= hi - margin * (1 - 1e-9))
+    # eta = 0 places more in the same box
+    assert _pack(scene(count=40)).n_placed > packing.n_placed or packing.n_placed == 40
