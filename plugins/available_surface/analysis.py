@@ -40,6 +40,7 @@ from regopack.plugins.available_surface.halfspaces import (
     halfspaces_of_arcs,
 )
 from regopack.plugins.available_surface.polyhedron import Polyhedron
+from regopack.plugins.available_surface.spheres import EPS, free_arcs, sample_free
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -270,6 +271,116 @@ def _gather(
 
 
 @numba.njit(cache=True)
+def _interferers(
+    g: Grid,
+    pk: int,
+    i: int,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+) -> tuple[int, IntArray, FloatArray]:
+    """Placed particles (or periodic images) that pass the circumradius test with ``pk``."""
+    ck = centre[pk]
+    reach = circum[pk] + reach_max + 2.0 * circum[i]
+    near = np.empty(64, dtype=np.int64)
+    at = np.empty((64, 3))
+    count = 0
+    if period.shape[0] == 0:
+        return _gather(g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, 0)
+    shift = np.empty(3)
+    for sx in (-1, 0, 1):
+        for sy in (-1, 0, 1):
+            for sz in (-1, 0, 1):
+                shift[0] = sx * period[0]
+                shift[1] = sy * period[1]
+                shift[2] = sz * period[2]
+                skip = False
+                for ax in range(3):
+                    pa = ck[ax] - shift[ax]
+                    if pa + reach < lo[ax] or pa - reach > hi[ax]:
+                        skip = True
+                if skip:
+                    continue
+                p = ck - shift
+                count, near, at = _gather(
+                    g, p, reach, shift, ck, pk, i, centre, circum, near, at, count
+                )
+    return count, near, at
+
+
+@numba.njit(cache=True)
+def analyse_sphere(
+    k: int,
+    i: int,
+    g: Grid,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    margin: float,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> int:
+    """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`."""
+    pk = order[k]
+    ck = centre[pk]
+    r = circum[i]
+    big_r = circum[pk] + r
+    tau = EPS * big_r
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi)
+    caps = np.empty((count + 6, 4))
+    nc = 0
+    for m in range(count):
+        dx = at[m, 0] - ck[0]
+        dy = at[m, 1] - ck[1]
+        dz = at[m, 2] - ck[2]
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        rho = circum[near[m]] + r + margin
+        h = (big_r * big_r + dist * dist - rho * rho) / (2.0 * dist)
+        if h >= big_r - tau:
+            continue  # the ball misses the sphere, or touches it
+        if h <= -big_r + tau:
+            return EMPTY  # it holds the whole sphere (but a point)
+        caps[nc, 0] = dx / dist
+        caps[nc, 1] = dy / dist
+        caps[nc, 2] = dz / dist
+        caps[nc, 3] = h
+        nc += 1
+    for ax in range(3):
+        for side in (-1.0, 1.0):
+            bound = adm_lo[ax] + margin if side < 0 else adm_hi[ax] - margin
+            if not math.isfinite(bound):
+                continue
+            h = side * (bound - ck[ax])
+            if h >= big_r - tau:
+                continue
+            if h <= -big_r + tau:
+                return EMPTY
+            caps[nc, 0] = 0.0
+            caps[nc, 1] = 0.0
+            caps[nc, 2] = 0.0
+            caps[nc, ax] = side
+            caps[nc, 3] = h
+            nc += 1
+    arcs = free_arcs(caps, nc, big_r, tau)
+    if nc > 0 and arcs.shape[0] == 0:
+        return EMPTY
+    ux, uy, uz = sample_free(caps, nc, arcs, big_r, tau, rng)
+    out[0] = ck[0] + ux
+    out[1] = ck[1] + uy
+    out[2] = ck[2] + uz
+    return FOUND
+
+
+@numba.njit(cache=True)
 def analyse(
     k: int,
     i: int,
@@ -304,32 +415,7 @@ def analyse(
     pk = order[k]
     q = solid(s, i)
     ck = centre[pk]
-    reach = circum[pk] + reach_max + 2.0 * circum[i]
-    near = np.empty(64, dtype=np.int64)
-    at = np.empty((64, 3))
-    count = 0
-    zero = np.zeros(3)
-    if period.shape[0] == 0:
-        count, near, at = _gather(g, ck, reach, zero, ck, pk, i, centre, circum, near, at, 0)
-    else:
-        shift = np.empty(3)
-        for sx in (-1, 0, 1):
-            for sy in (-1, 0, 1):
-                for sz in (-1, 0, 1):
-                    shift[0] = sx * period[0]
-                    shift[1] = sy * period[1]
-                    shift[2] = sz * period[2]
-                    skip = False
-                    for ax in range(3):
-                        pa = ck[ax] - shift[ax]
-                        if pa + reach < lo[ax] or pa - reach > hi[ax]:
-                            skip = True
-                    if skip:
-                        continue
-                    p = ck - shift
-                    count, near, at = _gather(
-                        g, p, reach, shift, ck, pk, i, centre, circum, near, at, count
-                    )
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi)
     rows = 0
     for m in range(count):
         j = near[m]
@@ -416,6 +502,7 @@ def scan(
     adm_hi: FloatArray,
     eta: float,
     xi: FloatArray,
+    spheres: bool,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> tuple[int, int]:
@@ -426,7 +513,8 @@ def scan(
     records ``tried[k] = i`` (when ``tried`` is not empty). With ``eta > 0``
     each analysis first draws ``xi ~ U(0, 1)`` and keeps the free surface
     ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
-    from the interferers and walls (:func:`eta_margin`). ``counters``
+    from the interferers and walls (:func:`eta_margin`). With ``spheres`` the
+    population is spheres (:func:`analyse_sphere`). ``counters``
     counts analyses and empty ones; ``xi[0]`` holds a drawn ``xi`` across a
     :data:`FULL` return (negative: none). Returns ``(code, position)``: :data:`FOUND`
     and the candidate's position (the centre in ``out``), :data:`EMPTY` and
@@ -443,10 +531,16 @@ def scan(
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
                 xi[0] = rng.random()
             margin = eta_margin(eta, xi[0], r)
-        code = analyse(
-            k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
-            lo, hi, adm_lo, adm_hi, margin, rng, out,
-        )  # fmt: skip
+        if spheres:
+            code = analyse_sphere(
+                k, i, g, order, centre, circum, reach_max, period,
+                lo, hi, adm_lo, adm_hi, margin, rng, out,
+            )  # fmt: skip
+        else:
+            code = analyse(
+                k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
+                lo, hi, adm_lo, adm_hi, margin, rng, out,
+            )  # fmt: skip
         if code == FULL:
             return FULL, m
         xi[0] = -1.0

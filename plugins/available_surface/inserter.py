@@ -142,10 +142,12 @@ class AvailableSurface(InsertionStrategy):
         shapes = population.shapes
         if not isinstance(domain, Box) or not isinstance(shapes, SolidBatch):
             raise ConfigError("insertion 'available-surface' packs solids in a 3D box")
-        if shapes.rounding is not None and np.any(shapes.rounding > 0):
+        rounding = shapes.rounding_radius
+        spheres = shapes.normals.shape[0] == 0 and bool(np.all(rounding > 0))
+        if np.any(rounding > 0) and not spheres:
             raise ConfigError(
-                "insertion 'available-surface' packs sharp polyhedra only so far; "
-                "spheres and rounded solids are not supported yet"
+                "insertion 'available-surface' packs sharp polyhedra or spheres, not both in "
+                "one scene nor rounded polyhedra; give every phase the same kind of shape"
             )
         from regopack.plugins.eta import EtaController
 

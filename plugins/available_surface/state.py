@@ -25,7 +25,7 @@ from regopack.plugins.available_surface.analysis import (
     scan,
     solids_of,
 )
-from regopack.plugins.available_surface.halfspaces import edge_arcs
+from regopack.plugins.available_surface.halfspaces import EdgeArcs, edge_arcs
 from regopack.plugins.available_surface.polyhedron import Polyhedron
 from regopack.solids import SolidBatch
 
@@ -90,7 +90,10 @@ class SurfaceState:
         self.t = t
         self.eta = eta
         self._xi = np.full(1, -1.0)
-        self.polys = polyhedra_of(shapes)
+        rounding = shapes.rounding_radius
+        self.spheres = bool(n > 0 and shapes.normals.shape[0] == 0 and np.all(rounding > 0))
+        self.rounding = rounding
+        self.polys = [] if self.spheres else polyhedra_of(shapes)
         self.circum = shapes.circumradius
         self.radius = radius
         self.lo = lo
@@ -102,6 +105,12 @@ class SurfaceState:
         self.count = 0
         self.counters = np.zeros(2, dtype=np.int64)
         self._no_tried = np.zeros(0, dtype=np.int64)
+        self._no_arcs = EdgeArcs(
+            np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
+            np.zeros((0, 3)),
+            np.zeros((0, 6)),
+        )
         self.reach_max = 0.0
         self.solids = solids_of(self.polys)
         self.arcs = arcs_for(self.solids)
@@ -116,7 +125,6 @@ class SurfaceState:
 
     def begin(self, i: int) -> bool:
         """Start on particle ``i``; False when it is larger than the box."""
-        q = self.polys[i]
         self._particle = i
         self._q_arcs = None
         self.cache.fill[0] = 0
@@ -124,8 +132,13 @@ class SurfaceState:
             self.adm_lo = np.full(3, -np.inf)
             self.adm_hi = np.full(3, np.inf)
             return True
-        self.adm_lo = self.lo - q.vertices.min(axis=0)
-        self.adm_hi = self.hi - q.vertices.max(axis=0)
+        if self.spheres:
+            self.adm_lo = self.lo + self.rounding[i]
+            self.adm_hi = self.hi - self.rounding[i]
+        else:
+            q = self.polys[i]
+            self.adm_lo = self.lo - q.vertices.min(axis=0)
+            self.adm_hi = self.hi - q.vertices.max(axis=0)
         return not bool(np.any(self.adm_lo > self.adm_hi))
 
     def fits_at(self, x: FloatArray) -> bool:
@@ -153,7 +166,7 @@ class SurfaceState:
         """
         i = self._particle
         if self._q_arcs is None:
-            self._q_arcs = edge_arcs(self.polys[i], -1.0)
+            self._q_arcs = self._no_arcs if self.spheres else edge_arcs(self.polys[i], -1.0)
         cands = np.ascontiguousarray(candidates, dtype=np.int64)
         t = self.t if screened else np.inf
         begin = 0
@@ -163,7 +176,8 @@ class SurfaceState:
                 self._no_tried if tried is None else tried, self.counters,
                 self._q_arcs, self.solids, self.arcs, self.grid, self.cache,
                 self.order, self.centre, self.circum, self.reach_max, self._period,
-                self.lo, self.hi, self.adm_lo, self.adm_hi, self.eta, self._xi, rng, self._out,
+                self.lo, self.hi, self.adm_lo, self.adm_hi, self.eta, self._xi, self.spheres,
+                rng, self._out,
             )  # fmt: skip
             if code != FULL:
                 break
