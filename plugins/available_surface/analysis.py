@@ -45,6 +45,8 @@ from regopack.plugins.available_surface.spheres import EPS, free_arcs, sample_fr
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
+SEPARATION_EPS = 1e-9
+"""Relative margin of the face-plane test that drops interferers (see :func:`_separated`)."""
 FOUND, EMPTY, FULL = 1, 0, -1
 """Return codes of :func:`analyse`: a centre, no free area, the cache needs more room."""
 
@@ -381,6 +383,49 @@ def analyse_sphere(
 
 
 @numba.njit(cache=True)
+def _face_gap(
+    s: Solids, a: int, ca: FloatArray, b: int, cb: FloatArray, q: int, margin: float
+) -> bool:
+    """Whether a face plane of ``a`` leaves ``b`` farther than ``Q``'s width (plus ``margin``).
+
+    Along a face normal ``n`` of ``a``, ``b`` lies beyond ``a`` by a gap; ``Q``
+    can touch ``a`` and overlap ``b`` only if its own width along ``n`` (and
+    the margin) spans that gap.
+    """
+    va = s.vertex_offsets
+    for f in range(s.face_offsets[a], s.face_offsets[a + 1]):
+        nx = s.normals[f, 0]
+        ny = s.normals[f, 1]
+        nz = s.normals[f, 2]
+        far = nx * ca[0] + ny * ca[1] + nz * ca[2] + s.support[f]
+        near_b = np.inf
+        for v in range(va[b], va[b + 1]):
+            near_b = min(
+                near_b, nx * s.vertices[v, 0] + ny * s.vertices[v, 1] + nz * s.vertices[v, 2]
+            )
+        gap = nx * cb[0] + ny * cb[1] + nz * cb[2] + near_b - far
+        if gap <= margin:
+            continue
+        qmin = np.inf
+        qmax = -np.inf
+        for v in range(va[q], va[q + 1]):
+            d = nx * s.vertices[v, 0] + ny * s.vertices[v, 1] + nz * s.vertices[v, 2]
+            qmin = min(qmin, d)
+            qmax = max(qmax, d)
+        if gap > (qmax - qmin) + margin + SEPARATION_EPS * (abs(far) + abs(gap) + qmax - qmin):
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _separated(
+    s: Solids, pk: int, j: int, i: int, ck: FloatArray, cj: FloatArray, margin: float
+) -> bool:
+    """Whether the envelopes ``E_k``, ``E_j`` of particle ``i`` cannot meet (:func:`_face_gap`)."""
+    return _face_gap(s, pk, ck, j, cj, i, margin) or _face_gap(s, j, cj, pk, ck, i, margin)
+
+
+@numba.njit(cache=True)
 def analyse(
     k: int,
     i: int,
@@ -416,6 +461,13 @@ def analyse(
     q = solid(s, i)
     ck = centre[pk]
     count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi)
+    kept = 0
+    for m in range(count):  # drop the interferers that a face plane keeps off E_k
+        if not _separated(s, pk, near[m], i, ck, at[m], margin):
+            near[kept] = near[m]
+            at[kept] = at[m]
+            kept += 1
+    count = kept
     rows = 0
     for m in range(count):
         j = near[m]
