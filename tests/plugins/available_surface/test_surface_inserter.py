@@ -10,7 +10,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import regopack
-from regopack.errors import ConfigError
 from regopack.packing3d import Packing3D
 from regopack.verification3d import separating_gap, verify_polyhedra
 
@@ -111,18 +110,6 @@ def test_extremes_stay_overlap_free(
         ],
     )
     _check(_pack(data))
-
-
-@pytest.mark.parametrize(
-    ("changes", "message"),
-    [],
-)
-def test_what_it_does_not_pack_yet_is_refused_in_one_line(
-    changes: dict[str, Any], message: str
-) -> None:
-    with pytest.raises(ConfigError, match=message) as err:
-        regopack.pack(scene(count=5, **changes))
-    assert "\n" not in str(err.value)
 
 
 def sweep_scene(**changes: Any) -> dict[str, Any]:
