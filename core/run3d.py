@@ -395,6 +395,12 @@ def _run3d(
         "insertion_time_s": max(wall - compile_insertion, 0.0),
         "compile_time_s": compile_insertion,
     }
+    if packing.n_placed < packing.n_particles:
+        from regopack.sieve import unplaced_per_class
+
+        d_min = getattr(resolved.size.config, "d_min", None)
+        rows = unplaced_per_class((2.0 * packing.radius, packing.placed), d_min)
+        summary["not_placed_by_class"] = [row for row in rows if row["not_placed"] > 0]
     for key, value in result.stats.items():
         summary.setdefault(key, value)
     if verify is None or verify:
