@@ -91,8 +91,9 @@ def _check_precision(points: FloatArray, dtype: type[np.floating], label: str) -
             f"{label}: the mesh's size overflows 64-bit floats; scale the mesh down"
         )
     largest = float(np.max(np.abs(points)))
-    step = float(np.spacing(dtype(largest)))
-    if step > RESOLUTION * size:
+    with np.errstate(over="ignore", invalid="ignore"):
+        step = float(np.spacing(dtype(largest)))  # NaN when ``largest`` overflows ``dtype``
+    if not step <= RESOLUTION * size:
         raise TemplateError(
             f"{label}: the coordinates resolve only {step / size:.1e} of the mesh's size "
             f"{size:.6g} (largest |coordinate| {largest:.6g}, {np.dtype(dtype).name}); at most "
@@ -183,7 +184,7 @@ def normalised_hull(
     size = _check_precision(unique, dtype, label)
     lo, hi = unique.min(axis=0), unique.max(axis=0)
     # work in coordinates of size about 1, so that tolerances are relative
-    q = (unique - 0.5 * (lo + hi)) / size
+    q = (unique - (0.5 * lo + 0.5 * hi)) / size
     try:
         hull = ConvexHull(q)
     except QhullError:

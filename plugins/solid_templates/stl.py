@@ -276,6 +276,10 @@ def _syntax_error(tokens: list[bytes], first: int, label: str) -> None:
         facet, pos = divmod(i, FACET_TOKENS)
         where = f"{label}: ASCII STL: facet {first + facet}"
         word = _KEYWORDS.get(pos)
+        if pos == 0 and token == b"endsolid":
+            raise TemplateError(
+                f"{where}: 'endsolid' before the end of the file (one solid per file is read)"
+            )
         if word is not None and token != word:
             wanted = "'facet' or 'endsolid'" if pos == 0 else repr(word.decode())
             raise TemplateError(f"{where}: expected {wanted}, found {_show(token)}")
