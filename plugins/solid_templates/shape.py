@@ -10,8 +10,9 @@ radius. Its reference point is the hull's volume centroid, as for the
 The files are read and hulled when the scene is validated (so that a bad
 file is refused in one line naming the scene field, before anything is
 drawn) and kept for the run; drawing is vectorised over the particles of
-each template: 10⁴ particles from a few templates of 50 to 200 vertices
-take about 20 ms.
+each template: 10⁴ particles from three templates of 8 to 48 vertices take
+about 0.05 s (measured on one core; the time grows with the templates'
+numbers of vertices and faces).
 """
 
 from __future__ import annotations

@@ -198,14 +198,14 @@ count = 40
 
 [domain]
 kind = "box"
-width = 15e-6
-height = 15e-6
-depth = 15e-6
+width = 15.0
+height = 15.0
+depth = 15.0
 
 [size]
 kind = "uniform"
-d_min = 2e-6
-d_max = 4e-6
+d_min = 2.0
+d_max = 4.0
 
 [[phases]]
 name = "measured"
@@ -273,3 +273,13 @@ def test_the_shape_is_registered_as_3d_and_refused_in_2d(grains: Path) -> None:
     }  # fmt: skip
     with pytest.raises(ConfigError, match=r"'template-3d' is a 3D shape"):
         regopack.scene(scene)
+
+
+def test_the_example_scene_reads_the_example_mesh(monkeypatch: pytest.MonkeyPatch) -> None:
+    root = Path(__file__).resolve().parents[3]
+    monkeypatch.chdir(root)  # the scene's mesh path is relative to the repository root
+    scene = regopack.scene(root / "docs" / "examples" / "grains3d.toml")
+    assert scene.scene.domain.dimension == 3
+    gen = template("docs/examples/grain.stl")
+    assert len(gen.templates.vertices) == 15 and len(gen.templates.normals) == 26
+    check_solid_generator(gen, radii=np.geomspace(0.5, 2.0, 5))
