@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import ConvexHull, QhullError
+from scipy.spatial import ConvexHull, QhullError, cKDTree
 
 from regopack.plugins.shapes import TemplateError
 
@@ -43,6 +43,17 @@ refused: move it to the origin when exporting it.
 COPLANAR_TOL = 1e-10
 """Two neighbouring hull triangles whose unit normals differ by less than this, and whose
 planes' offsets differ by less than this times the mesh's size, form one face."""
+
+CONSISTENCY_RTOL = 1e-10
+"""Largest distance of a face's vertex from the face's plane, relative to the hull's size,
+and smallest distance between two vertices: a hull that rounding leaves outside these
+bounds is computed again from snapped points (see :data:`SNAP_STEPS`)."""
+
+SNAP_STEPS = (0.0, 2.0**-30, 2.0**-26, 2.0**-22, 2.0**-18, 2.0**-14)
+"""Grids (relative to the mesh's size) that the points are rounded to, in turn, until the
+hull is consistent; 0 keeps them exact, which suffices for all but meshes of nearly
+coincident points, whose thin hull triangles have normals spoilt by rounding. The last
+grid moves a point by at most 3e-5 of the size."""
 
 FLAT_RTOL = 1e-6
 """A hull is flat when the distance from its centroid to its nearest face is at most this
@@ -165,8 +176,18 @@ def normalised_hull(
     ------
     TemplateError
         When there are fewer than 4 distinct points, the coordinates do not
-        resolve the shape (:data:`RESOLUTION`), or the hull is flat
-        (:data:`FLAT_RTOL`).
+        resolve the shape (:data:`RESOLUTION`), the hull is flat
+        (:data:`FLAT_RTOL`), or no grid of :data:`SNAP_STEPS` makes it
+        consistent.
+
+    Notes
+    -----
+    The hull is checked after it is built (:data:`CONSISTENCY_RTOL`): a mesh
+    with nearly coincident points (twins a rounding error apart, common in
+    noisy exports) gives thin hull triangles whose computed normals are off
+    by more than the contract of a solid allows. Such a mesh is hulled again
+    from its points rounded to a grid, finer grids first, so that an exact
+    mesh keeps its exact coordinates.
 
     Examples
     --------
@@ -185,6 +206,53 @@ def normalised_hull(
     lo, hi = unique.min(axis=0), unique.max(axis=0)
     # work in coordinates of size about 1, so that tolerances are relative
     q = (unique - (0.5 * lo + 0.5 * hi)) / size
+    for step in SNAP_STEPS:
+        pts = q if step == 0.0 else np.unique(np.round(q / step) * step, axis=0)
+        try:
+            solid = _hull(pts, label)
+        except RuntimeError:  # coplanar triangles that bound no single polygon
+            continue
+        if _consistent(solid):
+            return solid
+    raise TemplateError(
+        f"{label}: the convex hull cannot be computed to {CONSISTENCY_RTOL:g} of its size, "
+        f"even with the points snapped to {SNAP_STEPS[-1]:.1e} of it (a mesh of nearly "
+        "coincident, noisy points); simplify the mesh"
+    )
+
+
+def _consistent(solid: ConvexSolid) -> bool:
+    """Whether rounding left the hull a closed convex polyhedron to :data:`CONSISTENCY_RTOL`.
+
+    Every face's vertices lie on its plane (the plane of the support value
+    along its normal, over all vertices), every edge runs once each way, and
+    no two vertices are closer than ``CONSISTENCY_RTOL`` times the largest
+    distance from the centroid.
+    """
+    v, fv, fvo = solid.vertices, solid.face_vertices, solid.face_vertex_offsets
+    if not (np.isfinite(solid.normals).all() and np.isfinite(v).all()):
+        return False  # a face of no area
+    reach = float(np.max(np.linalg.norm(v, axis=1)))
+    owner = np.repeat(np.arange(solid.n_faces), np.diff(fvo))
+    off_plane = np.abs(np.einsum("ij,ij->i", v[fv], solid.normals[owner]) - solid.support[owner])
+    if float(off_plane.max()) > CONSISTENCY_RTOL * reach:
+        return False
+    after = np.arange(fv.shape[0]) + 1
+    last = np.diff(fvo) - 1
+    after[fvo[1:] - 1] -= last + 1  # the last vertex of a loop runs back to the first
+    edges = set(zip(fv.tolist(), fv[after].tolist(), strict=True))
+    if len(edges) != fv.shape[0] or any((b, a) not in edges for a, b in edges):
+        return False
+    return not cKDTree(v).query_pairs(CONSISTENCY_RTOL * reach)
+
+
+def _hull(q: FloatArray, label: str) -> ConvexSolid:
+    """Hull of points of size about 1, with merged faces, moved and scaled (no checks)."""
+    if q.shape[0] < 4:
+        raise TemplateError(
+            f"{label}: {q.shape[0]} distinct points; a solid needs at least 4 that do "
+            "not lie in one plane"
+        )
     try:
         hull = ConvexHull(q)
     except QhullError:
@@ -221,7 +289,8 @@ def normalised_hull(
     # unit normals of the faces from their (fan) area vectors
     area = np.zeros((len(loops), 3))
     np.add.at(area, owner, np.cross(p1 - p0, p2 - p0))
-    normals = area / np.linalg.norm(area, axis=1)[:, None]
+    with np.errstate(invalid="ignore", divide="ignore"):  # a face of no area: NaN, refused
+        normals = area / np.linalg.norm(area, axis=1)[:, None]
     support = _support(verts, normals)
     reach = float(np.max(np.linalg.norm(verts, axis=1)))
     thinness = float(support.min()) / reach

@@ -16,6 +16,21 @@ from regopack.plugins.solid_templates.hull import ConvexSolid, normalised_hull
 def check_hull(solid: ConvexSolid, points: np.ndarray) -> None:
     """Independent checks: a closed, convex, counter-clockwise polyhedron of volume 1
     about its centroid, whose shape is the hull of ``points``."""
+    check_polyhedron(solid)
+    v = solid.vertices
+    reach = float(np.max(np.linalg.norm(v, axis=1)))
+    # the same shape as the hull of the input, up to the translation and the scale
+    hull = ConvexHull(points)
+    s = (1.0 / hull.volume) ** (1.0 / 3.0)
+    assert len(v) == len(hull.vertices)
+    expected = np.sort((points[hull.vertices] - points[hull.vertices].mean(0)) * s, axis=0)
+    got = np.sort(v - v.mean(0), axis=0)
+    assert np.allclose(got, expected, rtol=0, atol=1e-9 * reach)
+
+
+def check_polyhedron(solid: ConvexSolid) -> None:
+    """A closed, convex, counter-clockwise polyhedron of volume 1 about its centroid, with
+    distinct vertices (the contract of a solid, to 1e-9 of its size)."""
     v = solid.vertices
     fvo = solid.face_vertex_offsets
     loops = [solid.face_vertices[fvo[f] : fvo[f + 1]] for f in range(solid.n_faces)]
@@ -40,13 +55,7 @@ def check_hull(solid: ConvexSolid, points: np.ndarray) -> None:
     assert np.allclose(solid.support, (v @ solid.normals.T).max(axis=0), rtol=0, atol=1e-15)
     assert volume == pytest.approx(1.0, rel=1e-12)
     assert np.all(np.abs(moment) <= 1e-12 * reach)  # the centroid is the origin
-    # the same shape as the hull of the input, up to the translation and the scale
-    hull = ConvexHull(points)
-    s = (1.0 / hull.volume) ** (1.0 / 3.0)
-    assert len(v) == len(hull.vertices)
-    expected = np.sort((points[hull.vertices] - points[hull.vertices].mean(0)) * s, axis=0)
-    got = np.sort(v - v.mean(0), axis=0)
-    assert np.allclose(got, expected, rtol=0, atol=1e-9 * reach)
+    assert np.unique(np.round(v / reach, 12), axis=0).shape[0] == len(v)  # distinct
 
 
 def test_a_cube_has_six_square_faces_at_distance_one_half() -> None:
@@ -114,14 +123,42 @@ def test_random_clouds_give_valid_hulls(
     try:
         solid = normalised_hull(points, "cloud")
     except ConfigError as err:  # only a very thin cloud can be refused
-        assert "flat" in str(err)
-        # the centroid lies at least width / 4 from every face (Minkowski-Radon), so a
-        # refused hull is thinner than 4e-6 of its diameter: its volume is tiny
-        corners = points[ConvexHull(points).vertices]
-        diameter = np.max(np.linalg.norm(corners[:, None] - corners[None], axis=2))
-        assert ConvexHull(points).volume <= 4e-6 * np.pi * diameter**3
+        assert_really_flat(points, err)
         return
     check_hull(solid, points)
+
+
+def assert_really_flat(points: np.ndarray, err: ConfigError) -> None:
+    """A hull refused as flat is thin: the centroid lies at least a quarter of the width
+    from every face (Minkowski-Radon), so the hull is thinner than 4e-6 of its diameter."""
+    assert "flat" in str(err)
+    corners = points[ConvexHull(points).vertices]
+    diameter = np.max(np.linalg.norm(corners[:, None] - corners[None], axis=2))
+    assert ConvexHull(points).volume <= 4e-6 * np.pi * diameter**3
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    n=st.integers(4, 120),
+    noise=st.sampled_from([1e-15, 1e-13, 1e-11, 1e-9, 1e-7]),
+    binary=st.booleans(),
+)
+def test_nearly_coincident_points_still_give_valid_hulls(
+    seed: int, n: int, noise: float, binary: bool
+) -> None:
+    # every point has a twin a rounding error away: thin hull triangles with spoilt normals
+    rng = np.random.default_rng(seed)
+    base = rng.standard_normal((n, 3)) * [1.0, 0.7, 0.4]
+    points = np.vstack([base, base + rng.standard_normal(base.shape) * noise])
+    if binary:
+        points = (points * 1000.0 + 7.0).astype(np.float32).astype(np.float64)
+    try:
+        solid = normalised_hull(points, "noisy", np.float32 if binary else np.float64)
+    except ConfigError as err:  # four nearly coplanar points, say
+        assert_really_flat(points, err)
+        return
+    check_polyhedron(solid)
 
 
 @pytest.mark.parametrize(
