@@ -184,11 +184,16 @@ def read_stl(path: str | Path, name: str | None = None) -> StlMesh:
     return StlMesh(triangles=triangles, binary=binary)
 
 
-_TEXT_BYTES = bytes(range(32, 127)) + b"\t\n\r\f\v"
+_TEXT_BYTES = bytes(range(32, 127)) + b"\t\n\r\f\v" + bytes(range(128, 256))
 
 
 def _looks_like_text(stream: BinaryIO) -> bool:
-    """Whether the first 4 kB of the file are printable ASCII (an ASCII STL's are)."""
+    """Whether the first 4 kB of the file hold no control bytes (as text, UTF-8 too, does).
+
+    Binary facets almost always hold NUL bytes (the zero coordinates and
+    normals, the attribute count), so a truncated binary file whose header
+    starts with ``solid`` is still told from an ASCII one.
+    """
     stream.seek(0)
     sample = stream.read(4096)
     stream.seek(0)

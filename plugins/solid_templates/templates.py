@@ -61,7 +61,7 @@ def template_files(path: str) -> list[Path]:
         files = sorted(f for f in given.iterdir() if f.suffix.lower() == SUFFIX and f.is_file())
         if not files:
             raise TemplateError(f"{path}: the folder holds no .stl file{_relative_note(given)}")
-    elif glob.has_magic(path):
+    elif any(c in path for c in "*?["):  # a glob pattern
         files = sorted(
             Path(f) for f in glob.glob(path) if f.lower().endswith(SUFFIX) and os.path.isfile(f)
         )

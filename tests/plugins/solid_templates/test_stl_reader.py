@@ -40,6 +40,19 @@ def test_ascii_keywords_in_any_case_blank_lines_and_a_bare_endsolid(tmp_path: Pa
     assert np.array_equal(read_stl(tmp_path / "c.stl").triangles, TRIS)
 
 
+def test_an_ascii_name_in_utf8_is_text(tmp_path: Path) -> None:
+    path = tmp_path / "c.stl"
+    path.write_bytes(ascii_text(TRIS, name="Körnchen 7 µm").encode("utf-8"))
+    assert not read_stl(path).binary
+
+
+def test_a_truncated_binary_file_with_a_solid_header_is_called_binary(tmp_path: Path) -> None:
+    path = write_binary(tmp_path / "c.stl", TRIS, header=b"solid exported by a CAD tool")
+    path.write_bytes(path.read_bytes()[:-10])
+    with pytest.raises(ConfigError, match=r"truncated or damaged binary STL"):
+        read_stl(path)
+
+
 def test_a_large_ascii_file_is_parsed_in_chunks(tmp_path: Path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
     monkeypatch.setattr(stl, "ASCII_CHUNK", 100)  # a chunk ends inside most facets
     many = np.concatenate([TRIS + k for k in range(20)])

@@ -151,6 +151,7 @@ def test_paths_file_folder_and_pattern(grains: Path, monkeypatch: pytest.MonkeyP
     rel = grains.name
     assert len(template(f"{rel}/cube.stl").templates) == 1
     assert len(template(rel).templates) == 4
+    assert len(template(f"{rel}/*").templates) == 4  # notes.txt is not taken
     assert template(f"{rel}/[ct]*.stl").templates.names == (
         f"{rel}/cube.stl",
         f"{rel}/tetrahedron.stl",
