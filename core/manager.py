@@ -52,6 +52,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.disk",
     "regopack.plugins.sphere",
     "regopack.plugins.polyhedra.shape",
+    "regopack.plugins.solid_templates.shape",
     "regopack.plugins.available_surface.inserter",
     "regopack.plugins.rsa",
     "regopack.plugins.exporters",

@@ -474,7 +474,8 @@ def read_templates(path: str | Path) -> Template:
     file = Path(path)
     suffix = file.suffix.lower()
     if suffix not in (".csv", ".json"):
-        raise TemplateError(f"{name}: unsupported template file type (use .csv or .json)")
+        hint = "; STL meshes are the 3D shape 'template-3d'" if suffix == ".stl" else ""
+        raise TemplateError(f"{name}: unsupported template file type (use .csv or .json{hint})")
     if not file.is_file():
         what = "is a directory" if file.is_dir() else "no such template file"
         where = "" if file.is_absolute() else f" (relative to the current directory {Path.cwd()})"

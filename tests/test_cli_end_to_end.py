@@ -36,6 +36,7 @@ def test_default_registry_has_the_builtins():
         "regular",
         "sphere",
         "template",
+        "template-3d",
     ]
     assert reg.names("insertion") == ["available-arc", "available-surface", "rsa"]
     assert reg.names("density") == ["eta"]

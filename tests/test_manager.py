@@ -38,6 +38,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.disk",
         "regopack.plugins.sphere",
         "regopack.plugins.polyhedra.shape",
+        "regopack.plugins.solid_templates.shape",
         "regopack.plugins.available_surface.inserter",
         "regopack.plugins.rsa",
         "regopack.plugins.exporters",

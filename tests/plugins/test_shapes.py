@@ -399,6 +399,13 @@ def test_bad_template_files(tmp_path: Path, name: str, content: str, message: st
     assert isinstance(info.value, ValueError) and isinstance(info.value, ConfigError)
 
 
+def test_an_stl_file_points_to_the_3d_template(tmp_path: Path) -> None:
+    path = tmp_path / "grain.stl"
+    path.write_bytes(b"solid grain\nendsolid grain\n")
+    with pytest.raises(TemplateError, match=r"\(use \.csv or \.json; STL meshes are the 3D shape"):
+        read_templates(path)
+
+
 def test_missing_template_file(tmp_path: Path) -> None:
     with pytest.raises(ValueError, match=r"missing\.json: no such template file"):
         read_templates(tmp_path / "missing.json")
