@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -11,6 +12,7 @@ from cli_helpers import one_error_line
 from packings3d import cube_and_sphere, packing3d
 
 from regopack.cli import main
+from regopack.domain3d import Box
 from regopack.errors import ConfigError
 from regopack.packing import load
 from regopack.packing3d import Packing3D, save3d
@@ -71,15 +73,22 @@ def test_the_section_is_a_valid_2d_packing_of_the_cuts(packing) -> None:  # type
     assert section.stats["interior_margin"] == 12.0 and "size" not in section.scene
 
 
-@pytest.mark.parametrize(("axis", "keep"), [("x", (1, 2)), ("y", (0, 2))])
-def test_other_axes_use_the_two_other_coordinates(packing, axis, keep) -> None:  # type: ignore[no-untyped-def]
-    section = slice_packing(packing, SliceConfig(axis=axis, at=3.0))
-    b = packing.domain.bounds().reshape(3, 2)
+@pytest.mark.parametrize(("axis", "keep"), [("x", (1, 2)), ("y", (0, 2)), ("z", (0, 1))])
+def test_every_axis_uses_the_two_other_coordinates(packing, axis, keep) -> None:  # type: ignore[no-untyped-def]
+    b = packing.domain.bounds() + [-1.0, 2.0, -3.0, 4.0, -5.0, 6.0]  # a box of three sides
+    wide = dataclasses.replace(packing, domain=Box(*b))
+    section = slice_packing(wide, SliceConfig(axis=axis, at=3.0))
+    b = b.reshape(3, 2)
     assert section.domain.bounds().tolist() == [*b[keep[0]], *b[keep[1]]]
+    assert verify(section).ok
     a = "xyz".index(axis)
     for k, j in enumerate(section.scene["slice"]["solids"]):
-        want = exact_cut_area(packing, j, a, 3.0)
+        want = exact_cut_area(wide, j, a, 3.0)
         assert section.area()[k] == pytest.approx(want, rel=1e-9)
+        centroid = shapely.Polygon(section.polygon(k)).centroid
+        cut = packing.world_vertices(j)[:, keep]
+        assert cut.min(axis=0)[0] <= centroid.x <= cut.max(axis=0)[0]
+        assert cut.min(axis=0)[1] <= centroid.y <= cut.max(axis=0)[1]
 
 
 def test_a_plane_outside_the_box_is_one_error(packing) -> None:  # type: ignore[no-untyped-def]
