@@ -16,6 +16,7 @@ from packings3d import cube_and_sphere, packing3d
 from regopack.errors import ExportError
 from regopack.packing3d import Packing3D
 from regopack.plugins.lammps3d_export import (
+    Lammps3dBodies,
     Lammps3dConfig,
     Lammps3dExporter,
     body_faces,
@@ -31,6 +32,11 @@ DRIVER = Path(__file__).resolve().parents[1] / "lammps_driver.py"
 def packing() -> Packing3D:
     """About 60 polyhedra of 14 face directions in a 20 µm box."""
     return packing3d()
+
+
+@pytest.fixture(scope="module")
+def bodies(packing) -> Lammps3dBodies:  # type: ignore[no-untyped-def]
+    return lammps3d_bodies(packing)
 
 
 @pytest.fixture(scope="module")
@@ -55,10 +61,10 @@ def body_blocks(text: str) -> list[tuple[list[int], list[float]]]:
 # the bodies, without LAMMPS
 
 
-def test_every_body_lies_inside_its_particle_and_is_a_closed_polyhedron(packing) -> None:  # type: ignore[no-untyped-def]
-    bodies = lammps3d_bodies(packing)
+def test_every_body_lies_inside_its_particle_and_is_a_closed_polyhedron(packing, bodies) -> None:  # type: ignore[no-untyped-def]
     assert bodies.reduced == 0 and bodies.index.size == packing.n_placed
     fo = packing.face_offsets
+    volumes = packing.solids.volume
     for k, j in enumerate(bodies.index.tolist()):
         core, r = bodies.cores[k], bodies.rounding[k]
         assert r == pytest.approx(0.05 * packing.radius[j])
@@ -68,7 +74,7 @@ def test_every_body_lies_inside_its_particle_and_is_a_closed_polyhedron(packing)
         nv, ne, nf = core.vertices.shape[0], core.edges.shape[0], len(core.loops)
         assert nv - ne + nf == 2
         volume, c, _ = mass_properties(core.vertices, core.loops)
-        assert volume > 0.7 * packing.solids.volume[j]
+        assert volume > 0.7 * volumes[j]
         faces = body_faces(core)
         for face in faces:  # planar, outward pieces of at most four vertices
             p = core.vertices[face[face >= 0]]
@@ -78,24 +84,23 @@ def test_every_body_lies_inside_its_particle_and_is_a_closed_polyhedron(packing)
         assert lengths.min() > 1e-6 * packing.radius[j]
 
 
-def test_mass_centre_and_inertia_are_the_particle_s(packing) -> None:  # type: ignore[no-untyped-def]
-    bodies = lammps3d_bodies(packing)
+def test_mass_centre_and_inertia_are_the_particle_s(packing, bodies) -> None:  # type: ignore[no-untyped-def]
+    volumes = packing.solids.volume
     for k, j in enumerate(bodies.index.tolist()):
         local, loops = packing.solids.solid(j)
         _, c, moments = mass_properties(local, loops)
-        assert bodies.volume[k] == pytest.approx(packing.solids.volume[j], rel=1e-12)
+        assert bodies.volume[k] == pytest.approx(volumes[j], rel=1e-12)
         np.testing.assert_allclose(bodies.position[k], packing.centre[j] + c, rtol=1e-14)
         np.testing.assert_allclose(
             bodies.inertia[k], np.trace(moments) * np.eye(3) - moments, rtol=1e-12, atol=1e-300
         )
 
 
-def test_data_file_layout(packing, tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_data_file_layout(packing, bodies, tmp_path) -> None:  # type: ignore[no-untyped-def]
     path = Lammps3dExporter(Lammps3dConfig(density=2.0)).export(packing, tmp_path / "p.data")
     text = path.read_text()
     n = packing.n_placed
     assert f"{n} atoms\n{n} bodies\n{len(packing.mineral_names)} atom types" in text
-    bodies = lammps3d_bodies(packing)
     blocks = body_blocks(text)
     assert len(blocks) == n
     sizes = []
