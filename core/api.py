@@ -646,7 +646,12 @@ def export(
             "analyses: expected analyzer names or the results of analyze(), "
             f"not {type(analyses).__name__}"
         )
-    return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+    try:
+        return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+    except ConfigError as err:  # a parameter that does not fit this packing
+        if params_source and str(err).startswith(f"exporter {to!r}: "):
+            raise ConfigError(f"{params_source}: {err}") from err
+        raise
 
 
 def sweep(

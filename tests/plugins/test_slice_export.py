@@ -91,9 +91,18 @@ def test_every_axis_uses_the_two_other_coordinates(packing, axis, keep) -> None:
         assert cut.min(axis=0)[1] <= centroid.y <= cut.max(axis=0)[1]
 
 
-def test_a_plane_outside_the_box_is_one_error(packing) -> None:  # type: ignore[no-untyped-def]
+def test_a_plane_outside_the_box_is_one_error(packing, packing_file, capsys) -> None:  # type: ignore[no-untyped-def]
     with pytest.raises(ConfigError, match=r"^exporter 'slice': at = 30: outside the box along z"):
         slice_packing(packing, SliceConfig(at=30.0))
+    assert main(["export", str(packing_file), "--to", "slice", "--set", "at=30"]) != 0
+    assert one_error_line(capsys) == (
+        "regopack: error: --set: exporter 'slice': at = 30: outside the box along z, which "
+        "spans -10 to 10; give a value between them"
+    )
+    assert main(["export", str(packing_file), "--to", "slice", "--set", "axis=w"]) != 0
+    assert "--set: exporter 'slice': axis = \"w\": Input should be 'x', 'y' or 'z'" in (
+        one_error_line(capsys)
+    )
 
 
 def test_a_sphere_is_cut_as_a_circle() -> None:
