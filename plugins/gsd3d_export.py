@@ -16,6 +16,9 @@ HOOMD-blue writes the shapes of its ``ConvexPolyhedron`` integrator.
   moments, as HOOMD-blue's rigid-body integrators expect. The packing's own
   rotation quaternion is logged as ``particles/regopack/rotation``.
 - **Mass** = volume × ``density``.
+
+A sphere (of a scene of spheres) is ``{"type": "Sphere", "diameter": d}``
+at its centre, with the identity quaternion and the moments ``m d² / 10``.
 """
 
 from __future__ import annotations
@@ -110,8 +113,8 @@ class Gsd3dExporter(SolidExporter):
     Raises
     ------
     ExportError
-        When ``gsd`` is not installed (on construction), a particle is a
-        sphere or a rounded solid, or the file cannot be written.
+        When ``gsd`` is not installed (on construction), or the file cannot
+        be written.
     """
 
     suffix = ".gsd"
@@ -130,7 +133,7 @@ class Gsd3dExporter(SolidExporter):
         lo, hi = box.bounds().reshape(3, 2).T
         length = hi - lo
         origin = 0.5 * (lo + hi)
-        solids = placed_solids(packing, "gsd3d")
+        solids = placed_solids(packing, "gsd3d", spheres=True)
         n = len(solids)
         density = self.config.density
         pos = np.zeros((n, 3))
@@ -141,6 +144,16 @@ class Gsd3dExporter(SolidExporter):
         types: list[str] = []
         shapes: list[dict[str, Any]] = []
         for i, s in enumerate(solids):
+            types.append(f"{packing.mineral_names[packing.mineral[s.index]]}_{s.index}")
+            if s.rounding > 0:  # a sphere: the GSD shape of a sphere, turned by nothing
+                rho = s.rounding
+                pos[i] = s.centre - origin
+                quat[i] = (1.0, 0.0, 0.0, 0.0)
+                mass[i] = 4.0 / 3.0 * np.pi * rho**3 * density
+                inertia[i] = 0.4 * mass[i] * rho * rho
+                diameter[i] = 2.0 * rho
+                shapes.append({"type": "Sphere", "diameter": 2.0 * rho})
+                continue
             volume, c, moments = mass_properties(s.local, s.loops)
             values, axes = principal_frame(moments * density)
             body = (s.local - c) @ axes  # box frame -> body frame: axesᵀ (x - c)
@@ -149,7 +162,6 @@ class Gsd3dExporter(SolidExporter):
             mass[i] = volume * density
             inertia[i] = values
             diameter[i] = 2.0 * float(np.linalg.norm(body, axis=1).max())
-            types.append(f"{packing.mineral_names[packing.mineral[s.index]]}_{s.index}")
             shapes.append(
                 {"type": "ConvexPolyhedron", "rounding_radius": 0.0, "vertices": body.tolist()}
             )

@@ -14,7 +14,10 @@ overlap, in LAMMPS.
 default), or ``rounding_radius``; a particle whose core would vanish or
 break up gets ``r`` halved (up to 8 times). The body carries the mass,
 centre of mass and inertia of the particle itself (the sharp polyhedron):
-the rounding shapes the contacts, not the grain.
+the rounding shapes the contacts, not the grain. A sphere is one vertex
+rounded by its own radius (``N E F = 1 0 0``: LAMMPS reads no edges or faces
+for it, and a face count above 0 would make it copy values past the body's
+storage).
 
 Beside ``<stem>.data`` the exporter writes ``<stem>.in``, which reads it with
 the pair style ``body/rounded/polyhedron``, walls ``wall/body/polyhedron`` on
@@ -171,16 +174,24 @@ def lammps3d_bodies(packing: Packing3D, config: Lammps3dConfig | None = None) ->
     Raises
     ------
     ExportError
-        One line, for a sphere or rounded solid, or a particle too thin to
-        carry a rounded body.
+        One line, for a particle too thin to carry a rounded body.
     """
     cfg = config or Lammps3dConfig()
-    solids = placed_solids(packing, "lammps3d")
+    solids = placed_solids(packing, "lammps3d", spheres=True)
     fo = packing.face_offsets
     cores, rounding, position, volume, inertia = [], [], [], [], []
     reduced = 0
     for s in solids:
         j = s.index
+        if s.rounding > 0:  # a sphere: one vertex rounded by its own radius
+            rho = s.rounding
+            v = 4.0 / 3.0 * np.pi * rho**3
+            cores.append(Core(np.zeros((1, 3)), [], np.zeros((0, 2), dtype=np.int64)))
+            rounding.append(rho)
+            position.append(s.centre.copy())
+            volume.append(v)
+            inertia.append(np.eye(3) * 0.4 * v * rho * rho)
+            continue
         v, c, moments = mass_properties(s.local, s.loops)
         normals = packing.normals[fo[j] : fo[j + 1]]
         support = packing.support[fo[j] : fo[j + 1]]

@@ -50,12 +50,16 @@ class PlacedSolid:
         Faces as loops of indices into ``local``, counter-clockwise seen from outside.
     centre
         Position of the reference point in the packing.
+    rounding
+        Radius of a sphere (its one vertex is its centre, it has no faces);
+        0 for a polyhedron.
     """
 
     index: int
     local: FloatArray
     loops: list[IntArray]
     centre: FloatArray
+    rounding: float = 0.0
 
     @property
     def world(self) -> FloatArray:
@@ -64,26 +68,26 @@ class PlacedSolid:
         return out
 
 
-def placed_solids(packing: Packing3D, exporter: str) -> list[PlacedSolid]:
-    """Return the placed polyhedra in draw order.
+def placed_solids(packing: Packing3D, exporter: str, spheres: bool = False) -> list[PlacedSolid]:
+    """Return the placed polyhedra (and, with ``spheres``, spheres) in draw order.
 
     Raises
     ------
     ExportError
-        One line, when some placed particle is a sphere or a rounded solid,
-        which the exporter ``exporter`` does not write.
+        One line, when some placed particle is a sphere (or another rounded
+        solid) that the exporter ``exporter`` does not write.
     """
     solids = packing.solids
     rho = solids.rounding_radius
     out = []
     for j in np.flatnonzero(packing.placed).tolist():
-        if rho[j] > 0:
-            raise ExportError(
-                f"particle {j}: a sphere or rounded solid; the {exporter} export writes "
-                "sharp polyhedra only"
-            )
         local, loops = solids.solid(j)
-        out.append(PlacedSolid(int(j), local, loops, packing.centre[j]))
+        if rho[j] > 0 and not (spheres and not loops):
+            raise ExportError(
+                f"particle {j}: a sphere; the {exporter} export writes sharp polyhedra only"
+                + ("" if spheres else " (gsd3d and lammps3d write spheres)")
+            )
+        out.append(PlacedSolid(int(j), local, loops, packing.centre[j], float(rho[j])))
     return out
 
 

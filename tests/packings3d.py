@@ -69,3 +69,14 @@ def cube_and_sphere(rounded: bool = True) -> Packing3D:
         domain=Box(0, 10, 0, 10, 0, 10),
         rounding=np.array([0.0, 1.0]) if rounded else None,
     )
+
+
+@functools.cache
+def spheres3d(side: float = 15.0) -> Packing3D:
+    """Spheres of the sizes of :func:`scene3d` packed in a walled box; do not change it."""
+    scene = scene3d(side)
+    for phase in scene["phases"]:
+        phase["shape"] = {"kind": "sphere"}
+    packing = regopack.pack(scene, verify=False)
+    assert isinstance(packing, Packing3D)
+    return packing

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from packings3d import packing3d
+from packings3d import packing3d, spheres3d
 
 from regopack.packing3d import Packing3D
 from regopack.plugins.gsd3d_export import Gsd3dConfig, Gsd3dExporter, quaternion_from_matrix
@@ -96,3 +96,16 @@ def test_quaternion_from_matrix_round_trips() -> None:
         m = np.column_stack([rotate(q, e) for e in np.eye(3)])
         got = quaternion_from_matrix(m)
         assert np.allclose(got, q * np.sign(q[0]), atol=1e-12)
+
+
+def test_spheres_are_sphere_shapes_at_their_centres(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    spheres = spheres3d()
+    path = Gsd3dExporter().export(spheres, tmp_path / "s.gsd")
+    with gsd_hoomd.open(path, "r") as traj:
+        frame = traj[0]
+    idx = np.flatnonzero(spheres.placed)
+    origin = np.asarray(frame.log["regopack/origin"])
+    want = [{"type": "Sphere", "diameter": 2 * spheres.radius[j]} for j in idx]
+    assert list(frame.particles.type_shapes) == want
+    np.testing.assert_allclose(frame.particles.position + origin, spheres.centre[idx], atol=1e-5)
+    np.testing.assert_array_equal(frame.particles.orientation, [[1, 0, 0, 0]] * idx.size)

@@ -11,9 +11,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from packings3d import cube_and_sphere, packing3d
+from packings3d import cube_and_sphere, packing3d, spheres3d
 
-from regopack.errors import ExportError
 from regopack.packing3d import Packing3D
 from regopack.plugins.lammps3d_export import (
     Lammps3dBodies,
@@ -132,9 +131,12 @@ def test_a_periodic_box_and_spheres(packing, tmp_path) -> None:  # type: ignore[
     path = Lammps3dExporter().export(periodic, tmp_path / "p.data")
     script = script3d_path(path).read_text()
     assert "boundary     p p p" in script and "wall/body" not in script
-    with pytest.raises(ExportError, match=r"^particle 1: a sphere or rounded solid; the lammps3d"):
-        Lammps3dExporter().export(cube_and_sphere(), tmp_path / "s.data")
-    assert not (tmp_path / "s.data").exists()
+    text = Lammps3dExporter().export(cube_and_sphere(), tmp_path / "s.data").read_text()
+    _, (sphere, values) = body_blocks(text)
+    assert sphere == [2, 3, 10, 1, 0, 0]  # one vertex, no edge or face
+    assert values[6:] == [0.0, 0.0, 0.0, 2.0]  # at its centre, rounded by its own radius
+    np.testing.assert_allclose(values[:6], [0.4 * 3.1 * 4 / 3 * np.pi] * 3 + [0.0] * 3)
+    assert "rounded/polyhedron 1 " in script3d_path(tmp_path / "s.data").read_text()
 
 
 def test_a_cube_erodes_into_a_smaller_cube() -> None:
@@ -226,4 +228,13 @@ def test_lammps_runs_many_faced_bodies(packing, tmp_path) -> None:  # type: igno
     report = simulate(path, [20])
     d_min = 2.0 * float(packing.radius[packing.placed].min())
     assert report["natoms"] == packing.n_placed and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_lammps_holds_a_packing_of_spheres_still(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    spheres = spheres3d()
+    path = Lammps3dExporter().export(spheres, tmp_path / "p.data")
+    report = simulate(path, [2000])
+    d_min = 2.0 * float(spheres.radius[spheres.placed].min())
+    assert report["natoms"] == spheres.n_placed > 15 and report["finite"]
     assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min

@@ -61,3 +61,14 @@ def test_a_packing_with_nothing_placed_gives_an_empty_file(kind, suffix, tmp_pat
     empty = dataclasses.replace(cube, centre=np.full((1, 3), np.nan), insertion_index=[-1])
     path = export_packing(empty, kind, tmp_path / f"p{suffix}", registry=default_registry())
     assert path.stat().st_size > 0
+
+
+@pytest.mark.parametrize("kind", ["vtk3d", "stl"])
+def test_spheres_are_refused_in_one_line_by_the_polyhedron_formats(kind, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from regopack.errors import ExportError
+
+    with pytest.raises(
+        ExportError, match=rf"^particle 1: a sphere; the {kind} export writes sharp"
+    ):
+        export_packing(cube_and_sphere(), kind, tmp_path / "p", registry=default_registry())
+    assert not list(tmp_path.iterdir())
