@@ -39,7 +39,8 @@ def scene(side, count="auto"):
         "phases": [{"name": n, "fraction": f, "shape": (
                        {"kind": "polyhedron", "psi": p} if kind == "polyhedron" else {"kind": kind})}
                    for n, f, p in phases],
-        "insertion": {"kind": "available-surface", "order": order}, "density": {"kind": "eta"},
+        "insertion": {"kind": "available-surface", "order": order},
+        "density": {"kind": "eta"},
     }
 regopack.pack(scene(20.0, 10), verify=False)  # compile or load the kernels
 t = time.perf_counter()

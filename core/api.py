@@ -375,6 +375,19 @@ def _packing(packing: Packing | str | os.PathLike[str]) -> Packing:
     )
 
 
+def _packing_any_dimension(
+    packing: Packing | Packing3D | str | os.PathLike[str],
+) -> Packing | Packing3D:
+    """Return the packing itself, or the 2D or 3D packing read from its file."""
+    if isinstance(packing, Packing3D):
+        return packing
+    if isinstance(packing, str | os.PathLike):
+        from regopack.packing3d import load_packing
+
+        return load_packing(Path(packing))
+    return _packing(packing)
+
+
 def analysis_params(
     params: Mapping[str, Any], known: Callable[[str], bool] | None = None
 ) -> dict[str, dict[str, Any]]:
@@ -544,7 +557,7 @@ def verify(
 
 
 def export(
-    packing: Packing | str | os.PathLike[str],
+    packing: Packing | Packing3D | str | os.PathLike[str],
     to: str,
     path: str | os.PathLike[str] | None = None,
     *,
@@ -559,10 +572,11 @@ def export(
     Parameters
     ----------
     packing
-        A packing or the path of a packing file.
+        A packing (2D or 3D) or the path of a packing file.
     to
         The exporter (``regopack plugins`` lists them: ``lammps``, ``vtk``,
-        ``image``, ``gsd``, ``csv``, ...).
+        ``image``, ``gsd``, ``csv``, ... for 2D packings; ``vtk3d``, ``stl``,
+        ``lammps3d``, ``gsd3d`` and ``slice`` for 3D ones).
     path
         The main file to write, or a folder. Required for a packing object;
         for a packing file it defaults to the file's name with the exporter's
@@ -582,7 +596,12 @@ def export(
         The main file written; companions (e.g. LAMMPS' input script) sit beside it.
     """
     from regopack.analysis import run_analyses
-    from regopack.exporting import build_exporter, export_packing, output_path
+    from regopack.exporting import (
+        build_exporter,
+        check_exporter_dimension,
+        export_packing,
+        output_path,
+    )
 
     reg = _registry(registry)
     if not isinstance(to, str):
@@ -593,17 +612,26 @@ def export(
         )
     merged = {**(params or {}), **{k: _plain(v) for k, v in kwargs.items()}}
     exporter = build_exporter(reg, to, merged, source=params_source)
-    loaded = _packing(packing)
+    loaded = _packing_any_dimension(packing)
+    file = None if isinstance(packing, Packing | Packing3D) else Path(packing)
+    dimension = 3 if isinstance(loaded, Packing3D) else 2
+    check_exporter_dimension(reg, to, dimension, "packing" if file is None else str(file))
     if path is None:
-        if isinstance(packing, Packing):
+        if file is None:
             raise ConfigError("export: give the path to write (the packing has no file)")
-        target = output_path(exporter, Path(packing))
+        target = output_path(exporter, file)
     else:
-        source = Path("packing.npz") if isinstance(packing, Packing) else Path(packing)
+        source = Path("packing.npz") if file is None else file
         target = output_path(exporter, source, _out_path(path, "path"))
-    if not isinstance(packing, Packing) and os.path.realpath(target) == os.path.realpath(packing):
+    if file is not None and os.path.realpath(target) == os.path.realpath(file):
         raise ConfigError(f"path {target}: is the packing file itself; give another file")
-    if isinstance(analyses, AnalysisResults):
+    if isinstance(loaded, Packing3D):
+        if analyses:
+            raise ConfigError(
+                "analyses: the 3D exporters carry no analysis results; leave them out"
+            )
+        computed = None
+    elif isinstance(analyses, AnalysisResults):
         computed = analyses.analyzers
     elif analyses is None:
         computed = None
@@ -618,7 +646,12 @@ def export(
             "analyses: expected analyzer names or the results of analyze(), "
             f"not {type(analyses).__name__}"
         )
-    return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+    try:
+        return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+    except ConfigError as err:  # a parameter that does not fit this packing
+        if params_source and str(err).startswith(f"exporter {to!r}: "):
+            raise ConfigError(f"{params_source}: {err}") from err
+        raise
 
 
 def sweep(

@@ -204,7 +204,10 @@ def build_parser() -> argparse.ArgumentParser:
         "--to",
         required=True,
         metavar="FORMAT",
-        help="exporter name: csv, json, svg, vtk, lammps, gsd, image or one from a plugin",
+        help=(
+            "exporter name: csv, json, svg, vtk, lammps, gsd, image (2D packings); vtk3d, stl, "
+            "gsd3d, lammps3d, slice (3D packings); or one from a plugin"
+        ),
     )
     export.add_argument(
         "--out",

@@ -2,7 +2,10 @@
 
 The formats are the plugins of kind ``"export"`` (see
 :func:`regopack.hookspecs.regopack_exporters`); the built-in ones are ``csv``,
-``json``, ``svg``, ``vtk``, ``lammps``, ``gsd`` and ``image``.
+``json``, ``svg``, ``vtk``, ``lammps``, ``gsd`` and ``image`` for 2D packings,
+and ``vtk3d``, ``stl``, ``lammps3d``, ``gsd3d`` and ``slice`` for 3D packings.
+Each exporter's spec lists the dimensions it writes; a packing of another
+dimension is refused in one line that names the exporters that fit.
 
 Examples
 --------
@@ -18,19 +21,79 @@ Examples
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from pydantic import ValidationError
 
 from regopack.errors import ConfigError, ExportError, PluginError
-from regopack.interfaces import Analyzer, Exporter
+from regopack.interfaces import Analyzer, Exporter, SolidExporter
 from regopack.manager import Registry
 from regopack.messages import describe_validation_error
 from regopack.packing import Packing
+from regopack.packing3d import Packing3D
 
-__all__ = ["build_exporter", "export_packing", "output_path"]
+__all__ = [
+    "build_exporter",
+    "check_exporter_dimension",
+    "export_packing",
+    "exporter_dimensions",
+    "output_path",
+    "run_exports",
+]
+
+
+def exporter_dimensions(registry: Registry, kind: str) -> tuple[int, ...]:
+    """Dimensions of the packings the exporter ``kind`` writes (2D unless its spec says)."""
+    return tuple(getattr(registry.get("export", kind), "dimensions", (2,)))
+
+
+def check_exporter_dimension(
+    registry: Registry, kind: str, dimension: int, source: str | None = None
+) -> None:
+    """Refuse, in one line, an exporter that does not write packings of ``dimension``.
+
+    Parameters
+    ----------
+    registry
+        Registry to look the exporter up in.
+    kind
+        Name of the exporter.
+    dimension
+        2 or 3, the packing's dimension.
+    source
+        What the message starts with (the packing file, or a scene field).
+
+    Raises
+    ------
+    ConfigError
+        Naming the source, the exporter, the dimensions it writes and the
+        exporters of ``dimension``.
+
+    Examples
+    --------
+    >>> from regopack.manager import default_registry
+    >>> try:
+    ...     check_exporter_dimension(default_registry(), "svg", 3, "p.npz")
+    ... except ConfigError as err:
+    ...     print(err)
+    p.npz: exporter 'svg' writes 2D packings, and this is a 3D packing; 3D exporters: ...
+    """
+    own = exporter_dimensions(registry, kind)
+    if dimension in own:
+        return
+    fitting = [n for n in registry.names("export") if dimension in exporter_dimensions(registry, n)]
+    listed = (
+        f"{dimension}D exporters: {', '.join(fitting)}"
+        if fitting
+        else (f"no {dimension}D exporter is installed")
+    )
+    text = (
+        f"exporter {kind!r} writes {'/'.join(f'{d}D' for d in own)} packings, and this is a "
+        f"{dimension}D packing; {listed}"
+    )
+    raise ConfigError(f"{source}: {text}" if source else text)
 
 
 def build_exporter(
@@ -39,7 +102,7 @@ def build_exporter(
     params: Mapping[str, Any] | None = None,
     *,
     source: str | None = None,
-) -> Exporter:
+) -> Exporter | SolidExporter:
     """Validate ``params`` with the exporter's config model and build the exporter.
 
     Parameters
@@ -57,7 +120,8 @@ def build_exporter(
     ------
     PluginError
         If no exporter is registered as ``kind`` (the message lists the known ones),
-        or the plugin does not build an :class:`~regopack.interfaces.Exporter`.
+        or the plugin does not build an :class:`~regopack.interfaces.Exporter`
+        (a :class:`~regopack.interfaces.SolidExporter` for a 3D exporter).
     ConfigError
         One line naming the exporter, the parameter, its value and the allowed
         parameters, if a parameter is unknown or out of range.
@@ -79,15 +143,18 @@ def build_exporter(
         where = f"{source}: " if source else ""
         raise ConfigError(f"{where}exporter {kind!r}: {text}") from err
     exporter = spec.factory(config)
-    if not isinstance(exporter, Exporter):
+    want = SolidExporter if exporter_dimensions(registry, kind) == (3,) else Exporter
+    if not isinstance(exporter, want):
         raise PluginError(
             f"export plugin {kind!r} ({registry.origin('export', kind)}) built a "
-            f"{type(exporter).__name__}, not an Exporter"
+            f"{type(exporter).__name__}, not an {want.__name__}"
         )
     return exporter
 
 
-def output_path(exporter: Exporter, packing_path: Path, out: Path | None = None) -> Path:
+def output_path(
+    exporter: Exporter | SolidExporter, packing_path: Path, out: Path | None = None
+) -> Path:
     """Where to write: ``out``, or ``<out>/<stem><suffix>`` if ``out`` is a directory.
 
     Without ``out``, the packing file's name with the exporter's suffix.
@@ -107,13 +174,14 @@ def output_path(exporter: Exporter, packing_path: Path, out: Path | None = None)
 
 
 def export_packing(
-    packing: Packing,
+    packing: Packing | Packing3D,
     kind: str,
     path: Path,
     *,
     registry: Registry,
     params: Mapping[str, Any] | None = None,
     analyses: Mapping[str, Analyzer] | None = None,
+    source: str | None = None,
 ) -> Path:
     """Write ``packing`` to ``path`` with the exporter ``kind``; return the main file.
 
@@ -131,15 +199,63 @@ def export_packing(
         Parameters of the exporter.
     analyses
         Computed analyzers whose per-particle results the exporter may add.
+    source
+        Where the packing came from (e.g. its file), named when the exporter
+        does not write packings of its dimension.
 
     Raises
     ------
+    ConfigError
+        One line, if the exporter does not write packings of this dimension.
     ExportError
         One line, if the file cannot be written.
     """
+    check_exporter_dimension(registry, kind, 3 if isinstance(packing, Packing3D) else 2, source)
     exporter = build_exporter(registry, kind, params)
     try:
-        return exporter.export(packing, Path(path), analyses=analyses)
+        if isinstance(packing, Packing3D) and isinstance(exporter, SolidExporter):
+            return exporter.export(packing, Path(path), analyses=analyses)
+        if isinstance(packing, Packing) and isinstance(exporter, Exporter):
+            return exporter.export(packing, Path(path), analyses=analyses)
+        raise PluginError(f"export plugin {kind!r} cannot write a {type(packing).__name__}")
     except OSError as err:
         why = err.strerror or type(err).__name__
         raise ExportError(f"cannot write {path}: {why}") from err
+
+
+def run_exports(
+    packing: Packing3D,
+    plugins: Sequence[Any],
+    packing_path: Path,
+    shown_path: Path,
+) -> tuple[Path, ...]:
+    """Write a 3D run's ``outputs.exports`` beside its packing file; return the main files.
+
+    Parameters
+    ----------
+    packing
+        The packing of the run.
+    plugins
+        The resolved exporters of ``outputs.exports`` (already checked to
+        write 3D packings when the scene was resolved).
+    packing_path
+        The packing file in the run's temporary folder; each file is
+        ``<packing stem><suffix>`` beside it.
+    shown_path
+        Where the packing file will be, for messages.
+    """
+    written = []
+    for plugin in plugins:
+        exporter = plugin.build()
+        if not isinstance(exporter, SolidExporter):
+            raise PluginError(
+                f"export plugin {plugin.kind!r} ({plugin.origin}) built a "
+                f"{type(exporter).__name__}, not a SolidExporter"
+            )
+        path = packing_path.with_suffix(exporter.suffix)
+        try:
+            written.append(exporter.export(packing, path))
+        except OSError as err:
+            shown = shown_path.with_suffix(exporter.suffix)
+            raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err
+    return tuple(written)

@@ -23,6 +23,7 @@ from regopack.solids import SolidBatch
 
 if TYPE_CHECKING:
     from regopack.packing import Packing
+    from regopack.packing3d import Packing3D
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -231,4 +232,40 @@ class Exporter(ABC):
         that writes more than its main file lists the others here. The
         default is none.
         """
+        return ()
+
+
+class SolidExporter(ABC):
+    """Writer of a 3D packing (:class:`~regopack.packing3d.Packing3D`) in another format.
+
+    The 3D counterpart of :class:`Exporter`, with the same ``suffix`` and
+    :meth:`companions`; its spec (:class:`~regopack.plugin_types.ExporterSpec`)
+    declares ``dimensions = (3,)``.
+    """
+
+    suffix: str = ""
+
+    @abstractmethod
+    def export(
+        self,
+        packing: Packing3D,
+        path: Path,
+        *,
+        analyses: Mapping[str, Analyzer] | None = None,
+    ) -> Path:
+        """Write ``packing`` to ``path``; return the path of the main file written.
+
+        Parameters
+        ----------
+        packing
+            The 3D packing to write.
+        path
+            Main output file. An exporter may write companion files beside it,
+            named after its stem.
+        analyses
+            Computed analyzers by name; an exporter may ignore them.
+        """
+
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Companion files that :meth:`export` writes beside the main file ``path``."""
         return ()

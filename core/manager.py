@@ -58,6 +58,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.exporters",
     "regopack.plugins.image_export",
     "regopack.plugins.gsd_export",
+    "regopack.plugins.exporters3d",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 

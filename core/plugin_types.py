@@ -21,6 +21,7 @@ from regopack.interfaces import (
     InsertionStrategy,
     ShapeGenerator,
     SizeDistribution,
+    SolidExporter,
     SolidGenerator,
 )
 
@@ -86,8 +87,15 @@ class AnalyzerSpec(PluginSpec[Analyzer]):
     """Spec of an analyzer plugin."""
 
 
-class ExporterSpec(PluginSpec[Exporter]):
-    """Spec of an exporter plugin."""
+@dataclass(frozen=True)
+class ExporterSpec(PluginSpec[Exporter | SolidExporter]):
+    """Spec of an exporter plugin; ``dimensions`` lists the dimensions of the packings it writes.
+
+    A 2D exporter (the default) builds an :class:`~regopack.interfaces.Exporter`,
+    a 3D one a :class:`~regopack.interfaces.SolidExporter`.
+    """
+
+    dimensions: tuple[int, ...] = (2,)
 
 
 KINDS: dict[str, type[PluginSpec[Any]]] = {

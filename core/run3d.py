@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from regopack.compilation import CompileTime, compile_timer
 from regopack.domain3d import Box
 from regopack.errors import ConfigError, GeometryError, PluginError
+from regopack.exporting import run_exports
 from regopack.interfaces import (
     DensityController,
     InsertionResult,
@@ -28,7 +29,7 @@ from regopack.interfaces import (
     SizeDistribution,
     SolidGenerator,
 )
-from regopack.outdir import check_replaceable, replace_folder
+from regopack.outdir import check_replaceable, rebase, replace_folder
 from regopack.packing import write_json_atomic
 from regopack.packing3d import Packing3D, save3d
 from regopack.population import Population
@@ -336,13 +337,12 @@ def run_scene3d(
     """
     from regopack.run import RUN_FOLDER
 
-    if resolved.scene.outputs.analyses or resolved.scene.outputs.exports:
+    if resolved.scene.outputs.analyses:
         raise ConfigError(
             _located(
                 resolved,
                 "outputs",
-                "3D scenes have no analyses or exports yet; leave outputs.analyses and "
-                "outputs.exports empty",
+                "3D scenes have no analyses yet; leave outputs.analyses empty",
             )
         )
     if out_dir is not None:
@@ -416,4 +416,10 @@ def _run3d(
             write_json_atomic(tmp / outputs.summary, summary)
         except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
             raise ConfigError(f"cannot write the run's output: {err}") from err
-    return RunOutcome3D(packing, summary, out / outputs.packing, out / outputs.summary)
+        exports = run_exports(
+            packing, resolved.exports, tmp / outputs.packing, out / outputs.packing
+        )
+    exports = tuple(rebase(p, tmp, out) for p in exports)
+    return RunOutcome3D(
+        packing, summary, out / outputs.packing, out / outputs.summary, None, exports
+    )

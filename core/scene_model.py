@@ -870,6 +870,7 @@ def resolve_scene(scene: Scene, registry: Registry) -> ResolvedScene:
     _check_dimensions(scene, registry, phases, insertion)
     analyses = resolve_list("analysis", "analyses", scene.outputs.analyses)
     exports = resolve_list("export", "exports", scene.outputs.exports)
+    _check_export_dimensions(scene, registry, exports)
     _check_output_files(scene, analyses, exports)
     return ResolvedScene(
         scene=scene,
@@ -919,6 +920,34 @@ def _check_dimensions(
                 f"{dim}D {noun}s: {', '.join(fitting)}"
                 if fitting
                 else f"no {dim}D {noun} is installed"
+            )
+        )
+        raise ConfigError(f"{source}: {text}" if source else text)
+
+
+def _check_export_dimensions(
+    scene: Scene, registry: Registry, exports: Sequence[ResolvedPlugin[Any]]
+) -> None:
+    """Refuse, in one line, an exporter of ``outputs.exports`` of another dimension."""
+    dim = scene.domain.dimension
+    for i, (plugin, item) in enumerate(zip(exports, scene.outputs.exports, strict=True)):
+        own = _dimensions_of(plugin.spec, "export")
+        if dim in own:
+            continue
+        loc = f"outputs.exports.{i}" + ("" if isinstance(item, str) else ".kind")
+        fitting = [
+            n
+            for n in registry.names("export")
+            if dim in _dimensions_of(registry.get("export", n), "export")
+        ]
+        source = _where(loc, scene.source, scene._overridden)
+        text = (
+            f"{loc} = {plugin.kind!r} is a {'/'.join(f'{d}D' for d in own)} exporter, but "
+            f"domain.kind = {scene.domain.kind!r} makes the scene {dim}D; "
+            + (
+                f"{dim}D exporters: {', '.join(fitting)}"
+                if fitting
+                else f"no {dim}D exporter is installed"
             )
         )
         raise ConfigError(f"{source}: {text}" if source else text)

@@ -41,7 +41,7 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
         order = np.argsort(lmp.numpy.extract_atom("id"))
         return np.array(lmp.numpy.extract_atom(name))[order]
 
-    x0 = per_atom("x")[:, :2]
+    x0 = per_atom("x")
     ke, finite = [], True
     for steps in (int(c) for c in chunks.split(",") if c):
         lmp.command(f"run {steps} post no")
@@ -53,7 +53,7 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
         "natoms": int(lmp.get_natoms()),
         "finite": bool(finite),
         "x0": x0.tolist(),
-        "x": per_atom("x")[:, :2].tolist(),
+        "x": per_atom("x").tolist(),
         "ke": ke,
         "dt": lmp.get_thermo("dt"),
         "vertices": verts.tolist(),

@@ -40,7 +40,20 @@ def test_default_registry_has_the_builtins():
     ]
     assert reg.names("insertion") == ["available-arc", "available-surface", "rsa"]
     assert reg.names("density") == ["eta"]
-    assert reg.names("export") == ["csv", "gsd", "image", "json", "lammps", "svg", "vtk"]
+    assert reg.names("export") == [
+        "csv",
+        "gsd",
+        "gsd3d",
+        "image",
+        "json",
+        "lammps",
+        "lammps3d",
+        "slice",
+        "stl",
+        "svg",
+        "vtk",
+        "vtk3d",
+    ]
     assert reg.origin("shape", "octagon") == "regopack.plugins.octagon"
     assert default_registry(autoload=False) is not reg
 

@@ -68,7 +68,7 @@ def test_parameters_and_analyses(packing_file, tmp_path):
 def test_unknown_format_is_one_line(packing_file, capsys):
     assert main(["export", str(packing_file), "--to", "xyz"]) == 2
     line = one_error_line(capsys)
-    assert "unknown export kind 'xyz'" in line and "csv, gsd, image, json" in line
+    assert "unknown export kind 'xyz'" in line and "csv, gsd, gsd3d, image, json" in line
 
 
 def test_unwritable_path_is_one_line(packing_file, tmp_path, capsys):

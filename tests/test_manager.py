@@ -44,6 +44,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.exporters",
         "regopack.plugins.image_export",
         "regopack.plugins.gsd_export",
+        "regopack.plugins.exporters3d",
     )
 
 

@@ -113,7 +113,7 @@ def test_count_auto_uses_the_mean_volume(registry) -> None:  # type: ignore[no-u
 
 def test_3d_outputs_that_do_not_exist_yet_are_refused(registry) -> None:  # type: ignore[no-untyped-def]
     scene = regopack.scene({**SCENE, "outputs": {"analyses": ["density"]}}, registry=registry)
-    with pytest.raises(ConfigError, match="3D scenes have no analyses or exports yet"):
+    with pytest.raises(ConfigError, match="3D scenes have no analyses yet"):
         regopack.pack(scene)
 
 
