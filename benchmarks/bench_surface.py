@@ -31,14 +31,14 @@ phases = [
     ("pyroxene", 0.343, 0.25), ("feldspar", 0.315, 0.5), ("glass", 0.161, 1.0),
     ("olivine", 0.091, 2.0), ("ilmenite", 0.052, 15.0), ("others", 0.038, 0.8),
 ]
+def shape(psi):
+    return {"kind": "polyhedron", "psi": psi} if kind == "polyhedron" else {"kind": kind}
 def scene(side, count="auto"):
     return {
         "name": "bench3d", "seed": seed, "count": count,
         "domain": {"kind": "box", "width": side, "height": side, "depth": side},
         "size": {"kind": "change5", "d_min": 2.0, "d_max": 12.0, "d0": 16.0, "alpha": 6.9},
-        "phases": [{"name": n, "fraction": f, "shape": (
-                       {"kind": "polyhedron", "psi": p} if kind == "polyhedron" else {"kind": kind})}
-                   for n, f, p in phases],
+        "phases": [{"name": n, "fraction": f, "shape": shape(p)} for n, f, p in phases],
         "insertion": {"kind": "available-surface", "order": order},
         "density": {"kind": "eta"},
     }
