@@ -36,6 +36,7 @@ from regopack.scene_model import ResolvedScene
 from regopack.solids import SolidBatch, concat_solids
 
 if TYPE_CHECKING:
+    from regopack.analysis import AnalysisFiles
     from regopack.verification3d import Report3D
 
 IntArray = NDArray[np.int64]
@@ -57,7 +58,7 @@ class RunOutcome3D:
     summary: dict[str, Any]
     packing_path: Path | None = None
     summary_path: Path | None = None
-    analysis: None = None
+    analysis: AnalysisFiles | None = None
     exports: tuple[Path, ...] = ()
 
 
@@ -311,27 +312,31 @@ def run_scene3d(
     progress: ProgressCallback | None = None,
     *,
     verify: bool | None = None,
+    figures: bool = True,
 ) -> RunOutcome3D:
-    """Draw, insert, measure and write a 3D scene (see :func:`regopack.run.run_scene`).
+    """Draw, insert, measure, analyse and write a 3D scene (see :func:`regopack.run.run_scene`).
 
     ``verify`` (default: True) checks the packing with the independent
-    oracle :func:`regopack.verification3d.verify_polyhedra`.
+    oracle :func:`regopack.verification3d.verify_polyhedra`. The analyzers
+    of ``outputs.analyses`` (3D ones, checked before anything is drawn) run
+    after the packing (see :mod:`regopack.analysis3d`); ``figures`` draws
+    their figures into the analysis folder.
     """
     from regopack.run import RUN_FOLDER
 
-    if resolved.scene.outputs.analyses or resolved.scene.outputs.exports:
+    if resolved.scene.outputs.exports:
         raise ConfigError(
             _located(
-                resolved,
-                "outputs",
-                "3D scenes have no analyses or exports yet; leave outputs.analyses and "
-                "outputs.exports empty",
+                resolved, "outputs", "3D scenes have no exports yet; leave outputs.exports empty"
             )
         )
+    from regopack.analysis3d import check_scene_analyses
+
+    check_scene_analyses(resolved)
     if out_dir is not None:
         check_replaceable(out_dir, RUN_FOLDER)
     with compile_timer() as compiling:
-        return _run3d(resolved, out_dir, progress, verify, compiling)
+        return _run3d(resolved, out_dir, progress, verify, compiling, figures)
 
 
 def _run3d(
@@ -340,6 +345,7 @@ def _run3d(
     progress: ProgressCallback | None,
     verify: bool | None,
     compiling: CompileTime,
+    figures: bool = True,
 ) -> RunOutcome3D:
     from regopack.run import RUN_FOLDER, _build
 
@@ -379,6 +385,9 @@ def _run3d(
         summary.setdefault(key, value)
     if verify is None or verify:
         summary["verify"] = verify_summary3d(packing)
+    from regopack.analysis3d import run_scene_analyses, write_scene_analyses
+
+    analyzers = run_scene_analyses(resolved, packing, summary)
     summary["compile_time_s"] = compiling.seconds
     if out_dir is None:
         return RunOutcome3D(packing, summary)
@@ -390,4 +399,7 @@ def _run3d(
             write_json_atomic(tmp / outputs.summary, summary)
         except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
             raise ConfigError(f"cannot write the run's output: {err}") from err
-    return RunOutcome3D(packing, summary, out / outputs.packing, out / outputs.summary)
+        analysis = write_scene_analyses(resolved, packing, analyzers, tmp, out, figures)
+    return RunOutcome3D(
+        packing, summary, out / outputs.packing, out / outputs.summary, analysis=analysis
+    )
