@@ -201,7 +201,7 @@ def _clip(points: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
     return np.vstack([inside, cross.reshape(-1, 3)])
 
 
-def phi_in_box(packing: Packing3D, window: Box) -> float:
+def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None) -> float:
     """Volume fraction of ``window`` covered by the placed solids, clipped exactly.
 
     A sharp polyhedron that crosses the window's faces is clipped by their
@@ -209,14 +209,16 @@ def phi_in_box(packing: Packing3D, window: Box) -> float:
     segments between its vertices, which holds its edges); a sphere
     (rounded solid without faces) is clipped analytically only when it lies
     wholly inside or outside, and raises ``NotImplementedError`` otherwise.
-    NaN for an empty window.
+    NaN for an empty window. ``volume`` gives the solids' volumes when they
+    are known already (default: :attr:`regopack.solids.SolidBatch.volume`).
     """
     from scipy.spatial import ConvexHull
 
     if not window.volume > 0:
         return math.nan
     solids = packing.solids
-    volume = solids.volume
+    if volume is None:
+        volume = solids.volume
     lo = np.array([window.xmin, window.ymin, window.zmin])
     hi = np.array([window.xmax, window.ymax, window.zmax])
     rho = solids.rounding_radius

@@ -10,7 +10,12 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.interfaces import Analyzer
 from regopack.plugins.analysis.common import eta_of
-from regopack.plugins.analysis.common3d import as_packing3d, interior_margin3d, interior_window3d
+from regopack.plugins.analysis.common3d import (
+    as_packing3d,
+    interior_margin3d,
+    interior_window3d,
+    solid_volumes,
+)
 from regopack.plugins.analysis.density import void_ratio
 
 
@@ -44,9 +49,10 @@ class Density3D(Analyzer):
         p3 = as_packing3d(packing, self)
         margin = interior_margin3d(p3, self.config.margin)
         window = interior_window3d(p3, margin)
-        phi_domain = p3.phi
+        volume = solid_volumes(p3)
+        phi_domain = float(volume[p3.placed].sum()) / p3.domain.volume
         try:
-            phi_interior = phi_in_box(p3, window)
+            phi_interior = phi_in_box(p3, window, volume)
         except NotImplementedError:  # a sphere crossing the window's faces
             phi_interior = math.nan
         self._results = {

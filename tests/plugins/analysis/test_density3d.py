@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 from lattices3d import cube_lattice
 
+from regopack.plugins.analysis.common3d import solid_volumes
 from regopack.plugins.analysis.density3d import Density3D, Density3DConfig
 
 
@@ -21,3 +22,13 @@ def test_a_window_through_a_cube_lattice_has_the_volume_of_its_box_intersections
     assert r["phi_domain"] == pytest.approx(27 / p.domain.volume, rel=1e-12)
     assert r["void_ratio_domain"] == pytest.approx((1 - r["phi_domain"]) / r["phi_domain"])
     assert r["window"] == pytest.approx(list(hi - lo))
+
+
+def test_the_volumes_of_all_solids_at_once_match_their_hulls(packing3d) -> None:
+    from scipy.spatial import ConvexHull
+
+    volume = solid_volumes(packing3d)
+    np.testing.assert_allclose(volume, packing3d.solids.volume, rtol=1e-12)
+    for k in range(0, packing3d.n_particles, 17):
+        hull = ConvexHull(packing3d.vertices[packing3d.offsets[k] : packing3d.offsets[k + 1]])
+        assert volume[k] == pytest.approx(hull.volume, rel=1e-12)
