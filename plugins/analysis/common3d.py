@@ -62,7 +62,7 @@ def solid_volumes(packing: Packing3D) -> FloatArray:
     a sphere has ``4/3 pi r^3``. Rounded polyhedra raise ``NotImplementedError``.
     """
     n = packing.n_particles
-    rho = packing.rounding_radius if packing.rounding is not None else np.zeros(n)
+    rho = packing.solids.rounding_radius
     faces = np.diff(packing.face_offsets)
     if np.any((faces > 0) & (rho > 0)):
         raise NotImplementedError("the volume of a rounded polyhedron")
