@@ -222,16 +222,20 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
     lo = np.array([window.xmin, window.ymin, window.zmin])
     hi = np.array([window.xmax, window.ymax, window.zmax])
     rho = solids.rounding_radius
+    # bounding boxes of all solids at once (rounding is monotone: min(v + c) = min(v) + c)
+    starts = packing.offsets[:-1]
+    box_lo = np.minimum.reduceat(packing.vertices, starts) + packing.centre - rho[:, None]
+    box_hi = np.maximum.reduceat(packing.vertices, starts) + packing.centre + rho[:, None]
+    whole = np.all(box_lo >= lo, axis=1) & np.all(box_hi <= hi, axis=1)
+    apart = np.any(box_hi <= lo, axis=1) | np.any(box_lo >= hi, axis=1)
     total = 0.0
-    for j in np.flatnonzero(packing.placed):
-        pts = packing.world_vertices(int(j))
-        vlo = pts.min(axis=0) - rho[j]
-        vhi = pts.max(axis=0) + rho[j]
-        if np.all(vlo >= lo) and np.all(vhi <= hi):
+    for j in np.flatnonzero(packing.placed).tolist():
+        if whole[j]:
             total += float(volume[j])
             continue
-        if np.any(vhi <= lo) or np.any(vlo >= hi):
+        if apart[j]:
             continue
+        pts = packing.world_vertices(int(j))
         if rho[j] > 0:
             raise NotImplementedError("clipping a rounded solid or sphere to a window")
         for axis in range(3):

@@ -111,8 +111,8 @@ def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
         run_analyses(packing, registry, [("rdff", {})])
     assert str(info.value) == (
         "unknown analyzer 'rdff'; known analyzers: contacts, contacts3d, coordination, "
-        "coordination3d, density, density3d, homogeneity, local_fraction, network, network3d, "
-        "psd, rdf, rdf3d"
+        "coordination3d, density, density3d, homogeneity, homogeneity3d, local_fraction, "
+        "network, network3d, psd, psd3d, rdf, rdf3d"
     )
 
 

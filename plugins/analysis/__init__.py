@@ -1,7 +1,8 @@
 """Built-in structure analyzers (the paper's Stage 3).
 
 Density, contacts, coordination, rdf, network, homogeneity, psd and local_fraction of
-2D packings; density3d, contacts3d, coordination3d, rdf3d and network3d of 3D ones.
+2D packings; density3d, contacts3d, coordination3d, rdf3d, network3d, homogeneity3d and
+psd3d of 3D ones.
 """
 
 from __future__ import annotations
@@ -18,10 +19,12 @@ from regopack.plugins.analysis.density import Density, DensityConfig
 from regopack.plugins.analysis.density3d import Density3D, Density3DConfig
 from regopack.plugins.analysis.figure_specs import figure_specs
 from regopack.plugins.analysis.homogeneity import Homogeneity, HomogeneityConfig
+from regopack.plugins.analysis.homogeneity3d import Homogeneity3D, Homogeneity3DConfig
 from regopack.plugins.analysis.local_fraction import LocalFraction, LocalFractionConfig
 from regopack.plugins.analysis.network import Network, NetworkConfig
 from regopack.plugins.analysis.network3d import Network3D, Network3DConfig
 from regopack.plugins.analysis.psd import Psd, PsdConfig
+from regopack.plugins.analysis.psd3d import Psd3D, Psd3DConfig
 from regopack.plugins.analysis.rdf import Rdf, RdfConfig
 from regopack.plugins.analysis.rdf3d import Rdf3D, Rdf3DConfig
 
@@ -96,6 +99,20 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             Network3DConfig,
             Network3D,
             "Contact network of a 3D packing and the fabric tensor of its contact normals.",
+            dimensions=(3,),
+        ),
+        AnalyzerSpec(
+            "homogeneity3d",
+            Homogeneity3DConfig,
+            Homogeneity3D,
+            "Density, volume fraction and size of a 3D packing over layers and nested boxes.",
+            dimensions=(3,),
+        ),
+        AnalyzerSpec(
+            "psd3d",
+            Psd3DConfig,
+            Psd3D,
+            "Size distribution of the placed solids against the drawn ones, by number and volume.",
             dimensions=(3,),
         ),
     ]

@@ -16,7 +16,7 @@ from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugin_types import FigureMaker, FigureSpec
 
-__all__ = ["CAPTIONS", "STEMS", "STEMS3D", "figure_specs"]
+__all__ = ["CAPTIONS", "CAPTIONS3D", "STEMS", "STEMS3D", "figure_specs"]
 
 CAPTIONS: dict[str, str] = {
     "packing": "Packing coloured by mineral, with a zoomed view (cf. paper Fig. 10)",
@@ -28,12 +28,16 @@ CAPTIONS: dict[str, str] = {
     "homogeneity": "Number density, area fraction and mean diameter over rings and tiles",
     "psd": "Size distribution of the placed particles against the requested one",
     "local-fraction": "Local packing fraction of the particles from their Laguerre cells",
+}
+"""Caption of each figure, by file stem."""
+
+CAPTIONS3D: dict[str, str] = {
     "contact-histograms-3d": "Distributions of A_c, V_c, b_c and the cap height δ (3D)",
     "z-vs-tol-3d": "Coordination number against the contact tolerance (3D)",
     "z-per-mineral-3d": "Coordination number per mineral (3D)",
     "rdf-3d": "Radial distribution function, all centres and each mineral with itself (3D)",
 }
-"""Caption of each figure, by file stem."""
+"""Caption of each figure of the 3D analyzers, by file stem."""
 
 STEMS: dict[str, tuple[str, ...]] = {
     "density": ("packing",),
@@ -85,6 +89,6 @@ def figure_specs() -> list[FigureSpec]:
         FigureSpec(name, _maker(name), {stem: CAPTIONS[stem] for stem in stems})
         for name, stems in STEMS.items()
     ] + [
-        FigureSpec(name, _maker3d(name), {stem: CAPTIONS[stem] for stem in stems})
+        FigureSpec(name, _maker3d(name), {stem: CAPTIONS3D[stem] for stem in stems})
         for name, stems in STEMS3D.items()
     ]
