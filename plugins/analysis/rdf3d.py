@@ -17,6 +17,7 @@ as in 2D.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any, Self
 
@@ -37,9 +38,6 @@ from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bin
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-PAIR_BLOCK = 2_000_000
-"""Pairs measured at once (memory of the histogram's working arrays)."""
 
 
 class Rdf3DConfig(BaseModel):
@@ -108,39 +106,22 @@ def rdf3d_histogram(
         ``(bins,)`` and ``(n_kinds, n_kinds, bins)`` (symmetric) curves; NaN
         where a kind pair has no pairs to normalise by.
     """
-    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    kind = np.asarray(kind, dtype=np.int64)
+    from regopack.plugins.analysis.rdf3d_kernel import weighted_pair_histogram3d
+
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    kind = np.ascontiguousarray(kind, dtype=np.int64)
     n = pts.shape[0]
+    # the compiled kernel indexes without checks: refuse what would write out of bounds
+    if kind.shape != (n,) or (n and (int(kind.min()) < 0 or int(kind.max()) >= n_kinds)):
+        raise ValueError(f"kind must be {n} integers in [0, {n_kinds})")
+    if not np.isfinite(pts).all():
+        raise ValueError("the points must be finite")
+    if not (bins >= 1 and math.isfinite(width) and width > 0 and math.isfinite(r_lo) and r_lo >= 0):
+        raise ValueError(f"bins ({bins}) must be >= 1, width ({width}) > 0 and r_lo ({r_lo}) >= 0")
     side = np.array(window.size, dtype=np.float64)
-    periodic = window.periodic
-    r_hi = r_lo + width * bins
-    hist = np.zeros(n_kinds * n_kinds * bins)
-    rows = max(1, PAIR_BLOCK // max(n, 1))
-    for a in range(0, n, rows):
-        b = min(n, a + rows)
-        d = pts[None, :, :] - pts[a:b, None, :]
-        if periodic:
-            d -= side * np.round(d / side)
-        d = np.abs(d)
-        i = np.arange(a, b)[:, None]
-        j = np.arange(n)[None, :]
-        r = np.sqrt(np.einsum("ijk,ijk->ij", d, d))
-        sel = (j > i) & (r >= r_lo) & (r < r_hi)
-        if not periodic:
-            sel &= np.all(d < side, axis=2)
-        ii, jj = np.nonzero(sel)
-        if ii.size == 0:
-            continue
-        dd = d[ii, jj]
-        if periodic:
-            w = np.full(ii.size, 1.0 / float(np.prod(side)))
-        else:
-            w = 1.0 / np.prod(side - dd, axis=1)  # 1 / |W ∩ (W + d)|
-        k = np.minimum(((r[ii, jj] - r_lo) / width).astype(np.int64), bins - 1)
-        ka, kb = kind[ii + a], kind[jj]
-        lo, hi = np.minimum(ka, kb), np.maximum(ka, kb)
-        hist += np.bincount((lo * n_kinds + hi) * bins + k, weights=w, minlength=hist.size)
-    per_pair = hist.reshape(n_kinds, n_kinds, bins)
+    per_pair = weighted_pair_histogram3d(
+        pts, kind, n_kinds, float(r_lo), float(width), int(bins), side, bool(window.periodic)
+    )
     edges = r_lo + width * np.arange(bins + 1)
     shell = 4.0 / 3.0 * np.pi * (edges[1:] ** 3 - edges[:-1] ** 3)
     volume = float(np.prod(side))
