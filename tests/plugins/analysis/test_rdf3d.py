@@ -44,10 +44,14 @@ def test_a_periodic_box_agrees_with_freud() -> None:
     np.testing.assert_allclose(total, rdf.rdf, rtol=1e-6)  # freud works in single precision
 
 
-def test_the_packing_rdf_is_zero_below_contact_and_one_far_away(analysed3d) -> None:
+def test_the_packing_rdf_is_zero_below_contact_and_knows_its_expected_pairs(analysed3d) -> None:
     rdf = analysed3d["rdf3d"]
     near = rdf.tables["rdf_near"]
     assert np.all(near["total"][near["r"] < 1.0] == 0)  # no two centres closer than 1 µm
     assert rdf["n_points"] > 10 and rdf["window"] == [12.0, 12.0, 12.0]
     assert rdf["first_peak_r"] is not None and 2.0 < rdf["first_peak_r"] < 6.0
     assert "far field cut at 12" in rdf["notes"][0]
+    # the pairs an uncorrelated pattern puts into the near field (they weigh the peak's fit)
+    n = rdf["n_points"]
+    expected = n * (n - 1) / 2 * 4 / 3 * np.pi * 10.0**3 / 12.0**3
+    assert rdf.analyzer.expected["near"].sum() == pytest.approx(expected)
