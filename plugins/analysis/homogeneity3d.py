@@ -95,7 +95,8 @@ class Homogeneity3D(Analyzer):
                 & (centre[:, 1] > w.ymin)
                 & (centre[:, 1] < w.ymax)
             )
-            for lo, hi in itertools.pairwise(edges):
+            # a margin that leaves no window leaves no regions
+            for lo, hi in itertools.pairwise(edges if w.volume > 0 else []):
                 slab = Box(w.xmin, w.xmax, w.ymin, w.ymax, float(lo), float(hi))
                 sel = inside_xy & (centre[:, 2] >= lo) & (centre[:, 2] < hi)
                 n, density, diameter = _region_stats(p3, sel, slab.volume)
@@ -112,7 +113,7 @@ class Homogeneity3D(Analyzer):
             steps = np.linspace(0.0, 1.0, cfg.shells + 1)
             inner_solid, inner_volume = 0.0, 0.0
             reach = np.max(np.abs(centre - c) / np.where(half > 0, half, np.inf), axis=1)
-            for lo, hi in itertools.pairwise(steps):
+            for lo, hi in itertools.pairwise(steps if w.volume > 0 else []):
                 box = Box(
                     *(v for a in range(3) for v in (c[a] - hi * half[a], c[a] + hi * half[a]))
                 )
@@ -137,6 +138,7 @@ class Homogeneity3D(Analyzer):
         self._results = {
             "interior_margin": margin,
             "window": [float(s) for s in w.size],
+            "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
             "phi_layers": clean(layers["phi"]),
             "density_layers": clean(layers["density"]),
             "mean_diameter_layers": clean(layers["mean_diameter"]),

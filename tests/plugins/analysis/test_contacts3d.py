@@ -163,3 +163,28 @@ def test_contacts3d_refuses_a_2d_packing_and_a_bad_tolerance() -> None:
     p = cube_lattice((2, 1, 1), GAPS)
     with pytest.raises(ConfigError, match=r"contacts3d.tol = -1"):
         regopack.analyze(p, "contacts3d", contacts3d__tol=-1.0)
+
+
+def test_every_3d_analyzer_runs_on_a_lone_particle_and_skips_the_unplaced() -> None:
+    import dataclasses
+
+    p = cube_lattice((3, 1, 1), (0.0, 0.0, 0.0))
+    centre = p.centre.copy()
+    centre[1:] = np.nan  # only the first cube is placed
+    lone = dataclasses.replace(p, centre=centre, insertion_index=np.array([0, -1, -1]))
+    names = ["density3d", "contacts3d", "coordination3d", "rdf3d", "network3d"]
+    res = regopack.analyze(lone, [*names, "homogeneity3d", "psd3d"], contacts3d__margin=0.0)
+    assert res["contacts3d"]["n_contacts"] == 0 and res["coordination3d"]["z_domain"] == 0.0
+    assert res["network3d"]["anisotropy"] is None and res["rdf3d"]["first_peak_r"] is None
+    assert res["psd3d"]["n_placed"] == 1
+
+
+def test_periodic_boxes_are_refused_in_one_line() -> None:
+    import dataclasses
+
+    from regopack.domain3d import PeriodicBox
+
+    p = cube_lattice((2, 1, 1), GAPS)
+    periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
+    with pytest.raises(ConfigError, match=r"^contacts3d: periodic boxes are not analysed yet"):
+        regopack.analyze(periodic, "contacts3d")
