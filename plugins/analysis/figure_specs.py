@@ -36,6 +36,7 @@ CAPTIONS3D: dict[str, str] = {
     "z-vs-tol-3d": "Coordination number against the contact tolerance (3D)",
     "z-per-mineral-3d": "Coordination number per mineral (3D)",
     "rdf-3d": "Radial distribution function, all centres and each mineral with itself (3D)",
+    "psd-3d": "Size distribution of the placed solids against the requested one, by volume (3D)",
 }
 """Caption of each figure of the 3D analyzers, by file stem."""
 
@@ -55,6 +56,7 @@ STEMS3D: dict[str, tuple[str, ...]] = {
     "contacts3d": ("contact-histograms-3d",),
     "coordination3d": ("z-vs-tol-3d", "z-per-mineral-3d"),
     "rdf3d": ("rdf-3d",),
+    "psd3d": ("psd-3d",),
 }
 """File stems of the figures of each 3D analyzer, in drawing order."""
 

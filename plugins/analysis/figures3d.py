@@ -3,7 +3,8 @@
 ``contact-histograms-3d`` (``contacts3d``): A_c, V_c, b_c and the cap height δ;
 ``z-vs-tol-3d`` and ``z-per-mineral-3d`` (``coordination3d``): the 2D figures
 on the 3D contacts; ``rdf-3d`` (``rdf3d``): g(r) of all centres and of each
-mineral with itself, near and far field.
+mineral with itself, near and far field; ``psd-3d`` (``psd3d``): the 2D
+size-distribution figure, with masses as volumes.
 """
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ from regopack.plugins.analysis.figures import (
     draw_z_per_mineral,
     draw_z_vs_tol,
 )
+from regopack.plugins.analysis.psd3d import Psd3D
 from regopack.plugins.analysis.rdf3d import Rdf3D
 
 __all__ = ["draw_contact_histograms3d", "draw_rdf3d", "figures3d_for"]
@@ -127,7 +129,7 @@ def figures3d_for(
         The analysed 3D packing.
     analyzers
         Computed analyzers by name; figures are drawn for ``contacts3d``,
-        ``coordination3d`` and ``rdf3d``.
+        ``coordination3d``, ``rdf3d`` and ``psd3d``.
     out_dir
         Directory of the figures (created if needed).
     formats
@@ -151,6 +153,11 @@ def figures3d_for(
         jobs.append(("z-per-mineral-3d", lambda: draw_z_per_mineral(packing, coordination)))
     if isinstance(rdf, Rdf3D):
         jobs.append(("rdf-3d", lambda: draw_rdf3d(packing, rdf)))
+    psd = analyzers.get("psd3d")
+    if isinstance(psd, Psd3D):
+        from regopack.plugins.analysis.psd_figure import draw_psd
+
+        jobs.append(("psd-3d", lambda: draw_psd(psd)))
     if of is not None:
         jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS3D.get(of, ())]
     if not jobs:

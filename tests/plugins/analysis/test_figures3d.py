@@ -16,7 +16,10 @@ STEMS = [stem for stems in STEMS3D.values() for stem in stems]
 
 
 def test_the_3d_figures_are_written_and_embedded(packing3d, analysed3d, tmp_path) -> None:
-    files = write_analysis(tmp_path / "a", packing3d, analysed3d.analyzers)
+    from regopack.plugins.analysis.psd3d import Psd3D
+
+    analyzers = {**analysed3d.analyzers, "psd3d": Psd3D().compute(packing3d, {})}
+    files = write_analysis(tmp_path / "a", packing3d, analyzers)
     names = sorted(p.name for p in files.figures)
     assert names == sorted([f"{s}.png" for s in STEMS] + [f"{s}.svg" for s in STEMS])
     report = files.report.read_text(encoding="utf-8")
