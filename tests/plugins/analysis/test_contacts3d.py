@@ -188,3 +188,13 @@ def test_periodic_boxes_are_refused_in_one_line() -> None:
     periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
     with pytest.raises(ConfigError, match=r"^contacts3d: periodic boxes are not analysed yet"):
         regopack.analyze(periodic, "contacts3d")
+
+
+def test_the_highs_fallback_gives_the_simplex_threshold_and_normal(packing3d, contacts) -> None:
+    from regopack.plugins.analysis.contacts3d import _fallback_threshold
+
+    for (i, j), tau in list(zip(contacts.pairs, contacts.threshold, strict=True))[:40:4]:
+        half, normal = _fallback_threshold(packing3d, int(i), int(j))
+        assert 2 * half == pytest.approx(tau, abs=1e-8)
+        p, q = packing3d.world_vertices(i) @ normal, packing3d.world_vertices(j) @ normal
+        assert q.min() - p.max() >= -1e-8  # a separating plane too
