@@ -7,6 +7,10 @@ the interior window, time, analyses, and the exponent of time against N.
 Each size runs in its own process after a warm-up that compiles the kernels.
 
     python benchmarks/bench_surface.py --sizes 30 45 60
+    python benchmarks/bench_surface.py --sizes 45 60 --order sweep
+    python benchmarks/bench_surface.py --sizes 45 60 --shape sphere
+
+``--shape sphere`` packs the same scene with spheres of the same sizes.
 """
 
 from __future__ import annotations
@@ -22,7 +26,7 @@ import numpy as np
 CHILD = r"""
 import json, sys, time
 import regopack
-size = float(sys.argv[1]); seed = int(sys.argv[2])
+size = float(sys.argv[1]); seed = int(sys.argv[2]); order = sys.argv[3]; kind = sys.argv[4]
 phases = [
     ("pyroxene", 0.343, 0.25), ("feldspar", 0.315, 0.5), ("glass", 0.161, 1.0),
     ("olivine", 0.091, 2.0), ("ilmenite", 0.052, 15.0), ("others", 0.038, 0.8),
@@ -32,9 +36,10 @@ def scene(side, count="auto"):
         "name": "bench3d", "seed": seed, "count": count,
         "domain": {"kind": "box", "width": side, "height": side, "depth": side},
         "size": {"kind": "change5", "d_min": 2.0, "d_max": 12.0, "d0": 16.0, "alpha": 6.9},
-        "phases": [{"name": n, "fraction": f, "shape": {"kind": "polyhedron", "psi": p}}
+        "phases": [{"name": n, "fraction": f, "shape": (
+                       {"kind": "polyhedron", "psi": p} if kind == "polyhedron" else {"kind": kind})}
                    for n, f, p in phases],
-        "insertion": {"kind": "available-surface"}, "density": {"kind": "eta"},
+        "insertion": {"kind": "available-surface", "order": order}, "density": {"kind": "eta"},
     }
 regopack.pack(scene(20.0, 10), verify=False)  # compile or load the kernels
 t = time.perf_counter()
@@ -51,11 +56,13 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--sizes", type=float, nargs="+", default=[30.0, 45.0, 60.0])
     parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--order", choices=["paper", "sweep"], default="paper")
+    parser.add_argument("--shape", choices=["polyhedron", "sphere"], default="polyhedron")
     args = parser.parse_args()
     rows = []
     for size in args.sizes:
         out = subprocess.run(
-            [sys.executable, "-c", CHILD, str(size), str(args.seed)],
+            [sys.executable, "-c", CHILD, str(size), str(args.seed), args.order, args.shape],
             check=True, capture_output=True, text=True,
         )  # fmt: skip
         rows.append(json.loads(out.stdout.strip().splitlines()[-1]))

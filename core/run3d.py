@@ -206,13 +206,15 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
 
     A sharp polyhedron that crosses the window's faces is clipped by their
     planes (the hull of its vertices inside and of the crossings of the
-    segments between its vertices, which holds its edges); a sphere
-    (rounded solid without faces) is clipped analytically only when it lies
-    wholly inside or outside, and raises ``NotImplementedError`` otherwise.
+    segments between its vertices, which holds its edges); a sphere is
+    clipped by :func:`regopack.sphere_volume.sphere_in_box`; a rounded
+    polyhedron that crosses a face raises ``NotImplementedError``.
     NaN for an empty window. ``volume`` gives the solids' volumes when they
     are known already (default: :attr:`regopack.solids.SolidBatch.volume`).
     """
     from scipy.spatial import ConvexHull
+
+    from regopack.sphere_volume import sphere_in_box
 
     if not window.volume > 0:
         return math.nan
@@ -237,7 +239,10 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
             continue
         pts = packing.world_vertices(int(j))
         if rho[j] > 0:
-            raise NotImplementedError("clipping a rounded solid or sphere to a window")
+            if pts.shape[0] != 1:
+                raise NotImplementedError("clipping a rounded polyhedron to a window")
+            total += sphere_in_box(pts[0], float(rho[j]), lo, hi)
+            continue
         for axis in range(3):
             for sign, bound in ((-1.0, -lo[axis]), (1.0, hi[axis])):
                 if pts.shape[0] < 4:
@@ -259,28 +264,40 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
 
 
 def verify_packing3d(packing: Packing3D, rel_tol: float = 1e-9) -> Report3D:
-    """Check a 3D packing of sharp polyhedra with the independent oracle.
+    """Check a 3D packing of sharp polyhedra or of spheres with the independent oracle.
 
     Raises
     ------
     ConfigError
-        For spheres and rounded solids, which the oracle does not check yet.
+        For rounded polyhedra, which the oracle does not check yet.
     """
-    from regopack.verification3d import verify_polyhedra
+    from regopack.verification3d import verify_polyhedra, verify_spheres
 
-    if packing.rounded:
-        raise ConfigError("verify: spheres and rounded solids are not verified yet")
     placed = packing.placed_in_order()
-    solids = [packing.world_vertices(int(j)) for j in placed]
     box = packing.domain
-    report = verify_polyhedra(
-        solids,
-        None,
-        [box.xmin, box.ymin, box.zmin],
-        [box.xmax, box.ymax, box.zmax],
-        periodic=box.periodic,
-        rel_tol=rel_tol,
-    )
+    solids = packing.solids
+    lo = [box.xmin, box.ymin, box.zmin]
+    hi = [box.xmax, box.ymax, box.zmax]
+    if packing.rounded:
+        if solids.normals.shape[0] != 0:
+            raise ConfigError("verify: rounded polyhedra are not verified yet")
+        report = verify_spheres(
+            packing.centre[placed] + solids.vertices[solids.offsets[placed]],
+            solids.rounding_radius[placed],
+            lo,
+            hi,
+            periodic=box.periodic,
+            rel_tol=rel_tol,
+        )
+    else:
+        report = verify_polyhedra(
+            [packing.world_vertices(int(j)) for j in placed],
+            None,
+            lo,
+            hi,
+            periodic=box.periodic,
+            rel_tol=rel_tol,
+        )
     import dataclasses
 
     ix = [int(j) for j in placed]
@@ -301,8 +318,8 @@ def verify_packing3d(packing: Packing3D, rel_tol: float = 1e-9) -> Report3D:
 
 def verify_summary3d(packing: Packing3D) -> dict[str, Any]:
     """Return the ``verify`` entry of a 3D run's summary, from the independent oracle."""
-    if packing.rounded:
-        return {"skipped": "spheres and rounded solids are not verified yet"}
+    if packing.rounded and packing.solids.normals.shape[0] != 0:
+        return {"skipped": "rounded polyhedra are not verified yet"}
     report = verify_packing3d(packing)
     return {
         "ok": bool(report.ok),
@@ -369,10 +386,13 @@ def _run3d(
         population, result, box, resolved.to_dict(), resolved.seed, result.stats
     )
     margin = 2.0 * float(size_dist.r_max)
-    try:
-        phi_interior = phi_in_box(packing, box.interior(margin))
-    except NotImplementedError:
-        phi_interior = math.nan
+    if box.periodic:
+        phi_interior = packing.phi  # no walls: the whole cell is interior
+    else:
+        try:
+            phi_interior = phi_in_box(packing, box.interior(margin))
+        except NotImplementedError:
+            phi_interior = math.nan
     summary: dict[str, Any] = {
         "scene": resolved.name,
         "seed": resolved.seed,
@@ -387,6 +407,12 @@ def _run3d(
         "insertion_time_s": max(wall - compile_insertion, 0.0),
         "compile_time_s": compile_insertion,
     }
+    if packing.n_placed < packing.n_particles:
+        from regopack.sieve import unplaced_per_class
+
+        d_min = getattr(resolved.size.config, "d_min", None)
+        rows = unplaced_per_class((2.0 * packing.radius, packing.placed), d_min)
+        summary["not_placed_by_class"] = [row for row in rows if row["not_placed"] > 0]
     for key, value in result.stats.items():
         summary.setdefault(key, value)
     if verify is None or verify:

@@ -725,3 +725,120 @@ def verify_polyhedra(
         periodic=periodic,
         rel_tol=rel_tol,
     )
+
+
+# ---------------------------------------------------------------- spheres
+
+
+def lens_volume(r1: float, r2: float, d: float) -> float:
+    """Volume shared by two balls of radii ``r1``, ``r2`` whose centres are ``d`` apart.
+
+    Examples
+    --------
+    >>> lens_volume(1.0, 1.0, 2.0)
+    0.0
+    >>> abs(lens_volume(1.0, 1.0, 0.0) - 4 / 3 * math.pi) < 1e-12
+    True
+    """
+    if d >= r1 + r2:
+        return 0.0
+    small = min(r1, r2)
+    if d <= abs(r1 - r2):
+        return 4.0 / 3.0 * math.pi * small**3
+    s = r1 + r2 - d
+    return math.pi * s * s * (d * d + 2.0 * d * (r1 + r2) - 3.0 * (r1 - r2) ** 2) / (12.0 * d)
+
+
+def verify_spheres(
+    centres: ArrayLike,
+    radii: ArrayLike,
+    box_lo: ArrayLike,
+    box_hi: ArrayLike,
+    periodic: bool = False,
+    rel_tol: float = 1e-9,
+) -> Report3D:
+    """Check that spheres do not overlap and stay inside a box.
+
+    Pairs closer than the sum of their radii (every periodic image, in a
+    periodic box, found by a k-d tree over the wrapped centres) share the
+    volume of a lens (:func:`lens_volume`); a pair overlaps when that volume
+    exceeds ``rel_tol`` times the smaller ball's. A sphere leaves a walled box
+    when it reaches beyond a wall by more than ``rel_tol`` times the cube
+    root of its volume.
+
+    Examples
+    --------
+    >>> verify_spheres([[0, 0, 0], [2, 0, 0]], [1, 1], [-1, -1, -1], [3, 1, 1]).ok
+    True
+    >>> verify_spheres([[0, 0, 0], [1.9, 0, 0]], [1, 1], [-1, -1, -1], [3, 1, 1]).ok
+    False
+    """
+    c = np.asarray(centres, dtype=np.float64).reshape(-1, 3)
+    r = np.asarray(radii, dtype=np.float64).reshape(-1)
+    lo = np.asarray(box_lo, dtype=np.float64).reshape(3)
+    hi = np.asarray(box_hi, dtype=np.float64).reshape(3)
+    if r.shape[0] != c.shape[0]:
+        raise ConfigError(f"{c.shape[0]} centres but {r.shape[0]} radii")
+    if not (np.isfinite(c).all() and np.isfinite(r).all() and np.all(r > 0)):
+        raise ConfigError("sphere centres and radii must be finite, radii positive")
+    n = c.shape[0]
+    volume = 4.0 / 3.0 * math.pi * r**3
+    rmax = float(r.max()) if n else 0.0
+    if periodic:
+        period = hi - lo
+        wrapped = np.mod(c - lo, period)
+        wrapped[wrapped >= period] = 0.0
+        tree = cKDTree(wrapped, boxsize=period)
+    else:
+        period = np.zeros(3)
+        wrapped = c
+        tree = cKDTree(c)
+    pairs = tree.query_pairs(2.0 * rmax) if n > 1 else set()
+    candidates = 0
+    overlapping: list[tuple[int, int]] = []
+    worst = 0.0
+    worst_pair: tuple[int, int] | None = None
+
+    def record(i: int, j: int, d: float) -> None:
+        nonlocal worst, worst_pair, candidates
+        candidates += 1
+        frac = lens_volume(float(r[i]), float(r[j]), d) / float(min(volume[i], volume[j]))
+        if frac > worst:
+            worst, worst_pair = frac, (min(i, j), max(i, j))
+        if frac > rel_tol:
+            overlapping.append((min(i, j), max(i, j)))
+
+    for i, j in sorted(pairs):
+        delta = wrapped[j] - wrapped[i]
+        if periodic:
+            delta = delta - period * np.round(delta / period)
+        d = float(np.linalg.norm(delta))
+        if d < r[i] + r[j]:
+            record(i, j, d)
+    if periodic:  # a sphere wider than the box overlaps its own images
+        for i in np.flatnonzero(2.0 * r > period.min()):
+            record(int(i), int(i), float(period.min()))
+    outside = 0
+    worst_out: tuple[int, float] | None = None
+    if not periodic and n:
+        size = np.cbrt(volume)
+        reach = np.maximum((lo - (c - r[:, None])).max(axis=1), ((c + r[:, None]) - hi).max(axis=1))
+        frac_out = reach / size
+        out = frac_out > rel_tol
+        outside = int(out.sum())
+        k = int(np.argmax(frac_out))
+        if frac_out[k] > 0:
+            worst_out = (k, float(frac_out[k]))
+    return Report3D(
+        ok=not overlapping and outside == 0,
+        n_checked=n,
+        n_candidate_pairs=candidates,
+        n_overlapping_pairs=len(overlapping),
+        overlapping_pairs=tuple(sorted(overlapping)),
+        worst_overlap_fraction=worst,
+        worst_pair=worst_pair,
+        n_outside=outside,
+        worst_outside=worst_out,
+        periodic=periodic,
+        rel_tol=rel_tol,
+    )

@@ -7,6 +7,8 @@ import tomllib
 
 import pytest
 
+import regopack
+
 pytest.importorskip("regopack.plugins.available_arc")
 
 from regopack.cli import main
@@ -44,7 +46,7 @@ def test_default_registry_has_the_builtins():
 
 def test_builtin_scenes_resolve():
     reg = default_registry(autoload=False)
-    for name in ("table1", "small"):
+    for name in ("table1", "small", "dem", "table1-3d"):
         resolve_scene(load_scene(name), reg)
 
 
@@ -63,6 +65,21 @@ def test_run_small_end_to_end(tmp_path, capsys):
     assert summary["tried"] == 300
     assert summary["placed"] == packing.n_placed > 0
     assert_valid_packing(packing)
+    assert main(["verify", str(out / "packing.npz")]) == 0
+
+
+def test_run_table1_3d_end_to_end_in_a_smaller_box(tmp_path, capsys):
+    out = tmp_path / "out"
+    sides = [f"domain.{k}=30" for k in ("width", "height", "depth")]
+    args = ["run", "table1-3d", *[a for s in sides for a in ("--set", s)], "--out", str(out)]
+    assert main(args) == 0
+    printed = capsys.readouterr().out
+    assert "φ domain" in printed and "OK" in printed
+    packing = regopack.load(out / "packing.npz")
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["dimension"] == 3 and summary["verify"]["ok"]
+    assert summary["placed"] == packing.n_placed > 30
+    assert summary["phi_domain"] == pytest.approx(packing.phi)
     assert main(["verify", str(out / "packing.npz")]) == 0
 
 

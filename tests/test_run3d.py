@@ -84,6 +84,9 @@ def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> N
     assert summary["placed"] == packing.n_placed > 0
     assert summary["phi_domain"] == pytest.approx(packing.phi)
     assert summary["verify"] == {"ok": True, "overlap_pairs": 0, "worst_overlap": 0.0, "outside": 0}
+    rows = summary.get("not_placed_by_class", [])
+    assert sum(r["not_placed"] for r in rows) == summary["not_placed"]
+    assert all(r["d_lo"] < r["d_hi"] and r["placed"] + r["not_placed"] == r["drawn"] for r in rows)
     back = load_packing(tmp_path / "run" / "packing.npz")
     assert isinstance(back, Packing3D)
     assert np.array_equal(back.vertices, packing.vertices)

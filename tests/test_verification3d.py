@@ -552,3 +552,22 @@ def test_ten_thousand_polyhedra_in_under_a_minute():
     assert report.ok
     assert report.n_checked == 10_976
     assert elapsed < 60
+
+
+def test_the_sphere_oracle_finds_overlaps_images_and_walls() -> None:
+    from regopack.verification3d import lens_volume, verify_spheres
+
+    # lens volume against the cap formula: two unit balls at distance 1 share 5 pi / 12
+    assert lens_volume(1.0, 1.0, 1.0) == pytest.approx(5 * np.pi / 12, rel=1e-12)
+    assert lens_volume(2.0, 0.5, 1.0) == pytest.approx(4 / 3 * np.pi * 0.125, rel=1e-12)
+    lo, hi = [0, 0, 0], [10, 10, 10]
+    ok = verify_spheres([[2, 2, 2], [4, 2, 2]], [1, 1], lo, hi)
+    assert ok.ok and ok.worst_overlap_fraction == 0.0
+    bad = verify_spheres([[2, 2, 2], [3.9, 2, 2]], [1, 1], lo, hi)
+    assert not bad.ok and bad.overlapping_pairs == ((0, 1),)
+    out = verify_spheres([[0.5, 2, 2]], [1], lo, hi)
+    assert not out.ok and out.n_outside == 1
+    # across a periodic face: 0.5 and 9.6 are 0.9 apart
+    img = verify_spheres([[0.5, 5, 5], [9.6, 5, 5]], [0.5, 0.5], lo, hi, periodic=True)
+    assert not img.ok and img.overlapping_pairs == ((0, 1),)
+    assert verify_spheres([[0.5, 5, 5], [9.5, 5, 5]], [0.5, 0.5], lo, hi, periodic=True).ok

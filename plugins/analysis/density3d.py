@@ -33,7 +33,8 @@ class Density3D(Analyzer):
     """Volume fraction of the solids over the box and the interior window, and void ratios.
 
     Solids that cross the window's faces are clipped exactly by their planes
-    (:func:`regopack.run3d.phi_in_box`).
+    (:func:`regopack.run3d.phi_in_box`). A periodic box has no walls: its
+    interior is the whole cell.
     """
 
     name = "density3d"
@@ -51,10 +52,13 @@ class Density3D(Analyzer):
         window = interior_window3d(p3, margin)
         volume = solid_volumes(p3)
         phi_domain = float(volume[p3.placed].sum()) / p3.domain.volume
-        try:
-            phi_interior = phi_in_box(p3, window, volume)
-        except NotImplementedError:  # a sphere crossing the window's faces
-            phi_interior = math.nan
+        if p3.domain.periodic:
+            phi_interior = phi_domain  # no walls: the whole cell is interior
+        else:
+            try:
+                phi_interior = phi_in_box(p3, window, volume)
+            except NotImplementedError:  # a rounded polyhedron crossing the window's faces
+                phi_interior = math.nan
         self._results = {
             "phi_domain": phi_domain,
             "phi_interior": None if math.isnan(phi_interior) else phi_interior,

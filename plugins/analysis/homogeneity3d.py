@@ -24,6 +24,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.domain3d import Box
+from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
 from regopack.plugins.analysis.common3d import (
@@ -78,6 +79,11 @@ class Homogeneity3D(Analyzer):
         from regopack.run3d import phi_in_box
 
         p3 = as_packing3d(packing, self)
+        if p3.domain.periodic:
+            raise ConfigError(
+                "homogeneity3d: periodic boxes are not analysed yet (their solids cross the "
+                "cell's faces; walled boxes only)"
+            )
         cfg = self.config
         margin = interior_margin3d(p3, cfg.margin)
         w = interior_window3d(p3, margin)

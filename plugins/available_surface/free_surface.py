@@ -539,14 +539,28 @@ def _face_pieces(
     poff: IntArray,
     tau: float,
     thin: float,
+    last: IntArray,
 ) -> tuple[int, int]:
     """Subtract every interferer from the face polygon (rows ``W_FX, W_FY``).
 
     Returns the number of pieces and their generation (see :func:`_subtract`);
-    the number is -1 if the piece buffers are too small.
+    the number is -1 if the piece buffers are too small. ``last[0]`` is the
+    interferer that last covered a whole face: neighbouring faces are often
+    inside the same one, so it is tried first (the result is the same, an
+    empty face, in whichever order the interferers come).
     """
     if n > pieces.shape[1]:
         return -1, 0
+    fr = G_FRAME
+    rf = geom[fr, F_RADIUS]
+    q = last[0]
+    if q >= 0:
+        cx = geom[fr, F_O] - shifts[q, 0]
+        cy = geom[fr, F_O + 1] - shifts[q, 1]
+        cz = geom[fr, F_O + 2] - shifts[q, 2]
+        if math.sqrt(cx * cx + cy * cy + cz * cz) <= rf + shifts[q, 3] + tau:
+            if _covered_part(q, n, facets, index, geom, work, tau, thin) == 0:
+                return 0, 0
     for i in range(n):
         pieces[0, i] = work[W_FX, i]
         pieces[1, i] = work[W_FY, i]
@@ -554,8 +568,6 @@ def _face_pieces(
     poff[0, 1] = n
     gen = 0
     ncur = 1
-    fr = G_FRAME
-    rf = geom[fr, F_RADIUS]
     for q in range(index.shape[1] - 1):
         cx = geom[fr, F_O] - shifts[q, 0]
         cy = geom[fr, F_O + 1] - shifts[q, 1]
@@ -566,6 +578,7 @@ def _face_pieces(
         if nl < 0:
             continue
         if nl == 0:  # the face lies inside E_q
+            last[0] = q
             return 0, gen
         ncur = _subtract(nl, geom, pieces, poff, gen, ncur, thin, work)
         if ncur < 0:
@@ -638,6 +651,7 @@ def free_surface(
     out_off = np.zeros(nf + 2, dtype=np.int64)
     out_area = np.empty(nf + 1)
     out_face = np.empty(nf + 1, dtype=np.int64)
+    last = np.full(1, -1, dtype=np.int64)
     npieces = 0
     f = 0
     while f < nf:
@@ -645,7 +659,9 @@ def free_surface(
         if n < 3 or is_thin(work, W_FX, W_FY, n, thin):
             f += 1
             continue
-        ncur, gen = _face_pieces(n, facets, shifts, index, geom, work, pieces, poff, tau, thin)
+        ncur, gen = _face_pieces(
+            n, facets, shifts, index, geom, work, pieces, poff, tau, thin, last
+        )
         if ncur < 0:  # the piece buffers are too small: grow them, do the face again
             pieces = np.empty((4, 2 * pieces.shape[1]))
             poff = np.empty((2, 2 * poff.shape[1] - 1), dtype=np.int64)

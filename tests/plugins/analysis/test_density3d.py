@@ -32,3 +32,14 @@ def test_the_volumes_of_all_solids_at_once_match_their_hulls(packing3d) -> None:
     for k in range(0, packing3d.n_particles, 17):
         hull = ConvexHull(packing3d.vertices[packing3d.offsets[k] : packing3d.offsets[k + 1]])
         assert volume[k] == pytest.approx(hull.volume, rel=1e-12)
+
+
+def test_a_periodic_box_is_interior_throughout() -> None:
+    import dataclasses
+
+    from regopack.domain3d import PeriodicBox
+
+    p = cube_lattice((2, 2, 2), (0.0, 0.0, 0.0))
+    periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
+    r = Density3D().compute(periodic, {}).results()
+    assert r["phi_interior"] == r["phi_domain"] == pytest.approx(8 / p.domain.volume)

@@ -34,3 +34,15 @@ def test_a_lattice_of_cubes_is_homogeneous_layer_by_layer() -> None:
     r = h.results()
     assert r["phi_layers_cv"] == pytest.approx(0.0, abs=1e-12)
     assert r["mean_diameter_layers"] == pytest.approx([2 * p.radius[0]] * 6)
+
+
+def test_periodic_boxes_are_refused_in_one_line() -> None:
+    import dataclasses
+
+    from regopack.domain3d import PeriodicBox
+    from regopack.errors import ConfigError
+
+    p = cube_lattice((2, 2, 2), (0.0, 0.0, 0.0))
+    periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
+    with pytest.raises(ConfigError, match=r"^homogeneity3d: periodic boxes are not analysed"):
+        Homogeneity3D().compute(periodic, {})
