@@ -33,7 +33,7 @@ import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from pydantic import ValidationError
@@ -43,10 +43,14 @@ from regopack.interfaces import Analyzer
 from regopack.manager import Registry
 from regopack.outdir import mark_folder, rebase, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
-from regopack.plugin_types import FigureSpec
+from regopack.plugin_types import AnalyzerSpec, FigureSpec
+
+if TYPE_CHECKING:
+    from regopack.packing3d import Packing3D
 
 __all__ = [
     "DEFAULT_ANALYSES",
+    "DEFAULT_ANALYSES_3D",
     "AnalysisFiles",
     "analysis_summary",
     "main_numbers",
@@ -59,7 +63,22 @@ ANALYSIS_KIND = "analysis"
 """Kind of the folder :func:`write_analysis` writes (in its marker file)."""
 
 DEFAULT_ANALYSES: tuple[str, ...] = ("density", "contacts", "coordination", "rdf", "network")
-"""Analyzers that ``regopack analyze`` runs when ``--only`` is not given."""
+"""Analyzers that ``regopack analyze`` runs on a 2D packing when ``--only`` is not given."""
+
+DEFAULT_ANALYSES_3D: tuple[str, ...] = (
+    "density3d",
+    "contacts3d",
+    "coordination3d",
+    "rdf3d",
+    "network3d",
+)
+"""Analyzers that ``regopack analyze`` runs on a 3D packing when ``--only`` is not given."""
+
+
+def default_analyses(packing: Packing | Packing3D) -> tuple[str, ...]:
+    """Return the analyzers run by default on ``packing`` (2D or 3D defaults)."""
+    return DEFAULT_ANALYSES_3D if getattr(packing, "dimension", 2) == 3 else DEFAULT_ANALYSES
+
 
 TableFormat = Literal["csv", "npz"]
 
@@ -78,6 +97,7 @@ _RESERVED = frozenset(
         "eta",
         "interior_margin",
         "analyses",
+        "dimension",
     }
 )
 """Top-level keys of ``analysis.json`` that are not analyzer names."""
@@ -121,10 +141,45 @@ def _build(
     return analyzer
 
 
+def dimensions_of(registry: Registry, name: str) -> tuple[int, ...]:
+    """Dimensions of the packings that the analyzer ``name`` analyses (2D by default)."""
+    spec = registry.get("analysis", name)
+    dims = spec.dimensions if isinstance(spec, AnalyzerSpec) else (2,)
+    return tuple(dims)
+
+
+def _fitting(registry: Registry, dimension: int) -> str:
+    names = [n for n in registry.names("analysis") if dimension in dimensions_of(registry, n)]
+    return ", ".join(names) or "(none)"
+
+
+def check_dimension(
+    registry: Registry, names: Iterable[str], dimension: int, source: str | None = None
+) -> None:
+    """Refuse, in one line, an analyzer that does not analyse packings of ``dimension``.
+
+    Unknown names are left to the planning, which lists the known ones.
+    ``source`` (a file and key, or an option) starts the message.
+    """
+    for name in names:
+        if ("analysis", name) not in registry:
+            continue
+        dims = dimensions_of(registry, name)
+        if dimension not in dims:
+            where = f"{source}: " if source else ""
+            fits = " or ".join(f"{d}D" for d in dims)
+            raise ConfigError(
+                f"{where}analyzer {name!r} analyses {fits} packings, not {dimension}D ones; "
+                f"analyzers of {dimension}D packings: {_fitting(registry, dimension)}"
+            )
+
+
 def _plan(
     registry: Registry,
     requests: Sequence[tuple[str, Mapping[str, Any]]],
     params: Mapping[str, Mapping[str, Any]],
+    dimension: int = 2,
+    source: str | None = None,
 ) -> dict[str, Analyzer]:
     """Build every analyzer to run, requirements before the analyzers needing them."""
     wanted: dict[str, dict[str, Any]] = {}
@@ -133,6 +188,7 @@ def _plan(
     for name in params:
         if ("analysis", name) not in registry:
             raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+    check_dimension(registry, [*wanted, *params], dimension, source)
 
     planned: dict[str, Analyzer] = {}
 
@@ -143,6 +199,7 @@ def _plan(
             cycle = " -> ".join((*chain, name))
             raise PluginError(f"analyzers require each other in a cycle: {cycle}")
         merged = {**wanted.get(name, {}), **params.get(name, {})}
+        check_dimension(registry, [name], dimension, source)
         analyzer = _build(registry, name, merged, chain[-1] if chain else None)
         for requirement in analyzer.requires:
             visit(requirement, (*chain, name))
@@ -160,11 +217,12 @@ def _plan(
 
 
 def run_analyses(
-    packing: Packing,
+    packing: Packing | Packing3D,
     registry: Registry,
     requests: Sequence[tuple[str, Mapping[str, Any]]],
     *,
     params: Mapping[str, Mapping[str, Any]] | None = None,
+    source: str | None = None,
 ) -> dict[str, Analyzer]:
     """Compute the requested analyzers and those they require, requirements first.
 
@@ -184,6 +242,9 @@ def run_analyses(
         analyzers that run only as a requirement (``{"contacts": {"tol": 0.1}}``
         with ``requests=[("coordination", {})]``). Naming an analyzer that is
         not run is an error.
+    source
+        Where the requests come from (a scene file and key, an option); it
+        starts the message that refuses an analyzer of another dimension.
 
     Returns
     -------
@@ -194,7 +255,8 @@ def run_analyses(
     Raises
     ------
     ConfigError
-        One line: an unknown analyzer (listing the known ones), a bad parameter
+        One line: an unknown analyzer (listing the known ones), an analyzer
+        of another dimension than the packing's (listing those that fit), a bad parameter
         (naming the field, e.g. ``contacts.tol = -1: ...``), or parameters
         for an analyzer that is not run. Every analyzer is validated before
         any is computed.
@@ -215,11 +277,12 @@ def run_analyses(
     (['density'], 0.25)
     """
     packing.validate()  # the arrays may have changed in place since the packing was built
-    planned = _plan(registry, requests, params or {})
+    dimension = int(getattr(packing, "dimension", 2))
+    planned = _plan(registry, requests, params or {}, dimension, source)
     done: dict[str, Analyzer] = {}
     for name, analyzer in planned.items():
         context = {req: done[req] for req in analyzer.requires}
-        result = analyzer.compute(packing, context)
+        result = analyzer.compute(packing, context)  # type: ignore[arg-type]
         if not isinstance(result, Analyzer):
             raise PluginError(
                 f"analyzer {name!r}: compute() returned {type(result).__name__}, not the analyzer"
@@ -280,7 +343,7 @@ def _first(results: Mapping[str, Mapping[str, Any]], key: str) -> Any:
 
 
 def analysis_summary(
-    packing: Packing,
+    packing: Packing | Packing3D,
     analyzers: Mapping[str, Analyzer],
     packing_path: str | Path | None = None,
 ) -> dict[str, Any]:
@@ -315,6 +378,8 @@ def analysis_summary(
         "interior_margin": _first(results, "interior_margin"),
         "analyses": list(results),
     }
+    if getattr(packing, "dimension", 2) == 3:
+        summary["dimension"] = 3
     summary.update(results)
     return summary
 
@@ -377,7 +442,7 @@ def _write_tables(
 
 
 def _draw_figures(
-    packing: Packing,
+    packing: Packing | Packing3D,
     analyzers: Mapping[str, Analyzer],
     out_dir: Path,
     registry: Registry | None,
@@ -404,7 +469,7 @@ class FigureWarning(UserWarning):
 
 
 def _drawn_files(
-    spec: FigureSpec, packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path
+    spec: FigureSpec, packing: Packing | Packing3D, analyzers: Mapping[str, Analyzer], out_dir: Path
 ) -> list[Path]:
     """Call ``spec.draw`` and return the files it wrote inside ``out_dir``.
 
@@ -415,7 +480,7 @@ def _drawn_files(
     """
     what = f"the figures of {spec.analyzer!r} ({getattr(spec.draw, '__module__', '?')})"
     try:
-        returned = spec.draw(packing, analyzers, out_dir)
+        returned = spec.draw(packing, analyzers, out_dir)  # type: ignore[arg-type]
     except Exception as exc:  # a plugin's own failure must not lose the analysis
         warnings.warn(f"{what} were not drawn: {exc}", FigureWarning, stacklevel=2)
         return []
@@ -445,7 +510,7 @@ def _drawn_files(
 
 def write_analysis(
     out_dir: str | Path,
-    packing: Packing,
+    packing: Packing | Packing3D,
     analyzers: Mapping[str, Analyzer],
     *,
     figures: bool = True,
@@ -510,7 +575,7 @@ def write_analysis(
 
 def write_analysis_files(
     out_dir: str | Path,
-    packing: Packing,
+    packing: Packing | Packing3D,
     analyzers: Mapping[str, Analyzer],
     *,
     figures: bool = True,
@@ -571,12 +636,19 @@ def _fmt(value: Any, spec: str = ".4g") -> str:
     return str(value)
 
 
+def _either(summary: Mapping[str, Any], name: str) -> Any:
+    """Results of the analyzer ``name``, or of its 3D counterpart ``name + "3d"``."""
+    value = summary.get(name)
+    return value if value is not None else summary.get(f"{name}3d")
+
+
 def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     """``(label, value)`` rows of the headline numbers of ``analysis.json``.
 
     Rows appear for the built-in analyzers that were run: packing density,
     contacts, coordination numbers (overall, interior, per mineral), the first
-    peak of g(r) and the fabric anisotropy.
+    peak of g(r) and the fabric anisotropy (of 2D packings, or of 3D ones
+    from the analyzers whose names end in ``3d``).
     """
     rows: list[tuple[str, str]] = []
     margin = summary.get("interior_margin")
@@ -586,23 +658,25 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
         rows.append(("contact tolerance tol", f"{_fmt(tol, 'g')} µm"))
     if summary.get("eta") is not None:
         rows.append(("η", _fmt(summary["eta"], "g")))
-    density = summary.get("density")
+    density = _either(summary, "density")
     if isinstance(density, dict):
         rows.append(("φ domain", _fmt(density.get("phi_domain"))))
         rows.append((f"φ {interior}", _fmt(density.get("phi_interior"))))
-    contacts = summary.get("contacts")
+    contacts = _either(summary, "contacts")
     if isinstance(contacts, dict):
         rows.append(("contacts", _fmt(contacts.get("n_contacts"))))
         rows.append(("median contact area A_c", f"{_fmt(contacts.get('median_area'))} µm²"))
+        if contacts.get("median_volume") is not None:
+            rows.append(("median contact volume V_c", f"{_fmt(contacts['median_volume'])} µm³"))
         rows.append(("median contact width b_c", f"{_fmt(contacts.get('median_width'))} µm"))
-    coordination = summary.get("coordination")
+    coordination = _either(summary, "coordination")
     if isinstance(coordination, dict):
         rows.append(("Z domain", _fmt(coordination.get("z_domain"))))
         rows.append((f"Z {interior}", _fmt(coordination.get("z_interior"))))
         per = coordination.get("z_per_mineral") or {}
         for mineral, z in per.items():
             rows.append((f"Z {mineral} (interior)", _fmt(z)))
-    rdf = summary.get("rdf")
+    rdf = _either(summary, "rdf")
     if isinstance(rdf, dict):
         peak, err = rdf.get("first_peak_r"), rdf.get("first_peak_r_err")
         if isinstance(peak, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
@@ -611,7 +685,7 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
         else:
             rows.append(("first g(r) peak", f"{_fmt(peak)} µm"))
         rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
-    network = summary.get("network")
+    network = _either(summary, "network")
     if isinstance(network, dict):
         rows.append(("fabric anisotropy", _fmt(network.get("anisotropy"))))
     return rows

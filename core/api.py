@@ -292,7 +292,7 @@ def pack_and_summarise(
 
         check_scene3d(resolved)
         with _progress(progress, f"packing {resolved.name}") as callback:
-            return run_scene3d(resolved, folder, progress=callback, verify=verify)
+            return run_scene3d(resolved, folder, progress=callback, verify=verify, figures=figures)
     check_scene(resolved)
     with _progress(progress, f"packing {resolved.name}") as callback:
         return run_scene(
@@ -365,6 +365,17 @@ def refuse_inside(path: Path, folder: Path, what: str) -> None:
         )
 
 
+def _packing_any(packing: Packing | Packing3D | str | os.PathLike[str]) -> Packing | Packing3D:
+    """Return the 2D or 3D packing given, or the one a file holds."""
+    if isinstance(packing, Packing3D):
+        return packing
+    if isinstance(packing, str | os.PathLike):
+        from regopack.packing3d import load_packing
+
+        return load_packing(Path(packing))
+    return _packing(packing)
+
+
 def _packing(packing: Packing | str | os.PathLike[str]) -> Packing:
     if isinstance(packing, Packing):
         return packing
@@ -417,7 +428,7 @@ def analysis_params(
 
 
 def analyze(
-    packing: Packing | str | os.PathLike[str],
+    packing: Packing | Packing3D | str | os.PathLike[str],
     only: str | Sequence[str] | None = None,
     *,
     out: str | os.PathLike[str] | None = None,
@@ -432,11 +443,12 @@ def analyze(
     Parameters
     ----------
     packing
-        A packing or the path of a packing file.
+        A 2D or 3D packing or the path of a packing file.
     only
         Analyzer names (a name, a comma-separated string or a sequence); by
-        default those ``regopack analyze`` runs. Analyzers they require run
-        too.
+        default those ``regopack analyze`` runs on a packing of that
+        dimension (see :func:`regopack.analysis.default_analyses`). Analyzers
+        they require run too; an analyzer of another dimension is refused.
     out
         Folder for ``analysis.json``, the tables, figures and report,
         replaced as a whole. ``None`` writes nothing.
@@ -464,20 +476,20 @@ def analyze(
     >>> list(res), round(res["density"]["phi_domain"], 6) == round(p.phi, 6)
     (['density'], True)
     """
-    from regopack.analysis import ANALYSIS_KIND, DEFAULT_ANALYSES, run_analyses, write_analysis
+    from regopack.analysis import ANALYSIS_KIND, default_analyses, run_analyses, write_analysis
     from regopack.outdir import check_replaceable
 
     _flag(figures, "figures")
     if tables not in ("csv", "npz"):
         raise ConfigError(f'tables = {tables!r}: expected "csv" or "npz"')
-    loaded = _packing(packing)
+    loaded = _packing_any(packing)
     folder = None if out is None else _out_path(out, "out")
     if folder is not None:
-        if not isinstance(packing, Packing):
+        if not isinstance(packing, Packing | Packing3D):
             refuse_inside(Path(packing), folder, "packing file")
         check_replaceable(folder, ANALYSIS_KIND)
     if only is None:
-        names = list(DEFAULT_ANALYSES)
+        names = list(default_analyses(loaded))
     else:
         if not isinstance(only, str | Sequence):
             raise ConfigError(
@@ -503,10 +515,11 @@ def analyze(
     merged = analysis_params(params or {})
     for name, fields in analysis_params(kwargs).items():
         merged.setdefault(name, {}).update(fields)
-    analyzers = run_analyses(loaded, reg, [(n, {}) for n in names], params=merged)
+    source = None if isinstance(packing, Packing | Packing3D) else str(packing)
+    analyzers = run_analyses(loaded, reg, [(n, {}) for n in names], params=merged, source=source)
     results = AnalysisResults(analyzers)
     if folder is not None:
-        packing_path = None if isinstance(packing, Packing) else Path(packing)
+        packing_path = None if isinstance(packing, Packing | Packing3D) else Path(packing)
         results.files = write_analysis(
             folder,
             loaded,

@@ -160,13 +160,15 @@ def build_parser() -> argparse.ArgumentParser:
         default=[],
         metavar="NAME[,NAME...]",
         help="run only these analyzers (and what they need); default: "
-        "density, contacts, coordination, rdf, network",
+        "density, contacts, coordination, rdf, network (3D packings: density3d, contacts3d, "
+        "coordination3d, rdf3d, network3d)",
     )
     analyze.add_argument(
         "--tol",
         type=float,
         metavar="X",
-        help="contact tolerance in micrometres (sets contacts.tol; default 0.05)",
+        help="contact tolerance in micrometres (sets contacts.tol, or contacts3d.tol for a "
+        "3D packing; default 0.05)",
     )
     analyze.add_argument(
         "--set",
@@ -389,8 +391,10 @@ def _analyzer_names(only: Sequence[str]) -> list[str]:
     return names
 
 
-def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, dict[str, Any]]:
-    """Parameters by analyzer from ``--set NAME.FIELD=VALUE`` and ``--tol``."""
+def _analyzer_params(
+    overrides: Sequence[str], tol: float | None, contacts: str = "contacts"
+) -> dict[str, dict[str, Any]]:
+    """Parameters by analyzer from ``--set NAME.FIELD=VALUE`` and ``--tol`` (of ``contacts``)."""
     params: dict[str, dict[str, Any]] = {}
     for text in overrides:
         key, sep, raw = text.partition("=")
@@ -403,7 +407,7 @@ def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, d
             value = raw.strip()
         params.setdefault(name.strip(), {})[field.strip()] = value
     if tol is not None:
-        params.setdefault("contacts", {})["tol"] = tol
+        params.setdefault(contacts, {})["tol"] = tol
     return params
 
 
@@ -412,7 +416,13 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
     from regopack.api import analyze
 
     names = _analyzer_names(args.only) or None
-    params = _analyzer_params(args.overrides, args.tol)
+    contacts = "contacts"
+    if args.tol is not None:
+        from regopack.packing3d import load_packing
+
+        if getattr(load_packing(args.packing), "dimension", 2) == 3:
+            contacts = "contacts3d"
+    params = _analyzer_params(args.overrides, args.tol, contacts)
     out_dir = args.out if args.out is not None else args.packing.parent / "analysis"
     with err.status(f"analysing {args.packing}"):
         results = analyze(

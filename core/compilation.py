@@ -136,8 +136,9 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     """Compile (or load from the cache) every built-in kernel by using it once.
 
     Packs the tiny variants of :data:`VARIANTS` whose plugins are registered,
-    runs every registered analyzer on each and writes each with every
-    registered exporter into a temporary folder, which is then removed.
+    runs every registered analyzer of its dimension on each and writes each
+    2D one with every registered exporter into a temporary folder, which is
+    then removed.
 
     Parameters
     ----------
@@ -149,16 +150,21 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     CompileTime
         The compilation time of the whole call (zero when everything was cached).
     """
+    from regopack.analysis import dimensions_of
     from regopack.api import analyze, export, pack, scene
     from regopack.errors import RegopackError
     from regopack.manager import default_registry
     from regopack.packing import Packing
 
     registry = default_registry()
-    analyzers = sorted(registry.names("analysis"))
+    by_dimension = {
+        d: [n for n in sorted(registry.names("analysis")) if d in dimensions_of(registry, n)]
+        for d in (2, 3)
+    }
+    analyzers = by_dimension[2]
     from regopack.exporting import exporter_dimensions
 
-    # the 3D exporters compile nothing (plain numpy); 3D variants are only packed
+    # the 3D exporters compile nothing (plain numpy); 3D variants are only packed and analysed
     exporters = [
         n for n in sorted(registry.names("export")) if 2 in exporter_dimensions(registry, n)
     ]
@@ -170,9 +176,10 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
             except RegopackError:
                 continue  # a plugin of this variant is not installed
             packing = pack(resolved)
-            if not isinstance(packing, Packing):  # 3D packings have no analyses or exports yet
+            if not isinstance(packing, Packing):  # 3D packings have no exports yet
+                analyze(packing, by_dimension[3], registry=registry)
                 if report is not None:
-                    report(f"{label}: packed", time.perf_counter() - start)
+                    report(f"{label}: packed, analysed", time.perf_counter() - start)
                 continue
             # the analyses and exports of every variant: some kernels have a
             # signature per domain kind (periodic images) or per particle kind

@@ -83,8 +83,11 @@ class DensityControllerSpec(PluginSpec[DensityController]):
     """Spec of a density controller plugin."""
 
 
+@dataclass(frozen=True)
 class AnalyzerSpec(PluginSpec[Analyzer]):
-    """Spec of an analyzer plugin."""
+    """Spec of an analyzer plugin; ``dimensions`` lists the dimensions of packings it analyses."""
+
+    dimensions: tuple[int, ...] = (2,)
 
 
 @dataclass(frozen=True)

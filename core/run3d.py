@@ -37,6 +37,7 @@ from regopack.scene_model import ResolvedScene
 from regopack.solids import SolidBatch, concat_solids
 
 if TYPE_CHECKING:
+    from regopack.analysis import AnalysisFiles
     from regopack.verification3d import Report3D
 
 IntArray = NDArray[np.int64]
@@ -58,7 +59,7 @@ class RunOutcome3D:
     summary: dict[str, Any]
     packing_path: Path | None = None
     summary_path: Path | None = None
-    analysis: None = None
+    analysis: AnalysisFiles | None = None
     exports: tuple[Path, ...] = ()
 
 
@@ -201,7 +202,7 @@ def _clip(points: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
     return np.vstack([inside, cross.reshape(-1, 3)])
 
 
-def phi_in_box(packing: Packing3D, window: Box) -> float:
+def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None) -> float:
     """Volume fraction of ``window`` covered by the placed solids, clipped exactly.
 
     A sharp polyhedron that crosses the window's faces is clipped by their
@@ -209,7 +210,8 @@ def phi_in_box(packing: Packing3D, window: Box) -> float:
     segments between its vertices, which holds its edges); a sphere is
     clipped by :func:`regopack.sphere_volume.sphere_in_box`; a rounded
     polyhedron that crosses a face raises ``NotImplementedError``.
-    NaN for an empty window.
+    NaN for an empty window. ``volume`` gives the solids' volumes when they
+    are known already (default: :attr:`regopack.solids.SolidBatch.volume`).
     """
     from scipy.spatial import ConvexHull
 
@@ -218,20 +220,25 @@ def phi_in_box(packing: Packing3D, window: Box) -> float:
     if not window.volume > 0:
         return math.nan
     solids = packing.solids
-    volume = solids.volume
+    if volume is None:
+        volume = solids.volume
     lo = np.array([window.xmin, window.ymin, window.zmin])
     hi = np.array([window.xmax, window.ymax, window.zmax])
     rho = solids.rounding_radius
+    # bounding boxes of all solids at once (rounding is monotone: min(v + c) = min(v) + c)
+    starts = packing.offsets[:-1]
+    box_lo = np.minimum.reduceat(packing.vertices, starts) + packing.centre - rho[:, None]
+    box_hi = np.maximum.reduceat(packing.vertices, starts) + packing.centre + rho[:, None]
+    whole = np.all(box_lo >= lo, axis=1) & np.all(box_hi <= hi, axis=1)
+    apart = np.any(box_hi <= lo, axis=1) | np.any(box_lo >= hi, axis=1)
     total = 0.0
-    for j in np.flatnonzero(packing.placed):
-        pts = packing.world_vertices(int(j))
-        vlo = pts.min(axis=0) - rho[j]
-        vhi = pts.max(axis=0) + rho[j]
-        if np.all(vlo >= lo) and np.all(vhi <= hi):
+    for j in np.flatnonzero(packing.placed).tolist():
+        if whole[j]:
             total += float(volume[j])
             continue
-        if np.any(vhi <= lo) or np.any(vlo >= hi):
+        if apart[j]:
             continue
+        pts = packing.world_vertices(int(j))
         if rho[j] > 0:
             if pts.shape[0] != 1:
                 raise NotImplementedError("clipping a rounded polyhedron to a window")
@@ -329,26 +336,24 @@ def run_scene3d(
     progress: ProgressCallback | None = None,
     *,
     verify: bool | None = None,
+    figures: bool = True,
 ) -> RunOutcome3D:
-    """Draw, insert, measure and write a 3D scene (see :func:`regopack.run.run_scene`).
+    """Draw, insert, measure, analyse and write a 3D scene (see :func:`regopack.run.run_scene`).
 
     ``verify`` (default: True) checks the packing with the independent
-    oracle :func:`regopack.verification3d.verify_polyhedra`.
+    oracle :func:`regopack.verification3d.verify_polyhedra`. The analyzers
+    of ``outputs.analyses`` (3D ones, checked before anything is drawn) run
+    after the packing (see :mod:`regopack.analysis3d`); ``figures`` draws
+    their figures into the analysis folder.
     """
+    from regopack.analysis3d import check_scene_analyses
     from regopack.run import RUN_FOLDER
 
-    if resolved.scene.outputs.analyses:
-        raise ConfigError(
-            _located(
-                resolved,
-                "outputs",
-                "3D scenes have no analyses yet; leave outputs.analyses empty",
-            )
-        )
+    check_scene_analyses(resolved)
     if out_dir is not None:
         check_replaceable(out_dir, RUN_FOLDER)
     with compile_timer() as compiling:
-        return _run3d(resolved, out_dir, progress, verify, compiling)
+        return _run3d(resolved, out_dir, progress, verify, compiling, figures)
 
 
 def _run3d(
@@ -357,6 +362,7 @@ def _run3d(
     progress: ProgressCallback | None,
     verify: bool | None,
     compiling: CompileTime,
+    figures: bool = True,
 ) -> RunOutcome3D:
     from regopack.run import RUN_FOLDER, _build
 
@@ -405,6 +411,9 @@ def _run3d(
         summary.setdefault(key, value)
     if verify is None or verify:
         summary["verify"] = verify_summary3d(packing)
+    from regopack.analysis3d import run_scene_analyses, write_scene_analyses
+
+    analyzers = run_scene_analyses(resolved, packing, summary)
     summary["compile_time_s"] = compiling.seconds
     if out_dir is None:
         return RunOutcome3D(packing, summary)
@@ -416,10 +425,11 @@ def _run3d(
             write_json_atomic(tmp / outputs.summary, summary)
         except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
             raise ConfigError(f"cannot write the run's output: {err}") from err
+        analysis = write_scene_analyses(resolved, packing, analyzers, tmp, out, figures)
         exports = run_exports(
             packing, resolved.exports, tmp / outputs.packing, out / outputs.packing
         )
     exports = tuple(rebase(p, tmp, out) for p in exports)
     return RunOutcome3D(
-        packing, summary, out / outputs.packing, out / outputs.summary, None, exports
+        packing, summary, out / outputs.packing, out / outputs.summary, analysis, exports
     )

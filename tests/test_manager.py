@@ -261,6 +261,10 @@ def test_the_builtin_figure_specs_follow_the_analyzers():
         "homogeneity",
         "psd",
         "local_fraction",
+        "contacts3d",
+        "coordination3d",
+        "rdf3d",
+        "psd3d",
     ]
     assert {f.analyzer for f in reg.figures()} <= set(reg.names("analysis"))
     assert reg.figures("coordination")[0].captions.keys() == {"z-vs-tol", "z-per-mineral"}

@@ -111,10 +111,13 @@ def test_count_auto_uses_the_mean_volume(registry) -> None:  # type: ignore[no-u
     assert packing.n_particles == round(60.0 * 40.0 * 50.0 / mean)
 
 
-def test_3d_outputs_that_do_not_exist_yet_are_refused(registry) -> None:  # type: ignore[no-untyped-def]
+def test_a_2d_analyzer_in_a_3d_scene_is_refused_before_packing(registry) -> None:  # type: ignore[no-untyped-def]
     scene = regopack.scene({**SCENE, "outputs": {"analyses": ["density"]}}, registry=registry)
-    with pytest.raises(ConfigError, match="3D scenes have no analyses yet"):
+    with pytest.raises(ConfigError) as err:
         regopack.pack(scene)
+    text = str(err.value)
+    assert text.startswith("scene dictionary: outputs.analyses: analyzer 'density' analyses 2D")
+    assert "density3d" in text and "contacts3d" in text and "\n" not in text
 
 
 def _cube_packing(centres: list[list[float]], half: float) -> Packing3D:

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Self
+from typing import Any, Protocol, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,11 +13,34 @@ from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import eta_of
-from regopack.plugins.analysis.contacts import Contacts
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
+
+
+class _Tolerances(Protocol):
+    tol: float
+    tol_max: float
+
+
+class ContactCounts(Protocol):
+    """What the coordination analyzer reads of a contact analyzer (2D or 3D)."""
+
+    config: _Tolerances
+    margin: float
+    interior: BoolArray
+
+    @property
+    def i(self) -> IntArray:
+        """First particle of each contact at ``tol``."""
+
+    @property
+    def j(self) -> IntArray:
+        """Second particle of each contact at ``tol``."""
+
+    def count_per_particle(self, tol: float | None = None) -> IntArray:
+        """Contacts of every particle at ``tol``."""
 
 
 def _default_sweep() -> list[float]:
@@ -144,8 +167,7 @@ class Coordination(Analyzer):
 
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Count contacts per particle at the contact tolerance and over the sweep."""
-        contacts = context["contacts"]
-        assert isinstance(contacts, Contacts)
+        contacts: ContactCounts = context[self.requires[0]]  # type: ignore[assignment]
         placed = packing.placed
         interior = contacts.interior
         z = contacts.count_per_particle()
@@ -168,9 +190,10 @@ class Coordination(Analyzer):
         sweep = set(self.config.tols)
         above = sorted(t for t in sweep if t > tol_max)
         if above and "tols" in self.config.model_fields_set:
+            source = self.requires[0]
             raise ConfigError(
-                f"coordination.tols: {above[0]:g} exceeds contacts.tol_max = {tol_max:g}; "
-                "raise contacts.tol_max or drop the larger tolerances"
+                f"{self.name}.tols: {above[0]:g} exceeds {source}.tol_max = {tol_max:g}; "
+                f"raise {source}.tol_max or drop the larger tolerances"
             )
         # the default sweep stops at the contacts analyzer's tol_max
         tols = sorted({t for t in sweep if t <= tol_max} | {contacts.config.tol})

@@ -16,7 +16,7 @@ from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugin_types import FigureMaker, FigureSpec
 
-__all__ = ["CAPTIONS", "STEMS", "figure_specs"]
+__all__ = ["CAPTIONS", "CAPTIONS3D", "STEMS", "STEMS3D", "figure_specs"]
 
 CAPTIONS: dict[str, str] = {
     "packing": "Packing coloured by mineral, with a zoomed view (cf. paper Fig. 10)",
@@ -31,6 +31,15 @@ CAPTIONS: dict[str, str] = {
 }
 """Caption of each figure, by file stem."""
 
+CAPTIONS3D: dict[str, str] = {
+    "contact-histograms-3d": "Distributions of A_c, V_c, b_c and the cap height δ (3D)",
+    "z-vs-tol-3d": "Coordination number against the contact tolerance (3D)",
+    "z-per-mineral-3d": "Coordination number per mineral (3D)",
+    "rdf-3d": "Radial distribution function, all centres and each mineral with itself (3D)",
+    "psd-3d": "Size distribution of the placed solids against the requested one, by volume (3D)",
+}
+"""Caption of each figure of the 3D analyzers, by file stem."""
+
 STEMS: dict[str, tuple[str, ...]] = {
     "density": ("packing",),
     "network": ("contact-network",),
@@ -43,6 +52,14 @@ STEMS: dict[str, tuple[str, ...]] = {
 }
 """File stems of the figures of each analyzer, in drawing order."""
 
+STEMS3D: dict[str, tuple[str, ...]] = {
+    "contacts3d": ("contact-histograms-3d",),
+    "coordination3d": ("z-vs-tol-3d", "z-per-mineral-3d"),
+    "rdf3d": ("rdf-3d",),
+    "psd3d": ("psd-3d",),
+}
+"""File stems of the figures of each 3D analyzer, in drawing order."""
+
 
 def _maker(analyzer: str) -> FigureMaker:
     def draw(packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path) -> Sequence[Path]:
@@ -53,8 +70,17 @@ def _maker(analyzer: str) -> FigureMaker:
     return draw
 
 
+def _maker3d(analyzer: str) -> FigureMaker:
+    def draw(packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path) -> Sequence[Path]:
+        from regopack.plugins.analysis.figures3d import figures3d_for
+
+        return figures3d_for(packing, analyzers, out_dir, of=analyzer)
+
+    return draw
+
+
 def figure_specs() -> list[FigureSpec]:
-    """One figure spec per analyzer of :data:`STEMS`, in drawing order.
+    """One figure spec per analyzer of :data:`STEMS`, then of :data:`STEMS3D`, in drawing order.
 
     Examples
     --------
@@ -64,4 +90,7 @@ def figure_specs() -> list[FigureSpec]:
     return [
         FigureSpec(name, _maker(name), {stem: CAPTIONS[stem] for stem in stems})
         for name, stems in STEMS.items()
+    ] + [
+        FigureSpec(name, _maker3d(name), {stem: CAPTIONS3D[stem] for stem in stems})
+        for name, stems in STEMS3D.items()
     ]

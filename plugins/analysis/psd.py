@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any, Self
+from typing import Any, ClassVar, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -122,12 +122,13 @@ def _cdf_of(dist: Any) -> Cdf | None:
 
 
 def analytic_shares(
-    cdf: Cdf, edges: FloatArray, d_lo: float, d_hi: float
+    cdf: Cdf, edges: FloatArray, d_lo: float, d_hi: float, power: int = 2
 ) -> tuple[FloatArray, FloatArray]:
     """Return the number and the mass (area) share of each class under ``cdf``.
 
     The first class also holds the probability below it and the last class
-    the probability above it. Mass shares integrate ``d²`` over the CDF on
+    the probability above it. Mass shares integrate ``d**power`` (``d²``, the
+    area in 2D; ``d³``, the volume in 3D) over the CDF on
     :data:`MASS_GRID` log-spaced diameters from ``d_lo`` to ``d_hi`` (the
     distribution's range) plus the class bounds.
     """
@@ -138,7 +139,7 @@ def analytic_shares(
     grid = grid[(grid >= d_lo) & (grid <= d_hi)]
     fg = cdf(grid)
     mid = 0.5 * (grid[:-1] + grid[1:])
-    cell_mass = mid**2 * np.maximum(np.diff(fg), 0.0)
+    cell_mass = mid**power * np.maximum(np.diff(fg), 0.0)
     k = class_of(mid, edges)
     mass = np.bincount(k, weights=cell_mass, minlength=len(edges) - 1)
     total = float(mass.sum())
@@ -174,6 +175,8 @@ class Psd(Analyzer):
     """
 
     name = "psd"
+    mass_power: ClassVar[int] = 2
+    """Power of the diameter that a particle's mass is proportional to: 2 (area) in 2D."""
 
     def __init__(self, config: PsdConfig | None = None) -> None:
         self.config = config or PsdConfig()
@@ -187,7 +190,7 @@ class Psd(Analyzer):
 
         d = 2.0 * packing.radius
         placed = packing.placed
-        mass = np.pi * packing.radius**2
+        mass = self.masses(packing.radius)
         self.diameter, self.mass, self.placed = d, mass, placed
         n, n_placed = len(d), int(placed.sum())
         notes: list[str] = []
@@ -303,7 +306,7 @@ class Psd(Analyzer):
         d, placed = self.diameter, self.placed
         try:
             lo, hi = 2.0 * float(dist.r_min), 2.0 * float(dist.r_max)
-            number, mass = analytic_shares(cdf, edges.copy(), lo, hi)
+            number, mass = analytic_shares(cdf, edges.copy(), lo, hi, self.mass_power)
             ks_d = stats.kstest(d, cdf)
             ks_p = stats.kstest(d[placed], cdf) if placed.any() else None
         except (ValueError, TypeError, ArithmeticError) as err:
@@ -321,6 +324,12 @@ class Psd(Analyzer):
         worst = _worst(rel, drawn >= self.config.min_class_count, edges)
         res["worst_analytic_number_rel_error"], res["worst_analytic_number_class"] = worst
         return number, mass, res
+
+    @staticmethod
+    def masses(radius: FloatArray) -> FloatArray:
+        """Mass of particles of equivalent radius ``radius``: their area ``pi r^2``."""
+        out: FloatArray = np.pi * radius**2
+        return out
 
     def results(self) -> dict[str, Any]:
         """Scalars: counts, medians, KS distances, worst class errors, the analytic comparison."""

@@ -40,7 +40,7 @@ def _passing(ax: Axes, psd: Psd) -> None:
     if psd.cdf is not None:
         grid = np.geomspace(float(psd.classes["d_lo"][0]), float(psd.classes["d_hi"][-1]), 400)
         f = psd.cdf(grid)
-        cell = (0.5 * (grid[:-1] + grid[1:])) ** 2 * np.maximum(np.diff(f), 0.0)
+        cell = (0.5 * (grid[:-1] + grid[1:])) ** psd.mass_power * np.maximum(np.diff(f), 0.0)
         by_mass = np.r_[0.0, np.cumsum(cell)]
         for y, style in ((f, "-"), (by_mass / by_mass[-1] if by_mass[-1] > 0 else by_mass, "--")):
             ax.plot(grid, 100.0 * y, color=ANALYTIC, ls=style, lw=0.8, alpha=0.9)
@@ -71,7 +71,8 @@ def _shares(ax: Axes, psd: Psd, basis: str) -> None:
         )
     ax.set_ylim(0.0, None)
     ax.set_ylabel(f"{basis} share per class (%)")
-    ax.set_title(f"√2 classes by {basis}" + (" (area)" if basis == "mass" else ""))
+    measure = " (area)" if psd.mass_power == 2 else " (volume)"
+    ax.set_title(f"√2 classes by {basis}" + (measure if basis == "mass" else ""))
 
 
 def draw_psd(psd: Psd) -> Figure:

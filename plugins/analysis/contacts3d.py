@@ -1,0 +1,314 @@
+"""Contacts between convex polyhedra at a tolerance, and the equivalent spherical cap.
+
+Each particle is grown by ``tol / 2`` along every face normal (its support
+values plus ``tol / 2``); two particles are in contact at ``tol`` when their
+grown solids share volume. Every pair gets, once, its *threshold*: twice the
+smallest growth at which the grown solids meet (a linear program, see
+:mod:`regopack.plugins.analysis.contact3d_kernel`). A pair is in contact at
+any ``tol`` above its threshold, so ``Z(tol)`` needs no new search.
+
+The threshold ``tau`` relates to the Euclidean gap ``g`` between the two
+solids (:func:`regopack.verification3d.separating_gap`) by
+``tau <= g <= tau * (R_i / h_i + R_j / h_j) / 2`` (``R`` the circumradius
+and ``h`` the smallest support value about the centre), with ``tau = g``
+when the closest features are a face and a point that projects into it
+(face-face, edge-face and vertex-face contacts): a growth along the face
+normals covers at least the ball of the same radius, and at most the solid
+scaled about its centre by ``1 + s / h``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from regopack.errors import ConfigError
+from regopack.interfaces import Analyzer
+from regopack.packing3d import Packing3D
+from regopack.plugins.analysis.common import eta_of
+from regopack.plugins.analysis.common3d import (
+    as_packing3d,
+    equivalent_cap,
+    interior_margin3d,
+    interior_mask3d,
+)
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+class Contacts3DConfig(BaseModel):
+    """Parameters of the 3D contact analyzer."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    tol: float = Field(
+        0.05,
+        gt=0,
+        allow_inf_nan=False,
+        description=(
+            "Contact tolerance tol (length unit): each solid grows by tol/2 along its face normals."
+        ),
+    )
+    tol_max: float = Field(
+        0.5,
+        gt=0,
+        allow_inf_nan=False,
+        description="Largest tolerance of later sweeps: pairs that touch up to tol_max are kept.",
+    )
+    margin: float | None = Field(
+        None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> Contacts3DConfig:
+        if self.tol_max < self.tol:
+            raise ValueError(f"tol_max ({self.tol_max}) must be at least tol ({self.tol})")
+        return self
+
+
+def candidate_pairs3d(packing: Packing3D, s_max: float) -> tuple[IntArray, IntArray]:
+    """Pairs ``i < j`` of placed solids whose solids grown by ``s_max`` may meet.
+
+    A solid grown by ``s`` along its face normals lies in the ball about its
+    centre of radius ``R (1 + s / h)`` (``R`` its circumradius, ``h`` its
+    smallest support value); pairs whose balls meet are returned, from a k-d
+    tree of the centres.
+    """
+    from scipy.spatial import cKDTree
+
+    placed = np.flatnonzero(packing.placed).astype(np.int64)
+    if placed.shape[0] < 2:
+        empty = np.zeros(0, dtype=np.int64)
+        return empty, empty
+    circum = packing.solids.circumradius
+    counts = np.diff(packing.face_offsets)
+    h_min = np.minimum.reduceat(packing.support, packing.face_offsets[:-1][counts > 0])
+    smallest = np.full(packing.n_particles, np.inf)
+    smallest[counts > 0] = h_min
+    reach = (circum * (1.0 + s_max / smallest))[placed] * (1.0 + 1e-9)
+    centre = packing.centre[placed]
+    tree = cKDTree(centre)
+    found = tree.query_pairs(2.0 * float(reach.max()), output_type="ndarray")
+    a, b = found[:, 0], found[:, 1]
+    d = np.linalg.norm(centre[b] - centre[a], axis=1)
+    near = d <= reach[a] + reach[b]
+    i, j = placed[a[near]], placed[b[near]]
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    order = np.lexsort((hi, lo))
+    return lo[order].astype(np.int64), hi[order].astype(np.int64)
+
+
+def _fallback_threshold(packing: Packing3D, i: int, j: int) -> tuple[float, FloatArray]:
+    """Threshold and normal of one pair by HiGHS, for a pair the compiled simplex gave up on."""
+    from scipy.optimize import linprog
+
+    solids = packing.solids
+    parts = []
+    for p in (i, j):
+        f0, f1 = int(solids.face_offsets[p]), int(solids.face_offsets[p + 1])
+        nrm = solids.normals[f0:f1]
+        parts.append((nrm, solids.support[f0:f1] + nrm @ packing.centre[p]))
+    a_ub = np.vstack([np.column_stack([n, -np.ones(len(n))]) for n, _ in parts])
+    b_ub = np.concatenate([b for _, b in parts])
+    res = linprog(np.array([0.0, 0.0, 0.0, 1.0]), A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * 4)
+    if res.status != 0:
+        raise ConfigError(f"contacts3d: the threshold of particles {i} and {j} was not found")
+    lam = -np.asarray(res.ineqlin.marginals)[: len(parts[0][0])]
+    w = lam @ parts[0][0]
+    norm = float(np.linalg.norm(w))
+    return float(res.fun), (w / norm if norm > 0 else np.zeros(3))
+
+
+class Contacts3D(Analyzer):
+    """Contact pairs of a 3D packing, their thresholds, and their regions at ``tol``.
+
+    After :meth:`compute`, ``pairs`` holds every pair (``i < j``) whose
+    grown solids share volume at ``tol_max``, ``threshold`` the tolerance
+    above which each is in contact and ``pair_normal`` its unit contact
+    normal (from ``i`` to ``j``). The properties ``i, j, volume, area,
+    width, depth, cap_radius, thickness, normal, point`` describe the
+    contacts at ``tol``.
+    """
+
+    name = "contacts3d"
+
+    def __init__(self, config: Contacts3DConfig | None = None) -> None:
+        self.config = config or Contacts3DConfig()
+        self._done = False
+
+    def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
+        """Find the candidate pairs, their thresholds and normals, and the regions at ``tol``."""
+        from regopack.plugins.analysis import contact3d_kernel as ck
+
+        p3 = as_packing3d(packing, self)
+        if p3.domain.periodic:
+            raise ConfigError("contacts3d: periodic boxes are not analysed yet (walled boxes only)")
+        if p3.rounded:
+            raise ConfigError(
+                "contacts3d: spheres and rounded solids are not analysed yet (sharp polyhedra only)"
+            )
+        cfg = self.config
+        self.packing = p3
+        s_max = 0.5 * cfg.tol_max
+        pi, pj = candidate_pairs3d(p3, s_max)
+        centre = np.ascontiguousarray(np.nan_to_num(p3.centre), dtype=np.float64)
+        size = np.ascontiguousarray(p3.solids.circumradius, dtype=np.float64)
+        args = (
+            np.ascontiguousarray(p3.normals),
+            np.ascontiguousarray(p3.support),
+            np.ascontiguousarray(p3.face_offsets),
+        )
+        thr, nrm = ck.pair_thresholds(pi, pj, centre, *args, size)
+        for k in np.flatnonzero(np.isnan(thr)).tolist():
+            thr[k], nrm[k] = _fallback_threshold(p3, int(pi[k]), int(pj[k]))
+        keep = 2.0 * thr < cfg.tol_max
+        self.pairs = np.column_stack([pi[keep], pj[keep]]).astype(np.int64)
+        self.threshold = 2.0 * thr[keep]
+        self.pair_normal = nrm[keep]
+        at = self.threshold < cfg.tol
+        ci, cj = self.pairs[at, 0].copy(), self.pairs[at, 1].copy()
+        normal = np.ascontiguousarray(self.pair_normal[at])
+        vertices = np.ascontiguousarray(p3.vertices)
+        offsets = np.ascontiguousarray(p3.offsets)
+        volume, area, width, point = ck.contact_regions(
+            ci, cj, 0.5 * cfg.tol, normal, centre, vertices, offsets, *args, size
+        )
+        ok = (volume > 0) & (area > 0)
+        depth, radius = equivalent_cap(volume[ok], area[ok])
+        self._i, self._j = ci[ok], cj[ok]
+        self._volume, self._area, self._width = volume[ok], area[ok], width[ok]
+        self._depth, self._radius = depth, radius
+        self._normal, self._point = normal[ok], point[ok]
+        self._threshold_at = self.threshold[at][ok]
+        self.margin = interior_margin3d(p3, cfg.margin)
+        self.interior = interior_mask3d(p3, self.margin)
+        self._done = True
+        return self
+
+    def _need(self) -> None:
+        if not self._done:
+            raise RuntimeError("call compute() first")
+
+    @property
+    def i(self) -> IntArray:
+        """First particle of each contact at ``tol``."""
+        self._need()
+        return np.asarray(self._i, dtype=np.int64)
+
+    @property
+    def j(self) -> IntArray:
+        """Second particle of each contact at ``tol``."""
+        self._need()
+        return np.asarray(self._j, dtype=np.int64)
+
+    @property
+    def volume(self) -> FloatArray:
+        """Contact volume V_c: the volume shared by the two grown solids."""
+        self._need()
+        return self._volume
+
+    @property
+    def area(self) -> FloatArray:
+        """Contact area A_c: the shared volume's area projected on the contact plane."""
+        self._need()
+        return self._area
+
+    @property
+    def width(self) -> FloatArray:
+        """Contact width b_c: the longest chord of that projection."""
+        self._need()
+        return self._width
+
+    @property
+    def depth(self) -> FloatArray:
+        """Height of the equivalent spherical cap (base area A_c, volume V_c)."""
+        self._need()
+        return self._depth
+
+    @property
+    def cap_radius(self) -> FloatArray:
+        """Sphere radius of the equivalent spherical cap."""
+        self._need()
+        return self._radius
+
+    @property
+    def thickness(self) -> FloatArray:
+        """Mean thickness V_c / A_c of the contact region along the normal."""
+        self._need()
+        return self._volume / self._area
+
+    @property
+    def normal(self) -> FloatArray:
+        """Unit contact normal (from i to j), ``(n, 3)``."""
+        self._need()
+        return self._normal
+
+    @property
+    def point(self) -> FloatArray:
+        """Centroid of each contact region, ``(n, 3)``."""
+        self._need()
+        return self._point
+
+    def count_per_particle(self, tol: float | None = None) -> IntArray:
+        """Count the contacts of every particle at ``tol`` (default: the analyzer's tol)."""
+        self._need()
+        if tol is None:
+            i, j = self._i, self._j
+        else:
+            if tol > self.config.tol_max:
+                raise ValueError(f"tol = {tol} exceeds tol_max = {self.config.tol_max}")
+            sel = self.threshold < tol
+            i, j = self.pairs[sel, 0], self.pairs[sel, 1]
+        n = self.packing.n_particles
+        return np.bincount(i, minlength=n) + np.bincount(j, minlength=n)
+
+    def results(self) -> dict[str, Any]:
+        """Scalars: contacts, tol, medians of A_c, V_c, b_c, the cap depth and thickness."""
+        self._need()
+        n = int(self._area.shape[0])
+
+        def med(a: FloatArray) -> float | None:
+            return float(np.median(a)) if a.shape[0] else None
+
+        return {
+            "tol": self.config.tol,
+            "tol_max": self.config.tol_max,
+            "eta": eta_of(self.packing),  # type: ignore[arg-type]
+            "interior_margin": self.margin,
+            "n_contacts": n,
+            "n_candidate_pairs": int(self.pairs.shape[0]),
+            "median_area": med(self._area),
+            "median_volume": med(self._volume),
+            "median_width": med(self._width),
+            "median_depth": med(self._depth),
+            "median_thickness": med(self.thickness),
+            "total_contact_area": float(self._area.sum()),
+        }
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Per-contact table (the ``contacts`` table of 2D, with 3D columns)."""
+        self._need()
+        return {
+            "contacts": {
+                "i": self._i,
+                "j": self._j,
+                "threshold": self._threshold_at,
+                "area": self._area,
+                "volume": self._volume,
+                "width": self._width,
+                "depth": self._depth,
+                "cap_radius": self._radius,
+                "thickness": self.thickness,
+                "normal_x": self._normal[:, 0],
+                "normal_y": self._normal[:, 1],
+                "normal_z": self._normal[:, 2],
+                "point_x": self._point[:, 0],
+                "point_y": self._point[:, 1],
+                "point_z": self._point[:, 2],
+            }
+        }

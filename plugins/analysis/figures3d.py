@@ -1,0 +1,170 @@
+"""Figures of the 3D analyzers, drawn with matplotlib at the size and style of the 2D ones.
+
+``contact-histograms-3d`` (``contacts3d``): A_c, V_c, b_c and the cap height δ;
+``z-vs-tol-3d`` and ``z-per-mineral-3d`` (``coordination3d``): the 2D figures
+on the 3D contacts; ``rdf-3d`` (``rdf3d``): g(r) of all centres and of each
+mineral with itself, near and far field; ``psd-3d`` (``psd3d``): the 2D
+size-distribution figure, with masses as volumes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from pathlib import Path
+from typing import Any, cast
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from regopack.colours import mineral_colours
+from regopack.interfaces import Analyzer
+from regopack.plugins.analysis.contacts3d import Contacts3D
+from regopack.plugins.analysis.coordination3d import Coordination3D
+from regopack.plugins.analysis.figure_specs import STEMS3D
+from regopack.plugins.analysis.figures import (
+    TOTAL,
+    WIDTH,
+    _log_hist,
+    _note,
+    _save,
+    _style,
+    draw_z_per_mineral,
+    draw_z_vs_tol,
+)
+from regopack.plugins.analysis.psd3d import Psd3D
+from regopack.plugins.analysis.rdf3d import Rdf3D
+
+__all__ = ["draw_contact_histograms3d", "draw_rdf3d", "figures3d_for"]
+
+
+def draw_contact_histograms3d(contacts: Contacts3D) -> Figure:
+    """Histograms of A_c, V_c, b_c and the cap height δ, log-spaced bins on log axes."""
+    fig = Figure(figsize=(WIDTH, 4.6))
+    axes = fig.subplots(2, 2)
+    tol = contacts.config.tol
+    panels = (
+        (contacts.area, r"contact area $A_\mathrm{c}$ (µm², projected)", "µm²"),
+        (contacts.volume, r"contact volume $V_\mathrm{c}$ (µm³)", "µm³"),
+        (contacts.width, r"contact width $b_\mathrm{c}$ (µm)", "µm"),
+        (contacts.depth, r"cap height $\delta$ (µm)", "µm"),
+    )
+    for ax, (values, label, unit) in zip(axes.ravel(), panels, strict=True):
+        _log_hist(ax, values, label, unit)
+    if contacts.depth.size:
+        ax_d = axes[1, 1]
+        ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} µm")
+        ax_d.axvline(
+            2 * tol, color="#D55E00", linestyle=":", linewidth=0.9, label="2 tol (face to face)"
+        )
+    for ax in axes.ravel():
+        if ax.get_legend_handles_labels()[0]:
+            ax.legend(loc="upper left")
+    fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} µm", fontsize=8)
+    return fig
+
+
+def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
+    """g(r) of all interior centres and of each mineral with itself, near and far field."""
+    names = packing.mineral_names
+    colours = mineral_colours(names)
+    res = rdf.results()
+    fig = Figure(figsize=(WIDTH, 3.0))
+    axes = fig.subplots(1, 2)
+    for ax, key, title in zip(axes, ("near", "far"), ("near field", "far field"), strict=True):
+        curves = rdf.curves.get(key)
+        if curves is None:
+            _note(ax, f"no {title} (window too small)")
+            continue
+        r = curves["r"]
+        step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        for name, colour in zip(names, colours, strict=True):
+            g = curves.get(f"{name}-{name}")
+            if g is not None and np.isfinite(g).any():
+                ax.plot(r, g, color=colour, linewidth=0.8, label=f"{name}–{name}")
+        ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
+        ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
+        peak = rdf.peak if key == "near" else None
+        if peak is not None and np.isfinite(peak.r_err):
+            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
+            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
+            ax.text(
+                peak.r,
+                0.04,
+                f" first peak {peak.r:.2f} ± {peak.r_err:.2f} µm",
+                transform=ax.get_xaxis_transform(),
+                fontsize=6.5,
+            )
+        ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
+        ax.set_xlabel("centre distance r (µm)")
+        ax.set_ylabel("g(r)")
+        ax.set_title(f"{title}, bins of {step:g} µm")
+    handles, labels = axes[0].get_legend_handles_labels()
+    if handles:
+        fig.legend(
+            handles,
+            labels,
+            loc="outside lower center",
+            ncol=min(len(handles), 4),
+            title=f"{res['n_points']:,} interior centres; window "
+            + " × ".join(f"{s:g}" for s in res["window"])
+            + " µm (a rare mineral's bins merged)",
+            title_fontsize=7,
+        )
+    return fig
+
+
+def figures3d_for(
+    packing: Any,
+    analyzers: Mapping[str, Analyzer],
+    out_dir: str | Path,
+    *,
+    formats: Sequence[str] = ("png", "svg"),
+    of: str | None = None,
+) -> list[Path]:
+    """Draw the figures of the computed 3D analyzers; return the files written.
+
+    Parameters
+    ----------
+    packing
+        The analysed 3D packing.
+    analyzers
+        Computed analyzers by name; figures are drawn for ``contacts3d``,
+        ``coordination3d``, ``rdf3d`` and ``psd3d``.
+    out_dir
+        Directory of the figures (created if needed).
+    formats
+        File formats to write.
+    of
+        Draw only the figures of this analyzer (see
+        :data:`~regopack.plugins.analysis.figure_specs.STEMS3D`); by default all.
+    """
+    out = Path(out_dir)
+    contacts = analyzers.get("contacts3d")
+    contacts = contacts if isinstance(contacts, Contacts3D) else None
+    coordination = analyzers.get("coordination3d")
+    rdf = analyzers.get("rdf3d")
+    jobs: list[tuple[str, Callable[[], Figure]]] = []
+    if contacts is not None:
+        jobs.append(("contact-histograms-3d", lambda: draw_contact_histograms3d(contacts)))
+    if isinstance(coordination, Coordination3D):
+        # the 2D figures read the counts, thresholds and masks that 3D contacts also have
+        as_2d = cast(Any, contacts)
+        jobs.append(("z-vs-tol-3d", lambda: draw_z_vs_tol(packing, coordination, as_2d)))
+        jobs.append(("z-per-mineral-3d", lambda: draw_z_per_mineral(packing, coordination)))
+    if isinstance(rdf, Rdf3D):
+        jobs.append(("rdf-3d", lambda: draw_rdf3d(packing, rdf)))
+    psd = analyzers.get("psd3d")
+    if isinstance(psd, Psd3D):
+        from regopack.plugins.analysis.psd_figure import draw_psd
+
+        jobs.append(("psd-3d", lambda: draw_psd(psd)))
+    if of is not None:
+        jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS3D.get(of, ())]
+    if not jobs:
+        return []
+    out.mkdir(parents=True, exist_ok=True)
+    paths: list[Path] = []
+    with _style():
+        for stem, draw in jobs:
+            paths += _save(draw(), out, stem, formats)
+    return paths

@@ -1,0 +1,245 @@
+"""Radial distribution function of the centres of a 3D packing, with the box's edge correction.
+
+``g(r)`` over the interior window ``W`` (a box ``a x b x c``), every pair at
+separation ``(dx, dy, dz)`` weighted by the translation correction
+``|W| / ((a - |dx|)(b - |dy|)(c - |dz|))``: the volume of ``W ∩ (W + d)``
+is the volume of the window in which a pair at that separation can lie
+whole, so an uncorrelated pattern gives ``g = 1`` at every ``r < min(a, b, c)``.
+In a periodic box pairs are counted through their nearest image, without a
+correction, up to half the shortest side.
+
+``g(r) = |W|^2 / (N (N - 1) / 2) * H(r) / V_shell(r)``, with ``H`` the
+weighted count of pairs in the bin and ``V_shell = 4/3 pi (r_2^3 - r_1^3)``;
+per mineral pair ``(A, B)`` the count of pairs is ``N_A N_B`` (``N_A (N_A - 1) / 2``
+when ``A = B``), and a pair's bins are merged until each expects enough pairs,
+as in 2D.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from regopack.domain3d import Box
+from regopack.interfaces import Analyzer
+from regopack.plugins.analysis.common import eta_of
+from regopack.plugins.analysis.common3d import (
+    as_packing3d,
+    interior_margin3d,
+    interior_mask3d,
+    interior_window3d,
+)
+from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+class Rdf3DConfig(BaseModel):
+    """Parameters of the 3D radial distribution function."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    near: tuple[float, float] = Field(
+        (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
+    )
+    near_bin: float = Field(0.1, gt=0, description="Bin width in the near field.")
+    far: tuple[float, float] = Field(
+        (10.0, 60.0), strict=False, description="Far-field range of r (length unit)."
+    )
+    far_bin: float = Field(0.5, gt=0, description="Bin width in the far field.")
+    per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
+    min_pairs_per_bin: float = Field(
+        100.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Bins of a mineral-pair curve are merged until an uncorrelated pattern would put "
+            "this many pairs into each at the middle of the range (0: no merging)."
+        ),
+    )
+    margin: float | None = Field(
+        None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
+    )
+
+    @model_validator(mode="after")
+    def _check(self) -> Rdf3DConfig:
+        for name in ("near", "far"):
+            lo, hi = getattr(self, name)
+            if not 0 <= lo < hi:
+                raise ValueError(
+                    f"{name} must be a range [lo, hi] with 0 <= lo < hi, got [{lo}, {hi}]"
+                )
+        return self
+
+
+def rdf3d_histogram(
+    points: FloatArray,
+    kind: IntArray,
+    n_kinds: int,
+    r_lo: float,
+    width: float,
+    bins: int,
+    window: Box,
+) -> tuple[FloatArray, FloatArray]:
+    """Edge-corrected ``g(r)`` of ``points`` in ``window``, total and per kind pair.
+
+    Parameters
+    ----------
+    points
+        ``(n, 3)`` centres, all inside ``window``.
+    kind
+        ``(n,)`` kind of each point, in ``[0, n_kinds)``.
+    r_lo, width, bins
+        The bins ``[r_lo + k width, r_lo + (k + 1) width)``.
+    window
+        A walled box (translation correction) or a periodic box (nearest image).
+
+    Returns
+    -------
+    total, per_kind
+        ``(bins,)`` and ``(n_kinds, n_kinds, bins)`` (symmetric) curves; NaN
+        where a kind pair has no pairs to normalise by.
+    """
+    from regopack.plugins.analysis.rdf3d_kernel import weighted_pair_histogram3d
+
+    pts = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    kind = np.ascontiguousarray(kind, dtype=np.int64)
+    n = pts.shape[0]
+    # the compiled kernel indexes without checks: refuse what would write out of bounds
+    if kind.shape != (n,) or (n and (int(kind.min()) < 0 or int(kind.max()) >= n_kinds)):
+        raise ValueError(f"kind must be {n} integers in [0, {n_kinds})")
+    if not np.isfinite(pts).all():
+        raise ValueError("the points must be finite")
+    if not (bins >= 1 and math.isfinite(width) and width > 0 and math.isfinite(r_lo) and r_lo >= 0):
+        raise ValueError(f"bins ({bins}) must be >= 1, width ({width}) > 0 and r_lo ({r_lo}) >= 0")
+    side = np.array(window.size, dtype=np.float64)
+    per_pair = weighted_pair_histogram3d(
+        pts, kind, n_kinds, float(r_lo), float(width), int(bins), side, bool(window.periodic)
+    )
+    edges = r_lo + width * np.arange(bins + 1)
+    shell = 4.0 / 3.0 * np.pi * (edges[1:] ** 3 - edges[:-1] ** 3)
+    volume = float(np.prod(side))
+    counts = np.bincount(kind, minlength=n_kinds).astype(np.float64)
+    total = per_pair.sum(axis=(0, 1)) * volume**2 / (max(n * (n - 1.0) / 2.0, 1e-300) * shell)
+    per = np.full_like(per_pair, np.nan)
+    for p in range(n_kinds):
+        for q in range(p, n_kinds):
+            norm = counts[p] * (counts[p] - 1.0) / 2.0 if p == q else counts[p] * counts[q]
+            if norm > 0:
+                per[p, q] = per_pair[p, q] * volume**2 / (norm * shell)
+                per[q, p] = per[p, q]
+    return total, per
+
+
+class Rdf3D(Analyzer):
+    """Radial distribution function of a 3D packing, total and per mineral pair, near and far."""
+
+    name = "rdf3d"
+
+    def __init__(self, config: Rdf3DConfig | None = None) -> None:
+        self.config = config or Rdf3DConfig()
+        self._results: dict[str, Any] | None = None
+
+    def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
+        """Histogram the centre pairs inside the interior window."""
+        p3 = as_packing3d(packing, self)
+        cfg = self.config
+        margin = interior_margin3d(p3, cfg.margin)
+        w = interior_window3d(p3, margin)
+        size = w.size
+        sel = interior_mask3d(p3, margin)
+        pts = p3.centre[sel]
+        kinds = p3.mineral[sel].astype(np.int64)
+        limit = 0.5 * min(size) if w.periodic else min(size)
+        volume = w.volume
+        n_pts = len(pts)
+        names = p3.mineral_names
+        n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
+        kind_counts = np.bincount(kinds, minlength=len(names))
+        self.curves: dict[str, dict[str, FloatArray]] = {}
+        self.expected: dict[str, FloatArray] = {}
+        pair_bins: dict[str, dict[str, float]] = {}
+        notes = []
+        for field_name, (lo, hi), width in (
+            ("near", cfg.near, cfg.near_bin),
+            ("far", cfg.far, cfg.far_bin),
+        ):
+            if hi >= limit:
+                dims = " x ".join(f"{s:g}" for s in size)
+                notes.append(f"{field_name} field cut at {limit:g}: the window is {dims}")
+                hi = float(np.nextafter(limit, 0.0))
+            if lo >= hi or not volume > 0:
+                continue
+            bins = max(1, int(np.floor((hi - lo) / width)))
+            total, per = rdf3d_histogram(
+                pts,
+                kinds if n_kinds > 1 else np.zeros(n_pts, dtype=np.int64),
+                n_kinds,
+                lo,
+                width,
+                bins,
+                w,
+            )
+            centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
+            edges = lo + width * np.arange(bins + 1)
+            shell = 4.0 / 3.0 * np.pi * (edges[1:] ** 3 - edges[:-1] ** 3)
+            self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / volume
+            curves: dict[str, FloatArray] = {"r": centres, "total": total}
+            widths: dict[str, float] = {}
+            if n_kinds > 1:
+                r_mid = 0.5 * (lo + hi)
+                for p, na in enumerate(names):
+                    for q in range(p, n_kinds):
+                        key = f"{na}-{names[q]}"
+                        cp, cq = float(kind_counts[p]), float(kind_counts[q])
+                        norm = cp * (cp - 1.0) / 2.0 if p == q else cp * cq
+                        per_bin = norm * 4.0 * np.pi * r_mid * r_mid * width / volume
+                        factor = count_bins(per_bin, cfg.min_pairs_per_bin, bins)
+                        curves[key] = merge_bins(per[p, q], shell, factor)
+                        groups = max(bins // factor, 1)
+                        widths[key] = float(width * (bins - factor * (groups - 1)))
+            self.curves[field_name] = curves
+            pair_bins[field_name] = widths
+        near = self.curves.get("near")
+        peak = None
+        if near is not None and n_pts > 1:
+            peak = first_peak(near["r"], near["total"], self.expected["near"])
+        self.peak = peak
+        far = self.curves.get("far")
+        far_mean = None
+        if far is not None and np.isfinite(far["total"]).any():
+            far_mean = float(np.nanmean(far["total"]))
+        self._results = {
+            "eta": eta_of(p3),  # type: ignore[arg-type]
+            "interior_margin": margin,
+            "n_points": int(n_pts),
+            "window_kind": w.kind,
+            "window": [float(s) for s in size],
+            "first_peak_r": None if peak is None else peak.r,
+            "first_peak_r_err": None if peak is None else peak.r_err,
+            "first_peak_g": None if peak is None else peak.g,
+            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
+            "first_peak_fitted": None if peak is None else peak.fitted,
+            "pair_bins": pair_bins,
+            "far_mean": far_mean,
+            "notes": notes,
+        }
+        return self
+
+    def results(self) -> dict[str, Any]:
+        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return dict(self._results)
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """g(r) curves per field (columns r, total, and one per mineral pair)."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return {f"rdf_{name}": dict(c) for name, c in self.curves.items()}

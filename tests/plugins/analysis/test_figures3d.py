@@ -1,0 +1,30 @@
+"""Figures of the 3D analyses: drawn into the analysis folder, at journal width, in the report."""
+
+from __future__ import annotations
+
+import pytest
+
+pytest.importorskip("matplotlib")
+
+from matplotlib.image import imread
+
+from regopack.analysis import write_analysis
+from regopack.plugins.analysis.figure_specs import STEMS3D
+from regopack.plugins.analysis.figures import DPI, WIDTH
+
+STEMS = [stem for stems in STEMS3D.values() for stem in stems]
+
+
+def test_the_3d_figures_are_written_and_embedded(packing3d, analysed3d, tmp_path) -> None:
+    from regopack.plugins.analysis.psd3d import Psd3D
+
+    analyzers = {**analysed3d.analyzers, "psd3d": Psd3D().compute(packing3d, {})}
+    files = write_analysis(tmp_path / "a", packing3d, analyzers)
+    names = sorted(p.name for p in files.figures)
+    assert names == sorted([f"{s}.png" for s in STEMS] + [f"{s}.svg" for s in STEMS])
+    report = files.report.read_text(encoding="utf-8")
+    for stem in STEMS:
+        image = imread(tmp_path / "a" / "figures" / f"{stem}.png")
+        assert image.shape[1] == round(WIDTH * DPI)  # 7 inches wide at 300 dpi
+        assert f"(figures/{stem}.png)" in report
+    assert "Coordination number per mineral (3D)" in report
