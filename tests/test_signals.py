@@ -33,6 +33,11 @@ TIMEOUT = 120.0
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 
 
+def _default_sigint() -> None:
+    """Give the child the default SIGINT, which a suite run as a background job ignores."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 class Paused:
     """A ``regopack`` subprocess, stopped before a step of its writing."""
 
@@ -46,6 +51,7 @@ class Paused:
             stdout=subprocess.DEVNULL,
             stderr=subprocess.PIPE,
             text=True,
+            preexec_fn=_default_sigint,
         )
         self.lines: queue.Queue[str | None] = queue.Queue()
         threading.Thread(target=self._read, daemon=True).start()
