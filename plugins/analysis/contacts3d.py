@@ -149,9 +149,12 @@ class Contacts3D(Analyzer):
         if p3.domain.periodic:
             raise ConfigError("contacts3d: periodic boxes are not analysed yet (walled boxes only)")
         if p3.rounded:
-            raise ConfigError(
-                "contacts3d: spheres and rounded solids are not analysed yet (sharp polyhedra only)"
-            )
+            if p3.solids.normals.shape[0] != 0:
+                raise ConfigError(
+                    "contacts3d: rounded polyhedra are not analysed yet (sharp polyhedra and "
+                    "spheres only)"
+                )
+            return self._compute_spheres(p3)
         cfg = self.config
         self.packing = p3
         s_max = 0.5 * cfg.tol_max
@@ -185,6 +188,63 @@ class Contacts3D(Analyzer):
         self._depth, self._radius = depth, radius
         self._normal, self._point = normal[ok], point[ok]
         self._threshold_at = self.threshold[at][ok]
+        self.margin = interior_margin3d(p3, cfg.margin)
+        self.interior = interior_mask3d(p3, self.margin)
+        self._done = True
+        return self
+
+    def _compute_spheres(self, p3: Packing3D) -> Self:
+        """:meth:`compute` for spheres, in closed form.
+
+        Two spheres grown by ``s`` each meet when their gap ``g = d - r_i - r_j``
+        is below ``2 s``: the threshold is ``g``, the normal the unit vector
+        between the centres. At ``tol`` the grown spheres share a lens
+        (:func:`regopack.verification3d.lens_volume`) whose projection on the
+        contact plane is the disk where their surfaces cross.
+        """
+        from scipy.spatial import cKDTree
+
+        from regopack.verification3d import lens_volume
+
+        cfg = self.config
+        self.packing = p3
+        placed = np.flatnonzero(p3.placed)
+        solids = p3.solids
+        r_all = solids.rounding_radius
+        c_all = np.nan_to_num(p3.centre) + solids.vertices[solids.offsets[:-1]]
+        c, r = c_all[placed], r_all[placed]
+        reach = 2.0 * float(r.max()) + cfg.tol_max if len(placed) else 0.0
+        found = np.array(sorted(cKDTree(c).query_pairs(reach)), dtype=np.int64).reshape(-1, 2)
+        delta = c[found[:, 1]] - c[found[:, 0]]
+        dist = np.linalg.norm(delta, axis=1)
+        gap = dist - r[found[:, 0]] - r[found[:, 1]]
+        keep = gap < cfg.tol_max
+        found, delta, dist, gap = found[keep], delta[keep], dist[keep], gap[keep]
+        pairs = placed[found]
+        order = np.lexsort((pairs[:, 1], pairs[:, 0]))
+        pairs, delta, dist, gap = pairs[order], delta[order], dist[order], gap[order]
+        self.pairs = np.ascontiguousarray(pairs, dtype=np.int64)
+        self.threshold = gap
+        self.pair_normal = delta / dist[:, None]
+        at = gap < cfg.tol
+        ci, cj = pairs[at, 0].copy(), pairs[at, 1].copy()
+        r1 = r_all[ci] + 0.5 * cfg.tol
+        r2 = r_all[cj] + 0.5 * cfg.tol
+        d = dist[at]
+        volume = np.array([lens_volume(a, b, e) for a, b, e in zip(r1, r2, d, strict=True)])
+        x = (d * d + r1 * r1 - r2 * r2) / (2.0 * d)  # from centre i to the lens's disk
+        radius2 = np.maximum(r1 * r1 - x * x, 0.0)
+        area = np.pi * radius2
+        normal = np.ascontiguousarray(self.pair_normal[at])
+        point = c_all[ci] + x[:, None] * normal
+        ok = (volume > 0) & (area > 0)
+        depth, cap = equivalent_cap(volume[ok], area[ok])
+        self._i, self._j = ci[ok], cj[ok]
+        self._volume, self._area = volume[ok], area[ok]
+        self._width = 2.0 * np.sqrt(radius2[ok])
+        self._depth, self._radius = depth, cap
+        self._normal, self._point = normal[ok], point[ok]
+        self._threshold_at = gap[at][ok]
         self.margin = interior_margin3d(p3, cfg.margin)
         self.interior = interior_mask3d(p3, self.margin)
         self._done = True

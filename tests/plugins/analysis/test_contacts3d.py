@@ -198,3 +198,27 @@ def test_the_highs_fallback_gives_the_simplex_threshold_and_normal(packing3d, co
         assert 2 * half == pytest.approx(tau, abs=1e-8)
         p, q = packing3d.world_vertices(i) @ normal, packing3d.world_vertices(j) @ normal
         assert q.min() - p.max() >= -1e-8  # a separating plane too
+
+
+def test_a_lattice_of_touching_spheres_has_the_known_contacts() -> None:
+    from lattices3d import sphere_lattice
+
+    from regopack.verification3d import lens_volume
+
+    tol = 0.05
+    p = sphere_lattice((3, 3, 3), 1.0, 0.0)
+    c = Contacts3D(Contacts3DConfig(tol=tol, margin=0.0)).compute(p, {})
+    assert len(c.pairs) == 54  # 3 x 3 x 2 touching neighbours along each axis
+    assert np.allclose(c.threshold, 0.0, atol=1e-12)
+    grown = 1.0 + tol / 2
+    assert np.allclose(c.area, np.pi * (grown**2 - 1.0))  # the disk where the grown surfaces cross
+    assert np.allclose(c.volume, lens_volume(grown, grown, 2.0))
+    assert np.allclose(np.abs(c.normal).max(axis=1), 1.0)  # along the lattice axes
+    assert np.allclose(c.point, 0.5 * (p.centre[c.i] + p.centre[c.j]))
+    assert int(c.count_per_particle()[13]) == 6  # the centre sphere
+    # a gap of 0.03: in contact at tol = 0.05, not at 0.02
+    apart = Contacts3D(Contacts3DConfig(tol=tol, margin=0.0)).compute(
+        sphere_lattice((2, 1, 1), 1.0, 0.03), {}
+    )
+    assert apart.threshold == pytest.approx([0.03]) and len(apart.i) == 1
+    assert apart.count_per_particle(0.02).sum() == 0
