@@ -265,6 +265,7 @@ def test_the_builtin_figure_specs_follow_the_analyzers():
         "coordination3d",
         "rdf3d",
         "psd3d",
+        "homogeneity3d",
     ]
     assert {f.analyzer for f in reg.figures()} <= set(reg.names("analysis"))
     assert reg.figures("coordination")[0].captions.keys() == {"z-vs-tol", "z-per-mineral"}

@@ -37,6 +37,7 @@ CAPTIONS3D: dict[str, str] = {
     "z-per-mineral-3d": "Coordination number per mineral (3D)",
     "rdf-3d": "Radial distribution function, all centres and each mineral with itself (3D)",
     "psd-3d": "Size distribution of the placed solids against the requested one, by volume (3D)",
+    "homogeneity-3d": "Number density, volume fraction and mean diameter by layer and shell (3D)",
 }
 """Caption of each figure of the 3D analyzers, by file stem."""
 
@@ -57,6 +58,7 @@ STEMS3D: dict[str, tuple[str, ...]] = {
     "coordination3d": ("z-vs-tol-3d", "z-per-mineral-3d"),
     "rdf3d": ("rdf-3d",),
     "psd3d": ("psd-3d",),
+    "homogeneity3d": ("homogeneity-3d",),
 }
 """File stems of the figures of each 3D analyzer, in drawing order."""
 

@@ -4,7 +4,9 @@
 ``z-vs-tol-3d`` and ``z-per-mineral-3d`` (``coordination3d``): the 2D figures
 on the 3D contacts; ``rdf-3d`` (``rdf3d``): g(r) of all centres and of each
 mineral with itself, near and far field; ``psd-3d`` (``psd3d``): the 2D
-size-distribution figure, with masses as volumes.
+size-distribution figure, with masses as volumes; ``homogeneity-3d``
+(``homogeneity3d``): number density, φ and mean diameter over the horizontal
+layers and the nested shells of the interior window.
 """
 
 from __future__ import annotations
@@ -31,10 +33,11 @@ from regopack.plugins.analysis.figures import (
     draw_z_per_mineral,
     draw_z_vs_tol,
 )
+from regopack.plugins.analysis.homogeneity3d import Homogeneity3D
 from regopack.plugins.analysis.psd3d import Psd3D
 from regopack.plugins.analysis.rdf3d import Rdf3D
 
-__all__ = ["draw_contact_histograms3d", "draw_rdf3d", "figures3d_for"]
+__all__ = ["draw_contact_histograms3d", "draw_homogeneity3d", "draw_rdf3d", "figures3d_for"]
 
 
 def draw_contact_histograms3d(contacts: Contacts3D) -> Figure:
@@ -60,6 +63,46 @@ def draw_contact_histograms3d(contacts: Contacts3D) -> Figure:
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper left")
     fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} µm", fontsize=8)
+    return fig
+
+
+def draw_homogeneity3d(homogeneity: Homogeneity3D) -> Figure:
+    """Draw number density, φ and mean diameter over the layers (top) and shells (bottom).
+
+    Each region is drawn at its middle (the layer's height, the shell's mean
+    half width), with a dashed line at the mean over the regions.
+    """
+    fig = Figure(figsize=(WIDTH, 4.4))
+    axes = fig.subplots(2, 3)
+    rows = (
+        (homogeneity.layers, "z_lo", "z_hi", "height z of the layer (µm)"),
+        (homogeneity.shells, "half_lo", "half_hi", "half width of the shell (µm)"),
+    )
+    columns = (
+        ("density", "number density (1/µm³)"),
+        ("phi", "volume fraction φ"),
+        ("mean_diameter", "mean diameter (µm)"),
+    )
+    for row, (table, lo, hi, xlabel) in enumerate(rows):
+        x = 0.5 * (np.asarray(table[lo]) + np.asarray(table[hi]))
+        for col, (key, ylabel) in enumerate(columns):
+            ax = axes[row, col]
+            y = np.asarray(table[key], dtype=float)
+            if x.size:
+                ax.plot(x, y, marker="o", markersize=3, linewidth=0.9, color="#0072B2")
+                finite = y[np.isfinite(y)]
+                if finite.size:
+                    mean = float(finite.mean())
+                    ax.axhline(mean, color="0.4", linestyle="--", linewidth=0.7)
+                    spread = float(finite.std() / mean) if mean else float("nan")
+                    ax.set_title(f"mean {mean:.4g}, spread {100 * spread:.1f} %", fontsize=7)
+            else:
+                _note(ax, "no interior window")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+    fig.suptitle(
+        "Homogeneity of the interior window: layers along z, shells about the centre", fontsize=8
+    )
     return fig
 
 
@@ -129,7 +172,7 @@ def figures3d_for(
         The analysed 3D packing.
     analyzers
         Computed analyzers by name; figures are drawn for ``contacts3d``,
-        ``coordination3d``, ``rdf3d`` and ``psd3d``.
+        ``coordination3d``, ``rdf3d``, ``psd3d`` and ``homogeneity3d``.
     out_dir
         Directory of the figures (created if needed).
     formats
@@ -158,6 +201,9 @@ def figures3d_for(
         from regopack.plugins.analysis.psd_figure import draw_psd
 
         jobs.append(("psd-3d", lambda: draw_psd(psd)))
+    homogeneity = analyzers.get("homogeneity3d")
+    if isinstance(homogeneity, Homogeneity3D):
+        jobs.append(("homogeneity-3d", lambda: draw_homogeneity3d(homogeneity)))
     if of is not None:
         jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS3D.get(of, ())]
     if not jobs:

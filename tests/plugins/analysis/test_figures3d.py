@@ -16,9 +16,14 @@ STEMS = [stem for stems in STEMS3D.values() for stem in stems]
 
 
 def test_the_3d_figures_are_written_and_embedded(packing3d, analysed3d, tmp_path) -> None:
+    from regopack.plugins.analysis.homogeneity3d import Homogeneity3D
     from regopack.plugins.analysis.psd3d import Psd3D
 
-    analyzers = {**analysed3d.analyzers, "psd3d": Psd3D().compute(packing3d, {})}
+    analyzers = {
+        **analysed3d.analyzers,
+        "psd3d": Psd3D().compute(packing3d, {}),
+        "homogeneity3d": Homogeneity3D().compute(packing3d, {}),
+    }
     files = write_analysis(tmp_path / "a", packing3d, analyzers)
     names = sorted(p.name for p in files.figures)
     assert names == sorted([f"{s}.png" for s in STEMS] + [f"{s}.svg" for s in STEMS])
