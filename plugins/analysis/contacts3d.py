@@ -20,7 +20,7 @@ scaled about its centre by ``1 + s / h``.
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Self
+from typing import Any, NamedTuple, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -103,16 +103,131 @@ def candidate_pairs3d(packing: Packing3D, s_max: float) -> tuple[IntArray, IntAr
     return lo[order].astype(np.int64), hi[order].astype(np.int64)
 
 
-def _fallback_threshold(packing: Packing3D, i: int, j: int) -> tuple[float, FloatArray]:
+def periodic_pairs3d(packing: Packing3D, s_max: float) -> tuple[IntArray, IntArray, FloatArray]:
+    """:func:`candidate_pairs3d` in a periodic box: pairs ``(i, j)`` and the shift of ``j``.
+
+    Every image ``centre[j] + shift`` (among the 27 about the cell) whose ball
+    meets ``i``'s is a pair, so in a box a few particles wide a pair may meet
+    through two images, and a particle its own image (``i == j``). Pairs have
+    ``i <= j`` and appear once.
+    """
+    import itertools
+
+    from scipy.spatial import cKDTree
+
+    placed = np.flatnonzero(packing.placed).astype(np.int64)
+    if placed.shape[0] < 1:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3))
+    circum = packing.solids.circumradius
+    counts = np.diff(packing.face_offsets)
+    smallest = np.full(packing.n_particles, np.inf)
+    smallest[counts > 0] = np.minimum.reduceat(
+        packing.support, packing.face_offsets[:-1][counts > 0]
+    )
+    reach = (circum * (1.0 + s_max / smallest))[placed] * (1.0 + 1e-9)
+    box = packing.domain
+    lo = np.array([box.xmin, box.ymin, box.zmin])
+    period = np.array(box.size)
+    wrapped = np.mod(packing.centre[placed] - lo, period)
+    wrapped[wrapped >= period] = 0.0
+    tree = cKDTree(wrapped)
+    rows: list[tuple[IntArray, IntArray, FloatArray]] = []
+    for s in itertools.product((-1, 0, 1), repeat=3):
+        image = np.array(s, dtype=float) * period
+        found = tree.sparse_distance_matrix(
+            cKDTree(wrapped + image), 2.0 * float(reach.max()), output_type="ndarray"
+        )
+        a = found["i"].astype(np.int64)
+        b = found["j"].astype(np.int64)
+        d = found["v"]
+        # each contact once: (a, b, s) is (b, a, -s); a particle's own image once
+        first = (a < b) | ((a == b) & (s > (0, 0, 0)))
+        near = first & (d <= reach[a] + reach[b])
+        a, b = a[near], b[near]
+        shift = (wrapped[b] + image + lo - packing.centre[placed[b]]) - (
+            wrapped[a] + lo - packing.centre[placed[a]]
+        )
+        rows.append((a, b, shift))
+    a = np.concatenate([r[0] for r in rows])
+    b = np.concatenate([r[1] for r in rows])
+    shift = np.concatenate([r[2] for r in rows])
+    i, j = placed[a], placed[b]
+    swap = i > j
+    i, j = np.where(swap, j, i), np.where(swap, i, j)
+    shift[swap] = -shift[swap]
+    order = np.lexsort((shift[:, 2], shift[:, 1], shift[:, 0], j, i))
+    return i[order].astype(np.int64), j[order].astype(np.int64), shift[order]
+
+
+class _Solids(NamedTuple):
+    """The arrays the contact kernels read."""
+
+    centre: FloatArray
+    vertices: FloatArray
+    offsets: IntArray
+    normals: FloatArray
+    support: FloatArray
+    face_offsets: IntArray
+    size: FloatArray
+
+
+def _own_solids(p3: Packing3D) -> _Solids:
+    """Return the packing's solids as the kernels read them."""
+    return _Solids(
+        np.ascontiguousarray(np.nan_to_num(p3.centre), dtype=np.float64),
+        np.ascontiguousarray(p3.vertices),
+        np.ascontiguousarray(p3.offsets),
+        np.ascontiguousarray(p3.normals),
+        np.ascontiguousarray(p3.support),
+        np.ascontiguousarray(p3.face_offsets),
+        np.ascontiguousarray(p3.solids.circumradius, dtype=np.float64),
+    )
+
+
+def _with_ghosts(p3: Packing3D, pj: IntArray, shift: FloatArray) -> tuple[IntArray, _Solids]:
+    """Append copies of the solids ``pj``, moved by ``shift``, after the packing's own.
+
+    Returns the copies' indices and the extended ``centre, vertices, offsets,
+    normals, support, face_offsets, size`` arrays the kernels read.
+    """
+    n = p3.n_particles
+    solids = p3.solids
+
+    def ranges(offsets: IntArray) -> tuple[IntArray, IntArray]:
+        sizes = offsets[pj + 1] - offsets[pj]
+        starts = np.repeat(offsets[pj] - np.concatenate([[0], np.cumsum(sizes)[:-1]]), sizes)
+        return starts + np.arange(int(sizes.sum())), sizes
+
+    vidx, vsizes = ranges(solids.offsets)
+    fidx, fsizes = ranges(solids.face_offsets)
+    centre = np.concatenate([np.nan_to_num(p3.centre), p3.centre[pj] + shift])
+    vertices = np.concatenate([p3.vertices, p3.vertices[vidx]])
+    offsets = np.concatenate([solids.offsets, solids.offsets[-1] + np.cumsum(vsizes)])
+    normals = np.concatenate([p3.normals, p3.normals[fidx]])
+    support = np.concatenate([p3.support, p3.support[fidx]])
+    face_offsets = np.concatenate(
+        [solids.face_offsets, solids.face_offsets[-1] + np.cumsum(fsizes)]
+    )
+    size = np.concatenate([solids.circumradius, solids.circumradius[pj]])
+    ghosts = np.arange(n, n + pj.shape[0], dtype=np.int64)
+    c = np.ascontiguousarray
+    return ghosts, _Solids(
+        c(centre), c(vertices), c(offsets), c(normals), c(support), c(face_offsets), c(size)
+    )
+
+
+def _fallback_threshold(
+    packing: Packing3D, i: int, j: int, shift: FloatArray | None = None
+) -> tuple[float, FloatArray]:
     """Threshold and normal of one pair by HiGHS, for a pair the compiled simplex gave up on."""
     from scipy.optimize import linprog
 
     solids = packing.solids
     parts = []
-    for p in (i, j):
+    for p, moved in ((i, np.zeros(3)), (j, np.zeros(3) if shift is None else shift)):
         f0, f1 = int(solids.face_offsets[p]), int(solids.face_offsets[p + 1])
         nrm = solids.normals[f0:f1]
-        parts.append((nrm, solids.support[f0:f1] + nrm @ packing.centre[p]))
+        parts.append((nrm, solids.support[f0:f1] + nrm @ (packing.centre[p] + moved)))
     a_ub = np.vstack([np.column_stack([n, -np.ones(len(n))]) for n, _ in parts])
     b_ub = np.concatenate([b for _, b in parts])
     res = linprog(np.array([0.0, 0.0, 0.0, 1.0]), A_ub=a_ub, b_ub=b_ub, bounds=[(None, None)] * 4)
@@ -146,8 +261,6 @@ class Contacts3D(Analyzer):
         from regopack.plugins.analysis import contact3d_kernel as ck
 
         p3 = as_packing3d(packing, self)
-        if p3.domain.periodic:
-            raise ConfigError("contacts3d: periodic boxes are not analysed yet (walled boxes only)")
         if p3.rounded:
             if p3.solids.normals.shape[0] != 0:
                 raise ConfigError(
@@ -158,28 +271,28 @@ class Contacts3D(Analyzer):
         cfg = self.config
         self.packing = p3
         s_max = 0.5 * cfg.tol_max
-        pi, pj = candidate_pairs3d(p3, s_max)
-        centre = np.ascontiguousarray(np.nan_to_num(p3.centre), dtype=np.float64)
-        size = np.ascontiguousarray(p3.solids.circumradius, dtype=np.float64)
-        args = (
-            np.ascontiguousarray(p3.normals),
-            np.ascontiguousarray(p3.support),
-            np.ascontiguousarray(p3.face_offsets),
-        )
-        thr, nrm = ck.pair_thresholds(pi, pj, centre, *args, size)
+        if p3.domain.periodic:
+            # each pair through the image of j nearest to i: a moved copy of j
+            pi, pj, shift = periodic_pairs3d(p3, s_max)
+            qj, sol = _with_ghosts(p3, pj, shift)
+        else:
+            pi, pj = candidate_pairs3d(p3, s_max)
+            shift = np.zeros((pi.shape[0], 3))
+            qj, sol = pj, _own_solids(p3)
+        faces = (sol.normals, sol.support, sol.face_offsets)
+        thr, nrm = ck.pair_thresholds(pi, qj, sol.centre, *faces, sol.size)
         for k in np.flatnonzero(np.isnan(thr)).tolist():
-            thr[k], nrm[k] = _fallback_threshold(p3, int(pi[k]), int(pj[k]))
+            thr[k], nrm[k] = _fallback_threshold(p3, int(pi[k]), int(pj[k]), shift[k])
         keep = 2.0 * thr < cfg.tol_max
         self.pairs = np.column_stack([pi[keep], pj[keep]]).astype(np.int64)
         self.threshold = 2.0 * thr[keep]
         self.pair_normal = nrm[keep]
         at = self.threshold < cfg.tol
         ci, cj = self.pairs[at, 0].copy(), self.pairs[at, 1].copy()
+        qcj = qj[keep][at].copy()
         normal = np.ascontiguousarray(self.pair_normal[at])
-        vertices = np.ascontiguousarray(p3.vertices)
-        offsets = np.ascontiguousarray(p3.offsets)
         volume, area, width, point = ck.contact_regions(
-            ci, cj, 0.5 * cfg.tol, normal, centre, vertices, offsets, *args, size
+            ci, qcj, 0.5 * cfg.tol, normal, sol.centre, sol.vertices, sol.offsets, *faces, sol.size
         )
         ok = (volume > 0) & (area > 0)
         depth, radius = equivalent_cap(volume[ok], area[ok])

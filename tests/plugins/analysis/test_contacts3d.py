@@ -179,15 +179,44 @@ def test_every_3d_analyzer_runs_on_a_lone_particle_and_skips_the_unplaced() -> N
     assert res["psd3d"]["n_placed"] == 1
 
 
-def test_periodic_boxes_are_refused_in_one_line() -> None:
+def test_a_periodic_lattice_of_cubes_touches_across_the_faces() -> None:
     import dataclasses
 
     from regopack.domain3d import PeriodicBox
 
-    p = cube_lattice((2, 1, 1), GAPS)
-    periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
-    with pytest.raises(ConfigError, match=r"^contacts3d: periodic boxes are not analysed yet"):
-        regopack.analyze(periodic, "contacts3d")
+    # 3 x 3 x 3 cubes of side 1 with a gap of 1/64, as a periodic cell of side 3 (1 + 1/64):
+    # grown along their face normals, all 26 neighbours meet at the same threshold, those
+    # across the cell's faces included, as the centre cube's do in the walled lattice
+    gap = 1 / 64
+    p = cube_lattice((3, 3, 3), (gap, gap, gap))
+    side = 3 * (1 + gap)
+    lo = p.centre.min(axis=0) - 0.5 - gap / 2
+    periodic = dataclasses.replace(p, domain=PeriodicBox(*(v for a in lo for v in (a, a + side))))
+    c = Contacts3D(Contacts3DConfig(tol=0.05, margin=0.0)).compute(periodic, {})
+    assert len(c.pairs) == 27 * 26 // 2
+    assert np.allclose(c.threshold, gap)
+    assert np.all(c.count_per_particle() == 26)
+    walled = Contacts3D(Contacts3DConfig(tol=0.05, margin=0.0)).compute(p, {})
+    assert int(walled.count_per_particle()[13]) == 26
+    centre = (walled.i == 13) | (walled.j == 13)
+    mine = (c.i == 13) | (c.j == 13)
+    assert np.allclose(np.sort(c.area[mine]), np.sort(walled.area[centre]))
+    assert np.allclose(np.sort(c.volume[mine]), np.sort(walled.volume[centre]))
+
+
+def test_a_cube_in_a_periodic_cell_of_its_size_touches_its_own_images() -> None:
+    import dataclasses
+
+    from regopack.domain3d import PeriodicBox
+
+    gap = 1 / 64
+    p = cube_lattice((1, 1, 1), (gap, gap, gap))
+    lo = p.centre[0] - 0.5 - gap / 2
+    cell = dataclasses.replace(p, domain=PeriodicBox(*(v for a in lo for v in (a, a + 1 + gap))))
+    c = Contacts3D(Contacts3DConfig(tol=0.05, margin=0.0)).compute(cell, {})
+    assert c.pairs.tolist() == [[0, 0]] * 13  # half of its 26 neighbouring images, once each
+    assert np.allclose(c.threshold, gap)
+    assert c.count_per_particle().tolist() == [26]
 
 
 def test_the_highs_fallback_gives_the_simplex_threshold_and_normal(packing3d, contacts) -> None:
