@@ -14,6 +14,7 @@ noise of its particle count.
 
 from __future__ import annotations
 
+import dataclasses
 import itertools
 import math
 from collections.abc import Mapping
@@ -23,8 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain3d import Box
-from regopack.errors import ConfigError
+from regopack.domain3d import Box, PeriodicBox
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
 from regopack.plugins.analysis.common3d import (
@@ -58,6 +58,23 @@ def _region_stats(
     return n, n / volume if volume > 0 else math.nan, float(d.mean()) if n else math.nan
 
 
+def _images(p3: Packing3D) -> list[Packing3D]:
+    """Return the packing, and in a periodic box its 26 images about the cell too."""
+    if not p3.domain.periodic:
+        return [p3]
+    period = np.array(p3.domain.size)
+    shifts = [np.array(s, dtype=float) * period for s in itertools.product((-1, 0, 1), repeat=3)]
+    return [dataclasses.replace(p3, centre=p3.centre + shift) for shift in shifts]
+
+
+def _wrapped_centres(p3: Packing3D) -> FloatArray:
+    """Return the centres, wrapped into the cell in a periodic box."""
+    domain = p3.domain
+    if not isinstance(domain, PeriodicBox):
+        return p3.centre
+    return np.asarray(domain.wrap(p3.centre), dtype=np.float64)
+
+
 def _cv(values: list[float]) -> float | None:
     v = np.asarray([x for x in values if math.isfinite(x)])
     if v.size < 2 or not v.mean() > 0:
@@ -76,29 +93,32 @@ class Homogeneity3D(Analyzer):
 
     def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
         """Measure every layer and shell of the interior window."""
-        from regopack.run3d import phi_in_box
+        from regopack.run3d import phi_in_box as clip
 
         p3 = as_packing3d(packing, self)
-        if p3.domain.periodic:
-            raise ConfigError(
-                "homogeneity3d: periodic boxes are not analysed yet (their solids cross the "
-                "cell's faces; walled boxes only)"
-            )
         cfg = self.config
         margin = interior_margin3d(p3, cfg.margin)
         w = interior_window3d(p3, margin)
         volume = solid_volumes(p3)
-        centre = p3.centre
+        images = _images(p3)
+
+        def phi_in_box(p: Packing3D, window: Box, vol: FloatArray) -> float:
+            # in a periodic box a solid that crosses a face fills the window in its images
+            return sum(clip(image, window, vol) for image in images)
+
+        centre = _wrapped_centres(p3)
         placed = p3.placed
         with np.errstate(invalid="ignore"):
             layers: dict[str, list[float]] = {k: [] for k in ("z_lo", "z_hi", "n", "density")}
             layers.update({"phi": [], "mean_diameter": []})
             edges = np.linspace(w.zmin, w.zmax, cfg.layers + 1)
+            # a periodic cell holds its wrapped centres in [lo, hi)
+            low = np.greater_equal if p3.domain.periodic else np.greater
             inside_xy = (
                 placed
-                & (centre[:, 0] > w.xmin)
+                & low(centre[:, 0], w.xmin)
                 & (centre[:, 0] < w.xmax)
-                & (centre[:, 1] > w.ymin)
+                & low(centre[:, 1], w.ymin)
                 & (centre[:, 1] < w.ymax)
             )
             # a margin that leaves no window leaves no regions

@@ -36,13 +36,17 @@ def test_a_lattice_of_cubes_is_homogeneous_layer_by_layer() -> None:
     assert r["mean_diameter_layers"] == pytest.approx([2 * p.radius[0]] * 6)
 
 
-def test_periodic_boxes_are_refused_in_one_line() -> None:
+def test_a_periodic_cell_counts_the_solids_that_cross_its_faces_in_their_images() -> None:
     import dataclasses
 
     from regopack.domain3d import PeriodicBox
-    from regopack.errors import ConfigError
 
-    p = cube_lattice((2, 2, 2), (0.0, 0.0, 0.0))
-    periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
-    with pytest.raises(ConfigError, match=r"^homogeneity3d: periodic boxes are not analysed"):
-        Homogeneity3D().compute(periodic, {})
+    # 4 x 4 x 4 touching unit cubes in a cell shifted by half a cube: every cube crosses
+    # faces of the cell, and its images fill every layer and shell to phi = 1
+    p = cube_lattice((4, 4, 4), (0.0, 0.0, 0.0))
+    lo = p.centre.min(axis=0)
+    cell = dataclasses.replace(p, domain=PeriodicBox(*(v for a in lo for v in (a, a + 4.0))))
+    h = Homogeneity3D(Homogeneity3DConfig(layers=4, shells=2)).compute(cell, {})
+    np.testing.assert_allclose(h.layers["phi"], 1.0, rtol=1e-12)
+    np.testing.assert_allclose(h.shells["phi"], 1.0, rtol=1e-12)
+    np.testing.assert_array_equal(h.layers["n"], 16)
