@@ -20,7 +20,9 @@ some circle and in no open cap). Each circle is handled as in 2D: every
 other cap covers an open arc of it, computed in closed form; free arcs
 shorter than ``THIN`` of ``R`` (tangent points) count as nothing, as do
 circles thinner than that and arcs beside which the free set is narrower
-than ``WIDTH`` tolerances at their middle (two caps meeting along a seam).
+than ``WIDTH`` tolerances at their middle and at both quarters (two caps
+meeting along a seam; another cap that only touches the arc at one point
+does not remove it).
 
 **Sampling.** The centre is uniform by area on ``F``: points uniform on ``S``
 are proposed and the first free one is taken; after ``TRIES`` failures
@@ -51,6 +53,8 @@ WIDTH = 16.0
 """A free set narrower than this many tolerances beside its boundary arc counts as nothing."""
 TRIES = 1 << 16
 """Proposals of each sampling stage."""
+WIDTH_AT = (0.5, 0.25, 0.75)
+"""Where along a free arc :func:`_has_width` looks, in turn (fractions of the arc)."""
 
 
 @numba.njit(cache=True)
@@ -116,6 +120,39 @@ def _has_width(
 
 
 @numba.njit(cache=True)
+def _arc_has_width(
+    caps: FloatArray,
+    ncaps: int,
+    big_r: float,
+    tau: float,
+    j: int,
+    start: float,
+    end: float,
+    rc: float,
+    hj: float,
+    e1x: float,
+    e1y: float,
+    e1z: float,
+    e2x: float,
+    e2y: float,
+    e2z: float,
+) -> bool:
+    """:func:`_has_width` at the middle of the arc, then at its quarters.
+
+    A seam (another cap meeting cap ``j`` along its circle) has no width
+    anywhere along the arc; a free set that another cap only pinches at
+    one point (a tangency at the arc's middle) has width beside the rest.
+    """
+    for frac in WIDTH_AT:
+        if _has_width(
+            caps, ncaps, big_r, tau, j, start + frac * (end - start), rc, hj,
+            e1x, e1y, e1z, e2x, e2y, e2z,
+        ):  # fmt: skip
+            return True
+    return False
+
+
+@numba.njit(cache=True)
 def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatArray:
     """Free arcs of every cap's boundary circle.
 
@@ -175,8 +212,8 @@ def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatAr
             else:
                 s = two_pi
                 e = two_pi
-            if s - at > min_angle and _has_width(
-                caps, ncaps, big_r, tau, j, 0.5 * (at + s), rc, hj, e1x, e1y, e1z, e2x, e2y, e2z
+            if s - at > min_angle and _arc_has_width(
+                caps, ncaps, big_r, tau, j, at, s, rc, hj, e1x, e1y, e1z, e2x, e2y, e2z
             ):
                 if nout == out.shape[0]:
                     grown = np.empty((2 * nout, 3))

@@ -57,6 +57,33 @@ def test_a_tangent_point_is_no_free_surface() -> None:
     assert free_arcs(caps, 2, 1.0, 1e-12).shape[0] == 0
 
 
+def test_a_free_set_pinched_at_the_middle_of_every_free_arc_is_found() -> None:
+    # four caps of 60 degrees about the equator of u and the hemisphere opposite u leave a
+    # rounded square about u; a cap about u inscribed in it touches each side at its middle,
+    # and so does it the middle of its own circle (angle pi of its frame, u chosen for that):
+    # four lobes remain, about 2 % of the sphere, though every free arc is pinched mid-way
+    from regopack.plugins.available_surface.spheres import _frame
+
+    u = np.array([0.7415052, 0.53854712, -0.40017126])
+    u /= np.linalg.norm(u)
+    e1x, e1y, e1z, e2x, e2y, e2z = _frame(*u)
+    e1, e2 = np.array([e1x, e1y, e1z]), np.array([e2x, e2y, e2z])
+    rows = []
+    for i in range(4):
+        b = math.pi + i * math.pi / 2
+        rows.append((*(math.cos(b) * e1 + math.sin(b) * e2), 0.5))
+    rows += [(*u, math.cos(math.pi / 6)), (*(-u), 0.0)]
+    caps = np.array(rows)
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(200_000, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    assert np.mean(np.all(x @ caps[:, :3].T <= caps[:, 3] - 1e-6, axis=1)) > 0.01
+    arcs = free_arcs(caps, 6, 1.0, 1e-12)
+    assert arcs.shape[0] > 0
+    for _ in range(20):
+        assert is_free(caps, 6, *sample_free(caps, 6, arcs, 1.0, 1e-12, rng), 1e-12)
+
+
 def scene(**changes: Any) -> dict[str, Any]:
     data: dict[str, Any] = {
         "name": "spheres",
