@@ -7,7 +7,8 @@ a candidate runs in one compiled call, :func:`analyse`:
 1. the envelope ``E_k = P_k ⊕ (-Q)``;
 2. the interferers: the placed particles (and, in a periodic box, their
    images among the 27 shifts) in the grid cells that a ball about ``c_k``
-   reaches, kept when ``|c_j - c_k| < R_k + R_j + 2 R_Q``;
+   reaches, kept when ``|c_j - c_k| < R_k + R_j + 2 R_Q`` (plus the packing
+   control's margin, when there is one);
 3. each interferer's envelope as half-spaces, computed once per particle
    being placed and kept in :class:`HalfspaceCache`;
 4. the free surface and, when it has area, a centre drawn uniformly by area
@@ -234,6 +235,7 @@ def _gather(
     near: IntArray,
     at: FloatArray,
     count: int,
+    margin: float,
 ) -> tuple[int, IntArray, FloatArray]:
     """Append the interferers found in the cells about ``p`` (their images at ``+ shift``).
 
@@ -254,7 +256,7 @@ def _gather(
                     dy = centre[j, 1] + shift[1] - ck[1]
                     dz = centre[j, 2] + shift[2] - ck[2]
                     d2 = dx * dx + dy * dy + dz * dz
-                    lim = circum[pk] + circum[j] + 2.0 * circum[i]
+                    lim = circum[pk] + circum[j] + 2.0 * circum[i] + margin
                     if d2 < lim * lim and not (j == pk and d2 == 0.0):
                         if count == near.shape[0]:
                             grown = np.empty(2 * count, dtype=np.int64)
@@ -283,15 +285,21 @@ def _interferers(
     period: FloatArray,
     lo: FloatArray,
     hi: FloatArray,
+    margin: float,
 ) -> tuple[int, IntArray, FloatArray]:
-    """Placed particles (or periodic images) that pass the circumradius test with ``pk``."""
+    """Placed particles (or periodic images) that pass the circumradius test with ``pk``.
+
+    ``|c_j - c_k| < R_k + R_j + 2 R_Q + margin``: with the packing control's
+    margin, a particle that the new one could come closer to than the margin
+    interferes too.
+    """
     ck = centre[pk]
-    reach = circum[pk] + reach_max + 2.0 * circum[i]
+    reach = circum[pk] + reach_max + 2.0 * circum[i] + margin
     near = np.empty(64, dtype=np.int64)
     at = np.empty((64, 3))
     count = 0
     if period.shape[0] == 0:
-        return _gather(g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, 0)
+        return _gather(g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, 0, margin)
     shift = np.empty(3)
     for sx in (-1, 0, 1):
         for sy in (-1, 0, 1):
@@ -308,7 +316,7 @@ def _interferers(
                     continue
                 p = ck - shift
                 count, near, at = _gather(
-                    g, p, reach, shift, ck, pk, i, centre, circum, near, at, count
+                    g, p, reach, shift, ck, pk, i, centre, circum, near, at, count, margin
                 )
     return count, near, at
 
@@ -337,7 +345,7 @@ def analyse_sphere(
     r = circum[i]
     big_r = circum[pk] + r
     tau = EPS * big_r
-    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi)
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
     caps = np.empty((count + 6, 4))
     nc = 0
     for m in range(count):
@@ -460,7 +468,7 @@ def analyse(
     pk = order[k]
     q = solid(s, i)
     ck = centre[pk]
-    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi)
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
     kept = 0
     for m in range(count):  # drop the interferers that a face plane keeps off E_k
         if not _separated(s, pk, near[m], i, ck, at[m], margin):

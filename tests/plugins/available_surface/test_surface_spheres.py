@@ -128,6 +128,24 @@ def test_spheres_touch_their_candidate_and_pass_the_oracle(kind: str, order: str
         assert gap.min() >= -1e-9 * r[a]  # overlaps none
 
 
+def test_eta_keeps_each_sphere_its_margin_from_spheres_beyond_the_circumradius_test() -> None:
+    # a sphere j with |c_j - c_k| >= r_k + r_j + 2 r cannot overlap the new sphere, but it
+    # can come closer to it than the margin: it interferes when the margin is added
+    eta = 30.0
+    packing = regopack.pack(scene(count=150, density={"kind": "eta", "eta": eta}), verify=False)
+    assert isinstance(packing, Packing3D)
+    order_ = packing.placed_in_order()
+    c = packing.centre[order_]
+    r = packing.radius[order_]
+    assert len(order_) >= 40
+    for a in range(1, len(order_)):
+        gap = np.sort(np.linalg.norm(c[:a] - c[a], axis=1) - r[:a] - r[a])
+        margin = (eta - 1.0) / 100.0 * 2.0 * r[a]  # xi >= 0
+        assert gap[0] == pytest.approx(0.0, abs=1e-9 * r[a])  # touches its candidate
+        if a > 1:
+            assert gap[1] >= margin * (1 - 1e-9)  # keeps the margin from every other
+
+
 def test_spheres_and_polyhedra_together_are_refused_in_one_line() -> None:
     phases = [
         {"name": "glass", "fraction": 0.5, "shape": {"kind": "sphere"}},
