@@ -25,7 +25,11 @@ from regopack.plugins.available_surface.analysis import (
     scan,
     solids_of,
 )
-from regopack.plugins.available_surface.halfspaces import EdgeArcs, edge_arcs
+from regopack.plugins.available_surface.halfspaces import (
+    EdgeArcs,
+    edge_arcs,
+    minkowski_halfspaces,
+)
 from regopack.plugins.available_surface.polyhedron import Polyhedron
 from regopack.solids import SolidBatch
 
@@ -124,14 +128,17 @@ class SurfaceState:
         self.adm_hi = hi
 
     def begin(self, i: int) -> bool:
-        """Start on particle ``i``; False when it is larger than the box."""
+        """Start on particle ``i``; False when it is larger than the box.
+
+        In a periodic box: False when it overlaps its own images.
+        """
         self._particle = i
         self._q_arcs = None
         self.cache.fill[0] = 0
         if self.period is not None:
             self.adm_lo = np.full(3, -np.inf)
             self.adm_hi = np.full(3, np.inf)
-            return True
+            return not self._meets_own_images(i)
         if self.spheres:
             self.adm_lo = self.lo + self.rounding[i]
             self.adm_hi = self.hi - self.rounding[i]
@@ -140,6 +147,27 @@ class SurfaceState:
             self.adm_lo = self.lo - q.vertices.min(axis=0)
             self.adm_hi = self.hi - q.vertices.max(axis=0)
         return not bool(np.any(self.adm_lo > self.adm_hi))
+
+    def _meets_own_images(self, i: int) -> bool:
+        """Whether particle ``i`` overlaps its own periodic images (it then fits nowhere).
+
+        A sphere does when its diameter exceeds the shortest period; a
+        polyhedron ``Q`` when a period shift lies inside the open difference
+        body ``Q ⊕ (-Q)`` (touching images are allowed).
+        """
+        period = self.period
+        assert period is not None
+        if self.spheres:
+            return bool(2.0 * self.rounding[i] > period.min())
+        q = self.polys[i]
+        normals, support = minkowski_halfspaces(q, q)
+        tol = 1e-12 * float(support.max())
+        reach = np.ceil(2.0 * float(self.circum[i]) / period).astype(np.int64)
+        axes = [np.arange(-m, m + 1) for m in reach]
+        shifts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        shifts = shifts[np.any(shifts != 0, axis=1)] * period
+        inside = (shifts @ normals.T - support).max(axis=1) < -tol
+        return bool(np.any(inside))
 
     def fits_at(self, x: FloatArray) -> bool:
         """Whether the current particle's centre ``x`` keeps it inside the box."""

@@ -215,6 +215,28 @@ def test_a_periodic_box_is_packed_across_its_faces(order: str) -> None:
     assert crossing
 
 
+def test_a_particle_that_meets_its_own_periodic_images_is_not_placed() -> None:
+    # a slab thinner than some of the particles: those fit nowhere, the others are placed
+    packing = _pack(
+        scene(
+            count=25,
+            seed=1,
+            domain={"kind": "periodic-box", "width": 14.0, "height": 14.0, "depth": 2.2},
+            size={"kind": "uniform", "d_min": 1.6, "d_max": 2.6},
+        )
+    )
+    assert 0 < packing.n_placed < 25
+    period = np.array(packing.domain.size)
+    size = float(np.cbrt(packing.solids.volume.min()))
+    shifts = [np.array(s) for s in np.ndindex(5, 5, 5)]
+    for j in packing.placed_in_order():
+        solid = packing.world_vertices(int(j))
+        for s in shifts:
+            t = (s - 2) * period
+            if np.any(t != 0):
+                assert separating_gap(solid, solid + t) >= -1e-9 * size
+
+
 @pytest.mark.parametrize("order", ["paper", "sweep"])
 def test_eta_keeps_each_particle_its_margin_from_all_but_its_candidate(order: str) -> None:
     eta = 50.0

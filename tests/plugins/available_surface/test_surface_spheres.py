@@ -146,6 +146,20 @@ def test_eta_keeps_each_sphere_its_margin_from_spheres_beyond_the_circumradius_t
             assert gap[1] >= margin * (1 - 1e-9)  # keeps the margin from every other
 
 
+def test_a_sphere_wider_than_a_periodic_box_is_not_placed() -> None:
+    # it would overlap its own images wherever it went
+    out = regopack.pack_and_summarise(
+        scene(
+            count=3,
+            domain={"kind": "periodic-box", "width": 1.7, "height": 1.7, "depth": 1.7},
+            size={"kind": "uniform", "d_min": 2.0, "d_max": 2.02},
+        ),
+        verify=True,
+    )
+    assert out.packing.n_placed == 0
+    assert out.summary["verify"]["ok"]
+
+
 def test_spheres_and_polyhedra_together_are_refused_in_one_line() -> None:
     phases = [
         {"name": "glass", "fraction": 0.5, "shape": {"kind": "sphere"}},
