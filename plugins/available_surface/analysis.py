@@ -471,7 +471,8 @@ def analyse(
     count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
     kept = 0
     for m in range(count):  # drop the interferers that a face plane keeps off E_k
-        if not _separated(s, pk, near[m], i, ck, at[m], margin):
+        # (exact without a margin only: facets moved out by it reach farther at vertices)
+        if margin > 0.0 or not _separated(s, pk, near[m], i, ck, at[m], margin):
             near[kept] = near[m]
             at[kept] = at[m]
             kept += 1

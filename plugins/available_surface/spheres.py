@@ -29,8 +29,12 @@ are proposed and the first free one is taken; after ``TRIES`` failures
 (``F`` is under about 1e-4 of the sphere) the proposals come from the
 smallest cap about the free arcs' mean direction that holds them, which
 holds ``F`` when ``F`` lies in a hemisphere (its boundary arcs bulge into it);
-after ``TRIES`` more, a point uniform by length on the free arcs is taken
-(a sliver: the point is free, but not uniform by area).
+after ``TRIES`` more, a point uniform by length on the free arcs is taken:
+free, but not uniform by area. That happens for a free set under about
+1e-9 of the sphere inside a small cap, but also for a scattered or
+band-shaped free set under about 1e-5 of the sphere (then the cap about the
+arcs is the whole sphere); in dense packings no placed sphere was seen to
+take it.
 """
 
 from __future__ import annotations
