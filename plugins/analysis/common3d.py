@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,6 +11,7 @@ from regopack.domain3d import Box
 from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
+from regopack.plugins.analysis.common import interior_margin
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -28,19 +29,11 @@ def as_packing3d(packing: Any, analyzer: Analyzer) -> Packing3D:
 def interior_margin3d(packing: Packing3D, margin: float | None = None) -> float:
     """Exclusion margin from the walls: ``margin`` if given, else the scene's d_max.
 
-    As in 2D (:func:`regopack.plugins.analysis.common.interior_margin`): the
-    run's statistics, then the scene's size section, then twice the largest
-    drawn radius.
+    The 2D rule (:func:`regopack.plugins.analysis.common.interior_margin`),
+    which reads only what both packings have: the run's statistics, then the
+    scene's size section, then twice the largest drawn radius.
     """
-    if margin is not None:
-        return float(margin)
-    stat = packing.stats.get("interior_margin")
-    if stat is not None and np.isfinite(stat):
-        return float(stat)
-    size: Any = packing.scene.get("size", {}) if isinstance(packing.scene, dict) else {}
-    if isinstance(size, dict) and "d_max" in size:
-        return float(size["d_max"])
-    return 2.0 * float(np.max(packing.radius)) if packing.n_particles else 0.0
+    return interior_margin(cast(Any, packing), margin)
 
 
 def interior_window3d(packing: Packing3D, margin: float) -> Box:
