@@ -119,6 +119,18 @@ class AvailableArcConfig(BaseModel):
             "Ignored by order = 'paper'."
         ),
     )
+    strip: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Width of the sweep's strips (length units): the domain's width is cut into "
+            "equal vertical strips of about this width, each with its own rising zone, and "
+            "each particle is offered to the strip whose zone is lowest, so that the work "
+            "per particle no longer grows with the domain's width. 0: one zone across the "
+            "whole width. Ignored by order = 'paper'."
+        ),
+    )
     search: Literal["indexed", "linear"] = Field(
         "indexed",
         description=(
@@ -232,30 +244,27 @@ def _pack_sweep(
     zone = cfg.zone
     if zone == 0.0:
         zone = ZONE_PER_RADIUS * float(population.radius.max()) if n else 1.0
-    sw = sweep.Sweep(n, height, zone, closing=cfg.closing)
+    width = float(bounds[1] - bounds[0])
+    sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=cfg.strip)
     placed = 0
     for begin in range(0, n, PROGRESS_EVERY):
         if progress is not None:
             progress(begin, placed, n)
         end = min(begin + PROGRESS_EVERY, n)
-        placed += int(
-            sweep.sweep_range(
-                begin, end, sw.delta, st.outlines, st.packed, st.work, rng,
-                sw.zs, sw.bin_head, sw.bin_next, sw.flag, sw.status, st.rounded,
-            )
-        )  # fmt: skip
+        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded)
     if progress is not None:
         progress(n, placed, n)
     index = np.full(n, -1, dtype=np.int64)
     order = st.packed.order[: st.count]
     index[order] = np.arange(order.shape[0])
     centre = np.column_stack([st.packed.cx, st.packed.cy])
-    refused = int(sw.zs[sweep.Z_REFUSED])
+    refused = sw.refused
     stats = {
         "candidate_analyses": st.counter(kernel.I_ANALYSES),
         "empty_analyses": st.counter(kernel.I_EMPTY),
         "zone": float(zone),
-        "zone_raises": int(sw.zs[sweep.Z_RAISES]),
+        "zone_raises": sw.raises,
+        "strips": sw.nstrip,
         "refused": refused,
         "not_offered": n - placed - refused,
         "prepare_time_s": prepared - started,

@@ -54,44 +54,107 @@ MAX_BINS = 1 << 20
 """Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
 has fewer than ``ZONE_BINS`` bins)."""
 
-# zs: integer state of the sweep
+# zs: integer state of the whole sweep
 (
-    Z_LO,
-    Z_HI,
-    Z_FULL,
     Z_DONE,
-    Z_RAISES,
     Z_REFUSED,
-    Z_NZONE,
     Z_STARTED,
-    Z_OFFERED,
-    Z_PACE,
-    Z_SINCE,
     Z_PROMPT,
-) = range(12)
-N_ZS = 12
+    Z_NZONE,
+    Z_CUR,
+) = range(6)
+N_ZS = 6
+
+# sz: integer state of each strip
+(
+    S_LO,
+    S_HI,
+    S_FULL,
+    S_RAISES,
+    S_OFFERED,
+    S_PACE,
+    S_SINCE,
+    S_CLOSED,
+    S_SEEDED,
+) = range(9)
+N_SZ = 9
 
 # per-candidate zone flag
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
 
+MAX_STRIPS = 4096
+"""Most strips across the domain."""
+
+
+def strip_count(width: float, strip: float) -> int:
+    """Return how many equal strips of about ``strip`` fit across ``width`` (at least one)."""
+    if not (strip > 0 and width > 0):
+        return 1
+    return int(min(MAX_STRIPS, max(1, math.floor(width / strip))))
+
 
 class Sweep:
-    """Arrays of one sweep run: bins, flags and the stored screening radii."""
+    """Arrays of one sweep run: bins per strip, flags and the stored screening radii.
 
-    def __init__(self, n: int, height: float, zone: float, closing: str = "paced") -> None:
+    ``strip`` is the requested strip width (0: one strip across ``width``); the
+    domain's width is cut into ``nstrip`` equal strips of width ``swidth``.
+    """
+
+    def __init__(
+        self,
+        n: int,
+        height: float,
+        zone: float,
+        closing: str = "paced",
+        width: float = 0.0,
+        strip: float = 0.0,
+    ) -> None:
         # bins of zone / ZONE_BINS, but at least ZONE_BINS of them over the domain's
         # height (a zone taller than the domain) and at most MAX_BINS (a tiny zone)
         self.delta = max(min(zone, height) / ZONE_BINS, height / MAX_BINS)
         if not self.delta > 0:
             self.delta = 1.0
         nbins = max(1, math.ceil(height / self.delta)) + 1
-        self.bin_head = np.full(nbins, -1, dtype=np.int64)
+        self.nstrip = strip_count(width, strip)
+        self.swidth = width / self.nstrip if width > 0 else 1.0
+        self.bin_head = np.full((self.nstrip, nbins), -1, dtype=np.int64)
         self.bin_next = np.full(max(n, 1), -1, dtype=np.int64)
         self.flag = np.full(max(n, 1), FROZEN, dtype=np.int64)
+        self.rec = np.full(max(n, 1), np.inf)
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
         self.zs[Z_NZONE] = max(1, round(zone / self.delta))
         self.zs[Z_PROMPT] = CLOSINGS[closing]
+        self.zs[Z_CUR] = -1
+        self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
+
+    def run(
+        self,
+        begin: int,
+        end: int,
+        g: K.Outlines,
+        s: K.Packed,
+        w: K.Work,
+        rng: np.random.Generator,
+        rounded: object = None,
+    ) -> int:
+        """Offer particles ``begin`` to ``end - 1``; return how many were placed."""
+        return int(
+            sweep_range(
+                begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
+                self.bin_head, self.bin_next, self.flag, self.rec, self.status, rounded,
+            )
+        )  # fmt: skip
+
+    @property
+    def raises(self) -> int:
+        """Rises of the zones, over all strips."""
+        return int(self.sz[:, S_RAISES].sum())
+
+    @property
+    def refused(self) -> int:
+        """Particles refused."""
+        return int(self.zs[Z_REFUSED])
 
 
 CLOSINGS: dict[str, int] = {"paced": 0, "prompt": 1, "tail": 2}
@@ -154,6 +217,18 @@ def _lowest_centre(i: int, g: K.Outlines, s: K.Packed) -> tuple[bool, float, flo
 
 
 @numba.njit(cache=True)
+def _strip_of(x: float, x0: float, swidth: float, nstrip: int) -> int:
+    if nstrip == 1:
+        return 0
+    b = math.floor((x - x0) / swidth)
+    if b < 0:
+        return 0
+    if b >= nstrip:
+        return nstrip - 1
+    return b
+
+
+@numba.njit(cache=True)
 def _exhaustive(
     i: int,
     mq: int,
@@ -162,14 +237,15 @@ def _exhaustive(
     w: K.Work,
     rng: np.random.Generator,
     rounded: object,
+    st: int,
     lo: int,
     bin_head: IntArray,
     bin_next: IntArray,
     flag: IntArray,
 ) -> int:
-    """Exact analysis, without screening, at every candidate of bins ``lo`` and above."""
-    for b in range(lo, bin_head.shape[0]):
-        e = bin_head[b]
+    """Analyse exactly, unscreened, every candidate of strip ``st`` in bins ``lo`` and up."""
+    for b in range(lo, bin_head.shape[1]):
+        e = bin_head[st, b]
         while e >= 0:
             k = e
             e = bin_next[e]
@@ -180,10 +256,10 @@ def _exhaustive(
 
 @numba.njit(cache=True)
 def _retire_bin(
-    b: int, s: K.Packed, bin_head: IntArray, bin_next: IntArray, flag: IntArray
+    st: int, b: int, s: K.Packed, bin_head: IntArray, bin_next: IntArray, flag: IntArray
 ) -> None:
     leaves = s.ipar[K.I_LEAVES]
-    e = bin_head[b]
+    e = bin_head[st, b]
     while e >= 0:
         if flag[e] != RETIRED:
             flag[e] = RETIRED
@@ -193,31 +269,38 @@ def _retire_bin(
 
 @numba.njit(cache=True)
 def _raise(
-    zs: IntArray, s: K.Packed, bin_head: IntArray, bin_next: IntArray, flag: IntArray
+    st: int,
+    zs: IntArray,
+    sz: IntArray,
+    s: K.Packed,
+    bin_head: IntArray,
+    bin_next: IntArray,
+    flag: IntArray,
 ) -> bool:
-    """Raise the zone by one bin; False when its top is already the domain's top."""
-    hi = zs[Z_HI]
-    if hi + 1 >= bin_head.shape[0]:
+    """Raise strip ``st``'s zone by one bin; False when its top is already the domain's top."""
+    hi = sz[st, S_HI]
+    if hi + 1 >= bin_head.shape[1]:
         return False
     hi += 1
-    zs[Z_HI] = hi
-    zs[Z_RAISES] += 1
+    sz[st, S_HI] = hi
+    sz[st, S_RAISES] += 1
     leaves = s.ipar[K.I_LEAVES]
-    e = bin_head[hi]
+    e = bin_head[st, hi]
     while e >= 0:
         if flag[e] == FROZEN:
             flag[e] = ACTIVE
             tree_set(s.tree, leaves, e, np.inf)
         e = bin_next[e]
-    if hi - zs[Z_LO] + 1 > zs[Z_NZONE]:
-        _retire_bin(zs[Z_LO], s, bin_head, bin_next, flag)
-        zs[Z_LO] += 1
+    if hi - sz[st, S_LO] + 1 > zs[Z_NZONE]:
+        _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+        sz[st, S_LO] += 1
     return True
 
 
 @numba.njit(cache=True)
 def _roll_back(
-    zs: IntArray,
+    st: int,
+    sz: IntArray,
     lo0: int,
     hi0: int,
     full: int,
@@ -229,45 +312,164 @@ def _roll_back(
 ) -> None:
     """Undo one particle's rises: refreeze the bins above ``hi0``, reopen those from ``lo0``."""
     leaves = s.ipar[K.I_LEAVES]
-    for b in range(hi0 + 1, zs[Z_HI] + 1):
-        e = bin_head[b]
+    for b in range(hi0 + 1, sz[st, S_HI] + 1):
+        e = bin_head[st, b]
         while e >= 0:
             if flag[e] == ACTIVE:
                 flag[e] = FROZEN
                 tree_set(s.tree, leaves, e, -np.inf)
             e = bin_next[e]
-    for b in range(lo0, zs[Z_LO]):
-        e = bin_head[b]
+    for b in range(lo0, sz[st, S_LO]):
+        e = bin_head[st, b]
         while e >= 0:
             flag[e] = ACTIVE
             tree_set(s.tree, leaves, e, np.inf)
             e = bin_next[e]
-    zs[Z_LO] = lo0
-    zs[Z_HI] = hi0
-    zs[Z_FULL] = full
-    zs[Z_RAISES] -= raises
+    sz[st, S_LO] = lo0
+    sz[st, S_HI] = hi0
+    sz[st, S_FULL] = full
+    sz[st, S_RAISES] -= raises
+
+
+@numba.njit(cache=True)
+def _show(
+    st: int,
+    visible: bool,
+    sz: IntArray,
+    s: K.Packed,
+    bin_head: IntArray,
+    bin_next: IntArray,
+    flag: IntArray,
+    rec: FloatArray,
+) -> None:
+    """Make strip ``st``'s zone candidates visible to the search, or hide them.
+
+    Hiding keeps each screening radius in ``rec``; showing puts it back.
+    """
+    leaves = s.ipar[K.I_LEAVES]
+    for b in range(sz[st, S_LO], sz[st, S_HI] + 1):
+        e = bin_head[st, b]
+        while e >= 0:
+            if flag[e] == ACTIVE:
+                if visible:
+                    tree_set(s.tree, leaves, e, rec[e])
+                else:
+                    rec[e] = s.tree[leaves + e]
+                    tree_set(s.tree, leaves, e, -np.inf)
+            e = bin_next[e]
+
+
+@numba.njit(cache=True)
+def _choose(sz: IntArray) -> int:
+    """Return the open strip whose zone top is lowest (the first such); -1 when none is."""
+    best = -1
+    for st in range(sz.shape[0]):
+        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
+            if best < 0 or sz[st, S_HI] < sz[best, S_HI]:
+                best = st
+    return best
+
+
+@numba.njit(cache=True)
+def _switch(
+    st: int,
+    zs: IntArray,
+    sz: IntArray,
+    s: K.Packed,
+    bin_head: IntArray,
+    bin_next: IntArray,
+    flag: IntArray,
+    rec: FloatArray,
+) -> None:
+    """Offer the next particles to strip ``st``: hide the current strip's zone, show ``st``'s."""
+    cur = zs[Z_CUR]
+    if cur == st:
+        return
+    if cur >= 0:
+        _show(cur, False, sz, s, bin_head, bin_next, flag, rec)
+    _show(st, True, sz, s, bin_head, bin_next, flag, rec)
+    zs[Z_CUR] = st
 
 
 @numba.njit(cache=True)
 def _register(
     k: int,
     zs: IntArray,
+    sz: IntArray,
     s: K.Packed,
     delta: float,
+    swidth: float,
     bin_head: IntArray,
     bin_next: IntArray,
     flag: IntArray,
+    rec: FloatArray,
 ) -> None:
-    """File new candidate ``k`` in its bin; it is frozen above the zone, retired below."""
+    """File new candidate ``k`` in its strip and bin: frozen above the zone, retired below.
+
+    The first candidate of a strip starts that strip's zone at its bin. A
+    candidate of a strip other than the current one stays hidden from the
+    search until its strip is offered particles.
+    """
     q = s.order[k]
-    b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bin_head.shape[0])
-    bin_next[k] = bin_head[b]
-    bin_head[b] = k
-    if b > zs[Z_HI] or b < zs[Z_LO]:
-        flag[k] = FROZEN if b > zs[Z_HI] else RETIRED
-        tree_set(s.tree, s.ipar[K.I_LEAVES], k, -np.inf)
+    st = _strip_of(s.cx[q], s.fpar[K.F_XMIN], swidth, bin_head.shape[0])
+    b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bin_head.shape[1])
+    bin_next[k] = bin_head[st, b]
+    bin_head[st, b] = k
+    if sz[st, S_SEEDED] == 0:
+        sz[st, S_SEEDED] = 1
+        sz[st, S_HI] = b
+        sz[st, S_LO] = max(0, b - zs[Z_NZONE] + 1)
+    leaves = s.ipar[K.I_LEAVES]
+    if b > sz[st, S_HI] or b < sz[st, S_LO]:
+        flag[k] = FROZEN if b > sz[st, S_HI] else RETIRED
+        tree_set(s.tree, leaves, k, -np.inf)
     else:
         flag[k] = ACTIVE
+        if st != zs[Z_CUR]:
+            rec[k] = np.inf
+            tree_set(s.tree, leaves, k, -np.inf)
+
+
+@numba.njit(cache=True)
+def _offer(
+    i: int,
+    st: int,
+    g: K.Outlines,
+    s: K.Packed,
+    w: K.Work,
+    rng: np.random.Generator,
+    zs: IntArray,
+    sz: IntArray,
+    bin_head: IntArray,
+    bin_next: IntArray,
+    flag: IntArray,
+    rounded: object,
+) -> int:
+    """Offer particle ``i`` to strip ``st``: the screened zone search, rising, then exact.
+
+    Returns the new insertion index, or -1 when the strip refuses it.
+    """
+    mq = K.begin_particle(i, g, s, w)
+    raises = 0
+    lo0 = sz[st, S_LO]
+    hi0 = sz[st, S_HI]
+    while True:
+        k = place_screened(i, mq, g, s, w, rng, rounded)
+        if k >= 0:
+            return k
+        if sz[st, S_FULL] == 0 and raises < zs[Z_NZONE]:
+            if _raise(st, zs, sz, s, bin_head, bin_next, flag):
+                raises += 1
+                continue
+            sz[st, S_FULL] = 1
+            sz[st, S_PACE] = max(1, sz[st, S_OFFERED] // max(1, sz[st, S_RAISES]))
+        if raises > 0:
+            # rising did not help: a particle too large for the front must not
+            # carry the zone away with it. The bins it retired reopen; the bins it
+            # opened freeze again, unless the zone reached the top (the closing)
+            keep_hi = sz[st, S_HI] if sz[st, S_FULL] == 1 else hi0
+            _roll_back(st, sz, lo0, keep_hi, sz[st, S_FULL], raises, s, bin_head, bin_next, flag)
+        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bin_head, bin_next, flag)
 
 
 @numba.njit(cache=True)
@@ -275,14 +477,17 @@ def sweep_range(
     begin: int,
     end: int,
     delta: float,
+    swidth: float,
     g: K.Outlines,
     s: K.Packed,
     w: K.Work,
     rng: np.random.Generator,
     zs: IntArray,
+    sz: IntArray,
     bin_head: IntArray,
     bin_next: IntArray,
     flag: IntArray,
+    rec: FloatArray,
     status: IntArray,
     rounded: object = None,
 ) -> int:
@@ -292,7 +497,7 @@ def sweep_range(
     after the run has closed keep ``STATUS_NOT_OFFERED``.
     """
     placed = 0
-    nbins = bin_head.shape[0]
+    nbins = bin_head.shape[1]
     for i in range(begin, end):
         if zs[Z_DONE] == 1:
             break
@@ -303,67 +508,67 @@ def sweep_range(
                 zs[Z_REFUSED] += 1
                 continue
             zs[Z_STARTED] = 1
-            zs[Z_LO] = 0
-            zs[Z_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
+            st = _strip_of(x, s.fpar[K.F_XMIN], swidth, bin_head.shape[0])
+            sz[st, S_SEEDED] = 1
+            sz[st, S_LO] = 0
+            sz[st, S_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
+            zs[Z_CUR] = st
             k = K.insert_particle(i, x, y, g, s)
-            _register(k, zs, s, delta, bin_head, bin_next, flag)
+            _register(k, zs, sz, s, delta, swidth, bin_head, bin_next, flag, rec)
             status[i] = STATUS_PLACED
             placed += 1
             continue
-        if zs[Z_FULL] == 1 and zs[Z_PROMPT] == 0:
-            # paced closing: the lowest bin retires after as many offers as a bin took to
-            # pass before, so the last zone sees the stream for as long as any other
-            zs[Z_SINCE] += 1
-            if zs[Z_SINCE] > zs[Z_PACE]:
-                zs[Z_SINCE] = 0
-                _retire_bin(zs[Z_LO], s, bin_head, bin_next, flag)
-                zs[Z_LO] += 1
-                if zs[Z_LO] > zs[Z_HI]:
-                    zs[Z_DONE] = 1
-                    break
-        elif zs[Z_FULL] == 0:
-            zs[Z_OFFERED] += 1
-        mq = K.begin_particle(i, g, s, w)
-        was_full = zs[Z_FULL]
-        raises = 0
-        lo0 = zs[Z_LO]
-        hi0 = zs[Z_HI]
         k = -1
+        offered = False
         while True:
-            k = place_screened(i, mq, g, s, w, rng, rounded)
-            if k >= 0:
+            st = _choose(sz)
+            if st < 0:
                 break
-            if zs[Z_FULL] == 0 and raises < zs[Z_NZONE]:
-                if _raise(zs, s, bin_head, bin_next, flag):
-                    raises += 1
-                    continue
-                zs[Z_FULL] = 1
-                zs[Z_PACE] = max(1, zs[Z_OFFERED] // max(1, zs[Z_RAISES]))
-            if raises > 0:
-                # rising did not help: a particle too large for the front must not
-                # carry the zone away with it. The bins it retired reopen; the bins it
-                # opened freeze again, unless the zone reached the top (the closing)
-                keep_hi = zs[Z_HI] if zs[Z_FULL] == 1 else hi0
-                _roll_back(zs, lo0, keep_hi, zs[Z_FULL], raises, s, bin_head, bin_next, flag)
-            k = _exhaustive(i, mq, g, s, w, rng, rounded, zs[Z_LO], bin_head, bin_next, flag)
+            _switch(st, zs, sz, s, bin_head, bin_next, flag, rec)
+            if sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 0:
+                # paced closing: the lowest bin retires after as many offers as a bin took to
+                # pass before, so the last zone sees the stream for as long as any other
+                sz[st, S_SINCE] += 1
+                if sz[st, S_SINCE] > sz[st, S_PACE]:
+                    sz[st, S_SINCE] = 0
+                    _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+                    sz[st, S_LO] += 1
+                    if sz[st, S_LO] > sz[st, S_HI]:
+                        sz[st, S_CLOSED] = 1
+                        continue
+            elif sz[st, S_FULL] == 0:
+                sz[st, S_OFFERED] += 1
+            was_full = sz[st, S_FULL]
+            offered = True
+            k = _offer(i, st, g, s, w, rng, zs, sz, bin_head, bin_next, flag, rounded)
+            if k >= 0 or zs[Z_PROMPT] != 2 or was_full == 0:
+                break
+            # tail closing: the first refusal under the top closes the strip and the
+            # particle goes on to the next open strip; when none is left the run ends,
+            # so the particles left out are the rest of the stream, a random tail. The
+            # particle whose rises took the zone to the top does not count: it fits
+            # nowhere, while the top bins have just opened for the others
+            sz[st, S_CLOSED] = 1
+        if not offered:
+            # every strip closed before this particle could be offered
+            zs[Z_DONE] = 1
             break
         if k < 0:
             status[i] = STATUS_REFUSED
             zs[Z_REFUSED] += 1
-            if zs[Z_FULL] == 1 and zs[Z_PROMPT] == 1:
-                # prompt closing: the refusal stands for the rise the zone would have made
-                _retire_bin(zs[Z_LO], s, bin_head, bin_next, flag)
-                zs[Z_LO] += 1
-                if zs[Z_LO] > zs[Z_HI]:
-                    zs[Z_DONE] = 1
-            elif was_full == 1 and zs[Z_PROMPT] == 2:
-                # tail closing: the first refusal under the top ends the run, so the
-                # particles left out are the rest of the stream, a random tail. The
-                # particle whose rises took the zone to the top does not count: it
-                # fits nowhere, while the top bins have just opened for the others
+            if st < 0:
+                # tail closing: the last open strip has just closed
                 zs[Z_DONE] = 1
+            elif sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 1:
+                # prompt closing: the refusal stands for the rise the zone would have made
+                _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+                sz[st, S_LO] += 1
+                if sz[st, S_LO] > sz[st, S_HI]:
+                    sz[st, S_CLOSED] = 1
+                    if _choose(sz) < 0:
+                        zs[Z_DONE] = 1
             continue
-        _register(k, zs, s, delta, bin_head, bin_next, flag)
+        _register(k, zs, sz, s, delta, swidth, bin_head, bin_next, flag, rec)
         status[i] = STATUS_PLACED
         placed += 1
     return placed

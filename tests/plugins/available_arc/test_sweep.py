@@ -136,10 +136,7 @@ def test_every_refusal_is_certified_by_an_exact_scan() -> None:
     pop, rng = change5_population(n, 7)
     st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
     sw = sweep.Sweep(n, domain.height, 6.0 * float(pop.radius.max()))
-    sweep.sweep_range(
-        0, n, sw.delta, st_.outlines, st_.packed, st_.work, rng,
-        sw.zs, sw.bin_head, sw.bin_next, sw.flag, sw.status, st_.rounded,
-    )  # fmt: skip
+    sw.run(0, n, st_.outlines, st_.packed, st_.work, rng, st_.rounded)
     assert np.array_equal(np.isfinite(st_.packed.cx), res.placed)
     refused = np.flatnonzero(sw.status == sweep.STATUS_REFUSED)
     assert len(refused) == res.stats["refused"]
@@ -188,10 +185,11 @@ def test_a_particle_larger_than_the_domain_is_refused() -> None:
     eta=st.sampled_from([0.0, 30.0]),
     zone=st.sampled_from([0.0, 0.5, 3.0]),
     closing=st.sampled_from(["paced", "prompt", "tail"]),
+    strip=st.sampled_from([0.0, 0.3]),
 )
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 def test_no_overlap_and_nothing_outside_at_the_extremes(
-    seed, n, ratio, scale, psi, a, kind, eta, zone, closing
+    seed, n, ratio, scale, psi, a, kind, eta, zone, closing, strip
 ) -> None:
     rng = np.random.default_rng(seed)
     radius = extreme_radii(n, ratio, scale, rng)
@@ -213,7 +211,10 @@ def test_no_overlap_and_nothing_outside_at_the_extremes(
     else:
         domain = PeriodicRectangle.centred(size, 1.1 * size, centre)
     zone_length = zone * float(radius.max())
-    res = pack(pop, domain, rng, eta=eta, order="sweep", zone=zone_length, closing=closing)
+    res = pack(
+        pop, domain, rng, eta=eta, order="sweep", zone=zone_length, closing=closing,
+        strip=strip * size,
+    )  # fmt: skip
     assert res.placed.sum() >= 1
     _oracle(as_packing(pop, res, domain))
 
@@ -357,6 +358,8 @@ def test_zones_far_below_and_far_above_the_domain_size_work(zone: float) -> None
         ("insertion.order=spiral", 'insertion.order = "spiral"', "'paper' or 'sweep'"),
         ("insertion.zone=-1", "insertion.zone = -1", "greater than or equal to 0"),
         ("insertion.zone=nan", "insertion.zone = nan", "finite"),
+        ("insertion.strip=-1", "insertion.strip = -1", "greater than or equal to 0"),
+        ("insertion.strip=inf", "insertion.strip = inf", "finite"),
         ("insertion.closing=late", 'insertion.closing = "late"', "'paced', 'prompt' or 'tail'"),
         ("insertion.screening=none", 'insertion.screening = "none"', "'paper' or 'exact'"),
     ],
@@ -374,6 +377,7 @@ def test_the_options_from_the_command_line(
 
 
 def test_dem_is_the_table1_scene_in_the_sweep_order() -> None:
+    """The same materials and domain, the sweep order, strips no narrower than the domain."""
     from regopack.manager import default_registry
     from regopack.scene_model import load_scene, resolve_scene
 
@@ -382,6 +386,80 @@ def test_dem_is_the_table1_scene_in_the_sweep_order() -> None:
     table1 = resolve_scene(load_scene("table1"), registry).to_dict()
     assert dem["insertion"].pop("order") == "sweep"
     assert table1["insertion"].pop("order") == "paper"
+    # strips as wide as the domain: one zone across it, as without strips
+    assert dem["insertion"].pop("strip") == dem["domain"]["width"]
+    assert table1["insertion"].pop("strip") == 0.0
     dem.pop("name")
     table1.pop("name")
     assert dem == table1
+
+
+@pytest.mark.parametrize("kind", list(DOMAINS))
+@pytest.mark.parametrize("closing", ["paced", "tail"])
+def test_strips_fill_every_domain_kind_without_overlap(kind: str, closing: str) -> None:
+    domain = DOMAINS[kind]
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 3)
+    res = pack(pop, domain, rng, order="sweep", strip=55.0, closing=closing)
+    packing = as_packing(pop, res, domain)
+    _oracle(packing)
+    assert res.stats["strips"] == int(domain.width // 55.0) >= 3
+    assert packing.area()[packing.placed].sum() / domain.area > 0.7
+    stats = res.stats
+    assert stats["refused"] + stats["not_offered"] == n - packing.n_placed
+
+
+def test_a_strip_as_wide_as_the_domain_is_the_sweep_without_strips() -> None:
+    domain = DOMAINS["periodic"]
+    runs = []
+    for strip in (0.0, domain.width, 1.9 * domain.width):
+        pop, rng = change5_population(700, 8)
+        runs.append(pack(pop, domain, rng, order="sweep", strip=strip))
+    for res in runs[1:]:
+        assert res.stats["strips"] == 1
+        assert np.array_equal(res.centre, runs[0].centre, equal_nan=True)
+        assert np.array_equal(res.insertion_index, runs[0].insertion_index)
+
+
+def test_same_seed_same_packing_with_strips() -> None:
+    domain = DOMAINS["rectangle"]
+    runs = []
+    for _ in range(2):
+        pop, rng = change5_population(800, 12)
+        runs.append(pack(pop, domain, rng, eta=5.0, order="sweep", strip=50.0))
+    assert np.array_equal(runs[0].centre, runs[1].centre, equal_nan=True)
+    assert np.array_equal(runs[0].insertion_index, runs[1].insertion_index)
+
+
+def test_the_fronts_of_the_strips_rise_together() -> None:
+    """Each fifth of the placements lies at about the same height in every strip."""
+    domain = Rectangle.centred(300.0, 300.0)
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 5)
+    res = pack(pop, domain, rng, order="sweep", strip=60.0, closing="tail")
+    assert res.stats["strips"] == 5
+    order = np.argsort(np.where(res.placed, res.insertion_index, np.iinfo(np.int64).max))
+    xy = res.centre[order[: res.placed.sum()]]
+    strip = np.minimum(((xy[:, 0] - domain.xmin) // 60.0).astype(int), 4)
+    zone = 6.0 * float(pop.radius.max())
+    for part in np.array_split(np.arange(len(xy)), 5):
+        heights = [np.median(xy[part][strip[part] == k, 1]) for k in range(5)]
+        assert max(heights) - min(heights) < zone
+    # every strip starts at the bottom
+    first = [np.flatnonzero(strip == k)[0] for k in range(5)]
+    assert all(xy[j, 1] < domain.ymin + zone for j in first)
+
+
+def test_strips_keep_the_tail_a_suffix_of_the_stream() -> None:
+    """Under the tail closing with strips, every particle offered is placed or refused."""
+    domain = DOMAINS["rectangle"]
+    n = round(1.2 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 4)
+    res = pack(pop, domain, rng, order="sweep", closing="tail", strip=55.0)
+    placed = res.placed
+    last = int(np.flatnonzero(placed).max())
+    assert not placed[last + 1 :].any()
+    assert res.stats["not_offered"] > 0
+    # refusals: particles that fit in no strip they were offered to
+    assert np.count_nonzero(~placed[: last + 1]) <= res.stats["refused"]
+    assert res.stats["refused"] + res.stats["not_offered"] == n - placed.sum()
