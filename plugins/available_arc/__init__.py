@@ -245,7 +245,12 @@ def _pack_sweep(
     if zone == 0.0:
         zone = ZONE_PER_RADIUS * float(population.radius.max()) if n else 1.0
     width = float(bounds[1] - bounds[0])
-    sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=cfg.strip)
+    strip = cfg.strip
+    if strip > 0.0 and n:
+        # strips at least two circumradii of the largest particle wide: a narrower
+        # strip's own candidates cannot hold up a front
+        strip = max(strip, 2.0 * float(st.outlines.circum.max()))
+    sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=strip)
     placed = 0
     for begin in range(0, n, PROGRESS_EVERY):
         if progress is not None:

@@ -84,13 +84,18 @@ FROZEN, ACTIVE, RETIRED = 0, 1, 2
 
 MAX_STRIPS = 4096
 """Most strips across the domain."""
+MAX_CELLS = 1 << 24
+"""Most bins over all strips (strips times bins per strip)."""
 
 
 def strip_count(width: float, strip: float) -> int:
     """Return how many equal strips of about ``strip`` fit across ``width`` (at least one)."""
     if not (strip > 0 and width > 0):
         return 1
-    return int(min(MAX_STRIPS, max(1, math.floor(width / strip))))
+    ratio = width / strip
+    if not math.isfinite(ratio):
+        return MAX_STRIPS
+    return int(min(MAX_STRIPS, max(1, math.floor(ratio))))
 
 
 class Sweep:
@@ -115,7 +120,8 @@ class Sweep:
         if not self.delta > 0:
             self.delta = 1.0
         nbins = max(1, math.ceil(height / self.delta)) + 1
-        self.nstrip = strip_count(width, strip)
+        # at most MAX_CELLS bins over all strips
+        self.nstrip = max(1, min(strip_count(width, strip), MAX_CELLS // nbins))
         self.swidth = width / self.nstrip if width > 0 else 1.0
         self.bin_head = np.full((self.nstrip, nbins), -1, dtype=np.int64)
         self.bin_next = np.full(max(n, 1), -1, dtype=np.int64)
@@ -127,6 +133,7 @@ class Sweep:
         self.zs[Z_PROMPT] = CLOSINGS[closing]
         self.zs[Z_CUR] = -1
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
+        self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
 
     def run(
         self,
@@ -142,7 +149,8 @@ class Sweep:
         return int(
             sweep_range(
                 begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bin_head, self.bin_next, self.flag, self.rec, self.status, rounded,
+                self.bin_head, self.bin_next, self.flag, self.rec, self.status, self.tried,
+                rounded,
             )
         )  # fmt: skip
 
@@ -360,13 +368,30 @@ def _show(
 
 
 @numba.njit(cache=True)
-def _choose(sz: IntArray) -> int:
-    """Return the open strip whose zone top is lowest (the first such); -1 when none is."""
+def _choose(sz: IntArray, tried: IntArray, i: int, cur: int) -> int:
+    """Return the strip to offer particle ``i`` to next; -1 when no open strip is left.
+
+    The open strip whose zone top is lowest, the first such one, among those
+    not yet tried for ``i``. Among full strips (whose tops cannot rise) the
+    turn passes on after ``cur``, so that they close together.
+    """
+    nstrip = sz.shape[0]
     best = -1
-    for st in range(sz.shape[0]):
-        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
+    for st in range(nstrip):
+        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0 and tried[st] != i:
             if best < 0 or sz[st, S_HI] < sz[best, S_HI]:
                 best = st
+    if best >= 0 and nstrip > 1 and sz[best, S_FULL] == 1 and cur >= 0:
+        for d in range(1, nstrip + 1):
+            st = (cur + d) % nstrip
+            if (
+                sz[st, S_SEEDED] == 1
+                and sz[st, S_CLOSED] == 0
+                and tried[st] != i
+                and sz[st, S_FULL] == 1
+                and sz[st, S_HI] == sz[best, S_HI]
+            ):
+                return st
     return best
 
 
@@ -415,7 +440,10 @@ def _register(
     b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bin_head.shape[1])
     bin_next[k] = bin_head[st, b]
     bin_head[st, b] = k
-    if sz[st, S_SEEDED] == 0:
+    cur = zs[Z_CUR]
+    if sz[st, S_SEEDED] == 0 and (cur < 0 or b <= sz[cur, S_HI] + zs[Z_NZONE]):
+        # a strip starts at its first candidate near the front (not at one that a
+        # periodic domain wrapped to the top: that one is filed frozen)
         sz[st, S_SEEDED] = 1
         sz[st, S_HI] = b
         sz[st, S_LO] = max(0, b - zs[Z_NZONE] + 1)
@@ -489,6 +517,7 @@ def sweep_range(
     flag: IntArray,
     rec: FloatArray,
     status: IntArray,
+    tried: IntArray,
     rounded: object = None,
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.
@@ -519,12 +548,13 @@ def sweep_range(
             placed += 1
             continue
         k = -1
-        offered = False
+        offered = -1  # the first strip particle i is offered to
         while True:
-            st = _choose(sz)
+            st = _choose(sz, tried, i, zs[Z_CUR])
             if st < 0:
                 break
             _switch(st, zs, sz, s, bin_head, bin_next, flag, rec)
+            tried[st] = i
             if sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 0:
                 # paced closing: the lowest bin retires after as many offers as a bin took to
                 # pass before, so the last zone sees the stream for as long as any other
@@ -539,33 +569,39 @@ def sweep_range(
             elif sz[st, S_FULL] == 0:
                 sz[st, S_OFFERED] += 1
             was_full = sz[st, S_FULL]
-            offered = True
+            if offered < 0:
+                offered = st
             k = _offer(i, st, g, s, w, rng, zs, sz, bin_head, bin_next, flag, rounded)
-            if k >= 0 or zs[Z_PROMPT] != 2 or was_full == 0:
+            if k >= 0:
                 break
-            # tail closing: the first refusal under the top closes the strip and the
-            # particle goes on to the next open strip; when none is left the run ends,
-            # so the particles left out are the rest of the stream, a random tail. The
-            # particle whose rises took the zone to the top does not count: it fits
-            # nowhere, while the top bins have just opened for the others
-            sz[st, S_CLOSED] = 1
-        if not offered:
+            if zs[Z_PROMPT] == 2 and was_full == 1:
+                # tail closing: the first refusal under the top closes the strip; when no
+                # strip is left the run ends, so the particles left out are the rest of
+                # the stream, a random tail. The particle whose rises took the zone to
+                # the top does not count: it fits nowhere, while the top bins have just
+                # opened for the others
+                sz[st, S_CLOSED] = 1
+            # a particle one strip refuses goes on to the other open strips
+        if offered < 0:
             # every strip closed before this particle could be offered
             zs[Z_DONE] = 1
             break
         if k < 0:
             status[i] = STATUS_REFUSED
             zs[Z_REFUSED] += 1
-            if st < 0:
-                # tail closing: the last open strip has just closed
-                zs[Z_DONE] = 1
-            elif sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 1:
+            st = offered
+            if zs[Z_PROMPT] == 2:
+                if _choose(sz, tried, -1, -1) < 0:
+                    # tail closing: the last open strip has just closed
+                    zs[Z_DONE] = 1
+            elif sz[st, S_CLOSED] == 0 and sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 1:
                 # prompt closing: the refusal stands for the rise the zone would have made
+                _switch(st, zs, sz, s, bin_head, bin_next, flag, rec)
                 _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
                 sz[st, S_LO] += 1
                 if sz[st, S_LO] > sz[st, S_HI]:
                     sz[st, S_CLOSED] = 1
-                    if _choose(sz) < 0:
+                    if _choose(sz, tried, -1, -1) < 0:
                         zs[Z_DONE] = 1
             continue
         _register(k, zs, sz, s, delta, swidth, bin_head, bin_next, flag, rec)

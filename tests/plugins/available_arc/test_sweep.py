@@ -463,3 +463,29 @@ def test_strips_keep_the_tail_a_suffix_of_the_stream() -> None:
     # refusals: particles that fit in no strip they were offered to
     assert np.count_nonzero(~placed[: last + 1]) <= res.stats["refused"]
     assert res.stats["refused"] + res.stats["not_offered"] == n - placed.sum()
+
+
+def test_a_strip_narrower_than_its_particles_is_widened() -> None:
+    """A strip narrower than two circumradii has no front of its own: it is widened."""
+    n = round(1.1 * DOMAINS["polygon"].area / Change5(Change5Config()).mean_area)
+    for kind, strip in (("polygon", 20.0), ("rectangle", 5.0), ("rectangle", 5e-324)):
+        pop, rng = change5_population(n, 3)
+        res = pack(pop, DOMAINS[kind], rng, order="sweep", strip=strip)
+        width = DOMAINS[kind].width
+        assert res.stats["strips"] <= width / (2.0 * pop.circumradius.max())  # type: ignore[attr-defined]
+        assert res.stats["refused"] < 0.3 * n
+        assert res.placed.sum() > 0.5 * n
+
+
+def test_a_periodic_strip_does_not_start_at_a_particle_wrapped_to_the_top() -> None:
+    domain = DOMAINS["periodic"]
+    n = round(1.1 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 1)
+    res = pack(pop, domain, rng, order="sweep", strip=55.0, closing="tail")
+    assert res.stats["strips"] == 3
+    union = shapely.union_all(as_packing(pop, res, domain).to_shapely())
+    x0, x1, y0, y1 = domain.bounds()
+    w = (x1 - x0) / 3
+    for k in range(3):  # the bottom quarter of every strip is packed
+        cell = shapely.box(x0 + k * w, y0, x0 + (k + 1) * w, y0 + 0.25 * (y1 - y0))
+        assert union.intersection(cell).area / cell.area > 0.7
