@@ -34,6 +34,7 @@ can run in chunks between progress reports.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -98,6 +99,19 @@ def strip_count(width: float, strip: float) -> int:
     return int(min(MAX_STRIPS, max(1, math.floor(ratio))))
 
 
+class Bins(NamedTuple):
+    """Candidates filed by strip and bin, with their zone flags and hidden screening radii."""
+
+    head: IntArray
+    """``(strips, bins)``: the last candidate filed in each bin, -1 for none."""
+    nxt: IntArray
+    """Per candidate: the candidate filed before it in its bin, -1 for none."""
+    flag: IntArray
+    """Per candidate: ``FROZEN``, ``ACTIVE`` or ``RETIRED``."""
+    rec: FloatArray
+    """Per candidate: its screening radius while its strip is hidden."""
+
+
 class Sweep:
     """Arrays of one sweep run: bins per strip, flags and the stored screening radii.
 
@@ -133,6 +147,7 @@ class Sweep:
         self.zs[Z_PROMPT] = CLOSINGS[closing]
         self.zs[Z_CUR] = -1
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
+        self.bins = Bins(self.bin_head, self.bin_next, self.flag, self.rec)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
 
     def run(
@@ -149,8 +164,7 @@ class Sweep:
         return int(
             sweep_range(
                 begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bin_head, self.bin_next, self.flag, self.rec, self.status, self.tried,
-                rounded,
+                self.bins, self.status, self.tried, rounded,
             )
         )  # fmt: skip
 
@@ -247,32 +261,28 @@ def _exhaustive(
     rounded: object,
     st: int,
     lo: int,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
+    bn: Bins,
 ) -> int:
     """Analyse exactly, unscreened, every candidate of strip ``st`` in bins ``lo`` and up."""
-    for b in range(lo, bin_head.shape[1]):
-        e = bin_head[st, b]
+    for b in range(lo, bn.head.shape[1]):
+        e = bn.head[st, b]
         while e >= 0:
             k = e
-            e = bin_next[e]
-            if flag[k] != RETIRED and try_candidate(k, i, mq, g, s, w, rng, rounded):
+            e = bn.nxt[e]
+            if bn.flag[k] != RETIRED and try_candidate(k, i, mq, g, s, w, rng, rounded):
                 return s.ipar[K.I_COUNT] - 1
     return -1
 
 
 @numba.njit(cache=True)
-def _retire_bin(
-    st: int, b: int, s: K.Packed, bin_head: IntArray, bin_next: IntArray, flag: IntArray
-) -> None:
+def _retire_bin(st: int, b: int, s: K.Packed, bn: Bins) -> None:
     leaves = s.ipar[K.I_LEAVES]
-    e = bin_head[st, b]
+    e = bn.head[st, b]
     while e >= 0:
-        if flag[e] != RETIRED:
-            flag[e] = RETIRED
+        if bn.flag[e] != RETIRED:
+            bn.flag[e] = RETIRED
             tree_set(s.tree, leaves, e, -np.inf)
-        e = bin_next[e]
+        e = bn.nxt[e]
 
 
 @numba.njit(cache=True)
@@ -281,26 +291,24 @@ def _raise(
     zs: IntArray,
     sz: IntArray,
     s: K.Packed,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
+    bn: Bins,
 ) -> bool:
     """Raise strip ``st``'s zone by one bin; False when its top is already the domain's top."""
     hi = sz[st, S_HI]
-    if hi + 1 >= bin_head.shape[1]:
+    if hi + 1 >= bn.head.shape[1]:
         return False
     hi += 1
     sz[st, S_HI] = hi
     sz[st, S_RAISES] += 1
     leaves = s.ipar[K.I_LEAVES]
-    e = bin_head[st, hi]
+    e = bn.head[st, hi]
     while e >= 0:
-        if flag[e] == FROZEN:
-            flag[e] = ACTIVE
+        if bn.flag[e] == FROZEN:
+            bn.flag[e] = ACTIVE
             tree_set(s.tree, leaves, e, np.inf)
-        e = bin_next[e]
+        e = bn.nxt[e]
     if hi - sz[st, S_LO] + 1 > zs[Z_NZONE]:
-        _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+        _retire_bin(st, sz[st, S_LO], s, bn)
         sz[st, S_LO] += 1
     return True
 
@@ -314,25 +322,23 @@ def _roll_back(
     full: int,
     raises: int,
     s: K.Packed,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
+    bn: Bins,
 ) -> None:
     """Undo one particle's rises: refreeze the bins above ``hi0``, reopen those from ``lo0``."""
     leaves = s.ipar[K.I_LEAVES]
     for b in range(hi0 + 1, sz[st, S_HI] + 1):
-        e = bin_head[st, b]
+        e = bn.head[st, b]
         while e >= 0:
-            if flag[e] == ACTIVE:
-                flag[e] = FROZEN
+            if bn.flag[e] == ACTIVE:
+                bn.flag[e] = FROZEN
                 tree_set(s.tree, leaves, e, -np.inf)
-            e = bin_next[e]
+            e = bn.nxt[e]
     for b in range(lo0, sz[st, S_LO]):
-        e = bin_head[st, b]
+        e = bn.head[st, b]
         while e >= 0:
-            flag[e] = ACTIVE
+            bn.flag[e] = ACTIVE
             tree_set(s.tree, leaves, e, np.inf)
-            e = bin_next[e]
+            e = bn.nxt[e]
     sz[st, S_LO] = lo0
     sz[st, S_HI] = hi0
     sz[st, S_FULL] = full
@@ -345,26 +351,23 @@ def _show(
     visible: bool,
     sz: IntArray,
     s: K.Packed,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
-    rec: FloatArray,
+    bn: Bins,
 ) -> None:
     """Make strip ``st``'s zone candidates visible to the search, or hide them.
 
-    Hiding keeps each screening radius in ``rec``; showing puts it back.
+    Hiding keeps each screening radius in ``bn.rec``; showing puts it back.
     """
     leaves = s.ipar[K.I_LEAVES]
     for b in range(sz[st, S_LO], sz[st, S_HI] + 1):
-        e = bin_head[st, b]
+        e = bn.head[st, b]
         while e >= 0:
-            if flag[e] == ACTIVE:
+            if bn.flag[e] == ACTIVE:
                 if visible:
-                    tree_set(s.tree, leaves, e, rec[e])
+                    tree_set(s.tree, leaves, e, bn.rec[e])
                 else:
-                    rec[e] = s.tree[leaves + e]
+                    bn.rec[e] = s.tree[leaves + e]
                     tree_set(s.tree, leaves, e, -np.inf)
-            e = bin_next[e]
+            e = bn.nxt[e]
 
 
 @numba.njit(cache=True)
@@ -401,18 +404,15 @@ def _switch(
     zs: IntArray,
     sz: IntArray,
     s: K.Packed,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
-    rec: FloatArray,
+    bn: Bins,
 ) -> None:
     """Offer the next particles to strip ``st``: hide the current strip's zone, show ``st``'s."""
     cur = zs[Z_CUR]
     if cur == st:
         return
     if cur >= 0:
-        _show(cur, False, sz, s, bin_head, bin_next, flag, rec)
-    _show(st, True, sz, s, bin_head, bin_next, flag, rec)
+        _show(cur, False, sz, s, bn)
+    _show(st, True, sz, s, bn)
     zs[Z_CUR] = st
 
 
@@ -424,10 +424,7 @@ def _register(
     s: K.Packed,
     delta: float,
     swidth: float,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
-    rec: FloatArray,
+    bn: Bins,
 ) -> None:
     """File new candidate ``k`` in its strip and bin: frozen above the zone, retired below.
 
@@ -436,10 +433,10 @@ def _register(
     search until its strip is offered particles.
     """
     q = s.order[k]
-    st = _strip_of(s.cx[q], s.fpar[K.F_XMIN], swidth, bin_head.shape[0])
-    b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bin_head.shape[1])
-    bin_next[k] = bin_head[st, b]
-    bin_head[st, b] = k
+    st = _strip_of(s.cx[q], s.fpar[K.F_XMIN], swidth, bn.head.shape[0])
+    b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bn.head.shape[1])
+    bn.nxt[k] = bn.head[st, b]
+    bn.head[st, b] = k
     cur = zs[Z_CUR]
     if sz[st, S_SEEDED] == 0 and (cur < 0 or b <= sz[cur, S_HI] + zs[Z_NZONE]):
         # a strip starts at its first candidate near the front (not at one that a
@@ -449,12 +446,12 @@ def _register(
         sz[st, S_LO] = max(0, b - zs[Z_NZONE] + 1)
     leaves = s.ipar[K.I_LEAVES]
     if b > sz[st, S_HI] or b < sz[st, S_LO]:
-        flag[k] = FROZEN if b > sz[st, S_HI] else RETIRED
+        bn.flag[k] = FROZEN if b > sz[st, S_HI] else RETIRED
         tree_set(s.tree, leaves, k, -np.inf)
     else:
-        flag[k] = ACTIVE
+        bn.flag[k] = ACTIVE
         if st != zs[Z_CUR]:
-            rec[k] = np.inf
+            bn.rec[k] = np.inf
             tree_set(s.tree, leaves, k, -np.inf)
 
 
@@ -468,9 +465,7 @@ def _offer(
     rng: np.random.Generator,
     zs: IntArray,
     sz: IntArray,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
+    bn: Bins,
     rounded: object,
 ) -> int:
     """Offer particle ``i`` to strip ``st``: the screened zone search, rising, then exact.
@@ -486,7 +481,7 @@ def _offer(
         if k >= 0:
             return k
         if sz[st, S_FULL] == 0 and raises < zs[Z_NZONE]:
-            if _raise(st, zs, sz, s, bin_head, bin_next, flag):
+            if _raise(st, zs, sz, s, bn):
                 raises += 1
                 continue
             sz[st, S_FULL] = 1
@@ -496,8 +491,8 @@ def _offer(
             # carry the zone away with it. The bins it retired reopen; the bins it
             # opened freeze again, unless the zone reached the top (the closing)
             keep_hi = sz[st, S_HI] if sz[st, S_FULL] == 1 else hi0
-            _roll_back(st, sz, lo0, keep_hi, sz[st, S_FULL], raises, s, bin_head, bin_next, flag)
-        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bin_head, bin_next, flag)
+            _roll_back(st, sz, lo0, keep_hi, sz[st, S_FULL], raises, s, bn)
+        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bn)
 
 
 @numba.njit(cache=True)
@@ -512,10 +507,7 @@ def sweep_range(
     rng: np.random.Generator,
     zs: IntArray,
     sz: IntArray,
-    bin_head: IntArray,
-    bin_next: IntArray,
-    flag: IntArray,
-    rec: FloatArray,
+    bn: Bins,
     status: IntArray,
     tried: IntArray,
     rounded: object = None,
@@ -526,7 +518,7 @@ def sweep_range(
     after the run has closed keep ``STATUS_NOT_OFFERED``.
     """
     placed = 0
-    nbins = bin_head.shape[1]
+    nbins = bn.head.shape[1]
     for i in range(begin, end):
         if zs[Z_DONE] == 1:
             break
@@ -537,13 +529,13 @@ def sweep_range(
                 zs[Z_REFUSED] += 1
                 continue
             zs[Z_STARTED] = 1
-            st = _strip_of(x, s.fpar[K.F_XMIN], swidth, bin_head.shape[0])
+            st = _strip_of(x, s.fpar[K.F_XMIN], swidth, bn.head.shape[0])
             sz[st, S_SEEDED] = 1
             sz[st, S_LO] = 0
             sz[st, S_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
             zs[Z_CUR] = st
             k = K.insert_particle(i, x, y, g, s)
-            _register(k, zs, sz, s, delta, swidth, bin_head, bin_next, flag, rec)
+            _register(k, zs, sz, s, delta, swidth, bn)
             status[i] = STATUS_PLACED
             placed += 1
             continue
@@ -553,7 +545,7 @@ def sweep_range(
             st = _choose(sz, tried, i, zs[Z_CUR])
             if st < 0:
                 break
-            _switch(st, zs, sz, s, bin_head, bin_next, flag, rec)
+            _switch(st, zs, sz, s, bn)
             tried[st] = i
             if sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 0:
                 # paced closing: the lowest bin retires after as many offers as a bin took to
@@ -561,7 +553,7 @@ def sweep_range(
                 sz[st, S_SINCE] += 1
                 if sz[st, S_SINCE] > sz[st, S_PACE]:
                     sz[st, S_SINCE] = 0
-                    _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+                    _retire_bin(st, sz[st, S_LO], s, bn)
                     sz[st, S_LO] += 1
                     if sz[st, S_LO] > sz[st, S_HI]:
                         sz[st, S_CLOSED] = 1
@@ -571,7 +563,7 @@ def sweep_range(
             was_full = sz[st, S_FULL]
             if offered < 0:
                 offered = st
-            k = _offer(i, st, g, s, w, rng, zs, sz, bin_head, bin_next, flag, rounded)
+            k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded)
             if k >= 0:
                 break
             if zs[Z_PROMPT] == 2 and was_full == 1:
@@ -596,15 +588,15 @@ def sweep_range(
                     zs[Z_DONE] = 1
             elif sz[st, S_CLOSED] == 0 and sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 1:
                 # prompt closing: the refusal stands for the rise the zone would have made
-                _switch(st, zs, sz, s, bin_head, bin_next, flag, rec)
-                _retire_bin(st, sz[st, S_LO], s, bin_head, bin_next, flag)
+                _switch(st, zs, sz, s, bn)
+                _retire_bin(st, sz[st, S_LO], s, bn)
                 sz[st, S_LO] += 1
                 if sz[st, S_LO] > sz[st, S_HI]:
                     sz[st, S_CLOSED] = 1
                     if _choose(sz, tried, -1, -1) < 0:
                         zs[Z_DONE] = 1
             continue
-        _register(k, zs, sz, s, delta, swidth, bin_head, bin_next, flag, rec)
+        _register(k, zs, sz, s, delta, swidth, bn)
         status[i] = STATUS_PLACED
         placed += 1
     return placed
