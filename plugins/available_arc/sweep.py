@@ -586,15 +586,17 @@ def sweep_range(
                 if _choose(sz, tried, -1, -1) < 0:
                     # tail closing: the last open strip has just closed
                     zs[Z_DONE] = 1
-            elif sz[st, S_CLOSED] == 0 and sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 1:
-                # prompt closing: the refusal stands for the rise the zone would have made
-                _switch(st, zs, sz, s, bn)
-                _retire_bin(st, sz[st, S_LO], s, bn)
-                sz[st, S_LO] += 1
-                if sz[st, S_LO] > sz[st, S_HI]:
-                    sz[st, S_CLOSED] = 1
-                    if _choose(sz, tried, -1, -1) < 0:
-                        zs[Z_DONE] = 1
+            elif zs[Z_PROMPT] == 1:
+                # prompt closing: the refusal stands for the rise each full strip that
+                # refused it would have made (a hidden strip's bin retires as well)
+                for t in range(sz.shape[0]):
+                    if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
+                        _retire_bin(t, sz[t, S_LO], s, bn)
+                        sz[t, S_LO] += 1
+                        if sz[t, S_LO] > sz[t, S_HI]:
+                            sz[t, S_CLOSED] = 1
+                if _choose(sz, tried, -1, -1) < 0:
+                    zs[Z_DONE] = 1
             continue
         _register(k, zs, sz, s, delta, swidth, bn)
         status[i] = STATUS_PLACED

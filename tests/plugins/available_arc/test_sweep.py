@@ -489,3 +489,21 @@ def test_a_periodic_strip_does_not_start_at_a_particle_wrapped_to_the_top() -> N
     for k in range(3):  # the bottom quarter of every strip is packed
         cell = shapely.box(x0 + k * w, y0, x0 + (k + 1) * w, y0 + 0.25 * (y1 - y0))
         assert union.intersection(cell).area / cell.area > 0.7
+
+
+def test_the_prompt_closing_with_strips_costs_about_what_one_zone_does() -> None:
+    """A refusal retires a bin of every full strip that refused it, so the strips close
+    after about as many refusals as one zone (not one strip at a time, each refusal
+    scanned in every strip)."""
+    domain = Rectangle.centred(200.0, 80.0)
+    n = round(2.5 * domain.area / Change5(Change5Config()).mean_area)
+    out = {}
+    for strip in (0.0, 50.0):
+        pop, rng = change5_population(n, 1)
+        res = pack(pop, domain, rng, order="sweep", strip=strip, closing="prompt")
+        placed = int(res.placed.sum())
+        stats = res.stats
+        out[strip] = (stats["strips"], stats["refused"], stats["candidate_analyses"] / placed)
+    assert out[50.0][0] == 4
+    assert out[50.0][1] <= 2 * out[0.0][1], out
+    assert out[50.0][2] <= 1.5 * out[0.0][2], out
