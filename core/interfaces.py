@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, ClassVar, Self
@@ -156,6 +156,17 @@ class InsertionStrategy(ABC):
         progress: ProgressCallback | None = None,
     ) -> InsertionResult:
         """Place the particles in population order; return where each went."""
+
+    def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
+        """Say, before anything is drawn, why this strategy cannot pack a scene.
+
+        ``shapes`` are the kinds of the phases' shapes, in phase order, and
+        ``density`` the kind of the density controller. Returns ``(field,
+        reason)``, the field a dotted scene path such as ``density.kind`` or
+        ``phases.2.shape.kind``, or ``None`` when nothing is known to conflict
+        (the default). :meth:`pack` still refuses what it cannot pack.
+        """
+        return None
 
     def may_overlap(self) -> bool:
         """Tell whether this strategy, as configured, can place overlapping particles.

@@ -186,6 +186,24 @@ def _count(n: int) -> str:
     return f"{n:,}" if n < 10**15 else f"{n:.3g}"
 
 
+def check_inserter(scene: ResolvedScene) -> None:
+    """Refuse, before anything is drawn, a scene that its inserter says it cannot pack.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the scene file (or ``--set``), the field and the reason
+        (see :meth:`~regopack.interfaces.InsertionStrategy.scene_conflict`).
+    """
+    inserter: InsertionStrategy = _build(scene.insertion, InsertionStrategy, "insertion")
+    conflict = inserter.scene_conflict(
+        tuple(phase.shape.kind for phase in scene.phases), scene.density.kind
+    )
+    if conflict is not None:
+        field, reason = conflict
+        raise ConfigError(_located(scene, field, reason))
+
+
 def check_scene(scene: ResolvedScene) -> int:
     """Check that ``scene`` can be drawn and packed at all; return its particle count.
 
@@ -193,13 +211,15 @@ def check_scene(scene: ResolvedScene) -> int:
     floats; particles larger than the domain (the smallest particle's area
     exceeds the domain's, so none can be placed); and a particle count (given,
     or from ``count = "auto"``) whose memory, at least
-    :data:`BYTES_PER_PARTICLE` per particle, exceeds :func:`memory_limit`.
+    :data:`BYTES_PER_PARTICLE` per particle, exceeds :func:`memory_limit`; and
+    what the inserter says it cannot pack (:func:`check_inserter`).
 
     Raises
     ------
     ConfigError
         One line naming the scene file (or ``--set``), the field and the limit.
     """
+    check_inserter(scene)
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
     r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
     area_max, area_min = math.pi * r_max * r_max, math.pi * r_min * r_min

@@ -78,11 +78,12 @@ def check_scene3d(scene: ResolvedScene) -> int:
 
     Refused in one line: particles whose volume overflows, a smallest
     particle larger than the box, ``count = "auto"`` with a size
-    distribution that does not know its mean volume, and a count whose
-    memory exceeds the machine's.
+    distribution that does not know its mean volume, a count whose
+    memory exceeds the machine's, and what the inserter says it cannot pack.
     """
-    from regopack.run import _build, _bytes, memory_limit
+    from regopack.run import _build, _bytes, check_inserter, memory_limit
 
+    check_inserter(scene)
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
     r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
     vol_max = 4.0 / 3.0 * math.pi * r_max * r_max * r_max

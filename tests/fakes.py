@@ -167,3 +167,26 @@ class FakePlugin:
 
 def fake_registry(*more: object):  # type: ignore[no-untyped-def]
     return make_registry(FakePlugin(), *more, builtins=())
+
+
+class PythonDensity:
+    """A density controller written in Python (``half``), for the refusals before drawing."""
+
+    @hookimpl
+    def regopack_density_controllers(self):  # type: ignore[no-untyped-def]
+        from pydantic import BaseModel
+
+        from regopack.interfaces import DensityController
+        from regopack.plugin_types import DensityControllerSpec
+
+        class Config(BaseModel):
+            pass
+
+        class Half(DensityController):
+            def __init__(self, cfg: Config) -> None:
+                pass
+
+            def shrink(self, arcs, r_new, r_candidate, rng):  # type: ignore[no-untyped-def]
+                return arcs
+
+        return [DensityControllerSpec("half", Config, Half, "a Python controller")]

@@ -9,6 +9,7 @@ from collections.abc import Iterable
 import numpy as np
 import pydantic
 import pytest
+from fakes import PythonDensity
 
 import regopack
 from regopack.domain3d import Box
@@ -250,3 +251,24 @@ def test_a_real_3d_scene_runs_from_the_command_line(tmp_path, capsys) -> None:  
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["placed"] == 10 and summary["verify"]["ok"] is True
     assert main(["verify", str(tmp_path / "run" / "packing.npz")]) == EXIT_OK
+
+
+def test_what_available_surface_cannot_pack_is_refused_before_drawing(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    (tmp_path / "s3.toml").write_text(SURFACE_SCENE, encoding="utf-8")
+    registry = make_registry(PythonDensity())
+    base = regopack.scene(tmp_path / "s3.toml", registry=registry)
+    with pytest.raises(ConfigError) as err:
+        regopack.pack(regopack.scene(base, density={"kind": "half"}, registry=registry))
+    assert str(err.value).endswith(
+        "density.kind: 'half' is not the built-in 'eta' density controller, which "
+        "insertion 'available-surface' needs"
+    )
+    phases = [
+        {"name": "glass", "fraction": 0.5, "shape": {"kind": "polyhedron"}},
+        {"name": "beads", "fraction": 0.5, "shape": {"kind": "sphere"}},
+    ]
+    with pytest.raises(ConfigError) as err:
+        regopack.pack(regopack.scene(base, phases=phases, registry=registry))
+    text = str(err.value)
+    assert "phases.1.shape.kind: 'sphere' beside 'polyhedron' in phase 0" in text
+    assert "\n" not in text

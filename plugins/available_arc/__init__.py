@@ -11,7 +11,7 @@ polar angle over what is left.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -145,6 +145,21 @@ class AvailableArc(InsertionStrategy):
 
     def __init__(self, config: AvailableArcConfig) -> None:
         self.config = config
+
+    def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
+        """Refuse a density controller other than ``eta`` for the sweep and exact screening."""
+        cfg = self.config
+        if density != "eta" and (cfg.order == "sweep" or cfg.screening == "exact"):
+            option = (
+                "insertion.order = 'sweep'"
+                if cfg.order == "sweep"
+                else "insertion.screening = 'exact'"
+            )
+            return (
+                "density.kind",
+                f"{density!r} is not the built-in 'eta' density controller, which {option} needs",
+            )
+        return None
 
     def may_overlap(self) -> bool:
         """Return True for the approximate ``tau`` interference test, which can overlap."""

@@ -36,7 +36,7 @@ come next.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable
+from collections.abc import Iterable, Sequence
 from typing import TYPE_CHECKING, Literal
 
 import numpy as np
@@ -120,6 +120,25 @@ class AvailableSurface(InsertionStrategy):
 
     def __init__(self, config: AvailableSurfaceConfig | None = None) -> None:
         self.config = config or AvailableSurfaceConfig()
+
+    def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
+        """Refuse a non-``eta`` density controller and spheres mixed with polyhedra."""
+        if density != "eta":
+            return (
+                "density.kind",
+                f"{density!r} is not the built-in 'eta' density controller, which "
+                "insertion 'available-surface' needs",
+            )
+        spheres = [kind == "sphere" for kind in shapes]
+        if any(spheres) and not all(spheres):
+            first = spheres.index(not spheres[0])
+            return (
+                f"phases.{first}.shape.kind",
+                f"{shapes[first]!r} beside {shapes[0]!r} in phase 0: insertion "
+                "'available-surface' packs spheres or polyhedra, not both in one scene; "
+                "give every phase the same kind of shape",
+            )
+        return None
 
     def pack(
         self,

@@ -507,3 +507,26 @@ def test_the_prompt_closing_with_strips_costs_about_what_one_zone_does() -> None
     assert out[50.0][0] == 4
     assert out[50.0][1] <= 2 * out[0.0][1], out
     assert out[50.0][2] <= 1.5 * out[0.0][2], out
+
+
+def test_the_sweep_with_a_python_controller_is_refused_before_drawing() -> None:
+    from fakes import PythonDensity
+
+    import regopack
+    from regopack.testing import make_registry
+
+    registry = make_registry(PythonDensity())
+    scene = regopack.scene("dem", registry=registry, density={"kind": "half"})
+    with pytest.raises(ConfigError) as err:
+        regopack.pack(scene)
+    assert str(err.value).endswith(
+        "density.kind: 'half' is not the built-in 'eta' density controller, which "
+        "insertion.order = 'sweep' needs"
+    )
+    exact = regopack.scene("table1", registry=registry, density={"kind": "half"})
+    with pytest.raises(ConfigError, match=r"insertion\.screening = 'exact' needs"):
+        regopack.pack(regopack.scene(exact, insertion__screening="exact", registry=registry))
+    # the paper's order takes any controller
+    from regopack.run import check_inserter
+
+    check_inserter(regopack.scene("table1", registry=registry, density={"kind": "half"}))
