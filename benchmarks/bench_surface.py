@@ -11,6 +11,11 @@ Each size runs in its own process after a warm-up that compiles the kernels.
     python benchmarks/bench_surface.py --sizes 45 60 --shape sphere
 
 ``--shape sphere`` packs the same scene with spheres of the same sizes.
+``--height-ratio`` makes the box taller than wide; ``--closing`` and
+``--strip`` (the width of the sweep's columns) pass to the inserter:
+
+    python benchmarks/bench_surface.py --sizes 36 90 180 --order sweep --closing tail \
+        --strip 45 --height-ratio 2
 """
 
 from __future__ import annotations
@@ -27,6 +32,7 @@ CHILD = r"""
 import json, sys, time
 import regopack
 size = float(sys.argv[1]); seed = int(sys.argv[2]); order = sys.argv[3]; kind = sys.argv[4]
+closing = sys.argv[5]; strip = float(sys.argv[6]); ratio = float(sys.argv[7])
 phases = [
     ("pyroxene", 0.343, 0.25), ("feldspar", 0.315, 0.5), ("glass", 0.161, 1.0),
     ("olivine", 0.091, 2.0), ("ilmenite", 0.052, 15.0), ("others", 0.038, 0.8),
@@ -36,10 +42,12 @@ def shape(psi):
 def scene(side, count="auto"):
     return {
         "name": "bench3d", "seed": seed, "count": count,
-        "domain": {"kind": "box", "width": side, "height": side, "depth": side},
+        "domain": {"kind": "box", "width": side, "height": ratio * side, "depth": side},
         "size": {"kind": "change5", "d_min": 2.0, "d_max": 12.0, "d0": 16.0, "alpha": 6.9},
         "phases": [{"name": n, "fraction": f, "shape": shape(p)} for n, f, p in phases],
-        "insertion": {"kind": "available-surface", "order": order},
+        "insertion": {
+            "kind": "available-surface", "order": order, "closing": closing, "strip": strip,
+        },
         "density": {"kind": "eta"},
     }
 regopack.pack(scene(20.0, 10), verify=False)  # compile or load the kernels
@@ -59,15 +67,23 @@ def main() -> None:
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--order", choices=["paper", "sweep"], default="paper")
     parser.add_argument("--shape", choices=["polyhedron", "sphere"], default="polyhedron")
+    parser.add_argument("--closing", choices=["paced", "prompt", "tail"], default="paced")
+    parser.add_argument("--strip", type=float, default=0.0, help="column width of the sweep")
+    parser.add_argument("--height-ratio", type=float, default=1.0, help="box height / width")
     args = parser.parse_args()
     rows = []
     for size in args.sizes:
         out = subprocess.run(
-            [sys.executable, "-c", CHILD, str(size), str(args.seed), args.order, args.shape],
+            [
+                sys.executable, "-c", CHILD, str(size), str(args.seed), args.order,
+                args.shape, args.closing, str(args.strip), str(args.height_ratio),
+            ],
             check=True, capture_output=True, text=True,
         )  # fmt: skip
         rows.append(json.loads(out.stdout.strip().splitlines()[-1]))
-    print("| L (µm) | N drawn | placed | φ | φ interior | time (s) | ms per placed | analyses |")
+    print(
+        "| width (µm) | N drawn | placed | φ | φ interior | time (s) | ms per placed | analyses |"
+    )
     print("|---:|---:|---:|---:|---:|---:|---:|---:|")
     for r in rows:
         print(

@@ -113,6 +113,18 @@ class AvailableSurfaceConfig(BaseModel):
             "(see the available-arc inserter). Ignored by order = 'paper'."
         ),
     )
+    strip: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Width of the sweep's columns (length units): the box's floor is cut into equal "
+            "tiles of about this width (at least two circumradii of the largest particle), "
+            "each column with its own rising zone, and each particle is offered to the "
+            "column whose zone is lowest, as the 2D strips; 0: one zone over the whole "
+            "floor. Ignored by order = 'paper'."
+        ),
+    )
 
 
 class AvailableSurface(InsertionStrategy):
@@ -190,12 +202,18 @@ class AvailableSurface(InsertionStrategy):
                 if cfg.zone > 0.0
                 else ZONE_PER_RADIUS * (float(radius.max()) if n else 1.0)
             )
-            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing)
+            strip = cfg.strip
+            if strip > 0.0 and n:
+                # columns at least two circumradii of the largest particle wide: a
+                # narrower column's own candidates cannot hold up a front
+                strip = max(strip, 2.0 * float(np.max(shapes.circumradius)))
+            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip)
             sweep.run(rng, progress, PROGRESS_EVERY)
             refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
             stats = {
                 "zone": float(zone),
                 "zone_raises": float(sweep.raises),
+                "strips": float(len(sweep.zones)),
                 "refused": float(refused),
                 "not_offered": float(n - st.count - refused),
             }

@@ -39,6 +39,20 @@ CLOSINGS = ("paced", "prompt", "tail")
 STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
 
 
+MAX_TILES = 1 << 16
+"""Most columns over the box's floor."""
+
+
+class Zone:
+    """The rising zone of one column: its bins, lowest and top bin, and counters."""
+
+    def __init__(self, nbins: int) -> None:
+        self.bins: list[list[int]] = [[] for _ in range(nbins)]
+        self.lo = self.hi = 0
+        self.full = self.closed = self.seeded = False
+        self.raises = self.offered = self.pace = self.since = 0
+
+
 class SurfaceSweep:
     """State of one sweep run over a :class:`SurfaceState`.
 
@@ -52,9 +66,15 @@ class SurfaceSweep:
         Zone height (length units, > 0).
     closing
         ``"paced"``, ``"prompt"`` or ``"tail"``.
+    strip
+        Width of the columns (length units): the box's floor is cut into
+        equal tiles of about this width, each column with its own zone, as the
+        2D strips; 0: one zone over the whole floor.
     """
 
-    def __init__(self, state: SurfaceState, t: float, zone: float, closing: str) -> None:
+    def __init__(
+        self, state: SurfaceState, t: float, zone: float, closing: str, strip: float = 0.0
+    ) -> None:
         if closing not in CLOSINGS:
             raise ValueError(f"closing must be one of {CLOSINGS}, not {closing!r}")
         self.state = state
@@ -65,16 +85,27 @@ class SurfaceSweep:
         if not self.delta > 0:
             self.delta = 1.0
         self.nbins = max(1, math.ceil(height / self.delta)) + 1
-        self.bins: list[list[int]] = [[] for _ in range(self.nbins)]
+        span = state.hi[:2] - state.lo[:2]
+        self.ntile = np.array([_count(float(span[0]), strip), _count(float(span[1]), strip)])
+        while int(self.ntile.prod()) * self.nbins > MAX_TILES * ZONE_BINS * 16:
+            self.ntile = np.maximum(1, self.ntile // 2)  # bound the bins over all columns
+        self.twidth = span / self.ntile
+        self.zones = [Zone(self.nbins) for _ in range(int(self.ntile.prod()))]
         n = max(state.n, 1)
         self.flag = np.full(n, FROZEN, dtype=np.int8)
+        self.tile = np.zeros(n, dtype=np.int64)
         self.tried = np.full(n, -1, dtype=np.int64)  # particle last analysed at each candidate
         self.status = np.zeros(n, dtype=np.int8)
         self.nzone = max(1, round(zone / self.delta))
         self.closing = closing
-        self.lo = self.hi = 0
-        self.full = self.done = self.started = False
-        self.raises = self.refused = self.offered = self.pace = self.since = 0
+        self.cur = -1
+        self.done = self.started = False
+        self.refused = 0
+
+    @property
+    def raises(self) -> int:
+        """Rises of the zones, over all columns."""
+        return sum(z.raises for z in self.zones)
 
     # ------------------------------------------------------------------ bins
 
@@ -82,45 +113,84 @@ class SurfaceSweep:
         b = math.floor((z - self.z0) / self.delta)
         return min(max(b, 0), self.nbins - 1)
 
+    def _tile_of(self, c: FloatArray) -> int:
+        if len(self.zones) == 1:
+            return 0
+        ij = np.floor((c[:2] - self.state.lo[:2]) / self.twidth).astype(np.int64)
+        ij = np.clip(ij, 0, self.ntile - 1)
+        return int(ij[1] * self.ntile[0] + ij[0])
+
     def _register(self, k: int) -> None:
-        b = self._bin_of(float(self.state.centre[self.state.order[k], 2]))
-        self.bins[b].append(k)
-        if b > self.hi:
+        c = self.state.centre[self.state.order[k]]
+        b = self._bin_of(float(c[2]))
+        tile = self._tile_of(c)
+        self.tile[k] = tile
+        z = self.zones[tile]
+        z.bins[b].append(k)
+        if not z.seeded and (self.cur < 0 or b <= self.zones[self.cur].hi + self.nzone):
+            # a column starts at its first candidate near the front (not at one that a
+            # periodic box wrapped to the top: that one is filed frozen)
+            z.seeded = True
+            z.hi = b
+            z.lo = max(0, b - self.nzone + 1)
+        if b > z.hi:
             self.flag[k] = FROZEN
-        elif b < self.lo:
+        elif b < z.lo:
             self.flag[k] = RETIRED
         else:
             self.flag[k] = ACTIVE
 
-    def _retire_lowest(self) -> None:
-        for k in self.bins[self.lo]:
+    def _retire_lowest(self, z: Zone) -> None:
+        for k in z.bins[z.lo]:
             self.flag[k] = RETIRED
-        self.lo += 1
+        z.lo += 1
 
-    def _raise(self) -> bool:
-        """Raise the zone by one bin; False when its top is the box's top already."""
-        if self.hi + 1 >= self.nbins:
+    def _raise(self, z: Zone) -> bool:
+        """Raise zone ``z`` by one bin; False when its top is the box's top already."""
+        if z.hi + 1 >= self.nbins:
             return False
-        self.hi += 1
-        self.raises += 1
-        for k in self.bins[self.hi]:
+        z.hi += 1
+        z.raises += 1
+        for k in z.bins[z.hi]:
             if self.flag[k] == FROZEN:
                 self.flag[k] = ACTIVE
-        if self.hi - self.lo + 1 > self.nzone:
-            self._retire_lowest()
+        if z.hi - z.lo + 1 > self.nzone:
+            self._retire_lowest(z)
         return True
 
-    def _roll_back(self, lo0: int, hi0: int, raises: int) -> None:
-        for b in range(hi0 + 1, self.hi + 1):
-            for k in self.bins[b]:
+    def _roll_back(self, z: Zone, lo0: int, hi0: int, raises: int) -> None:
+        for b in range(hi0 + 1, z.hi + 1):
+            for k in z.bins[b]:
                 if self.flag[k] == ACTIVE:
                     self.flag[k] = FROZEN
-        for b in range(lo0, self.lo):
-            for k in self.bins[b]:
+        for b in range(lo0, z.lo):
+            for k in z.bins[b]:
                 self.flag[k] = ACTIVE
-        self.lo = lo0
-        self.hi = hi0
-        self.raises -= raises
+        z.lo = lo0
+        z.hi = hi0
+        z.raises -= raises
+
+    def _choose(self, tried: set[int]) -> int:
+        """Return the column to offer the particle to next; -1 when no open one is left.
+
+        The open column whose zone top is lowest, the first such one, among
+        those not yet tried; among full columns the turn passes on after the
+        current one, so that they close together.
+        """
+        best = -1
+        for k, z in enumerate(self.zones):
+            if z.seeded and not z.closed and k not in tried:
+                if best < 0 or z.hi < self.zones[best].hi:
+                    best = k
+        if best >= 0 and len(self.zones) > 1 and self.zones[best].full and self.cur >= 0:
+            m = len(self.zones)
+            for d in range(1, m + 1):
+                k = (self.cur + d) % m
+                z = self.zones[k]
+                if z.seeded and not z.closed and k not in tried and z.full:
+                    if z.hi == self.zones[best].hi:
+                        return k
+        return best
 
     # ---------------------------------------------------------------- search
 
@@ -128,13 +198,37 @@ class SurfaceSweep:
         st = self.state
         c = st.count
         open_ = (self.flag[:c] == ACTIVE) & (st.radius[i] < self.t * st.rmin[:c])
+        if len(self.zones) > 1:
+            open_ &= self.tile[:c] == self.cur
         return st.scan(np.flatnonzero(open_), rng, tried=self.tried)
 
     def _exhaustive(self, i: int, rng: np.random.Generator) -> FloatArray | None:
         st = self.state
         c = st.count
         todo = (self.flag[:c] != RETIRED) & (self.tried[:c] != i)
+        if len(self.zones) > 1:
+            todo &= self.tile[:c] == self.cur
         return st.scan(np.flatnonzero(todo), rng, screened=False, tried=self.tried)[1]
+
+    def _offer_to(self, i: int, z: Zone, rng: np.random.Generator) -> FloatArray | None:
+        """Offer particle ``i`` to the current column: screened, rising, then exact."""
+        raises = 0
+        lo0, hi0 = z.lo, z.hi
+        while True:
+            _, x = self._screened(i, rng)
+            if x is not None:
+                return x
+            if not z.full and raises < self.nzone:
+                if self._raise(z):
+                    raises += 1
+                    continue
+                z.full = True
+                z.pace = max(1, z.offered // max(1, z.raises))
+            if raises > 0:
+                # rising did not help: the bins it retired reopen, those it opened
+                # freeze again, unless the zone reached the top (the closing)
+                self._roll_back(z, lo0, z.hi if z.full else hi0, raises)
+            return self._exhaustive(i, rng)
 
     # ------------------------------------------------------------------ loop
 
@@ -149,53 +243,66 @@ class SurfaceSweep:
                 first[2] = st.lo[2] if st.period is not None else st.adm_lo[2]
                 if st.fits_at(first):
                     self.started = True
-                    self.hi = self._bin_of(float(first[2]))
+                    self.cur = self._tile_of(first)
+                    z = self.zones[self.cur]
+                    z.seeded = True
+                    z.hi = self._bin_of(float(first[2]))
                     self._register(st.insert(i, first))
                     self.status[i] = STATUS_PLACED
                     return
             self.status[i] = STATUS_REFUSED
             self.refused += 1
             return
-        if self.full and self.closing == "paced":
-            # the lowest bin retires after as many offers as a bin took to pass before
-            self.since += 1
-            if self.since > self.pace:
-                self.since = 0
-                self._retire_lowest()
-                if self.lo > self.hi:
-                    self.done = True
-                    return
-        elif not self.full:
-            self.offered += 1
-        was_full = self.full
         x: FloatArray | None = None
-        if st.begin(i):
-            raises = 0
-            lo0, hi0 = self.lo, self.hi
-            while True:
-                _, x = self._screened(i, rng)
-                if x is not None:
-                    break
-                if not self.full and raises < self.nzone:
-                    if self._raise():
-                        raises += 1
-                        continue
-                    self.full = True
-                    self.pace = max(1, self.offered // max(1, self.raises))
-                if raises > 0:
-                    # rising did not help: the bins it retired reopen, those it opened
-                    # freeze again, unless the zone reached the top (the closing)
-                    self._roll_back(lo0, self.hi if self.full else hi0, raises)
-                x = self._exhaustive(i, rng)
+        tried: set[int] = set()
+        offered = -1  # the first column the particle is offered to
+        fits = True
+        while True:
+            k = self._choose(tried)
+            if k < 0:
                 break
+            tried.add(k)
+            self.cur = k
+            z = self.zones[k]
+            if z.full and self.closing == "paced":
+                # the lowest bin retires after as many offers as a bin took to pass before
+                z.since += 1
+                if z.since > z.pace:
+                    z.since = 0
+                    self._retire_lowest(z)
+                    if z.lo > z.hi:
+                        z.closed = True
+                        continue
+            elif not z.full:
+                z.offered += 1
+            was_full = z.full
+            if offered < 0:
+                offered = k
+                fits = st.begin(i)
+            x = self._offer_to(i, z, rng) if fits else None
+            if x is not None:
+                break
+            if was_full and self.closing == "tail":
+                z.closed = True  # the first refusal under the top closes the column
+            if not fits:
+                break  # larger than the box
+            # a particle one column refuses goes on to the other open columns
+        if offered < 0:
+            self.done = True  # every column closed before this particle was offered
+            return
         if x is None:
             self.status[i] = STATUS_REFUSED
             self.refused += 1
-            if self.full and self.closing == "prompt":
-                self._retire_lowest()
-                if self.lo > self.hi:
-                    self.done = True
-            elif was_full and self.closing == "tail":
+            if self.closing == "prompt":
+                # the refusal stands for the rise each full column that refused it
+                # would have made
+                for k in sorted(tried):
+                    z = self.zones[k]
+                    if z.full and not z.closed:
+                        self._retire_lowest(z)
+                        if z.lo > z.hi:
+                            z.closed = True
+            if self.closing in ("tail", "prompt") and self._choose(set()) < 0:
                 self.done = True
             return
         self._register(st.insert(i, x))
@@ -215,3 +322,13 @@ class SurfaceSweep:
             if self.done:
                 break
             self.offer(i, rng)
+
+
+def _count(width: float, strip: float) -> int:
+    """Return how many equal tiles of about ``strip`` fit across ``width`` (at least one)."""
+    if not (strip > 0 and width > 0):
+        return 1
+    ratio = width / strip
+    if not math.isfinite(ratio):
+        return MAX_TILES
+    return int(min(MAX_TILES, max(1, math.floor(ratio))))

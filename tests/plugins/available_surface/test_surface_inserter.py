@@ -265,3 +265,63 @@ def test_eta_keeps_each_particle_its_margin_from_all_but_its_candidate(order: st
         assert np.all(solids[a] <= hi - margin * (1 - 1e-9))
     # eta = 0 places more in the same box
     assert _pack(scene(count=40)).n_placed > packing.n_placed or packing.n_placed == 40
+
+
+def column_scene(strip: float, closing: str = "tail", kind: str = "box", **changes: Any) -> dict:
+    """A wide box packed in the sweep order with columns about ``strip`` wide."""
+    data = scene(
+        count=400,
+        domain={"kind": kind, "width": 24.0, "height": 14.0, "depth": 24.0},
+        size={"kind": "uniform", "d_min": 1.5, "d_max": 4.0},
+        insertion={
+            "kind": "available-surface",
+            "order": "sweep",
+            "zone": 5.0,
+            "strip": strip,
+            "closing": closing,
+        },
+    )
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize("closing", ["tail", "paced", "prompt"])
+def test_columns_pack_touching_overlap_free_and_contained(closing: str) -> None:
+    packing = _pack(column_scene(8.0, closing))
+    stats = packing.stats
+    assert stats["strips"] == 9
+    _check(packing)
+    assert stats["refused"] + stats["not_offered"] + packing.n_placed == packing.n_particles
+    assert packing.phi > 0.35
+
+
+def test_columns_pack_a_periodic_box_across_its_faces() -> None:
+    packing = _pack(column_scene(8.0, "paced", kind="periodic-box", count=90))
+    assert packing.stats["strips"] == 9
+    _check_periodic(packing)
+
+
+def test_one_column_is_the_sweep_without_columns() -> None:
+    a = _pack(column_scene(0.0, count=80))
+    for strip in (24.0, 40.0):
+        b = _pack(column_scene(strip, count=80))
+        assert b.stats["strips"] == 1
+        assert np.array_equal(a.centre, b.centre, equal_nan=True)
+        assert np.array_equal(a.insertion_index, b.insertion_index)
+
+
+def test_columns_are_reproducible_and_rise_together() -> None:
+    a = _pack(column_scene(8.0))
+    b = _pack(column_scene(8.0))
+    assert np.array_equal(a.centre, b.centre, equal_nan=True)
+    order = a.placed_in_order()
+    c = a.centre[order]
+    ij = np.minimum(((c[:, :2] + 12.0) // 8.0).astype(int), 2)
+    column = ij[:, 1] * 3 + ij[:, 0]
+    # the first half of the placements lies low in every column (the fronts rise
+    # together): no column has run ahead to the top while another stays at the bottom
+    half = c[: len(c) // 2]
+    col = column[: len(c) // 2]
+    heights = [np.median(half[col == k, 2]) for k in range(9) if np.any(col == k)]
+    assert len(heights) == 9
+    assert max(heights) - min(heights) < 5.0 + 2.0 * float(a.solids.circumradius.max())
