@@ -325,3 +325,12 @@ def test_columns_are_reproducible_and_rise_together() -> None:
     heights = [np.median(half[col == k, 2]) for k in range(9) if np.any(col == k)]
     assert len(heights) == 9
     assert max(heights) - min(heights) < 5.0 + 2.0 * float(a.solids.circumradius.max())
+
+
+def test_a_column_searches_only_its_own_candidates() -> None:
+    """Each particle is offered to one column's zone: fewer analyses than one zone over all."""
+    one = _pack(column_scene(0.0))
+    nine = _pack(column_scene(8.0))
+    per_one = one.stats["candidate_analyses"] / one.n_placed
+    per_nine = nine.stats["candidate_analyses"] / nine.n_placed
+    assert per_nine < 0.9 * per_one  # 5.3 against 7.0
