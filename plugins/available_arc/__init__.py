@@ -265,6 +265,10 @@ def _pack_sweep(
         # strips at least two circumradii of the largest particle wide: a narrower
         # strip's own candidates cannot hold up a front
         strip = max(strip, 2.0 * float(st.outlines.circum.max()))
+        if sweep.strip_count(width, strip) > 1:
+            # and a zone at least as high: a strip's next candidate is then always
+            # within one zone of its top
+            zone = max(zone, 2.0 * float(st.outlines.circum.max()))
     sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=strip)
     placed = 0
     for begin in range(0, n, PROGRESS_EVERY):

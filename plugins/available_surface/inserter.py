@@ -211,7 +211,7 @@ class AvailableSurface(InsertionStrategy):
             sweep.run(rng, progress, PROGRESS_EVERY)
             refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
             stats = {
-                "zone": float(zone),
+                "zone": float(sweep.zone),
                 "zone_raises": float(sweep.raises),
                 "strips": float(len(sweep.zones)),
                 "refused": float(refused),

@@ -39,15 +39,15 @@ CLOSINGS = ("paced", "prompt", "tail")
 STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
 
 
-MAX_TILES = 1 << 16
+MAX_TILES = 1 << 10
 """Most columns over the box's floor."""
 
 
 class Zone:
     """The rising zone of one column: its bins, lowest and top bin, and counters."""
 
-    def __init__(self, nbins: int) -> None:
-        self.bins: list[list[int]] = [[] for _ in range(nbins)]
+    def __init__(self) -> None:
+        self.bins: dict[int, list[int]] = {}  # filled bins only
         self.lo = self.hi = 0
         self.full = self.closed = self.seeded = False
         self.raises = self.offered = self.pace = self.since = 0
@@ -81,16 +81,21 @@ class SurfaceSweep:
         self.t = t
         height = float(state.hi[2] - state.lo[2])
         self.z0 = float(state.lo[2])
+        span = state.hi[:2] - state.lo[:2]
+        self.ntile = np.array([_count(float(span[0]), strip), _count(float(span[1]), strip)])
+        while int(self.ntile.prod()) > MAX_TILES:
+            self.ntile = np.maximum(1, self.ntile // 2)
+        self.twidth = span / self.ntile
+        if int(self.ntile.prod()) > 1 and state.n > 0:
+            # with columns, a zone at least two circumradii of the largest particle
+            # high: a column's next candidate is then always within one zone of its top
+            zone = max(zone, 2.0 * float(np.max(state.circum)))
+        self.zone = zone
         self.delta = max(min(zone, height) / ZONE_BINS, height / MAX_BINS)
         if not self.delta > 0:
             self.delta = 1.0
         self.nbins = max(1, math.ceil(height / self.delta)) + 1
-        span = state.hi[:2] - state.lo[:2]
-        self.ntile = np.array([_count(float(span[0]), strip), _count(float(span[1]), strip)])
-        while int(self.ntile.prod()) * self.nbins > MAX_TILES * ZONE_BINS * 16:
-            self.ntile = np.maximum(1, self.ntile // 2)  # bound the bins over all columns
-        self.twidth = span / self.ntile
-        self.zones = [Zone(self.nbins) for _ in range(int(self.ntile.prod()))]
+        self.zones = [Zone() for _ in range(int(self.ntile.prod()))]
         n = max(state.n, 1)
         self.flag = np.full(n, FROZEN, dtype=np.int8)
         self.tile = np.zeros(n, dtype=np.int64)
@@ -126,13 +131,17 @@ class SurfaceSweep:
         tile = self._tile_of(c)
         self.tile[k] = tile
         z = self.zones[tile]
-        z.bins[b].append(k)
+        z.bins.setdefault(b, []).append(k)
         if not z.seeded and (self.cur < 0 or b <= self.zones[self.cur].hi + self.nzone):
             # a column starts at its first candidate near the front (not at one that a
             # periodic box wrapped to the top: that one is filed frozen)
             z.seeded = True
             z.hi = b
             z.lo = max(0, b - self.nzone + 1)
+            for bb, ks in z.bins.items():  # candidates filed before it join the zone
+                if z.lo <= bb <= z.hi:
+                    for kk in ks:
+                        self.flag[kk] = ACTIVE
         if b > z.hi:
             self.flag[k] = FROZEN
         elif b < z.lo:
@@ -141,7 +150,7 @@ class SurfaceSweep:
             self.flag[k] = ACTIVE
 
     def _retire_lowest(self, z: Zone) -> None:
-        for k in z.bins[z.lo]:
+        for k in z.bins.get(z.lo, ()):
             self.flag[k] = RETIRED
         z.lo += 1
 
@@ -151,7 +160,7 @@ class SurfaceSweep:
             return False
         z.hi += 1
         z.raises += 1
-        for k in z.bins[z.hi]:
+        for k in z.bins.get(z.hi, ()):
             if self.flag[k] == FROZEN:
                 self.flag[k] = ACTIVE
         if z.hi - z.lo + 1 > self.nzone:
@@ -160,11 +169,11 @@ class SurfaceSweep:
 
     def _roll_back(self, z: Zone, lo0: int, hi0: int, raises: int) -> None:
         for b in range(hi0 + 1, z.hi + 1):
-            for k in z.bins[b]:
+            for k in z.bins.get(b, ()):
                 if self.flag[k] == ACTIVE:
                     self.flag[k] = FROZEN
         for b in range(lo0, z.lo):
-            for k in z.bins[b]:
+            for k in z.bins.get(b, ()):
                 self.flag[k] = ACTIVE
         z.lo = lo0
         z.hi = hi0
