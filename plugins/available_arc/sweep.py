@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins import strips
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.candidates import tree_set
 from regopack.plugins.available_arc.refusal import place_screened, try_candidate
@@ -91,12 +92,7 @@ MAX_CELLS = 1 << 24
 
 def strip_count(width: float, strip: float) -> int:
     """Return how many equal strips of about ``strip`` fit across ``width`` (at least one)."""
-    if not (strip > 0 and width > 0):
-        return 1
-    ratio = width / strip
-    if not math.isfinite(ratio):
-        return MAX_STRIPS
-    return int(min(MAX_STRIPS, max(1, math.floor(ratio))))
+    return strips.strip_count(width, strip, MAX_STRIPS)
 
 
 class Bins(NamedTuple):

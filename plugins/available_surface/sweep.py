@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.plugins.available_surface.state import SurfaceState
+from regopack.plugins.strips import strip_count
 
 FloatArray = NDArray[np.float64]
 
@@ -82,7 +83,12 @@ class SurfaceSweep:
         height = float(state.hi[2] - state.lo[2])
         self.z0 = float(state.lo[2])
         span = state.hi[:2] - state.lo[:2]
-        self.ntile = np.array([_count(float(span[0]), strip), _count(float(span[1]), strip)])
+        self.ntile = np.array(
+            [
+                strip_count(float(span[0]), strip, MAX_TILES),
+                strip_count(float(span[1]), strip, MAX_TILES),
+            ]
+        )
         while int(self.ntile.prod()) > MAX_TILES:
             self.ntile = np.maximum(1, self.ntile // 2)
         self.twidth = span / self.ntile
@@ -331,13 +337,3 @@ class SurfaceSweep:
             if self.done:
                 break
             self.offer(i, rng)
-
-
-def _count(width: float, strip: float) -> int:
-    """Return how many equal tiles of about ``strip`` fit across ``width`` (at least one)."""
-    if not (strip > 0 and width > 0):
-        return 1
-    ratio = width / strip
-    if not math.isfinite(ratio):
-        return MAX_TILES
-    return int(min(MAX_TILES, max(1, math.floor(ratio))))
