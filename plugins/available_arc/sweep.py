@@ -296,13 +296,7 @@ def _raise(
     hi += 1
     sz[st, S_HI] = hi
     sz[st, S_RAISES] += 1
-    leaves = s.ipar[K.I_LEAVES]
-    e = bn.head[st, hi]
-    while e >= 0:
-        if bn.flag[e] == FROZEN:
-            bn.flag[e] = ACTIVE
-            tree_set(s.tree, leaves, e, np.inf)
-        e = bn.nxt[e]
+    _thaw(st, hi, hi, True, s, bn)
     if hi - sz[st, S_LO] + 1 > zs[Z_NZONE]:
         _retire_bin(st, sz[st, S_LO], s, bn)
         sz[st, S_LO] += 1
@@ -413,6 +407,22 @@ def _switch(
 
 
 @numba.njit(cache=True)
+def _thaw(st: int, lo: int, hi: int, visible: bool, s: K.Packed, bn: Bins) -> None:
+    """Make the frozen candidates of strip ``st``'s bins ``lo..hi`` active (with rmin = inf)."""
+    leaves = s.ipar[K.I_LEAVES]
+    for b in range(lo, hi + 1):
+        e = bn.head[st, b]
+        while e >= 0:
+            if bn.flag[e] == FROZEN:
+                bn.flag[e] = ACTIVE
+                if visible:
+                    tree_set(s.tree, leaves, e, np.inf)
+                else:
+                    bn.rec[e] = np.inf
+            e = bn.nxt[e]
+
+
+@numba.njit(cache=True)
 def _register(
     k: int,
     zs: IntArray,
@@ -440,6 +450,8 @@ def _register(
         sz[st, S_SEEDED] = 1
         sz[st, S_HI] = b
         sz[st, S_LO] = max(0, b - zs[Z_NZONE] + 1)
+        # candidates filed in the strip before it was seeded join its zone
+        _thaw(st, sz[st, S_LO], b, st == cur, s, bn)
     leaves = s.ipar[K.I_LEAVES]
     if b > sz[st, S_HI] or b < sz[st, S_LO]:
         bn.flag[k] = FROZEN if b > sz[st, S_HI] else RETIRED
