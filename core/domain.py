@@ -94,16 +94,33 @@ class Domain(ABC):
 
     def covered_area(self, geoms: NDArray[np.object_]) -> float:
         """Total area of the shapely polygons ``geoms`` that lies inside the domain."""
+        return self.add_parts(self.covered_parts(geoms))
+
+    def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
+        """Area inside the domain of each of ``geoms``, in groups that :meth:`add_parts` sums.
+
+        The groups keep the order of ``geoms``, so the parts of consecutive
+        batches, joined group by group, sum to the area of the whole set
+        exactly as :meth:`covered_area` of the whole set would.
+        """
         import shapely
 
         if len(geoms) == 0:
-            return 0.0
+            return [np.zeros(0), np.zeros(0)]
         window = shapely.Polygon(self.outline())
         inside = shapely.contains_properly(window, geoms)
-        total = float(shapely.area(geoms[inside]).sum())
         rest = ~inside
-        if rest.any():
-            total += float(shapely.area(shapely.intersection(geoms[rest], window)).sum())
+        clipped = shapely.area(shapely.intersection(geoms[rest], window)) if rest.any() else []
+        return [
+            np.asarray(shapely.area(geoms[inside]), dtype=np.float64),
+            np.asarray(clipped, dtype=np.float64),
+        ]
+
+    def add_parts(self, parts: list[FloatArray]) -> float:
+        """Sum the groups of :meth:`covered_parts`: each group as an array, then in order."""
+        total = 0.0
+        for part in parts:
+            total += float(part.sum())
         return total
 
 
@@ -189,12 +206,12 @@ class Rectangle(Domain):
             dtype=np.float64,
         )
 
-    def covered_area(self, geoms: NDArray[np.object_]) -> float:
-        """Total area of ``geoms`` inside the rectangle, by exact clipping."""
+    def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
+        """Area of ``geoms`` inside the rectangle, by exact clipping (see :class:`Domain`)."""
         import shapely
 
         if len(geoms) == 0:
-            return 0.0
+            return [np.zeros(0), np.zeros(0)]
         b = shapely.bounds(geoms)
         inside = (
             (b[:, 0] >= self.xmin)
@@ -209,11 +226,11 @@ class Rectangle(Domain):
             | (b[:, 1] >= self.ymax)
         )
         straddling = ~inside & ~away
-        total = float(shapely.area(geoms[inside]).sum())
+        clipped: FloatArray = np.zeros(0)
         if straddling.any():
             box = shapely.box(self.xmin, self.ymin, self.xmax, self.ymax)
-            total += float(shapely.area(shapely.intersection(geoms[straddling], box)).sum())
-        return total
+            clipped = shapely.area(shapely.intersection(geoms[straddling], box))
+        return [np.asarray(shapely.area(geoms[inside]), dtype=np.float64), clipped]
 
     def to_dict(self) -> dict[str, Any]:
         """``{"kind": "rectangle", "bounds": [xmin, xmax, ymin, ymax]}``."""
@@ -261,11 +278,11 @@ class PeriodicRectangle(Rectangle):
         out: FloatArray = d - period * np.round(d / period)
         return out
 
-    def covered_area(self, geoms: NDArray[np.object_]) -> float:
-        """Total area of ``geoms``: every part of a particle lies in the torus once."""
+    def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
+        """Area of each of ``geoms``: every part of a particle lies in the torus once."""
         import shapely
 
-        return float(shapely.area(geoms).sum()) if len(geoms) else 0.0
+        return [np.asarray(shapely.area(geoms), dtype=np.float64) if len(geoms) else np.zeros(0)]
 
 
 @dataclass(frozen=True)
@@ -416,16 +433,24 @@ class Circle(Domain):
             [self.cx + self.radius * np.cos(t), self.cy + self.radius * np.sin(t)]
         )
 
-    def covered_area(self, geoms: NDArray[np.object_]) -> float:
-        """Total area of ``geoms`` inside the disk, by exact polygon-disk intersection."""
+    def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
+        """Area of each of ``geoms`` inside the disk, by exact polygon-disk intersection."""
         import shapely
 
         if len(geoms) == 0 or self.radius <= 0:
-            return 0.0
-        total = 0.0
-        for g in geoms:
+            return [np.zeros(0)]
+        areas = np.empty(len(geoms))
+        for j, g in enumerate(geoms):
             ring = np.asarray(shapely.get_exterior_ring(g).coords)[:-1]
-            total += polygon_disk_area(ring, (self.cx, self.cy), self.radius)
+            areas[j] = polygon_disk_area(ring, (self.cx, self.cy), self.radius)
+        return [areas]
+
+    def add_parts(self, parts: list[FloatArray]) -> float:
+        """Sum the areas one by one, in order."""
+        total = 0.0
+        for part in parts:
+            for value in part.tolist():
+                total += value
         return total
 
     def to_dict(self) -> dict[str, Any]:

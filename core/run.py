@@ -59,6 +59,9 @@ __all__ = [
 RUN_FOLDER = "run"
 """Kind of the folder a run writes (in its :data:`regopack.outdir.MARKER` file)."""
 
+SHAPELY_BATCH = 1 << 16
+"""Particles turned into shapely polygons at a time when measuring a covered area."""
+
 BYTES_PER_PARTICLE = 256
 """Memory a run needs at least per particle drawn, in bytes (a lower bound).
 
@@ -329,6 +332,17 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     )
 
 
+def _covered_by_parts(kind: type[Domain]) -> bool:
+    """Whether ``kind.covered_area`` is the sum of ``kind.covered_parts``."""
+
+    def owner(name: str) -> type:
+        return next(c for c in kind.__mro__ if name in c.__dict__)
+
+    return owner("covered_area") is Domain or issubclass(
+        owner("covered_parts"), owner("covered_area")
+    )
+
+
 def phi_in_window(packing: Packing, window: Domain | tuple[float, float, float, float]) -> float:
     """Area fraction of ``window`` covered by placed particles.
 
@@ -340,8 +354,18 @@ def phi_in_window(packing: Packing, window: Domain | tuple[float, float, float, 
         window = Rectangle(*(float(v) for v in window))
     if not window.area > 0:
         return math.nan
-    geoms = packing.to_shapely()
-    return window.covered_area(geoms) / window.area
+    if not _covered_by_parts(type(window)):
+        # a domain that redefines its covered area alone gets every polygon at once
+        return window.covered_area(packing.to_shapely()) / window.area
+    # polygons a batch at a time, so that a large packing never holds them all
+    placed = np.flatnonzero(packing.placed)
+    groups: list[list[FloatArray]] = []
+    for start in range(0, max(len(placed), 1), SHAPELY_BATCH):
+        parts = window.covered_parts(packing.to_shapely(placed[start : start + SHAPELY_BATCH]))
+        groups = groups or [[] for _ in parts]
+        for group, part in zip(groups, parts, strict=True):
+            group.append(part)
+    return window.add_parts([np.concatenate(group) for group in groups]) / window.area
 
 
 def default_out_dir(scene: ResolvedScene) -> Path:

@@ -2,11 +2,13 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pytest
 from fakes import RegularPolygon, ShapeConfig, SizeConfig, UniformDiameter
 
+from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.errors import ConfigError, PluginError
 from regopack.hookspecs import hookimpl
 from regopack.packing import load
@@ -146,6 +148,45 @@ def test_phi_in_window():
     assert phi_in_window(p, (1, 3, 1, 3)) == pytest.approx(1 / 4)
     assert phi_in_window(p, (2, 4, 2, 4)) == 0.0
     assert math.isnan(phi_in_window(p, (2, 2, 0, 4)))
+
+
+def _scattered_triangles(n: int, seed: int) -> list[np.ndarray]:
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-12.0, 12.0, (n, 2))
+    return [c + rng.uniform(-1.5, 1.5, (3, 2)) for c in centres]
+
+
+@pytest.mark.parametrize(
+    "window",
+    [
+        Rectangle(-6.0, 7.0, -5.0, 4.0),
+        Circle(0.5, -0.5, 6.5),
+        ConvexPolygon(((-8.0, -6.0), (9.0, -7.0), (1.0, 8.0))),
+        PeriodicRectangle(-10.0, 10.0, -10.0, 10.0),
+    ],
+)
+def test_phi_in_window_batch_by_batch_is_the_whole_at_once_exactly(
+    window: Domain, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import regopack.run as run_module
+
+    p = packing_from_polygons(_scattered_triangles(300, 4), domain=(-15, 15, -15, 15))
+    whole = window.covered_area(p.to_shapely()) / window.area
+    assert 0.05 < whole < 1.0
+    for batch in (1, 7, 299, 10**6):
+        monkeypatch.setattr(run_module, "SHAPELY_BATCH", batch)
+        assert phi_in_window(p, window) == whole
+
+
+def test_phi_in_window_of_a_domain_with_its_own_covered_area() -> None:
+    @dataclass(frozen=True)
+    class Halved(Rectangle):
+        def covered_area(self, geoms: np.ndarray) -> float:
+            return 0.5 * super().covered_area(geoms)
+
+    p = packing_from_polygons(_scattered_triangles(50, 5), domain=(-15, 15, -15, 15))
+    window = Halved(-6.0, 7.0, -5.0, 4.0)
+    assert phi_in_window(p, window) == 0.5 * phi_in_window(p, Rectangle(-6.0, 7.0, -5.0, 4.0))
 
 
 def test_analyses_run_with_their_requirements(tmp_path):

@@ -33,6 +33,8 @@ if TYPE_CHECKING:
     from regopack.plugins.available_arc.state import ArcState
 
 PROGRESS_EVERY = 256
+SWEEP_POOL_ROWS = 4096
+"""Neighbour-list rows the sweep starts with (the pool grows when a batch could exhaust it)."""
 ZONE_PER_RADIUS = 6.0
 """Default sweep zone height over the largest equivalent radius (three diameters)."""
 
@@ -197,6 +199,8 @@ class AvailableArc(InsertionStrategy):
             first_random=cfg.first == "random",
             eta=eta,
             neighbour_lists=cfg.neighbour_lists,
+            # the sweep gives back the lists it leaves behind: start small, grow on demand
+            pool_rows=SWEEP_POOL_ROWS if cfg.order == "sweep" else None,
         )
         prepared = time.perf_counter()
         if cfg.order == "sweep":
@@ -275,6 +279,7 @@ def _pack_sweep(
         if progress is not None:
             progress(begin, placed, n)
         end = min(begin + PROGRESS_EVERY, n)
+        st.reserve_rows(end - begin)
         placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded)
     if progress is not None:
         progress(n, placed, n)

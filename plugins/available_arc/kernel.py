@@ -88,8 +88,9 @@ N_FPAR = 14
     I_WALLMODE,
     I_ROUNDED,
     I_NBLISTS,
-) = range(16)
-N_IPAR = 16
+    I_NBTOP,
+) = range(17)
+N_IPAR = 17
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -132,6 +133,8 @@ class Packed(NamedTuple):
     nb_dy: FloatArray
     nb_n: IntArray
     nb_reach: FloatArray
+    nb_row: IntArray
+    nb_free: IntArray
 
 
 class Work(NamedTuple):
@@ -195,10 +198,10 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
     if ipar[I_NBLISTS] == 1:
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
-        register_neighbours(
+        ipar[I_NBTOP] = register_neighbours(
             i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
             s.head, s.nxt, s.item, s.stamp, token,
-            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n,
+            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_row, s.nb_free, ipar[I_NBTOP],
         )  # fmt: skip
     grid_insert(i, x, y, reach_of(i, g, s.fpar, ipar), gpar, gdim, s.head, s.nxt, s.item)
     return k
@@ -395,19 +398,20 @@ def analyze_candidate(
     # the candidate's neighbour list, nearest first, holds every interferer of a
     # new particle whose reach is at most the lists' cap: read it up to the gap
     # beyond which none can interfere; otherwise (and for a dropped list) search the grid
-    lists = ipar[I_NBLISTS] == 1 and s.nb_n[pk] >= 0 and s.nb_reach[i] <= fpar[F_NBCAP]
+    row = s.nb_row[pk] if ipar[I_NBLISTS] == 1 else -1
+    lists = row >= 0 and s.nb_n[row] >= 0 and s.nb_reach[i] <= fpar[F_NBCAP]
     if lists:
-        cnt = s.nb_n[pk]
+        cnt = s.nb_n[row]
         if cnt > found.shape[0]:
             found = np.empty(cnt, dtype=np.int64)
         lgap = s.nb_reach[pk] + 2.0 * s.nb_reach[i]
         stop = lgap + GAP_SLACK * (lgap + 2.0 * fpar[F_REACH])
         for e in range(cnt):
-            if s.nb_gap[pk, e] > stop:
+            if s.nb_gap[row, e] > stop:
                 break
-            o = s.nb_o[pk, e]
-            ddx = s.nb_dx[pk, e]
-            ddy = s.nb_dy[pk, e]
+            o = s.nb_o[row, e]
+            ddx = s.nb_dx[row, e]
+            ddy = s.nb_dy[row, e]
             if _interferes(pk, o, i, ddx * ddx + ddy * ddy, g, tau_mode, tau):
                 found[nf] = o
                 nf += 1

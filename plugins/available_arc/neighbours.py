@@ -12,6 +12,12 @@ at most ``cap`` is in the list, before the first entry whose gap exceeds
 ``reach_q + 2 reach_new``, so a query reads one short contiguous block instead
 of the grid cells. A list that would outgrow its capacity is dropped
 (``count = -1``) and its particle goes back to the grid.
+
+The lists live in a pool of rows: ``row[q]`` is the row of ``q``'s list (-1:
+none), and the free rows are a stack (``free[:top]``). A particle placed when
+the pool is empty gets no list and uses the grid; a candidate that can never
+be analysed again (one the sweep has left behind) gives its row back with
+:func:`release_row`, so the pool holds only the lists still in use.
 """
 
 from __future__ import annotations
@@ -45,7 +51,7 @@ def _add_entry(
     nb_dy: FloatArray,
     nb_n: IntArray,
 ) -> None:
-    """Insert ``o`` into ``q``'s list at its place by gap; drop the list when full."""
+    """Insert ``o`` into list row ``q`` at its place by gap; drop the list when full."""
     cnt = nb_n[q]
     if cnt < 0:
         return
@@ -86,16 +92,25 @@ def register_neighbours(
     nb_dx: FloatArray,
     nb_dy: FloatArray,
     nb_n: IntArray,
-) -> None:
-    """Start ``p``'s list and add ``p`` to its neighbours' lists.
+    row: IntArray,
+    free: IntArray,
+    top: int,
+) -> int:
+    """Start ``p``'s list and add ``p`` to its neighbours' lists; return the new stack top.
 
     Call after ``p`` is placed and before it is registered in the grid;
-    ``token`` must be a fresh stamp value.
+    ``token`` must be a fresh stamp value. ``p`` takes the row on top of the
+    free stack ``free[:top]``, or none when the stack is empty.
     """
     x = cx[p]
     y = cy[p]
     rp = reach[p]
-    nb_n[p] = 0
+    rp_row = -1
+    if top > 0:
+        top -= 1
+        rp_row = free[top]
+        nb_n[rp_row] = 0
+    row[p] = rp_row
     stamp[p] = token
     # o qualifies when |c_p - c_o| < (rp + ro + 2 cap)(1 + slack): its grid disk
     # (radius ro <= maxreach) then reaches into this box
@@ -119,10 +134,32 @@ def register_neighbours(
                 lim = rp + ro + 2.0 * cap
                 if d >= lim * (1.0 + GAP_SLACK):
                     continue
-                _add_entry(p, o, d - ro, dx, dy, nb_o, nb_gap, nb_dx, nb_dy, nb_n)
-                _add_entry(o, p, d - rp, x - cx[o], y - cy[o], nb_o, nb_gap, nb_dx, nb_dy, nb_n)
+                if rp_row >= 0:
+                    _add_entry(rp_row, o, d - ro, dx, dy, nb_o, nb_gap, nb_dx, nb_dy, nb_n)
+                ro_row = row[o]
+                if ro_row >= 0:
+                    _add_entry(
+                        ro_row, p, d - rp, x - cx[o], y - cy[o], nb_o, nb_gap, nb_dx, nb_dy, nb_n
+                    )
+    return top
+
+
+@numba.njit(cache=True)
+def release_row(q: int, row: IntArray, free: IntArray, top: int) -> int:
+    """Give ``q``'s list row back to the free stack; return the new stack top."""
+    r = row[q]
+    if r < 0:
+        return top
+    row[q] = -1
+    free[top] = r
+    return top + 1
 
 
 def list_capacity(n: int, enabled: bool, capacity: int) -> tuple[int, int]:
     """Shape ``(rows, columns)`` of the list arrays (one dummy entry when disabled)."""
     return (n, capacity) if enabled and n > 0 else (1, 1)
+
+
+def free_stack(rows: int, enabled: bool) -> IntArray:
+    """Free-row stack of a new pool: row 0 on top, so rows are taken in order."""
+    return np.arange(rows - 1, -1, -1, dtype=np.int64) if enabled else np.zeros(1, np.int64)

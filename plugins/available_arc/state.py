@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -10,7 +12,7 @@ from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.candidates import tree_size
 from regopack.plugins.available_arc.geometry import prepare_outlines
 from regopack.plugins.available_arc.grid import grid_layout
-from regopack.plugins.available_arc.neighbours import list_capacity
+from regopack.plugins.available_arc.neighbours import free_stack, list_capacity
 from regopack.plugins.walls import (
     WALL_HALFPLANES,
     WALL_PERIODIC,
@@ -25,6 +27,18 @@ LIST_CAP_QUANTILE = 0.9
 """New particles up to this quantile of the reach look up interferers in neighbour lists."""
 LIST_CAPACITY = 64
 """Entries per neighbour list; a particle with more neighbours uses the grid."""
+
+
+def list_rows(n: int, pool_rows: int | None) -> int:
+    """Rows of a new neighbour-list pool: ``pool_rows`` (at least one), or ``n``."""
+    return n if pool_rows is None else max(1, min(n, pool_rows))
+
+
+def _grown(a: NDArray[Any], rows: int) -> NDArray[Any]:
+    """Return ``a`` with zero rows appended up to ``rows`` rows."""
+    out = np.zeros((rows, a.shape[1]), dtype=a.dtype)
+    out[: a.shape[0]] = a
+    return out
 
 
 class ArcState:
@@ -50,6 +64,10 @@ class ArcState:
         Keep per-particle neighbour lists where the scene allows them (walled
         domains, sharp polygons); ``False`` always searches the grid. Both give
         the same packing.
+    pool_rows
+        Rows of the neighbour-list pool to start with; ``None``: one per
+        particle. An insertion that gives rows back (the sweep) starts small
+        and grows the pool with :meth:`reserve_rows`.
     """
 
     def __init__(
@@ -63,6 +81,7 @@ class ArcState:
         first_random: bool = False,
         eta: float = 0.0,
         neighbour_lists: bool = True,
+        pool_rows: int | None = None,
     ) -> None:
         n = len(population)
         offsets = np.ascontiguousarray(population.shapes.offsets, dtype=np.int64)
@@ -105,7 +124,8 @@ class ArcState:
         ipar[kernel.I_WALLMODE] = mode
         ipar[kernel.I_ROUNDED] = 1 if rounded else 0
         ipar[kernel.I_NBLISTS] = 1 if lists else 0
-        rows, cols = list_capacity(n, lists, LIST_CAPACITY)
+        rows, cols = list_capacity(list_rows(n, pool_rows), lists, LIST_CAPACITY)
+        ipar[kernel.I_NBTOP] = rows if lists else 0
         # the kernels compile their rounded path only for rounded scenes
         self.rounded: bool | None = True if rounded else None
         self.packed = kernel.Packed(
@@ -126,6 +146,8 @@ class ArcState:
             nb_dy=np.zeros((rows, cols)),
             nb_n=np.full(rows, -1, dtype=np.int64),
             nb_reach=np.ascontiguousarray(reach, dtype=np.float64),
+            nb_row=np.full(max(n, 1), -1, dtype=np.int64),
+            nb_free=free_stack(rows, lists),
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax
@@ -151,6 +173,33 @@ class ArcState:
             cache_rad=np.zeros(slots),
             woff=np.zeros(walls.shape[0] if mode == WALL_HALFPLANES else 1),
         )
+
+    def reserve_rows(self, need: int) -> None:
+        """Grow the neighbour-list pool until at least ``need`` rows are free.
+
+        Every placement takes at most one row, so reserving the rows of ``m``
+        placements before packing ``m`` particles keeps every list that the
+        full pool would keep: the packing does not depend on the pool's size.
+        """
+        p = self.packed
+        top = int(p.ipar[kernel.I_NBTOP])
+        if p.ipar[kernel.I_NBLISTS] == 0 or top >= need:
+            return
+        rows = p.nb_o.shape[0]
+        grown = max(2 * rows, rows + need - top)
+        added = grown - rows
+        free = np.empty(grown, dtype=np.int64)  # room for every row to be free
+        free[:added] = np.arange(grown - 1, rows - 1, -1)
+        free[added : added + top] = p.nb_free[:top]
+        self.packed = p._replace(
+            nb_o=_grown(p.nb_o, grown),
+            nb_gap=_grown(p.nb_gap, grown),
+            nb_dx=_grown(p.nb_dx, grown),
+            nb_dy=_grown(p.nb_dy, grown),
+            nb_n=np.concatenate([p.nb_n, np.full(added, -1, dtype=np.int64)]),
+            nb_free=free,
+        )
+        p.ipar[kernel.I_NBTOP] = top + added
 
     @property
     def count(self) -> int:

@@ -44,6 +44,7 @@ import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba co
 from regopack.plugins import strips
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.candidates import tree_set
+from regopack.plugins.available_arc.neighbours import release_row
 from regopack.plugins.available_arc.refusal import place_screened, try_candidate
 from regopack.plugins.walls import WALL_BOX, WALL_PERIODIC, point_fits
 
@@ -78,8 +79,9 @@ N_ZS = 6
     S_SINCE,
     S_CLOSED,
     S_SEEDED,
-) = range(9)
-N_SZ = 9
+    S_FREED,
+) = range(10)
+N_SZ = 10
 
 # per-candidate zone flag
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
@@ -282,6 +284,27 @@ def _retire_bin(st: int, b: int, s: K.Packed, bn: Bins) -> None:
 
 
 @numba.njit(cache=True)
+def _release(st: int, sz: IntArray, s: K.Packed, bn: Bins) -> None:
+    """Give back the neighbour-list rows of strip ``st``'s bins below its zone.
+
+    Call between particles: bins below the zone then stay behind for good (only
+    a particle's own rises are rolled back), so their candidates are never
+    analysed again.
+    """
+    if s.ipar[K.I_NBLISTS] == 0:
+        return
+    top = s.ipar[K.I_NBTOP]
+    for b in range(sz[st, S_FREED], sz[st, S_LO]):
+        e = bn.head[st, b]
+        while e >= 0:
+            top = release_row(s.order[e], s.nb_row, s.nb_free, top)
+            e = bn.nxt[e]
+    if sz[st, S_LO] > sz[st, S_FREED]:
+        sz[st, S_FREED] = sz[st, S_LO]
+    s.ipar[K.I_NBTOP] = top
+
+
+@numba.njit(cache=True)
 def _raise(
     st: int,
     zs: IntArray,
@@ -456,6 +479,8 @@ def _register(
     if b > sz[st, S_HI] or b < sz[st, S_LO]:
         bn.flag[k] = FROZEN if b > sz[st, S_HI] else RETIRED
         tree_set(s.tree, leaves, k, -np.inf)
+        if b < sz[st, S_FREED]:  # behind the zone for good: its list is not needed
+            s.ipar[K.I_NBTOP] = release_row(q, s.nb_row, s.nb_free, s.ipar[K.I_NBTOP])
     else:
         bn.flag[k] = ACTIVE
         if st != zs[Z_CUR]:
@@ -586,6 +611,11 @@ def sweep_range(
             # every strip closed before this particle could be offered
             zs[Z_DONE] = 1
             break
+        if k >= 0:
+            _register(k, zs, sz, s, delta, swidth, bn)
+        for t in range(sz.shape[0]):
+            if tried[t] == i:
+                _release(t, sz, s, bn)
         if k < 0:
             status[i] = STATUS_REFUSED
             zs[Z_REFUSED] += 1
@@ -606,7 +636,6 @@ def sweep_range(
                 if _choose(sz, tried, -1, -1) < 0:
                     zs[Z_DONE] = 1
             continue
-        _register(k, zs, sz, s, delta, swidth, bn)
         status[i] = STATUS_PLACED
         placed += 1
     return placed

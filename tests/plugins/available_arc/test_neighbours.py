@@ -83,7 +83,8 @@ def test_full_lists_fall_back_to_the_grid(monkeypatch: pytest.MonkeyPatch) -> No
     pop, _ = change5_population(400, 8)
     st_ = _same_with_and_without_lists(pop, Rectangle.centred(100.0, 100.0), 8)
     placed = st_.packed.order[: st_.count]
-    dropped = np.sum(st_.packed.nb_n[placed] < 0)
+    rows = st_.packed.nb_row[placed]
+    dropped = np.sum(st_.packed.nb_n[rows] < 0)
     assert 0 < dropped < st_.count
 
 
@@ -97,7 +98,8 @@ def test_lists_hold_every_near_particle_sorted_by_gap() -> None:
     assert cap > 0
     checked = 0
     for q in placed:
-        cnt = p.nb_n[q]
+        r = p.nb_row[q]
+        cnt = p.nb_n[r]
         if cnt < 0:
             continue
         others = placed[placed != q]
@@ -105,13 +107,13 @@ def test_lists_hold_every_near_particle_sorted_by_gap() -> None:
         lim = reach[q] + reach[others] + 2.0 * cap
         must = set(others[d < lim].tolist())
         may = set(others[d < lim * (1 + 2 * GAP_SLACK)].tolist())
-        got = p.nb_o[q, :cnt].astype(np.int64)
+        got = p.nb_o[r, :cnt].astype(np.int64)
         assert must <= set(got.tolist()) <= may
         assert len(set(got.tolist())) == cnt
-        assert np.all(np.diff(p.nb_gap[q, :cnt]) >= 0)
+        assert np.all(np.diff(p.nb_gap[r, :cnt]) >= 0)
         # offsets are the same floats the grid search computes
-        assert np.array_equal(p.nb_dx[q, :cnt], p.cx[got] - p.cx[q])
-        assert np.array_equal(p.nb_dy[q, :cnt], p.cy[got] - p.cy[q])
+        assert np.array_equal(p.nb_dx[r, :cnt], p.cx[got] - p.cx[q])
+        assert np.array_equal(p.nb_dy[r, :cnt], p.cy[got] - p.cy[q])
         checked += 1
     assert checked > 0.9 * len(placed)
 
@@ -157,3 +159,91 @@ def test_the_option_from_the_command_line(capsys: pytest.CaptureFixture[str]) ->
     assert err == [
         "regopack: error: --set: insertion.neighbour_lists = 3: Input should be a valid boolean"
     ]
+
+
+class _Spy:
+    """Capture the state and the sweep of the next available-arc run."""
+
+    def __init__(self, monkeypatch: pytest.MonkeyPatch, pool_rows: int) -> None:
+        import regopack.plugins.available_arc as arc
+        from regopack.plugins.available_arc import sweep
+
+        self.state: ArcState | None = None
+        self.sweep: sweep.Sweep | None = None
+        pack_sweep = arc._pack_sweep
+        spy = self
+
+        def capture(st_: ArcState, *args: object, **kwargs: object) -> object:
+            spy.state = st_
+            return pack_sweep(st_, *args, **kwargs)  # type: ignore[arg-type]
+
+        class Recorded(sweep.Sweep):
+            def __init__(self, *args: object, **kwargs: object) -> None:
+                super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+                spy.sweep = self
+
+        monkeypatch.setattr(arc, "SWEEP_POOL_ROWS", pool_rows)
+        monkeypatch.setattr(arc, "_pack_sweep", capture)
+        monkeypatch.setattr(sweep, "Sweep", Recorded)
+
+
+def _sweep_run(
+    monkeypatch: pytest.MonkeyPatch, pool_rows: int, seed: int, **cfg: object
+) -> tuple[_Spy, bytes, dict[str, object]]:
+    spy = _Spy(monkeypatch, pool_rows)
+    pop, rng = change5_population(700, seed)
+    res = pack(pop, Rectangle.centred(70.0, 260.0), rng, order="sweep", **cfg)
+    stats = {k: v for k, v in res.stats.items() if "time" not in k}
+    return spy, res.centre.tobytes() + res.insertion_index.tobytes(), stats
+
+
+@pytest.mark.parametrize(
+    ("closing", "strip"), [("paced", 0.0), ("prompt", 0.0), ("tail", 0.0), ("paced", 30.0)]
+)
+def test_the_sweep_reuses_list_rows_and_packs_as_with_one_row_per_particle(
+    monkeypatch: pytest.MonkeyPatch, closing: str, strip: float
+) -> None:
+    small, key, stats = _sweep_run(monkeypatch, 1, 3, closing=closing, strip=strip)
+    _, whole_key, whole_stats = _sweep_run(monkeypatch, 10**9, 3, closing=closing, strip=strip)
+    assert key == whole_key
+    assert stats == whole_stats
+    assert small.state is not None
+    p = small.state.packed
+    placed = int(np.sum(~np.isnan(p.cx)))
+    # the rows of the candidates left behind went back to the pool
+    assert np.sum(p.nb_row >= 0) < placed / 2
+
+
+def test_lists_of_the_candidates_still_in_reach_are_whole_after_rows_are_reused(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from regopack.plugins.available_arc.sweep import RETIRED
+
+    spy, _, _ = _sweep_run(monkeypatch, 1, 5, closing="tail")
+    assert spy.state is not None and spy.sweep is not None
+    p = spy.state.packed
+    count = spy.state.count
+    cap = p.fpar[kernel.F_NBCAP]
+    placed = p.order[:count]
+    live = placed[spy.sweep.flag[:count] != RETIRED]
+    assert len(live) > 20
+    # every candidate that can still be analysed kept its row
+    assert np.all(p.nb_row[live] >= 0)
+    rows = p.nb_row[placed]
+    assert len(set(rows[rows >= 0].tolist())) == np.sum(rows >= 0)
+    checked = 0
+    for q in placed[rows >= 0]:
+        r = p.nb_row[q]
+        cnt = p.nb_n[r]
+        if cnt < 0:
+            continue
+        others = placed[placed != q]
+        d = np.hypot(p.cx[others] - p.cx[q], p.cy[others] - p.cy[q])
+        lim = p.nb_reach[q] + p.nb_reach[others] + 2.0 * cap
+        got = p.nb_o[r, :cnt].astype(np.int64)
+        assert set(others[d < lim].tolist()) <= set(got.tolist())
+        assert set(got.tolist()) <= set(others[d < lim * (1 + 2 * GAP_SLACK)].tolist())
+        assert np.all(np.diff(p.nb_gap[r, :cnt]) >= 0)
+        assert np.array_equal(p.nb_dx[r, :cnt], p.cx[got] - p.cx[q])
+        checked += 1
+    assert checked >= 0.9 * len(live)
