@@ -76,7 +76,7 @@ class AvailableArcConfig(BaseModel):
     neighbour_lists: bool = Field(
         True,
         description=(
-            "Keep a neighbour list per particle (walled domains, sharp polygons): the same "
+            "Keep a neighbour list per particle (walled domains): the same "
             "packing, faster in large domains, about 1.8 kB per particle; false uses the grid only."
         ),
     )

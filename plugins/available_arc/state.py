@@ -62,8 +62,7 @@ class ArcState:
         Packing control coefficient of the compiled ``eta`` rule.
     neighbour_lists
         Keep per-particle neighbour lists where the scene allows them (walled
-        domains, sharp polygons); ``False`` always searches the grid. Both give
-        the same packing.
+        domains); ``False`` always searches the grid. Both give the same packing.
     pool_rows
         Rows of the neighbour-list pool to start with; ``None``: one per
         particle. An insertion that gives rows back (the sweep) starts small
@@ -111,8 +110,8 @@ class ArcState:
         fpar[kernel.F_ETA] = eta
         fpar[kernel.F_CX], fpar[kernel.F_CY] = domain.center
         fpar[kernel.F_REACH] = float(reach.max()) if n else 0.0
-        # neighbour lists: walled domains of sharp polygons (see neighbours.py)
-        lists = neighbour_lists and n > 0 and mode != WALL_PERIODIC and not rounded
+        # neighbour lists: walled domains (see neighbours.py)
+        lists = neighbour_lists and n > 0 and mode != WALL_PERIODIC
         fpar[kernel.F_NBCAP] = float(np.quantile(reach, LIST_CAP_QUANTILE)) if lists else 0.0
         ipar = np.zeros(kernel.N_IPAR, dtype=np.int64)
         ipar[kernel.I_TAUMODE] = 0 if tau is None else 1

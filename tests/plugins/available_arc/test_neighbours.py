@@ -12,7 +12,10 @@ from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Re
 from regopack.plugins.available_arc import kernel, state
 from regopack.plugins.available_arc.neighbours import GAP_SLACK
 from regopack.plugins.available_arc.state import ArcState
-from regopack.population import Population
+from regopack.plugins.change5 import Change5, Change5Config
+from regopack.plugins.disk import Disk
+from regopack.plugins.octagon import OctagonConfig, RandomPolygon
+from regopack.population import Population, ShapeBatch, concat_shapes
 from regopack.testing import extreme_radii
 
 HEXAGON = tuple((60.0 * np.cos(a), 60.0 * np.sin(a)) for a in np.linspace(0, 2 * np.pi, 7)[:-1])
@@ -66,6 +69,62 @@ def test_scene_option_turns_the_lists_off_and_keeps_the_packing() -> None:
         **out[1].stats,
         **{k: out[0].stats[k] for k in out[0].stats if "time" in k},
     }
+
+
+def _rounded_population(n: int, seed: int, kind: str) -> Population:
+    """Disks, disks among octagons, or octagons with rounded corners."""
+    rng = np.random.default_rng(seed)
+    radius = Change5(Change5Config()).sample(n, rng)
+    octagons = RandomPolygon(OctagonConfig(psi=1.0)).generate(radius, rng)
+    disks = Disk().generate(radius, rng)
+    if kind == "disks":
+        batch = disks
+    elif kind == "mixed":
+        disk = rng.random(n) < 0.5
+        idx = np.flatnonzero(disk)
+        rest = np.flatnonzero(~disk)
+        batch = concat_shapes(
+            [
+                (idx, Disk().generate(radius[idx], rng)),
+                (rest, RandomPolygon(OctagonConfig(psi=1.0)).generate(radius[rest], rng)),
+            ],
+            n,
+        )
+    else:  # cores shrunk to 70 %, grown back by a rounding of 30 % of the radius
+        batch = ShapeBatch(
+            vertices=0.7 * octagons.vertices,
+            offsets=octagons.offsets,
+            orientation=octagons.orientation,
+            rounding=0.3 * radius,
+        )
+    return Population(radius, np.zeros(n, dtype=np.int64), ("m",), batch)
+
+
+@pytest.mark.parametrize("kind", ["disks", "mixed", "rounded"])
+@pytest.mark.parametrize(
+    "domain",
+    [Rectangle.centred(90.0, 80.0, (2.0, -1.0)), Circle(1.0, 2.0, 48.0), ConvexPolygon(HEXAGON)],
+)
+def test_lists_and_grid_give_identical_packings_with_rounded_particles(
+    kind: str, domain: Domain
+) -> None:
+    pop = _rounded_population(300, 7, kind)
+    st_ = _same_with_and_without_lists(pop, domain, 7)
+    assert st_.count > 150
+
+
+@pytest.mark.parametrize("closing", ["paced", "tail"])
+def test_the_sweep_packs_disks_the_same_with_and_without_lists(closing: str) -> None:
+    out = []
+    for lists in (True, False):
+        pop = _rounded_population(500, 11, "mixed")
+        rng = np.random.default_rng(11)
+        res = pack(
+            pop, Rectangle.centred(80.0, 110.0), rng, order="sweep", closing=closing,
+            neighbour_lists=lists,
+        )  # fmt: skip
+        out.append(res.centre.tobytes() + res.insertion_index.tobytes())
+    assert out[0] == out[1]
 
 
 @pytest.mark.parametrize("scale", [1e-150, 1e40, 1e150])
