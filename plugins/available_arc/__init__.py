@@ -255,7 +255,9 @@ def _pack_sweep(
     prepared: float,
 ) -> InsertionResult:
     """Insert in the sweep order (see :mod:`regopack.plugins.available_arc.sweep`)."""
-    from regopack.plugins.available_arc import kernel, sweep
+    import numba
+
+    from regopack.plugins.available_arc import batches, kernel, sweep
 
     n = len(population)
     bounds = domain.bounds()
@@ -274,13 +276,15 @@ def _pack_sweep(
             # within one zone of its top
             zone = max(zone, 2.0 * float(st.outlines.circum.max()))
     sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=strip)
+    threads = min(numba.get_num_threads(), batches.MAX_THREADS) if n else 1
+    helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
     placed = 0
     for begin in range(0, n, PROGRESS_EVERY):
         if progress is not None:
             progress(begin, placed, n)
         end = min(begin + PROGRESS_EVERY, n)
         st.reserve_rows(end - begin)
-        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded)
+        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded, helpers)
     if progress is not None:
         progress(n, placed, n)
     index = np.full(n, -1, dtype=np.int64)
@@ -294,6 +298,7 @@ def _pack_sweep(
         "zone": float(zone),
         "zone_raises": sw.raises,
         "strips": sw.nstrip,
+        "threads": threads,
         "refused": refused,
         "not_offered": n - placed - refused,
         "prepare_time_s": prepared - started,

@@ -43,6 +43,7 @@ from numpy.typing import NDArray
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins import strips
 from regopack.plugins.available_arc import kernel as K
+from regopack.plugins.available_arc.batches import Helpers, try_batch
 from regopack.plugins.available_arc.candidates import tree_set
 from regopack.plugins.available_arc.neighbours import release_row
 from regopack.plugins.available_arc.refusal import place_screened, try_candidate
@@ -157,12 +158,17 @@ class Sweep:
         w: K.Work,
         rng: np.random.Generator,
         rounded: object = None,
+        helpers: Helpers | None = None,
     ) -> int:
-        """Offer particles ``begin`` to ``end - 1``; return how many were placed."""
+        """Offer particles ``begin`` to ``end - 1``; return how many were placed.
+
+        ``helpers``: per-thread scratch that spreads the exact scans over threads
+        (see :mod:`~regopack.plugins.available_arc.batches`); the packing is the same.
+        """
         return int(
             sweep_range(
                 begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bins, self.status, self.tried, rounded,
+                self.bins, self.status, self.tried, rounded, helpers,
             )
         )  # fmt: skip
 
@@ -260,16 +266,37 @@ def _exhaustive(
     st: int,
     lo: int,
     bn: Bins,
+    helpers: Helpers | None = None,
 ) -> int:
-    """Analyse exactly, unscreened, every candidate of strip ``st`` in bins ``lo`` and up."""
+    """Analyse exactly, unscreened, every candidate of strip ``st`` in bins ``lo`` and up.
+
+    With ``helpers`` the candidates go a batch at a time to threads (see
+    :mod:`~regopack.plugins.available_arc.batches`), with the same result.
+    """
+    if helpers is None:
+        for b in range(lo, bn.head.shape[1]):
+            e = bn.head[st, b]
+            while e >= 0:
+                k = e
+                e = bn.nxt[e]
+                if bn.flag[k] != RETIRED and try_candidate(k, i, mq, g, s, w, rng, rounded):
+                    return s.ipar[K.I_COUNT] - 1
+        return -1
+    nb = 0
     for b in range(lo, bn.head.shape[1]):
         e = bn.head[st, b]
         while e >= 0:
             k = e
             e = bn.nxt[e]
-            if bn.flag[k] != RETIRED and try_candidate(k, i, mq, g, s, w, rng, rounded):
-                return s.ipar[K.I_COUNT] - 1
-    return -1
+            if bn.flag[k] != RETIRED:
+                helpers.ks[nb] = k
+                nb += 1
+                if nb == helpers.ks.shape[0]:
+                    placed = try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
+                    if placed >= 0:
+                        return placed
+                    nb = 0
+    return try_batch(nb, i, mq, g, s, w, rng, helpers, rounded) if nb > 0 else -1
 
 
 @numba.njit(cache=True)
@@ -500,6 +527,7 @@ def _offer(
     sz: IntArray,
     bn: Bins,
     rounded: object,
+    helpers: Helpers | None,
 ) -> int:
     """Offer particle ``i`` to strip ``st``: the screened zone search, rising, then exact.
 
@@ -525,7 +553,7 @@ def _offer(
             # opened freeze again, unless the zone reached the top (the closing)
             keep_hi = sz[st, S_HI] if sz[st, S_FULL] == 1 else hi0
             _roll_back(st, sz, lo0, keep_hi, sz[st, S_FULL], raises, s, bn)
-        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bn)
+        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bn, helpers)
 
 
 @numba.njit(cache=True)
@@ -544,6 +572,7 @@ def sweep_range(
     status: IntArray,
     tried: IntArray,
     rounded: object = None,
+    helpers: Helpers | None = None,
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.
 
@@ -596,7 +625,7 @@ def sweep_range(
             was_full = sz[st, S_FULL]
             if offered < 0:
                 offered = st
-            k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded)
+            k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded, helpers)
             if k >= 0:
                 break
             if zs[Z_PROMPT] == 2 and was_full == 1:

@@ -1,0 +1,162 @@
+"""Candidate analyses of the exact scans spread over several threads.
+
+An exact scan (the sweep's certificate before a refusal) analyses every
+candidate of a zone, one after another, and stops at the first that takes the
+particle; most scans find none. :func:`exact_scan` analyses the candidates a
+batch at a time on ``T`` threads and then reads the results in the scan's
+order, exactly as the sequential scan meets them: an empty candidate counts
+its analysis, a candidate with arcs is tried on the calling thread (its arcs
+computed once more, then the eta control and the random angle, in the
+sequential order), and the analyses after the one that takes the particle are
+dropped.
+
+An analysis reads the packing and writes only scratch space (the envelope
+cache, the grid stamps and their counters), so each thread has its own
+scratch, in :class:`Helpers`. The packing is therefore the same, bit for
+bit, on any number of threads, and so are the counts of analyses.
+"""
+
+from __future__ import annotations
+
+from typing import Any, NamedTuple
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_arc import kernel as K
+from regopack.plugins.available_arc.refusal import try_candidate
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+MAX_THREADS = 8
+"""Most threads the batches use (each holds scratch of 24 bytes per particle)."""
+PER_THREAD = 32
+"""Candidates per thread in a batch: starting the threads costs about two analyses, and
+the candidates after the one that takes the particle are analysed in vain."""
+
+
+class Helpers(NamedTuple):
+    """Per-thread scratch, stacked along the first axis (one row per thread)."""
+
+    rx: FloatArray
+    ry: FloatArray
+    rex: FloatArray
+    rey: FloatArray
+    rang: FloatArray
+    wx: FloatArray
+    wy: FloatArray
+    wex: FloatArray
+    wey: FloatArray
+    va: FloatArray
+    ckey: IntArray
+    cslot: IntArray
+    cache_x: FloatArray
+    cache_y: FloatArray
+    cache_ex: FloatArray
+    cache_ey: FloatArray
+    cache_n: IntArray
+    cache_rad: FloatArray
+    woff: FloatArray
+    ipar: IntArray
+    """``(T, N_IPAR)``: each thread's copy of the parameters and its scratch counters."""
+    stamp: IntArray
+    """``(T, n)``: each thread's grid stamps."""
+    last: IntArray
+    """``last[t * PAD]``: the particle thread ``t``'s scratch is prepared for (-1: none)."""
+    ks: IntArray
+    """``(B,)``: the candidates of the current batch."""
+    narcs: IntArray
+    """``narcs[j * PAD]``: how many arcs the analysis of ``ks[j]`` found."""
+
+
+PAD = 16
+"""Elements added to each thread's row of the small scratch arrays (128 bytes), so that
+no two threads write to the same cache line."""
+PADDED = ("rx", "ry", "rex", "rey", "rang", "wx", "wy", "wex", "wey", "va")
+"""Scratch arrays whose length the analysis does not read: their rows can be padded."""
+
+
+def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
+    """Scratch for ``threads`` threads, shaped like ``work`` and ``packed``'s scratch."""
+    t = max(1, threads)
+
+    def stack(a: NDArray[Any], pad: int = 0) -> NDArray[Any]:
+        out = np.zeros((t, a.shape[0] + pad, *a.shape[1:]), dtype=a.dtype)
+        out[:, : a.shape[0]] = a
+        return out
+
+    fields = {
+        name: stack(getattr(work, name), PAD if name in PADDED else 0) for name in K.Work._fields
+    }
+    fields["ckey"][:] = -1
+    return Helpers(
+        **fields,
+        ipar=stack(packed.ipar, PAD),
+        stamp=np.zeros((t, packed.stamp.shape[0]), dtype=np.int64),
+        last=np.full(t * PAD, -1, dtype=np.int64),
+        ks=np.zeros(PER_THREAD * t, dtype=np.int64),
+        narcs=np.zeros(PER_THREAD * t * PAD, dtype=np.int64),
+    )
+
+
+@numba.njit(parallel=True, cache=True)
+def _analyse_batch(
+    nb: int, i: int, mq: int, g: K.Outlines, s: K.Packed, h: Helpers, rounded: object
+) -> None:
+    """Analyse candidates ``h.ks[:nb]`` for particle ``i``, candidate ``j`` on thread ``j % T``."""
+    threads = h.ipar.shape[0]
+    # the arrays a thread writes are taken out of the tuple first: written
+    # through the tuple inside the parallel loop, their values were lost
+    last = h.last
+    ks = h.ks
+    narcs = h.narcs
+    for t in numba.prange(threads):
+        w = K.Work(
+            h.rx[t], h.ry[t], h.rex[t], h.rey[t], h.rang[t],
+            h.wx[t], h.wy[t], h.wex[t], h.wey[t], h.va[t],
+            h.ckey[t], h.cslot[t],
+            h.cache_x[t], h.cache_y[t], h.cache_ex[t], h.cache_ey[t],
+            h.cache_n[t], h.cache_rad[t], h.woff[t],
+        )  # fmt: skip
+        st = K.Packed(
+            s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],
+            s.fpar, h.ipar[t], s.walls,
+            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
+        )  # fmt: skip
+        if last[t * PAD] != i:
+            K.begin_particle(i, g, st, w)
+            last[t * PAD] = i
+        for j in range(t, nb, threads):
+            arcs = K.analyze_candidate(s.order[ks[j]], i, mq, g, st, w, rounded)
+            narcs[j * PAD] = arcs.shape[0]
+
+
+@numba.njit(cache=True)
+def try_batch(
+    nb: int,
+    i: int,
+    mq: int,
+    g: K.Outlines,
+    s: K.Packed,
+    w: K.Work,
+    rng: np.random.Generator,
+    h: Helpers,
+    rounded: object,
+) -> int:
+    """Try candidates ``h.ks[:nb]`` in order for particle ``i``, as ``try_candidate`` one by one.
+
+    Returns the new insertion index, or -1 when none takes the particle.
+    """
+    if nb > 1:
+        _analyse_batch(nb, i, mq, g, s, h, rounded)
+    for j in range(nb):
+        if nb > 1 and h.narcs[j * PAD] == 0:
+            s.ipar[K.I_ANALYSES] += 1
+            s.ipar[K.I_EMPTY] += 1
+            continue
+        if try_candidate(h.ks[j], i, mq, g, s, w, rng, rounded):
+            return int(s.ipar[K.I_COUNT]) - 1
+    return -1
