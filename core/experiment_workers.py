@@ -110,12 +110,25 @@ def _run_job(job: _Job) -> tuple[dict[str, Any] | None, str | None]:
     return outcome.summary, None
 
 
-def _init_worker() -> None:
+def threads_per_worker(workers: int, cores: int | None) -> int:
+    """Compiled-kernel threads for each of ``workers`` processes sharing ``cores`` cores.
+
+    A thread that waits for a core makes the whole batch it belongs to wait, so
+    the workers share the cores instead of each starting one thread per core.
+    """
+    return max(1, (cores or 1) // max(1, workers))
+
+
+def _init_worker(workers: int = 1) -> None:
     """Start a worker process: Ctrl-C goes to the main process, which stops the workers.
 
     SIGTERM keeps its default action (the process ends at once); the main
-    process removes what a stopped worker left.
+    process removes what a stopped worker left. The worker's compiled kernels
+    use its share of the cores (:func:`threads_per_worker`).
     """
+    import numba
+
+    numba.set_num_threads(min(numba.get_num_threads(), threads_per_worker(workers, os.cpu_count())))
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     parent = os.getppid()
@@ -164,7 +177,7 @@ def _submit_local(
 
     context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=_init_worker
+        max_workers=workers, mp_context=context, initializer=_init_worker, initargs=(workers,)
     ) as pool:
         pending: dict[Future[tuple[dict[str, Any] | None, str | None]], _Job] = {
             pool.submit(_run_job, job): job for job in jobs
