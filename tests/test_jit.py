@@ -96,3 +96,16 @@ def test_third_party_kernel_modules_change_the_key(tmp_path, monkeypatch) -> Non
     third = jit.kernel_cache_dir()
     assert len({first, second, third}) == 3
     assert "kpkg" not in sys.modules and "single" not in sys.modules
+
+
+def test_kernel_threads_sleep_while_they_wait_unless_the_user_chose(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    import os
+
+    monkeypatch.delenv("OMP_WAIT_POLICY", raising=False)
+    jit.configure_threads()
+    assert os.environ["OMP_WAIT_POLICY"] == "PASSIVE"
+    monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
+    jit.configure_threads()
+    assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"
