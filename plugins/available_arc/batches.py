@@ -39,7 +39,11 @@ the candidates after the one that takes the particle are analysed in vain."""
 
 
 class Helpers(NamedTuple):
-    """Per-thread scratch, stacked along the first axis (one row per thread)."""
+    """Per-thread scratch, stacked along the first axis (one row per thread).
+
+    The first fields are those of :class:`kernel.Work`, flat rather than a
+    nested ``Work``: numba's parallel loop does not lower a tuple within a tuple.
+    """
 
     rx: FloatArray
     ry: FloatArray
