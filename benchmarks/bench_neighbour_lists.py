@@ -68,7 +68,9 @@ def main() -> None:
             p = state.packed
             packings[lists] = p.cx.tobytes() + p.cy.tobytes() + p.order.tobytes()
             if lists:
-                arrays = (p.nb_o, p.nb_gap, p.nb_dx, p.nb_dy, p.nb_n, p.nb_reach)
+                arrays = (
+                    p.nb_o, p.nb_gap, p.nb_dx, p.nb_dy, p.nb_n, p.nb_reach, p.nb_row, p.nb_free
+                )
                 memory = sum(a.nbytes for a in arrays) / 2**20
     same = packings[True] == packings[False]
     n = len(state.outlines.req)
