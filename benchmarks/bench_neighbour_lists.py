@@ -69,7 +69,14 @@ def main() -> None:
             packings[lists] = p.cx.tobytes() + p.cy.tobytes() + p.order.tobytes()
             if lists:
                 arrays = (
-                    p.nb_o, p.nb_gap, p.nb_dx, p.nb_dy, p.nb_n, p.nb_reach, p.nb_row, p.nb_free
+                    p.nb_o,
+                    p.nb_gap,
+                    p.nb_dx,
+                    p.nb_dy,
+                    p.nb_n,
+                    p.nb_reach,
+                    p.nb_row,
+                    p.nb_free,
                 )
                 memory = sum(a.nbytes for a in arrays) / 2**20
     same = packings[True] == packings[False]

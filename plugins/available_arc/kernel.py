@@ -33,7 +33,7 @@ from regopack.plugins.available_arc.geometry import (
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
 from regopack.plugins.available_arc.neighbours import GAP_SLACK, register_neighbours
-from regopack.plugins.available_arc.rounded import rounded_arcs, rounded_locate
+from regopack.plugins.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
 from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.plugins.walls import (
     WALL_BOX,
@@ -89,8 +89,9 @@ N_FPAR = 14
     I_ROUNDED,
     I_NBLISTS,
     I_NBTOP,
-) = range(17)
-N_IPAR = 17
+    I_DISKS,
+) = range(18)
+N_IPAR = 18
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -326,27 +327,6 @@ def analyze_candidate(
     ipar = s.ipar
     cx = s.cx
     cy = s.cy
-    wx = w.wx
-    wy = w.wy
-    n = minkowski_envelope(
-        pk,
-        g.vx,
-        g.vy,
-        g.ex,
-        g.ey,
-        g.ang,
-        g.offsets,
-        w.rx,
-        w.ry,
-        w.rex,
-        w.rey,
-        w.rang,
-        mq,
-        wx,
-        wy,
-        w.wex,
-        w.wey,
-    )
     pcx = cx[pk]
     pcy = cy[pk]
 
@@ -450,6 +430,62 @@ def analyze_candidate(
                         if periodic:
                             found_q[nf] = qs
                         nf += 1
+
+    if rounded is not None and ipar[I_DISKS] == 1:
+        # disks only: every envelope is a circle about a centre, so none is built.
+        # A centre is the offset between the two particles plus the envelope's
+        # single vertex, the same arithmetic as through the envelopes below
+        # (and rounded_arcs), so the arcs are the same bit for bit
+        grho = g.rho
+        gvx = g.vx
+        gvy = g.vy
+        goff = g.offsets
+        q0x = w.rx[0]
+        q0y = w.ry[0]
+        ocx = np.empty(nf)
+        ocy = np.empty(nf)
+        orho = np.empty(nf)
+        for f in range(nf):
+            o = found[f]
+            odx_ = cx[o] - pcx
+            ody_ = cy[o] - pcy
+            if periodic and found_q[f] > 0:
+                qx = found_q[f] % nsx
+                qy = found_q[f] // nsx
+                odx_ -= 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
+                ody_ -= 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+            ocx[f] = odx_ + (gvx[goff[o]] + q0x)
+            ocy[f] = ody_ + (gvy[goff[o]] + q0y)
+            orho[f] = grho[o] + grho[i]
+        box = np.empty(4)
+        box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
+        inner = s.walls[0, 2] - grho[i] if mode == WALL_CIRCLE else 0.0
+        return disk_arcs(
+            grho[pk] + grho[i], pcx, pcy, nf, ocx, ocy, orho,
+            mode, s.walls, box, w.woff, w.rx, w.ry, inner,
+        )  # fmt: skip
+
+    wx = w.wx
+    wy = w.wy
+    n = minkowski_envelope(
+        pk,
+        g.vx,
+        g.vy,
+        g.ex,
+        g.ey,
+        g.ang,
+        g.offsets,
+        w.rx,
+        w.ry,
+        w.rex,
+        w.rey,
+        w.rang,
+        mq,
+        wx,
+        wy,
+        w.wex,
+        w.wey,
+    )
 
     # ---- interferer envelopes (cached per new particle), relative to their centres
     ncache = w.cache_n.shape[0]

@@ -480,10 +480,14 @@ def rounded_arcs(
                 disks = False
                 break
         if disks:
-            return _disk_arcs(
-                rho, pcx, pcy, nf, slot, odx, ody, ox, oy, orho,
-                mode, walls, box, woff, qx, qy, inner,
-            )  # fmt: skip
+            ocx = np.empty(nf)
+            ocy = np.empty(nf)
+            for f in range(nf):
+                ocx[f] = odx[f] + ox[slot[f], 0]
+                ocy[f] = ody[f] + oy[slot[f], 0]
+            return disk_arcs(
+                rho, pcx, pcy, nf, ocx, ocy, orho, mode, walls, box, woff, qx, qy, inner
+            )
     pieces = envelope_pieces(wx, wy, wex, wey, n, rho)
     npc = pieces.shape[0]
     va = np.empty(npc + 1)
@@ -602,16 +606,13 @@ def _circle_cover(r: float, cx: float, cy: float, r2: float) -> tuple[float, flo
 
 
 @numba.njit(cache=True)
-def _disk_arcs(
+def disk_arcs(
     rho: float,
     pcx: float,
     pcy: float,
     nf: int,
-    slot: NDArray[np.int64],
-    odx: FloatArray,
-    ody: FloatArray,
-    ox: FloatArray,
-    oy: FloatArray,
+    ocx: FloatArray,
+    ocy: FloatArray,
     orho: FloatArray,
     mode: int,
     walls: FloatArray,
@@ -624,17 +625,18 @@ def _disk_arcs(
     """:func:`rounded_arcs` when the candidate, the new particle and every interferer are disks.
 
     The envelope is the circle of radius ``rho`` about the candidate; each
-    interferer covers one open arc of it, and every wall (or, in a circle,
-    the outside of the one admissible disk) covers one arc. The free arcs are
-    the gaps between the covered ones, in polar angle from 0.
+    interferer ``f``, the open disk of radius ``orho[f]`` about ``(ocx[f],
+    ocy[f])`` (relative to the candidate's centre ``pc``), covers one open arc
+    of it, and every wall (or, in a circle, the outside of the one admissible
+    disk) covers one arc. The free arcs are the gaps between the covered
+    ones, in polar angle from 0.
     """
     k_walls = 4 if mode == WALL_BOX else (walls.shape[0] if mode == WALL_HALFPLANES else 1)
     lo = np.empty(2 * (nf + k_walls))
     hi = np.empty(2 * (nf + k_walls))
     k = 0
     for f in range(nf):
-        sl = slot[f]
-        centre, half = _circle_cover(rho, odx[f] + ox[sl, 0], ody[f] + oy[sl, 0], orho[f])
+        centre, half = _circle_cover(rho, ocx[f], ocy[f], orho[f])
         k = _cover(lo, hi, k, centre, half)
     if mode == WALL_BOX or mode == WALL_HALFPLANES:
         for e in range(k_walls):

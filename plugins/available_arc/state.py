@@ -122,6 +122,10 @@ class ArcState:
         ipar[kernel.I_FIRSTRANDOM] = 1 if first_random else 0
         ipar[kernel.I_WALLMODE] = mode
         ipar[kernel.I_ROUNDED] = 1 if rounded else 0
+        # disks only: every outline a single vertex at its centre, every rounding > 0
+        disks = rounded and n > 0 and bool(np.all(np.diff(offsets) == 1))
+        disks = disks and bool(np.all(rho > 0) and np.all(vx == 0.0) and np.all(vy == 0.0))
+        ipar[kernel.I_DISKS] = 1 if disks else 0
         ipar[kernel.I_NBLISTS] = 1 if lists else 0
         rows, cols = list_capacity(list_rows(n, pool_rows), lists, LIST_CAPACITY)
         ipar[kernel.I_NBTOP] = rows if lists else 0

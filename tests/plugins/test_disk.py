@@ -316,7 +316,7 @@ def _in_arcs(arcs: np.ndarray, phi: np.ndarray) -> np.ndarray:
     scale=st.sampled_from([1e-6, 1.0, 1e6]),
 )
 def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, scale) -> None:
-    from regopack.plugins.available_arc.rounded import _disk_arcs, rounded_arcs
+    from regopack.plugins.available_arc.rounded import disk_arcs, rounded_arcs
 
     rng = np.random.default_rng(seed)
     rho = 2.0 * scale
@@ -331,7 +331,7 @@ def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, sc
     walls, woff, q = box.reshape(1, 4), np.zeros(1), np.zeros(1)
     w = (np.zeros(2), np.zeros(2), np.array([1.0, -1.0]), np.zeros(2))
     common = (nf, slot, odx, ody, ox, oy)
-    fast = _disk_arcs(rho, pc[0], pc[1], *common, orho, mode, walls, box, woff, q, q, 0.0)
+    fast = disk_arcs(rho, pc[0], pc[1], nf, odx, ody, orho, mode, walls, box, woff, q, q, 0.0)
     general = rounded_arcs(
         *w, 2, rho, pc[0], pc[1], *common, oex, oey, on, orad, orho, mode, walls, box, woff,
         q, q, 1, 0.0,

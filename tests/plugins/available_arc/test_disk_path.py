@@ -1,0 +1,107 @@
+"""The analysis of a scene of disks only: no envelopes built, the same arcs bit for bit."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from arc_helpers import octagon_population, pack
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from test_neighbours import HEXAGON, _rounded_population
+
+from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
+from regopack.plugins.available_arc import kernel
+from regopack.plugins.available_arc.state import ArcState
+from regopack.plugins.disk import Disk
+from regopack.population import Population
+from regopack.testing import extreme_radii
+
+
+def _disks(radius: np.ndarray, rng: np.random.Generator) -> Population:
+    n = len(radius)
+    return Population(radius, np.zeros(n, dtype=np.int64), ("m",), Disk().generate(radius, rng))
+
+
+def _packed(pop: Population, domain: Domain, seed: int, closed_form: bool) -> tuple[int, bytes]:
+    """Pack with the disks' own analysis on or off; return the flag and the packing's bytes."""
+    st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
+    flag = st_.counter(kernel.I_DISKS)
+    if not closed_form:
+        st_.packed.ipar[kernel.I_DISKS] = 0
+    st_.pack_range(0, len(pop), np.random.default_rng(seed))
+    p = st_.packed
+    key = p.cx.tobytes() + p.cy.tobytes() + p.order.tobytes()
+    return flag, key + bytes(str(st_.counter(kernel.I_ANALYSES)), "ascii")
+
+
+@pytest.mark.parametrize("kind", ["disks", "mixed", "rounded"])
+def test_only_a_scene_of_disks_takes_the_disks_own_analysis(kind: str) -> None:
+    st_ = ArcState(
+        _rounded_population(50, 3, kind),
+        Rectangle.centred(60.0, 60.0),
+        t=0.999,
+        tau=None,
+        linear=False,
+    )
+    assert st_.counter(kernel.I_DISKS) == (1 if kind == "disks" else 0)
+
+
+def test_octagons_do_not_take_the_disks_own_analysis() -> None:
+    rng = np.random.default_rng(1)
+    pop = octagon_population(rng.uniform(1.0, 3.0, 30), rng)
+    st_ = ArcState(pop, Rectangle.centred(60.0, 60.0), t=0.999, tau=None, linear=False)
+    assert st_.counter(kernel.I_DISKS) == 0
+
+
+@pytest.mark.parametrize(
+    "domain",
+    [
+        Rectangle.centred(90.0, 80.0, (2.0, -1.0)),
+        Circle(1.0, 2.0, 48.0),
+        ConvexPolygon(HEXAGON),
+        PeriodicRectangle(-40.0, 45.0, -35.0, 40.0),
+    ],
+)
+def test_disks_pack_the_same_with_and_without_their_own_analysis(domain: Domain) -> None:
+    pop = _rounded_population(300, 5, "disks")
+    flag, fast = _packed(pop, domain, 5, True)
+    _, general = _packed(pop, domain, 5, False)
+    assert flag == 1
+    assert fast == general
+
+
+@settings(max_examples=12, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    ratio=st.sampled_from([1.0, 10.0, 1e4]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+)
+def test_the_same_at_extreme_sizes_and_scales(seed: int, ratio: float, scale: float) -> None:
+    rng = np.random.default_rng(seed)
+    radius = extreme_radii(120, ratio, scale, rng)
+    pop = _disks(radius, rng)
+    side = 30.0 * scale * (1.0 if ratio < 1e4 else 40.0)
+    domain = Rectangle.centred(side, side)
+    assert _packed(pop, domain, seed, True) == _packed(pop, domain, seed, False)
+
+
+@pytest.mark.parametrize("closing", ["paced", "tail"])
+def test_the_sweep_packs_disks_the_same_with_and_without_their_own_analysis(
+    closing: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    original = ArcState.__init__
+
+    def no_disks(self: ArcState, *args: object, **kwargs: object) -> None:
+        original(self, *args, **kwargs)  # type: ignore[arg-type]
+        self.packed.ipar[kernel.I_DISKS] = 0
+
+    out = []
+    for closed_form in (True, False):
+        pop = _rounded_population(500, 11, "disks")
+        if not closed_form:
+            # the state is built inside pack(): switch the flag off as it is set
+            monkeypatch.setattr(ArcState, "__init__", no_disks)
+        rng = np.random.default_rng(11)
+        res = pack(pop, Rectangle.centred(80.0, 110.0), rng, order="sweep", closing=closing)
+        out.append(res.centre.tobytes() + res.insertion_index.tobytes())
+    assert out[0] == out[1]
