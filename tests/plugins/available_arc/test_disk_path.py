@@ -13,7 +13,7 @@ from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Re
 from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.state import ArcState
 from regopack.plugins.disk import Disk
-from regopack.population import Population
+from regopack.population import Population, ShapeBatch
 from regopack.testing import extreme_radii
 
 
@@ -49,6 +49,27 @@ def test_only_a_scene_of_disks_takes_the_disks_own_analysis(kind: str) -> None:
 def test_octagons_do_not_take_the_disks_own_analysis() -> None:
     rng = np.random.default_rng(1)
     pop = octagon_population(rng.uniform(1.0, 3.0, 30), rng)
+    st_ = ArcState(pop, Rectangle.centred(60.0, 60.0), t=0.999, tau=None, linear=False)
+    assert st_.counter(kernel.I_DISKS) == 0
+
+
+@pytest.mark.parametrize("change", ["core off its centre", "no rounding", "two-vertex core"])
+def test_a_population_that_is_not_all_centred_disks_takes_the_general_path(change: str) -> None:
+    rng = np.random.default_rng(4)
+    radius = rng.uniform(1.0, 3.0, 40)
+    batch = Disk().generate(radius, rng)
+    vertices = batch.vertices.copy()
+    offsets = batch.offsets.copy()
+    rounding = np.asarray(batch.rounding).copy()
+    if change == "core off its centre":
+        vertices[offsets[7]] = (0.25 * rounding[7], 0.0)
+    elif change == "no rounding":
+        rounding[7] = 0.0
+    else:  # particle 7 gets a second vertex where its first is
+        vertices = np.insert(vertices, offsets[8], vertices[offsets[7]], axis=0)
+        offsets[8:] += 1
+    shapes = ShapeBatch(vertices, offsets, batch.orientation, rounding)
+    pop = Population(radius, np.zeros(40, dtype=np.int64), ("m",), shapes)
     st_ = ArcState(pop, Rectangle.centred(60.0, 60.0), t=0.999, tau=None, linear=False)
     assert st_.counter(kernel.I_DISKS) == 0
 
