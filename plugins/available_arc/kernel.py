@@ -32,7 +32,12 @@ from regopack.plugins.available_arc.geometry import (
     reflect_outline,
 )
 from regopack.plugins.available_arc.grid import cell_range, grid_insert
-from regopack.plugins.available_arc.neighbours import GAP_SLACK, register_neighbours
+from regopack.plugins.available_arc.neighbours import (
+    GAP_SLACK,
+    IMAGE_QUERIES,
+    image_code,
+    register_neighbours,
+)
 from regopack.plugins.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
 from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.plugins.walls import (
@@ -136,6 +141,9 @@ class Packed(NamedTuple):
     nb_reach: FloatArray
     nb_row: IntArray
     nb_free: IntArray
+    nb_img: NDArray[np.int8]
+    """Per list entry in a periodic domain: which image of the neighbour it is
+    (:func:`~regopack.plugins.available_arc.neighbours.image_code`); 0 elsewhere."""
 
 
 class Work(NamedTuple):
@@ -199,11 +207,15 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
     if ipar[I_NBLISTS] == 1:
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
+        periodic = ipar[I_WALLMODE] == WALL_PERIODIC
         ipar[I_NBTOP] = register_neighbours(
             i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
             s.head, s.nxt, s.item, s.stamp, token,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_row, s.nb_free, ipar[I_NBTOP],
+            s.nb_img, periodic, s.fpar[F_XMIN : F_YMAX + 1],
         )  # fmt: skip
+        if periodic:  # the image queries took stamps of their own
+            ipar[I_STAMP] = token + IMAGE_QUERIES
     grid_insert(i, x, y, reach_of(i, g, s.fpar, ipar), gpar, gdim, s.head, s.nxt, s.item)
     return k
 
@@ -386,6 +398,18 @@ def analyze_candidate(
             found = np.empty(cnt, dtype=np.int64)
         lgap = s.nb_reach[pk] + 2.0 * s.nb_reach[i]
         stop = lgap + GAP_SLACK * (lgap + 2.0 * fpar[F_REACH])
+        if periodic:
+            # an entry is an image one period away: the grid search finds it only
+            # in the query about pk's image on that side, when it makes that query
+            qcode = np.full(9, -1, dtype=np.int64)
+            for qs in range(nsx * nsy):
+                qx = qs % nsx
+                qy = qs // nsx
+                ix = 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
+                iy = 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+                qcode[image_code(ix, iy)] = qs
+            if cnt > found_q.shape[0]:
+                found_q = np.empty(cnt, dtype=np.int64)
         for e in range(cnt):
             if s.nb_gap[row, e] > stop:
                 break
@@ -393,6 +417,11 @@ def analyze_candidate(
             ddx = s.nb_dx[row, e]
             ddy = s.nb_dy[row, e]
             if _interferes(pk, o, i, ddx * ddx + ddy * ddy, g, tau_mode, tau):
+                if periodic:
+                    qs = qcode[s.nb_img[row, e]]
+                    if qs < 0:
+                        continue
+                    found_q[nf] = qs
                 found[nf] = o
                 nf += 1
     for qs in range(0 if lists else nsx * nsy):

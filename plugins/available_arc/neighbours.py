@@ -36,6 +36,16 @@ IntArray = NDArray[np.int64]
 
 GAP_SLACK = 1e-9
 """Relative slack of the list cut-offs, far above the rounding of the gaps."""
+IMAGE_QUERIES = 9
+"""Stamp values one registration in a periodic domain may take (a query per image)."""
+
+
+@numba.njit(cache=True)
+def image_code(sx: float, sy: float) -> int:
+    """Code of the periodic image shifted by ``(sx, sy)``: per axis 0 none, 1 up, 2 down."""
+    ax = 0 if sx == 0.0 else (1 if sx > 0.0 else 2)
+    ay = 0 if sy == 0.0 else (1 if sy > 0.0 else 2)
+    return ax + 3 * ay
 
 
 @numba.njit(cache=True)
@@ -45,11 +55,13 @@ def _add_entry(
     gap: float,
     dx: float,
     dy: float,
+    code: int,
     nb_o: NDArray[np.int32],
     nb_gap: FloatArray,
     nb_dx: FloatArray,
     nb_dy: FloatArray,
     nb_n: IntArray,
+    img: NDArray[np.int8],
 ) -> None:
     """Insert ``o`` into list row ``q`` at its place by gap; drop the list when full."""
     cnt = nb_n[q]
@@ -64,11 +76,13 @@ def _add_entry(
         nb_gap[q, e] = nb_gap[q, e - 1]
         nb_dx[q, e] = nb_dx[q, e - 1]
         nb_dy[q, e] = nb_dy[q, e - 1]
+        img[q, e] = img[q, e - 1]
         e -= 1
     nb_o[q, e] = o
     nb_gap[q, e] = gap
     nb_dx[q, e] = dx
     nb_dy[q, e] = dy
+    img[q, e] = code
     nb_n[q] = cnt + 1
 
 
@@ -95,12 +109,22 @@ def register_neighbours(
     row: IntArray,
     free: IntArray,
     top: int,
+    img: NDArray[np.int8],
+    periodic: bool = False,
+    bounds: FloatArray | None = None,
 ) -> int:
     """Start ``p``'s list and add ``p`` to its neighbours' lists; return the new stack top.
 
     Call after ``p`` is placed and before it is registered in the grid;
-    ``token`` must be a fresh stamp value. ``p`` takes the row on top of the
-    free stack ``free[:top]``, or none when the stack is empty.
+    ``token`` must be a fresh stamp value (in a periodic domain, the
+    :data:`IMAGE_QUERIES` values from ``token`` on). ``p`` takes the row on
+    top of the free stack ``free[:top]``, or none when the stack is empty.
+
+    In a periodic domain (``bounds``: xmin, xmax, ymin, ymax) the grid is also
+    searched about ``p``'s images one period away, and each entry records its
+    image (``img``) and its offset computed as the analysis's grid search
+    computes it from that image, so that both find the same interferers at the
+    same offsets.
     """
     x = cx[p]
     y = cy[p]
@@ -115,32 +139,93 @@ def register_neighbours(
     # o qualifies when |c_p - c_o| < (rp + ro + 2 cap)(1 + slack): its grid disk
     # (radius ro <= maxreach) then reaches into this box
     half = (rp + 2.0 * cap) + (rp + maxreach + 2.0 * cap) * 2.0 * GAP_SLACK
-    ia, ib = cell_range(x - half, x + half, gpar[0], gpar[2], gdim[0])
-    ja, jb = cell_range(y - half, y + half, gpar[1], gpar[2], gdim[1])
+    nsx = 1
+    nsy = 1
+    sx1 = sx2 = sy1 = sy2 = 0.0
+    if periodic and bounds is not None:
+        lx = bounds[1] - bounds[0]
+        ly = bounds[3] - bounds[2]
+        span = half + maxreach
+        if x - span < bounds[0]:
+            sx1 = lx
+            nsx += 1
+        if x + span > bounds[1]:
+            if nsx == 1:
+                sx1 = -lx
+            else:
+                sx2 = -lx
+            nsx += 1
+        if y - span < bounds[2]:
+            sy1 = ly
+            nsy += 1
+        if y + span > bounds[3]:
+            if nsy == 1:
+                sy1 = -ly
+            else:
+                sy2 = -ly
+            nsy += 1
     nx = gdim[0]
-    for gj in range(ja, jb + 1):
-        for gi in range(ia, ib + 1):
-            e = head[gj * nx + gi]
-            while e >= 0:
-                o = item[e]
-                e = nxt[e]
-                if stamp[o] == token:
-                    continue
-                stamp[o] = token
-                dx = cx[o] - x
-                dy = cy[o] - y
-                d = math.sqrt(dx * dx + dy * dy)
-                ro = reach[o]
-                lim = rp + ro + 2.0 * cap
-                if d >= lim * (1.0 + GAP_SLACK):
-                    continue
-                if rp_row >= 0:
-                    _add_entry(rp_row, o, d - ro, dx, dy, nb_o, nb_gap, nb_dx, nb_dy, nb_n)
-                ro_row = row[o]
-                if ro_row >= 0:
-                    _add_entry(
-                        ro_row, p, d - rp, x - cx[o], y - cy[o], nb_o, nb_gap, nb_dx, nb_dy, nb_n
-                    )
+    for qs in range(nsx * nsy):
+        qx = qs % nsx
+        qy = qs // nsx
+        ix = 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
+        iy = 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+        tq = token + qs
+        # the image of p this query is about; from o, p's entry is o's image -i
+        qcx = x
+        qcy = y
+        if qs > 0:
+            qcx += ix
+            qcy += iy
+            stamp[p] = tq
+        code = image_code(ix, iy)
+        back = image_code(-ix, -iy)
+        ia, ib = cell_range(qcx - half, qcx + half, gpar[0], gpar[2], gdim[0])
+        ja, jb = cell_range(qcy - half, qcy + half, gpar[1], gpar[2], gdim[1])
+        for gj in range(ja, jb + 1):
+            for gi in range(ia, ib + 1):
+                e = head[gj * nx + gi]
+                while e >= 0:
+                    o = item[e]
+                    e = nxt[e]
+                    if stamp[o] == tq:
+                        continue
+                    stamp[o] = tq
+                    dx = cx[o] - qcx
+                    dy = cy[o] - qcy
+                    d = math.sqrt(dx * dx + dy * dy)
+                    ro = reach[o]
+                    lim = rp + ro + 2.0 * cap
+                    if d >= lim * (1.0 + GAP_SLACK):
+                        continue
+                    if rp_row >= 0:
+                        _add_entry(
+                            rp_row, o, d - ro, dx, dy, code, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
+                        )
+                    ro_row = row[o]
+                    if ro_row >= 0:
+                        if qs == 0:
+                            bx = x - cx[o]
+                            by = y - cy[o]
+                            bd = d
+                        else:  # as the grid search about o's image -i finds p
+                            ox_ = cx[o]
+                            oy_ = cy[o]
+                            ox_ += -ix
+                            oy_ += -iy
+                            bx = x - ox_
+                            by = y - oy_
+                            bd = math.sqrt(bx * bx + by * by)
+                        _add_entry(
+                            ro_row, p, bd - rp, bx, by, back, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
+                        )
+        if qs > 0 and rp_row >= 0:
+            # p's own image: p is not in the grid yet
+            dx = x - qcx
+            dy = y - qcy
+            d = math.sqrt(dx * dx + dy * dy)
+            if d < (rp + rp + 2.0 * cap) * (1.0 + GAP_SLACK):
+                _add_entry(rp_row, p, d - rp, dx, dy, code, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img)
     return top
 
 

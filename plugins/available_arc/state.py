@@ -15,7 +15,6 @@ from regopack.plugins.available_arc.grid import grid_layout
 from regopack.plugins.available_arc.neighbours import free_stack, list_capacity
 from regopack.plugins.walls import (
     WALL_HALFPLANES,
-    WALL_PERIODIC,
     check_periodic_size,
     wall_arrays,
 )
@@ -110,8 +109,8 @@ class ArcState:
         fpar[kernel.F_ETA] = eta
         fpar[kernel.F_CX], fpar[kernel.F_CY] = domain.center
         fpar[kernel.F_REACH] = float(reach.max()) if n else 0.0
-        # neighbour lists: walled domains (see neighbours.py)
-        lists = neighbour_lists and n > 0 and mode != WALL_PERIODIC
+        # neighbour lists (see neighbours.py), in every kind of domain
+        lists = neighbour_lists and n > 0
         fpar[kernel.F_NBCAP] = float(np.quantile(reach, LIST_CAP_QUANTILE)) if lists else 0.0
         ipar = np.zeros(kernel.N_IPAR, dtype=np.int64)
         ipar[kernel.I_TAUMODE] = 0 if tau is None else 1
@@ -151,6 +150,7 @@ class ArcState:
             nb_reach=np.ascontiguousarray(reach, dtype=np.float64),
             nb_row=np.full(max(n, 1), -1, dtype=np.int64),
             nb_free=free_stack(rows, lists),
+            nb_img=np.zeros((rows, cols), dtype=np.int8),
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax
@@ -199,6 +199,7 @@ class ArcState:
             nb_gap=_grown(p.nb_gap, grown),
             nb_dx=_grown(p.nb_dx, grown),
             nb_dy=_grown(p.nb_dy, grown),
+            nb_img=_grown(p.nb_img, grown),
             nb_n=np.concatenate([p.nb_n, np.full(added, -1, dtype=np.int64)]),
             nb_free=free,
         )

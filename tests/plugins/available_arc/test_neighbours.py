@@ -50,6 +50,8 @@ def _same_with_and_without_lists(
         (3, Rectangle.centred(110.0, 90.0), 0.65),
         (4, Circle(1.0, 2.0, 55.0), None),
         (5, ConvexPolygon(HEXAGON), None),
+        (6, PeriodicRectangle.centred(110.0, 90.0, (3.0, -7.0)), None),
+        (7, PeriodicRectangle.centred(110.0, 90.0), 0.65),
     ],
 )
 def test_lists_and_grid_give_identical_packings(seed: int, domain: Domain, tau: float) -> None:
@@ -103,7 +105,12 @@ def _rounded_population(n: int, seed: int, kind: str) -> Population:
 @pytest.mark.parametrize("kind", ["disks", "mixed", "rounded"])
 @pytest.mark.parametrize(
     "domain",
-    [Rectangle.centred(90.0, 80.0, (2.0, -1.0)), Circle(1.0, 2.0, 48.0), ConvexPolygon(HEXAGON)],
+    [
+        Rectangle.centred(90.0, 80.0, (2.0, -1.0)),
+        Circle(1.0, 2.0, 48.0),
+        ConvexPolygon(HEXAGON),
+        PeriodicRectangle.centred(90.0, 80.0, (2.0, -1.0)),
+    ],
 )
 def test_lists_and_grid_give_identical_packings_with_rounded_particles(
     kind: str, domain: Domain
@@ -114,14 +121,17 @@ def test_lists_and_grid_give_identical_packings_with_rounded_particles(
 
 
 @pytest.mark.parametrize("closing", ["paced", "tail"])
-def test_the_sweep_packs_disks_the_same_with_and_without_lists(closing: str) -> None:
+@pytest.mark.parametrize("periodic", [False, True])
+def test_the_sweep_packs_disks_the_same_with_and_without_lists(
+    closing: str, periodic: bool
+) -> None:
     out = []
+    box = PeriodicRectangle.centred if periodic else Rectangle.centred
     for lists in (True, False):
         pop = _rounded_population(500, 11, "mixed")
         rng = np.random.default_rng(11)
         res = pack(
-            pop, Rectangle.centred(80.0, 110.0), rng, order="sweep", closing=closing,
-            neighbour_lists=lists,
+            pop, box(80.0, 110.0), rng, order="sweep", closing=closing, neighbour_lists=lists,
         )  # fmt: skip
         out.append(res.centre.tobytes() + res.insertion_index.tobytes())
     assert out[0] == out[1]
@@ -180,11 +190,81 @@ def test_lists_hold_every_near_particle_sorted_by_gap() -> None:
     assert _checked_lists(st_.packed, placed, placed) > 0.9 * len(placed)
 
 
-def test_lists_are_not_kept_where_the_grid_is_needed() -> None:
+def _checked_periodic_lists(p: kernel.Packed, placed: np.ndarray) -> int:
+    """As :func:`_checked_lists` in a periodic box: one entry per image in reach."""
+    cap = p.fpar[kernel.F_NBCAP]
+    lx = p.fpar[kernel.F_XMAX] - p.fpar[kernel.F_XMIN]
+    ly = p.fpar[kernel.F_YMAX] - p.fpar[kernel.F_YMIN]
+    checked = images = 0
+    for q in placed:
+        r = p.nb_row[q]
+        if r < 0 or p.nb_n[r] < 0:
+            continue
+        cnt = p.nb_n[r]
+        must, may, want = set(), set(), {}
+        for ix in (0.0, lx, -lx):
+            for iy in (0.0, ly, -ly):
+                # q's image shifted by (ix, iy), as the grid search places its query
+                qcx = p.cx[q]
+                qcy = p.cy[q]
+                if ix != 0.0 or iy != 0.0:
+                    qcx += ix
+                    qcy += iy
+                code = (0 if ix == 0 else 1 if ix > 0 else 2) + 3 * (
+                    0 if iy == 0 else 1 if iy > 0 else 2
+                )
+                dx = p.cx[placed] - qcx
+                dy = p.cy[placed] - qcy
+                d = np.hypot(dx, dy)
+                lim = p.nb_reach[q] + p.nb_reach[placed] + 2.0 * cap
+                for j in np.flatnonzero(d < lim * (1 + 2 * GAP_SLACK)):
+                    key = (int(placed[j]), code)
+                    if placed[j] == q and code == 0:
+                        continue
+                    may.add(key)
+                    want[key] = (dx[j], dy[j])
+                    if d[j] < lim[j]:
+                        must.add(key)
+        got = {
+            (int(p.nb_o[r, e]), int(p.nb_img[r, e])): (p.nb_dx[r, e], p.nb_dy[r, e])
+            for e in range(cnt)
+        }
+        assert len(got) == cnt
+        assert must <= set(got) <= may
+        for key, offset in got.items():
+            assert offset == want[key]  # the same floats as the grid search's
+        assert np.all(np.diff(p.nb_gap[r, :cnt]) >= 0)
+        images += sum(1 for _, code in got if code != 0)
+        checked += 1
+    assert images > 0
+    return checked
+
+
+@pytest.mark.parametrize(("small", "tau"), [(True, None), (True, 0.5), (False, None)])
+def test_periodic_lists_hold_every_image_in_reach_at_the_grid_searchs_offsets(
+    small: bool, tau: float | None
+) -> None:
+    pop, _ = change5_population((30 if tau else 60) if small else 400, 9)
+    # the small box: just over the shortest period allowed, where most lists hold
+    # images, and with a small tau (a long reach) a particle's own images
+    side = 4.2 * pop.circumradius.max() / 0.9 if small else 110.0
+    st_, _ = _run(pop, PeriodicRectangle.centred(side, 0.9 * side, (3.0, -2.0)), 9, True, tau)
+    placed = st_.packed.order[: st_.count]
+    assert _checked_periodic_lists(st_.packed, placed) > 0.9 * len(placed)
+    if tau is not None:
+        p = st_.packed
+        own = [
+            q
+            for q in placed
+            if p.nb_row[q] >= 0 and q in p.nb_o[p.nb_row[q], : p.nb_n[p.nb_row[q]]]
+        ]
+        assert own
+
+
+def test_lists_are_kept_in_every_kind_of_domain_unless_turned_off() -> None:
     pop, _ = change5_population(50, 1)
     periodic = ArcState(pop, PeriodicRectangle.centred(80.0, 80.0), t=0.999, tau=None, linear=False)
-    assert periodic.counter(kernel.I_NBLISTS) == 0
-    assert periodic.packed.nb_dx.shape == (1, 1)
+    assert periodic.counter(kernel.I_NBLISTS) == 1
     off = ArcState(
         pop, Rectangle.centred(80.0, 80.0), t=0.999, tau=None, linear=False, neighbour_lists=False
     )
@@ -198,14 +278,19 @@ def test_lists_are_not_kept_where_the_grid_is_needed() -> None:
     scale=st.sampled_from([1e-6, 1.0, 1e6]),
     psi=st.sampled_from([0.01, 0.5, 15.0, 1000.0]),
     tau=st.sampled_from([None, None, 0.65]),
+    periodic=st.booleans(),
 )
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-def test_lists_and_grid_agree_in_random_scenes(seed, n, ratio, scale, psi, tau) -> None:
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+def test_lists_and_grid_agree_in_random_scenes(seed, n, ratio, scale, psi, tau, periodic) -> None:
     rng = np.random.default_rng(seed)
     radius = extreme_radii(n, ratio, scale, rng)
     pop = octagon_population(radius, rng, psi=psi)
     side = max(scale * 4.0 * ratio, 3.0 * np.sqrt(np.sum(radius**2)), 2.6 * pop.circumradius.max())
-    domain = Rectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
+    if periodic:  # down to the shortest period allowed: images of images, a particle's own
+        side = max(side * rng.uniform(0.3, 1.0), 4.0 * pop.circumradius.max() / 0.79)
+        domain: Domain = PeriodicRectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
+    else:
+        domain = Rectangle.centred(side, 0.8 * side, (3.0 * scale, -2.0 * scale))
     _same_with_and_without_lists(pop, domain, seed, tau)
 
 
