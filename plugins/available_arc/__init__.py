@@ -76,8 +76,9 @@ class AvailableArcConfig(BaseModel):
     neighbour_lists: bool = Field(
         True,
         description=(
-            "Keep a neighbour list per particle (walled domains): the same "
-            "packing, faster in large domains, about 1.8 kB per particle; false uses the grid only."
+            "Keep a neighbour list per particle (in a periodic box with the images): the "
+            "same packing, faster in large domains, about 1.8 kB per particle; false uses "
+            "the grid only."
         ),
     )
     order: Literal["paper", "sweep"] = Field(

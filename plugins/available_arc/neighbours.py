@@ -195,27 +195,28 @@ def register_neighbours(
                     dy = cy[o] - qcy
                     d = math.sqrt(dx * dx + dy * dy)
                     ro = reach[o]
-                    lim = rp + ro + 2.0 * cap
-                    if d >= lim * (1.0 + GAP_SLACK):
-                        continue
-                    if rp_row >= 0:
+                    lim = (rp + ro + 2.0 * cap) * (1.0 + GAP_SLACK)
+                    # p's entry in o's list: the offset the grid search about o's
+                    # image -i computes, which can round apart from -(dx, dy) far
+                    # from the origin; each list is tested on its own distance
+                    if qs == 0:
+                        bx = x - cx[o]
+                        by = y - cy[o]
+                        bd = d
+                    else:
+                        ox_ = cx[o]
+                        oy_ = cy[o]
+                        ox_ += -ix
+                        oy_ += -iy
+                        bx = x - ox_
+                        by = y - oy_
+                        bd = math.sqrt(bx * bx + by * by)
+                    if rp_row >= 0 and d < lim:
                         _add_entry(
                             rp_row, o, d - ro, dx, dy, code, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
                         )
                     ro_row = row[o]
-                    if ro_row >= 0:
-                        if qs == 0:
-                            bx = x - cx[o]
-                            by = y - cy[o]
-                            bd = d
-                        else:  # as the grid search about o's image -i finds p
-                            ox_ = cx[o]
-                            oy_ = cy[o]
-                            ox_ += -ix
-                            oy_ += -iy
-                            bx = x - ox_
-                            by = y - oy_
-                            bd = math.sqrt(bx * bx + by * by)
+                    if ro_row >= 0 and bd < lim:
                         _add_entry(
                             ro_row, p, bd - rp, bx, by, back, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
                         )

@@ -60,8 +60,8 @@ class ArcState:
     eta
         Packing control coefficient of the compiled ``eta`` rule.
     neighbour_lists
-        Keep per-particle neighbour lists where the scene allows them (walled
-        domains); ``False`` always searches the grid. Both give the same packing.
+        Keep per-particle neighbour lists (in a periodic box, of the neighbours'
+        images); ``False`` always searches the grid. Both give the same packing.
     pool_rows
         Rows of the neighbour-list pool to start with; ``None``: one per
         particle. An insertion that gives rows back (the sweep) starts small

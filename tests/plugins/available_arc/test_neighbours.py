@@ -378,3 +378,43 @@ def test_lists_of_the_candidates_still_in_reach_are_whole_after_rows_are_reused(
     rows = p.nb_row[placed]
     assert len(set(rows[rows >= 0].tolist())) == np.sum(rows >= 0)
     assert _checked_lists(p, placed, placed[rows >= 0]) >= 0.9 * len(live)
+
+
+def test_a_periodic_entry_is_kept_by_the_distance_the_grid_search_computes() -> None:
+    """Far from the origin, p's distance to o's image and o's to p's round apart."""
+    radius = np.full(3, 1.00003)
+    pop = Population(
+        radius,
+        np.zeros(3, dtype=np.int64),
+        ("m",),
+        Disk().generate(radius, np.random.default_rng(0)),
+    )
+    domain = PeriodicRectangle.centred(20.0, 20.0, (2.0**40, 0.0))
+    st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
+    f = st_.packed.fpar
+    lx = f[kernel.F_XMAX] - f[kernel.F_XMIN]
+    lim = 4.0 * radius[0]
+    # o at the left side, p at the right where the two distances fall either side of lim
+    xo = f[kernel.F_XMIN] + 1.0
+    pair = None
+    for _ in range(16):
+        xo = np.nextafter(xo, np.inf)
+        xp = xo + lx - lim - 3e-3
+        for _ in range(60):
+            from_p = abs(xo - (xp + (-lx)))
+            from_o = abs(xp - (xo + lx))
+            if from_p >= lim * (1 + GAP_SLACK) and from_o < lim:
+                pair = (xo, xp)
+                break
+            xp = np.nextafter(xp, np.inf)
+        if pair:
+            break
+    assert pair is not None
+    st_.insert(0, pair[0], 0.0)
+    st_.insert(1, pair[1], 0.0)
+    p = st_.packed
+    r = p.nb_row[0]
+    entries = [(int(p.nb_o[r, e]), p.nb_dx[r, e]) for e in range(p.nb_n[r])]
+    qcx = pair[0]
+    qcx += lx  # the grid search about 0's image on the right finds 1 there
+    assert entries == [(1, pair[1] - qcx)]
