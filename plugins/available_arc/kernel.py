@@ -36,6 +36,7 @@ from regopack.plugins.available_arc.neighbours import (
     GAP_SLACK,
     IMAGE_QUERIES,
     image_code,
+    image_shifts,
     register_neighbours,
 )
 from regopack.plugins.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
@@ -351,8 +352,6 @@ def analyze_candidate(
         qrad = g.circum[pk] + 2.0 * g.circum[i]
     mode = ipar[I_WALLMODE]
     periodic = mode == WALL_PERIODIC
-    lx = fpar[F_XMAX] - fpar[F_XMIN]
-    ly = fpar[F_YMAX] - fpar[F_YMIN]
     # query boxes: the one about pk and, in a periodic domain, its images one
     # period away when an interferer's image could lie across a side (within
     # qrad plus the largest reach). Each image query finds the particles near
@@ -364,24 +363,8 @@ def analyze_candidate(
     nsy = 1
     if periodic:
         span = qrad + fpar[F_REACH]
-        if pcx - span < fpar[F_XMIN]:
-            sx1 = lx
-            nsx += 1
-        if pcx + span > fpar[F_XMAX]:
-            if nsx == 1:
-                sx1 = -lx
-            else:
-                sx2 = -lx
-            nsx += 1
-        if pcy - span < fpar[F_YMIN]:
-            sy1 = ly
-            nsy += 1
-        if pcy + span > fpar[F_YMAX]:
-            if nsy == 1:
-                sy1 = -ly
-            else:
-                sy2 = -ly
-            nsy += 1
+        nsx, sx1, sx2 = image_shifts(pcx, span, fpar[F_XMIN], fpar[F_XMAX])
+        nsy, sy1, sy2 = image_shifts(pcy, span, fpar[F_YMIN], fpar[F_YMAX])
     gnx = ipar[I_GNX]
     found = np.empty(32, dtype=np.int64)
     found_q = np.empty(32 if periodic else 0, dtype=np.int64)

@@ -40,6 +40,30 @@ IMAGE_QUERIES = 9
 """Stamp values one registration in a periodic domain may take (a query per image)."""
 
 
+@numba.njit(cache=True, inline="always")
+def image_shifts(x: float, span: float, lo: float, hi: float) -> tuple[int, float, float]:
+    """Shifts of the image queries along one periodic axis ``[lo, hi)`` about ``x``.
+
+    Returns ``(n, s1, s2)``: ``n`` queries, the first unshifted, the next
+    ``s1`` and ``s2`` (a period up, down) when ``x`` lies within ``span`` of
+    the low or the high side. The analysis and the neighbour lists choose
+    their images by this one rule.
+    """
+    period = hi - lo
+    n = 1
+    s1 = s2 = 0.0
+    if x - span < lo:
+        s1 = period
+        n += 1
+    if x + span > hi:
+        if n == 1:
+            s1 = -period
+        else:
+            s2 = -period
+        n += 1
+    return n, s1, s2
+
+
 @numba.njit(cache=True)
 def image_code(sx: float, sy: float) -> int:
     """Code of the periodic image shifted by ``(sx, sy)``: per axis 0 none, 1 up, 2 down."""
@@ -143,27 +167,9 @@ def register_neighbours(
     nsy = 1
     sx1 = sx2 = sy1 = sy2 = 0.0
     if periodic and bounds is not None:
-        lx = bounds[1] - bounds[0]
-        ly = bounds[3] - bounds[2]
         span = half + maxreach
-        if x - span < bounds[0]:
-            sx1 = lx
-            nsx += 1
-        if x + span > bounds[1]:
-            if nsx == 1:
-                sx1 = -lx
-            else:
-                sx2 = -lx
-            nsx += 1
-        if y - span < bounds[2]:
-            sy1 = ly
-            nsy += 1
-        if y + span > bounds[3]:
-            if nsy == 1:
-                sy1 = -ly
-            else:
-                sy2 = -ly
-            nsy += 1
+        nsx, sx1, sx2 = image_shifts(x, span, bounds[0], bounds[1])
+        nsy, sy1, sy2 = image_shifts(y, span, bounds[2], bounds[3])
     nx = gdim[0]
     for qs in range(nsx * nsy):
         qx = qs % nsx
