@@ -35,7 +35,8 @@ from regopack.plugins.available_arc.grid import cell_range, grid_insert
 from regopack.plugins.available_arc.neighbours import (
     GAP_SLACK,
     IMAGE_QUERIES,
-    image_code,
+    image_query,
+    image_shift,
     image_shifts,
     register_neighbours,
 )
@@ -381,18 +382,8 @@ def analyze_candidate(
             found = np.empty(cnt, dtype=np.int64)
         lgap = s.nb_reach[pk] + 2.0 * s.nb_reach[i]
         stop = lgap + GAP_SLACK * (lgap + 2.0 * fpar[F_REACH])
-        if periodic:
-            # an entry is an image one period away: the grid search finds it only
-            # in the query about pk's image on that side, when it makes that query
-            qcode = np.full(9, -1, dtype=np.int64)
-            for qs in range(nsx * nsy):
-                qx = qs % nsx
-                qy = qs // nsx
-                ix = 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
-                iy = 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
-                qcode[image_code(ix, iy)] = qs
-            if cnt > found_q.shape[0]:
-                found_q = np.empty(cnt, dtype=np.int64)
+        if periodic and cnt > found_q.shape[0]:
+            found_q = np.empty(cnt, dtype=np.int64)
         for e in range(cnt):
             if s.nb_gap[row, e] > stop:
                 break
@@ -401,7 +392,9 @@ def analyze_candidate(
             ddy = s.nb_dy[row, e]
             if _interferes(pk, o, i, ddx * ddx + ddy * ddy, g, tau_mode, tau):
                 if periodic:
-                    qs = qcode[s.nb_img[row, e]]
+                    # an entry is an image one period away: the grid search finds it
+                    # only in the query about pk's image on that side, if it makes it
+                    qs = image_query(s.nb_img[row, e], nsx, sx1, sx2, nsy, sy1, sy2)
                     if qs < 0:
                         continue
                     found_q[nf] = qs
@@ -417,8 +410,8 @@ def analyze_candidate(
         else:
             qx = qs % nsx
             qy = qs // nsx
-            qcx += 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
-            qcy += 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+            qcx += image_shift(qx, sx1, sx2)
+            qcy += image_shift(qy, sy1, sy2)
         ia, ib = cell_range(qcx - qrad, qcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
         ja, jb = cell_range(qcy - qrad, qcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
         for gj in range(ja, jb + 1):
@@ -464,8 +457,8 @@ def analyze_candidate(
             if periodic and found_q[f] > 0:
                 qx = found_q[f] % nsx
                 qy = found_q[f] // nsx
-                odx_ -= 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
-                ody_ -= 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+                odx_ -= image_shift(qx, sx1, sx2)
+                ody_ -= image_shift(qy, sy1, sy2)
             ocx[f] = odx_ + (gvx[goff[o]] + q0x)
             ocy[f] = ody_ + (gvy[goff[o]] + q0y)
             orho[f] = grho[o] + grho[i]
@@ -530,8 +523,8 @@ def analyze_candidate(
         if periodic and found_q[f] > 0:
             qx = found_q[f] % nsx
             qy = found_q[f] // nsx
-            odx[f] -= 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
-            ody[f] -= 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+            odx[f] -= image_shift(qx, sx1, sx2)
+            ody[f] -= image_shift(qy, sy1, sy2)
         if nf <= ncache:
             if w.ckey[o] == gen:
                 slot[f] = w.cslot[o]

@@ -64,6 +64,40 @@ def image_shifts(x: float, span: float, lo: float, hi: float) -> tuple[int, floa
     return n, s1, s2
 
 
+@numba.njit(cache=True, inline="always")
+def image_shift(q: int, s1: float, s2: float) -> float:
+    """Shift of image query ``q`` along one axis (0: none; 1, 2: ``s1``, ``s2``)."""
+    return 0.0 if q == 0 else (s1 if q == 1 else s2)
+
+
+@numba.njit(cache=True, inline="always")
+def _axis_query(a: int, n: int, s1: float, s2: float) -> int:
+    """Query index along one axis of a shift of code ``a`` (0 none, 1 up, 2 down); -1: none."""
+    if a == 0:
+        return 0
+    up = a == 1
+    if n >= 2 and (s1 > 0.0) == up:
+        return 1
+    if n == 3 and (s2 > 0.0) == up:
+        return 2
+    return -1
+
+
+@numba.njit(cache=True, inline="always")
+def image_query(
+    code: int, nsx: int, sx1: float, sx2: float, nsy: int, sy1: float, sy2: float
+) -> int:
+    """Index of the image query that looks for the image of ``code``; -1 when none does.
+
+    The queries are those :func:`image_shifts` chose, numbered ``qx + nsx * qy``.
+    """
+    qx = _axis_query(code % 3, nsx, sx1, sx2)
+    qy = _axis_query(code // 3, nsy, sy1, sy2)
+    if qx < 0 or qy < 0:
+        return -1
+    return qx + nsx * qy
+
+
 @numba.njit(cache=True)
 def image_code(sx: float, sy: float) -> int:
     """Code of the periodic image shifted by ``(sx, sy)``: per axis 0 none, 1 up, 2 down."""
@@ -174,8 +208,8 @@ def register_neighbours(
     for qs in range(nsx * nsy):
         qx = qs % nsx
         qy = qs // nsx
-        ix = 0.0 if qx == 0 else (sx1 if qx == 1 else sx2)
-        iy = 0.0 if qy == 0 else (sy1 if qy == 1 else sy2)
+        ix = image_shift(qx, sx1, sx2)
+        iy = image_shift(qy, sy1, sy2)
         tq = token + qs
         # the image of p this query is about; from o, p's entry is o's image -i
         qcx = x

@@ -418,3 +418,27 @@ def test_a_periodic_entry_is_kept_by_the_distance_the_grid_search_computes() -> 
     qcx = pair[0]
     qcx += lx  # the grid search about 0's image on the right finds 1 there
     assert entries == [(1, pair[1] - qcx)]
+
+
+@pytest.mark.parametrize("x", [0.5, 5.0, 9.5])
+@pytest.mark.parametrize("y", [0.5, 5.0, 9.5])
+@pytest.mark.parametrize("span", [1.0, 6.0])
+def test_each_image_code_maps_to_the_query_that_looks_for_it(
+    x: float, y: float, span: float
+) -> None:
+    from regopack.plugins.available_arc.neighbours import (
+        image_code,
+        image_query,
+        image_shift,
+        image_shifts,
+    )
+
+    nsx, sx1, sx2 = image_shifts(x, span, 0.0, 10.0)
+    nsy, sy1, sy2 = image_shifts(y, span, 0.0, 10.0)
+    queried = {}
+    for qs in range(nsx * nsy):
+        ix = image_shift(qs % nsx, sx1, sx2)
+        iy = image_shift(qs // nsx, sy1, sy2)
+        queried[image_code(ix, iy)] = qs
+    for code in range(9):
+        assert image_query(code, nsx, sx1, sx2, nsy, sy1, sy2) == queried.get(code, -1)
