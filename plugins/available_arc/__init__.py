@@ -11,13 +11,14 @@ polar angle over what is left.
 from __future__ import annotations
 
 import time
-from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING, Literal
+from collections.abc import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain import Domain
+from regopack.domain import Domain, Rectangle
 from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
@@ -30,7 +31,12 @@ from regopack.plugin_types import InserterSpec
 from regopack.population import Population
 
 if TYPE_CHECKING:
+    from regopack.plugins.available_arc.batches import Helpers
     from regopack.plugins.available_arc.state import ArcState
+    from regopack.plugins.available_arc.sweep import Sweep
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 PROGRESS_EVERY = 256
 SWEEP_POOL_ROWS = 4096
@@ -134,6 +140,16 @@ class AvailableArcConfig(BaseModel):
             "whole width. Ignored by order = 'paper'."
         ),
     )
+    lag: Literal["pilot", "none"] = Field(
+        "pilot",
+        description=(
+            "When the sweep offers each particle: 'pilot' (after the front has risen by "
+            "the depth below the zone top at which particles of its size land in the "
+            "steady state, measured by a small pilot sweep first: no band of fine "
+            "particles at the bottom, at the cost of the pilot) or 'none' (at its turn "
+            "in the stream). Ignored by order = 'paper'."
+        ),
+    )
     search: Literal["indexed", "linear"] = Field(
         "indexed",
         description=(
@@ -191,18 +207,22 @@ class AvailableArc(InsertionStrategy):
         started = time.perf_counter()
         compiled = type(controller) is EtaController or controller.identity
         eta = controller.eta if type(controller) is EtaController else 0.0
-        st = ArcState(
-            population,
-            domain,
-            t=cfg.t,
-            tau=cfg.tau if cfg.interference == "tau" else None,
-            linear=cfg.search == "linear",
-            first_random=cfg.first == "random",
-            eta=eta,
-            neighbour_lists=cfg.neighbour_lists,
-            # the sweep gives back the lists it leaves behind: start small, grow on demand
-            pool_rows=SWEEP_POOL_ROWS if cfg.order == "sweep" else None,
-        )
+
+        def new_state(population: Population, domain: Domain) -> ArcState:
+            return ArcState(
+                population,
+                domain,
+                t=cfg.t,
+                tau=cfg.tau if cfg.interference == "tau" else None,
+                linear=cfg.search == "linear",
+                first_random=cfg.first == "random",
+                eta=eta,
+                neighbour_lists=cfg.neighbour_lists,
+                # the sweep gives back the lists it leaves behind: start small, grow on demand
+                pool_rows=SWEEP_POOL_ROWS if cfg.order == "sweep" else None,
+            )
+
+        st = new_state(population, domain)
         prepared = time.perf_counter()
         if cfg.order == "sweep":
             if not compiled:
@@ -210,7 +230,9 @@ class AvailableArc(InsertionStrategy):
                     "insertion.order = 'sweep' needs the built-in 'eta' density controller "
                     f"(got {type(controller).__name__})"
                 )
-            return _pack_sweep(st, population, domain, cfg, rng, progress, started, prepared)
+            return _pack_sweep(
+                st, new_state, population, domain, cfg, rng, progress, started, prepared
+            )
         exact = cfg.screening == "exact"
         if exact and not compiled:
             raise ConfigError(
@@ -247,6 +269,7 @@ class AvailableArc(InsertionStrategy):
 
 def _pack_sweep(
     st: ArcState,
+    new_state: Callable[[Population, Domain], ArcState],
     population: Population,
     domain: Domain,
     cfg: AvailableArcConfig,
@@ -259,6 +282,7 @@ def _pack_sweep(
     import numba
 
     from regopack.plugins.available_arc import batches, kernel, sweep
+    from regopack.plugins.available_arc.lag import pilot_lags
 
     n = len(population)
     bounds = domain.bounds()
@@ -277,17 +301,24 @@ def _pack_sweep(
             # within one zone of its top
             zone = max(zone, 2.0 * float(st.outlines.circum.max()))
     sw = sweep.Sweep(n, height, zone, closing=cfg.closing, width=width, strip=strip)
+    lag_info: dict[str, Any] = {}
+    if cfg.lag == "pilot":
+
+        def run_pilot(
+            sub: Population, pilot: Rectangle, zone: float
+        ) -> tuple[FloatArray, IntArray, float]:
+            pst = new_state(sub, pilot)
+            psw = sweep.Sweep(len(sub), pilot.height, zone, closing="tail", width=pilot.width)
+            _run_sweep(pst, psw, len(sub), _child(rng), None, None)
+            y = pst.packed.cy[: len(sub)] - pilot.ymin
+            return y, psw.lags.top_at[: len(sub)], psw.delta
+
+        lags, lag_info = pilot_lags(population, domain, zone, sw.delta, run_pilot)
+        sw.set_lags(lags)
     threads = min(numba.get_num_threads(), batches.MAX_THREADS) if n else 1
     helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
-    placed = 0
-    for begin in range(0, n, PROGRESS_EVERY):
-        if progress is not None:
-            progress(begin, placed, n)
-        end = min(begin + PROGRESS_EVERY, n)
-        st.reserve_rows(end - begin)
-        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded, helpers)
-    if progress is not None:
-        progress(n, placed, n)
+    piloted = time.perf_counter()
+    placed = _run_sweep(st, sw, n, rng, helpers, progress)
     index = np.full(n, -1, dtype=np.int64)
     order = st.packed.order[: st.count]
     index[order] = np.arange(order.shape[0])
@@ -302,10 +333,43 @@ def _pack_sweep(
         "threads": threads,
         "refused": refused,
         "not_offered": n - placed - refused,
+        **lag_info,
         "prepare_time_s": prepared - started,
+        **({"pilot_time_s": piloted - prepared} if cfg.lag == "pilot" else {}),
         "insert_time_s": time.perf_counter() - prepared,
     }
     return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+
+def _child(rng: np.random.Generator) -> np.random.Generator:
+    """Return an independent generator spawned from ``rng``, which keeps its own stream."""
+    try:
+        return rng.spawn(1)[0]
+    except (TypeError, ValueError):  # a generator without a seed sequence
+        return np.random.default_rng(rng.integers(2**63))
+
+
+def _run_sweep(
+    st: ArcState,
+    sw: Sweep,
+    n: int,
+    rng: np.random.Generator,
+    helpers: Helpers | None,
+    progress: ProgressCallback | None,
+) -> int:
+    """Offer particles ``0 .. n - 1`` to ``sw`` in chunks; return how many were placed."""
+    placed = 0
+    for begin in range(0, n, PROGRESS_EVERY):
+        if progress is not None:
+            progress(begin, placed, n)
+        end = min(begin + PROGRESS_EVERY, n)
+        # every placement takes at most one list row: this chunk's particles, and
+        # at the end those still waiting for their lag
+        st.reserve_rows(end - begin + sw.waiting)
+        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded, helpers)
+    if progress is not None:
+        progress(n, placed, n)
+    return placed
 
 
 def _pack_python(

@@ -66,8 +66,11 @@ has fewer than ``ZONE_BINS`` bins)."""
     Z_PROMPT,
     Z_NZONE,
     Z_CUR,
-) = range(6)
-N_ZS = 6
+    Z_QBIN,
+    Z_QLEN,
+    Z_FLUSH,
+) = range(9)
+N_ZS = 9
 
 # sz: integer state of each strip
 (
@@ -111,6 +114,24 @@ class Bins(NamedTuple):
     """Per candidate: its screening radius while its strip is hidden."""
 
 
+class Lags(NamedTuple):
+    """Particles offered after a lag, and the queue of those waiting for it."""
+
+    lag: IntArray
+    """Per particle: bins the front rises between its turn in the stream and its
+    offer (0: offered at its turn)."""
+    top_at: IntArray
+    """Per particle: the bin of its strip's zone top when it was placed with the
+    zone at full height below the domain's top; -1 otherwise (or not placed)."""
+    qhead: IntArray
+    """Per bin of the front (up to a zone height and more above the domain's top):
+    the first particle waiting until the front reaches that bin, -1 for none."""
+    qtail: IntArray
+    """Per bin: the last particle waiting for it."""
+    qnext: IntArray
+    """Per particle: the next particle waiting for the same bin, -1 for none."""
+
+
 class Sweep:
     """Arrays of one sweep run: bins per strip, flags and the stored screening radii.
 
@@ -148,6 +169,23 @@ class Sweep:
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
         self.bins = Bins(self.bin_head, self.bin_next, self.flag, self.rec)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
+        # waiting particles by the bin of the front they wait for; a full zone's front
+        # rises on for a zone height while its bins retire (see _front)
+        nwait = nbins + 2 * int(self.zs[Z_NZONE]) + 1
+        self.lags = Lags(
+            np.zeros(max(n, 1), dtype=np.int64),
+            np.full(max(n, 1), -1, dtype=np.int64),
+            np.full(nwait, -1, dtype=np.int64),
+            np.full(nwait, -1, dtype=np.int64),
+            np.full(max(n, 1), -1, dtype=np.int64),
+        )
+
+    def set_lags(self, lag: IntArray) -> None:
+        """Offer each particle ``lag[i]`` bins of the front's rise after its turn.
+
+        See :func:`sweep_range`; all zeros (the default) offers every particle at its turn.
+        """
+        self.lags.lag[: lag.shape[0]] = lag
 
     def run(
         self,
@@ -168,7 +206,7 @@ class Sweep:
         return int(
             sweep_range(
                 begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bins, self.status, self.tried, rounded, helpers,
+                self.bins, self.status, self.tried, self.lags, rounded, helpers,
             )
         )  # fmt: skip
 
@@ -176,6 +214,11 @@ class Sweep:
     def raises(self) -> int:
         """Rises of the zones, over all strips."""
         return int(self.sz[:, S_RAISES].sum())
+
+    @property
+    def waiting(self) -> int:
+        """Particles waiting for their lag."""
+        return int(self.zs[Z_QLEN])
 
     @property
     def refused(self) -> int:
@@ -557,6 +600,172 @@ def _offer(
 
 
 @numba.njit(cache=True)
+def _step(
+    i: int,
+    queued: bool,
+    delta: float,
+    swidth: float,
+    g: K.Outlines,
+    s: K.Packed,
+    w: K.Work,
+    rng: np.random.Generator,
+    zs: IntArray,
+    sz: IntArray,
+    bn: Bins,
+    status: IntArray,
+    tried: IntArray,
+    lags: Lags,
+    rounded: object,
+    helpers: Helpers | None,
+) -> int:
+    """Offer particle ``i`` to the strips; return 1 when it is placed, else 0.
+
+    ``queued``: ``i`` waited for its lag, so an earlier particle of the stream;
+    its refusal does not end the tail closing.
+    """
+    nbins = bn.head.shape[1]
+    if zs[Z_STARTED] == 0:
+        ok, x, y = _lowest_centre(i, g, s)
+        if not ok:
+            status[i] = STATUS_REFUSED
+            zs[Z_REFUSED] += 1
+            return 0
+        zs[Z_STARTED] = 1
+        st = _strip_of(x, s.fpar[K.F_XMIN], swidth, bn.head.shape[0])
+        sz[st, S_SEEDED] = 1
+        sz[st, S_LO] = 0
+        sz[st, S_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
+        zs[Z_CUR] = st
+        k = K.insert_particle(i, x, y, g, s)
+        _register(k, zs, sz, s, delta, swidth, bn)
+        status[i] = STATUS_PLACED
+        return 1
+    k = -1
+    offered = -1  # the first strip particle i is offered to
+    st = -1
+    while True:
+        st = _choose(sz, tried, i, zs[Z_CUR])
+        if st < 0:
+            break
+        _switch(st, zs, sz, s, bn)
+        tried[st] = i
+        if sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 0:
+            # paced closing: the lowest bin retires after as many offers as a bin took to
+            # pass before, so the last zone sees the stream for as long as any other
+            sz[st, S_SINCE] += 1
+            if sz[st, S_SINCE] > sz[st, S_PACE]:
+                sz[st, S_SINCE] = 0
+                _retire_bin(st, sz[st, S_LO], s, bn)
+                sz[st, S_LO] += 1
+                if sz[st, S_LO] > sz[st, S_HI]:
+                    sz[st, S_CLOSED] = 1
+                    continue
+        elif sz[st, S_FULL] == 0:
+            sz[st, S_OFFERED] += 1
+        was_full = sz[st, S_FULL]
+        if offered < 0:
+            offered = st
+        k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded, helpers)
+        if k >= 0:
+            break
+        if zs[Z_PROMPT] == 2 and was_full == 1 and not queued:
+            # tail closing: the first refusal under the top closes the strip; when no
+            # strip is left the run ends, so the particles left out are the rest of
+            # the stream, a random tail. The particle whose rises took the zone to
+            # the top does not count: it fits nowhere, while the top bins have just
+            # opened for the others
+            sz[st, S_CLOSED] = 1
+        # a particle one strip refuses goes on to the other open strips
+    if offered < 0:
+        # every strip closed before this particle could be offered
+        zs[Z_DONE] = 1
+        return 0
+    if k >= 0:
+        _register(k, zs, sz, s, delta, swidth, bn)
+        if sz[st, S_FULL] == 0 and sz[st, S_HI] - sz[st, S_LO] + 1 >= zs[Z_NZONE]:
+            lags.top_at[i] = sz[st, S_HI]
+    for t in range(sz.shape[0]):
+        if tried[t] == i:
+            _release(t, sz, s, bn)
+    if k < 0:
+        status[i] = STATUS_REFUSED
+        zs[Z_REFUSED] += 1
+        if zs[Z_PROMPT] == 2:
+            if _choose(sz, tried, -1, -1) < 0:
+                # tail closing: the last open strip has just closed
+                zs[Z_DONE] = 1
+        elif zs[Z_PROMPT] == 1:
+            # prompt closing: the refusal stands for the rise each full strip that
+            # refused it would have made (a hidden strip's bin retires as well)
+            for t in range(sz.shape[0]):
+                if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
+                    _retire_bin(t, sz[t, S_LO], s, bn)
+                    sz[t, S_LO] += 1
+                    if sz[t, S_LO] > sz[t, S_HI]:
+                        sz[t, S_CLOSED] = 1
+            if _choose(sz, tried, -1, -1) < 0:
+                zs[Z_DONE] = 1
+        return 0
+    status[i] = STATUS_PLACED
+    return 1
+
+
+@numba.njit(cache=True)
+def _front(zs: IntArray, sz: IntArray) -> tuple[int, bool]:
+    """Return the front, the lowest zone top of the open strips (-1: none), and if it is full.
+
+    A full zone's top stays under the domain's top while its lowest bins retire
+    (the paced and prompt closings); its front goes on rising with them, as the
+    top of a zone of full height would.
+    """
+    best = -1
+    front = 0
+    for st in range(sz.shape[0]):
+        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
+            top = sz[st, S_HI]
+            if sz[st, S_FULL] == 1:
+                top = max(top, sz[st, S_LO] + zs[Z_NZONE] - 1)
+            if best < 0 or top < front:
+                best = st
+                front = top
+    if best < 0:
+        return -1, False
+    return front, sz[best, S_FULL] == 1
+
+
+@numba.njit(cache=True)
+def _lowest_open(sz: IntArray) -> int:
+    """Return the lowest bin still in a zone of the open strips (a large number for none)."""
+    lo = 1 << 62
+    for st in range(sz.shape[0]):
+        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
+            lo = min(lo, sz[st, S_LO])
+    return lo
+
+
+@numba.njit(cache=True)
+def _wait(i: int, front: int, zs: IntArray, lags: Lags) -> bool:
+    """Queue particle ``i`` until the front (now at bin ``front``) has risen by its lag.
+
+    Returns False when ``i`` is to be offered now: no lag, before the first
+    particle, or once the waiting particles have been let go.
+    """
+    if lags.lag[i] <= 0 or zs[Z_STARTED] == 0 or zs[Z_FLUSH] != 0 or front < 0:
+        return False
+    nbins = lags.qhead.shape[0]
+    # not below the lowest bin still waited for, which the release has passed
+    b = min(max(front + lags.lag[i], zs[Z_QBIN]), nbins - 1)
+    if lags.qtail[b] < 0:
+        lags.qhead[b] = i
+    else:
+        lags.qnext[lags.qtail[b]] = i
+    lags.qtail[b] = i
+    lags.qnext[i] = -1
+    zs[Z_QLEN] += 1
+    return True
+
+
+@numba.njit(cache=True)
 def sweep_range(
     begin: int,
     end: int,
@@ -571,100 +780,72 @@ def sweep_range(
     bn: Bins,
     status: IntArray,
     tried: IntArray,
+    lags: Lags,
     rounded: object = None,
     helpers: Helpers | None = None,
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.
 
+    A particle with a lag waits in a queue until the front (see :func:`_front`)
+    has risen by that many bins; waiting particles are offered, in the order
+    they became due, before the next particle of the stream. Once the front's
+    zone is at the domain's top no particle waits. Every waiting particle is
+    then offered at once in the prompt and tail closings (they leave out a
+    random tail of the stream), and in any closing when the stream ends below
+    the top. In the paced closing, when the stream ends, a waiting particle is
+    offered only if the bin the front was at when it was drawn is still in a
+    zone; the others are not offered.
+
     ``status`` records each particle offered (placed or refused); particles
     after the run has closed keep ``STATUS_NOT_OFFERED``.
     """
     placed = 0
-    nbins = bn.head.shape[1]
-    for i in range(begin, end):
+    last = end >= status.shape[0]
+    for i in range(begin, end + 1 if last else end):
         if zs[Z_DONE] == 1:
             break
-        if zs[Z_STARTED] == 0:
-            ok, x, y = _lowest_centre(i, g, s)
-            if not ok:
-                status[i] = STATUS_REFUSED
-                zs[Z_REFUSED] += 1
+        # the waiting particles that are due (see the docstring for when all are)
+        while zs[Z_QLEN] > 0 and zs[Z_DONE] == 0:
+            front, full = _front(zs, sz)
+            if zs[Z_FLUSH] == 0:
+                if full and zs[Z_PROMPT] == 0:
+                    # the paced closing feeds the last zone from the stream at once, at
+                    # the rate the lags fed every zone before it. When the stream ends,
+                    # a waiting particle is offered if the bin the front was at when it
+                    # was drawn is still open; the others' pores are filled already
+                    if i < end:
+                        break
+                    zs[Z_FLUSH] = 2
+                elif full or i == end:
+                    # the prompt and tail closings leave out a random tail of the
+                    # stream: every particle drawn before it is offered once the front's
+                    # zone is at the top; so is every particle when the stream ends
+                    # below the top
+                    zs[Z_FLUSH] = 1
+            b = zs[Z_QBIN]
+            if zs[Z_FLUSH] == 0 and b > front:
+                break
+            q = lags.qhead[b]
+            if q < 0:
+                zs[Z_QBIN] = b + 1
                 continue
-            zs[Z_STARTED] = 1
-            st = _strip_of(x, s.fpar[K.F_XMIN], swidth, bn.head.shape[0])
-            sz[st, S_SEEDED] = 1
-            sz[st, S_LO] = 0
-            sz[st, S_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
-            zs[Z_CUR] = st
-            k = K.insert_particle(i, x, y, g, s)
-            _register(k, zs, sz, s, delta, swidth, bn)
-            status[i] = STATUS_PLACED
-            placed += 1
-            continue
-        k = -1
-        offered = -1  # the first strip particle i is offered to
-        while True:
-            st = _choose(sz, tried, i, zs[Z_CUR])
-            if st < 0:
-                break
-            _switch(st, zs, sz, s, bn)
-            tried[st] = i
-            if sz[st, S_FULL] == 1 and zs[Z_PROMPT] == 0:
-                # paced closing: the lowest bin retires after as many offers as a bin took to
-                # pass before, so the last zone sees the stream for as long as any other
-                sz[st, S_SINCE] += 1
-                if sz[st, S_SINCE] > sz[st, S_PACE]:
-                    sz[st, S_SINCE] = 0
-                    _retire_bin(st, sz[st, S_LO], s, bn)
-                    sz[st, S_LO] += 1
-                    if sz[st, S_LO] > sz[st, S_HI]:
-                        sz[st, S_CLOSED] = 1
-                        continue
-            elif sz[st, S_FULL] == 0:
-                sz[st, S_OFFERED] += 1
-            was_full = sz[st, S_FULL]
-            if offered < 0:
-                offered = st
-            k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded, helpers)
-            if k >= 0:
-                break
-            if zs[Z_PROMPT] == 2 and was_full == 1:
-                # tail closing: the first refusal under the top closes the strip; when no
-                # strip is left the run ends, so the particles left out are the rest of
-                # the stream, a random tail. The particle whose rises took the zone to
-                # the top does not count: it fits nowhere, while the top bins have just
-                # opened for the others
-                sz[st, S_CLOSED] = 1
-            # a particle one strip refuses goes on to the other open strips
-        if offered < 0:
-            # every strip closed before this particle could be offered
-            zs[Z_DONE] = 1
+            lags.qhead[b] = lags.qnext[q]
+            if lags.qhead[b] < 0:
+                lags.qtail[b] = -1
+            zs[Z_QLEN] -= 1
+            if zs[Z_FLUSH] == 2 and b - lags.lag[q] < _lowest_open(sz):
+                continue
+            placed += _step(
+                q, True, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
+                rounded, helpers,
+            )  # fmt: skip
+        if i == end or zs[Z_DONE] == 1:
             break
-        if k >= 0:
-            _register(k, zs, sz, s, delta, swidth, bn)
-        for t in range(sz.shape[0]):
-            if tried[t] == i:
-                _release(t, sz, s, bn)
-        if k < 0:
-            status[i] = STATUS_REFUSED
-            zs[Z_REFUSED] += 1
-            st = offered
-            if zs[Z_PROMPT] == 2:
-                if _choose(sz, tried, -1, -1) < 0:
-                    # tail closing: the last open strip has just closed
-                    zs[Z_DONE] = 1
-            elif zs[Z_PROMPT] == 1:
-                # prompt closing: the refusal stands for the rise each full strip that
-                # refused it would have made (a hidden strip's bin retires as well)
-                for t in range(sz.shape[0]):
-                    if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
-                        _retire_bin(t, sz[t, S_LO], s, bn)
-                        sz[t, S_LO] += 1
-                        if sz[t, S_LO] > sz[t, S_HI]:
-                            sz[t, S_CLOSED] = 1
-                if _choose(sz, tried, -1, -1) < 0:
-                    zs[Z_DONE] = 1
+        front, full = _front(zs, sz)
+        if not full and _wait(i, front, zs, lags):
             continue
-        status[i] = STATUS_PLACED
-        placed += 1
+        placed += _step(
+            i, False, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
+            rounded, helpers,
+        )  # fmt: skip
     return placed

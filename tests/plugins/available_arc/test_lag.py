@@ -1,0 +1,211 @@
+"""The sweep's lags: small particles offered after the front has risen by their landing depth."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from arc_helpers import as_packing, change5_population, pack
+from test_sweep import DOMAINS, _oracle, disks_and_octagons
+
+from regopack.domain import Rectangle
+from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig, lag, sweep
+from regopack.plugins.available_arc.state import ArcState
+from regopack.plugins.change5 import Change5, Change5Config
+from regopack.plugins.eta import EtaConfig, EtaController
+
+
+def test_size_classes_are_half_octaves_of_the_smallest_radius() -> None:
+    r = np.array([1.0, 1.4, 1.42, 2.0, 2.9, 0.5])
+    assert lag.size_class(r, 1.0).tolist() == [0, 0, 1, 2, 3, 0]
+
+
+def test_class_lags_are_mean_depths_and_ignore_thin_or_shallow_classes() -> None:
+    radius = np.array([1.0] * 30 + [1.5] * 30 + [2.1] * 30 + [3.0] * 5)
+    depth = np.array([10.0] * 15 + [20.0] * 15 + [0.5] * 30 + [-4.0] * 30 + [50.0] * 5)
+    lags, samples = lag.class_lags(radius, depth, 1.0, min_lag=1.0, min_samples=20)
+    assert samples.tolist() == [30, 30, 30, 5]
+    # class 0: mean 15; class 1: shallower than min_lag; class 2: above the top;
+    # class 3: too few placements
+    assert lags.tolist() == [15.0, 0.0, 0.0, 0.0]
+
+
+def test_the_head_of_a_population_keeps_its_particles() -> None:
+    pop, _ = change5_population(50, 1)
+    sub = lag.head(pop, 20)
+    assert len(sub) == 20
+    assert np.array_equal(sub.radius, pop.radius[:20])
+    for j in (0, 7, 19):
+        assert np.array_equal(sub.shapes.outline(j), pop.shapes.outline(j))
+
+
+def _lagged(res: object) -> int:
+    return int(res.stats["lagged"])  # type: ignore[attr-defined]
+
+
+def test_a_domain_lower_than_the_pilot_needs_gets_no_lags() -> None:
+    domain = Rectangle.centred(300.0, 200.0)  # under 2.5 zones of 120
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 3)
+    a = pack(pop, domain, rng, order="sweep")
+    assert _lagged(a) == 0 and a.stats["lag_samples"] == 0
+    pop, rng = change5_population(n, 3)
+    b = pack(pop, domain, rng, order="sweep", lag="none")
+    assert np.array_equal(a.centre, b.centre, equal_nan=True)
+
+
+def test_lags_that_come_out_zero_leave_the_packing_as_without_them() -> None:
+    """The pilot draws from a generator of its own: the run's stream is untouched."""
+    domain = Rectangle.centred(10.0, 100.0)
+    radius = np.ones(200)
+    runs = {}
+    for mode in ("pilot", "none"):
+        rng = np.random.default_rng(1)
+        pop = disks_and_octagons(radius, rng, share=1.0)
+        runs[mode] = pack(pop, domain, rng, order="sweep", lag=mode)
+    assert runs["pilot"].stats["lag_samples"] > 0 and _lagged(runs["pilot"]) == 0
+    assert np.array_equal(runs["pilot"].centre, runs["none"].centre, equal_nan=True)
+    assert np.array_equal(runs["pilot"].insertion_index, runs["none"].insertion_index)
+
+
+def _by_hand(domain: Rectangle, n: int, seed: int, lags: np.ndarray | None, closing: str):  # type: ignore[no-untyped-def]
+    pop, rng = change5_population(n, seed)
+    st = ArcState(pop, domain, t=0.999, tau=None, linear=False, eta=0.0)
+    sw = sweep.Sweep(n, domain.height, 6.0 * float(pop.radius.max()), closing=closing)
+    if lags is not None:
+        sw.set_lags(lags)
+    for begin in range(0, n, 97):  # chunks, as between progress reports
+        sw.run(begin, min(n, begin + 97), st.outlines, st.packed, st.work, rng, st.rounded)
+    return st, sw
+
+
+@pytest.mark.parametrize("closing", ["paced", "tail"])
+def test_particles_waiting_until_the_stream_ends_are_offered_in_stream_order(
+    closing: str,
+) -> None:
+    """Lags longer than the domain: nothing is offered before the stream ends, then all in
+    order, which is the run without lags."""
+    domain = Rectangle.centred(120.0, 100.0)
+    n = round(0.8 * domain.area / Change5(Change5Config()).mean_area)
+    st0, _ = _by_hand(domain, n, 5, None, closing)
+    huge = np.full(n, 10**6, dtype=np.int64)
+    st1, sw1 = _by_hand(domain, n, 5, huge, closing)
+    assert sw1.waiting == 0
+    assert np.array_equal(st0.packed.cx, st1.packed.cx, equal_nan=True)
+    assert np.array_equal(st0.packed.order[: st0.count], st1.packed.order[: st1.count])
+
+
+def test_only_a_lagged_particle_is_overtaken_and_only_after_the_front_rose() -> None:
+    domain = Rectangle.centred(200.0, 400.0)
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    pop, _ = change5_population(n, 6)
+    lags = np.where(pop.radius < 1.5, 40, 0).astype(np.int64)
+    st, sw = _by_hand(domain, n, 6, lags, "paced")
+    order = st.packed.order[: st.count]
+    # per placed particle: how many particles drawn after it were placed before it
+    overtaken = np.zeros(n, dtype=np.int64)
+    latest = -1
+    for i in order:
+        overtaken[i] = max(0, latest - i)  # a lower bound: the latest drawn so far
+        latest = max(latest, int(i))
+    placed = np.isfinite(st.packed.cx)
+    assert (overtaken[placed & (lags == 0)] == 0).all()
+    waited = placed & (lags > 0)
+    assert waited.sum() > 100
+    # 40 bins of the front's rise are about 60 µm: some 250 particles in this width
+    assert np.median(overtaken[waited]) > 100
+    # where each lagged particle lands: above the highest particle placed before its turn
+    y = st.packed.cy
+    pos = np.empty(n, dtype=np.int64)
+    pos[order] = np.arange(st.count)
+    top_before = np.maximum.accumulate(y[order])
+    j = np.flatnonzero(waited)
+    j = j[j > 0]
+    # j's turn came after the last particle without a lag drawn before it was placed
+    at_turn = placed & (lags == 0)
+    turn = np.array([pos[:k][at_turn[:k]].max() for k in j])
+    rise = top_before[pos[j]] - top_before[turn]
+    assert np.median(rise) > 0.5 * 40 * sw.delta
+
+
+def test_every_domain_kind_without_overlap_with_lags() -> None:
+    for kind, domain in DOMAINS.items():
+        n = round(1.1 * domain.area / (0.25 * Change5(Change5Config()).mean_area))
+        pop, rng = change5_population(n, 9, scale=0.5)
+        res = pack(pop, domain, rng, order="sweep")
+        assert _lagged(res) > 0, kind
+        _oracle(as_packing(pop, res, domain))
+
+
+@pytest.mark.parametrize("closing", ["tail", "prompt"])
+def test_closings_that_leave_out_a_random_tail_still_do(closing: str) -> None:
+    """Every particle drawn before the last one offered is offered: the rest is a suffix."""
+    domain = Rectangle.centred(150.0, 400.0)
+    n = round(1.2 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 4)
+    inserter = AvailableArc(AvailableArcConfig(order="sweep", closing=closing))  # type: ignore[arg-type]
+    res = inserter.pack(pop, domain, EtaController(EtaConfig()), rng)
+    assert _lagged(res) > 0 and res.stats["not_offered"] > 0
+    offered = res.placed.copy()
+    refused = res.stats["refused"]
+    # the offered particles (placed or refused) are a prefix of the stream
+    last_placed = int(np.flatnonzero(offered).max())
+    assert np.count_nonzero(~offered[: last_placed + 1]) <= refused
+    assert res.stats["not_offered"] >= n - last_placed - 1 - refused
+
+
+def test_same_seed_same_lagged_packing() -> None:
+    domain = Rectangle.centred(150.0, 400.0)
+    n = round(domain.area / Change5(Change5Config()).mean_area)
+    runs = []
+    for _ in range(2):
+        pop, rng = change5_population(n, 2)
+        runs.append(pack(pop, domain, rng, order="sweep"))
+    assert _lagged(runs[0]) > 0
+    assert np.array_equal(runs[0].centre, runs[1].centre, equal_nan=True)
+
+
+def test_lags_remove_the_excess_of_fine_particles_at_the_bottom() -> None:
+    """Table-1 materials, 400 x 800 µm: the finest class near the floor against the bulk."""
+    from regopack.api import pack as pack_scene
+
+    ratio = {}
+    for mode in ("none", "pilot"):
+        r = []
+        for seed in (1, 2, 3):
+            p = pack_scene(
+                "dem",
+                seed=seed,
+                **{
+                    "domain.width": 400.0,
+                    "domain.height": 800.0,
+                    "insertion.closing": "tail",
+                    "insertion.lag": mode,
+                },
+            )
+            c = p.centre[p.placed]
+            fine = 2.0 * p.radius[p.placed] < 2.0 * np.sqrt(2.0)
+            y = c[:, 1] + 400.0
+            inner = np.abs(c[:, 0]) < 160.0
+            band = inner & (y > 40.0) & (y < 120.0)
+            bulk = inner & (y > 250.0) & (y < 650.0)
+            r.append((np.sum(fine & band) / 80.0) / (np.sum(fine & bulk) / 400.0))
+        ratio[mode] = float(np.mean(r))
+    assert ratio["none"] > 1.3  # the band: a third more of the finest particles
+    assert ratio["pilot"] < 1.15
+
+
+def test_drawing_what_fits_places_every_particle_with_lags() -> None:
+    """A stream that ends near the top leaves no particle waiting: none is left out."""
+    from regopack.api import pack_and_summarise
+
+    for seed in (1, 2, 3):
+        out = pack_and_summarise(
+            "dem",
+            seed=seed,
+            count=6900,  # about 85 % of what the auto count draws for 400 x 800 µm
+            **{"domain.width": 400.0, "domain.height": 800.0},
+        )
+        s = out.summary
+        assert s["lagged"] > 0
+        assert s["not_offered"] == 0
+        assert out.packing.n_placed + s["refused"] == 6900
