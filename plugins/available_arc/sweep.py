@@ -66,11 +66,10 @@ has fewer than ``ZONE_BINS`` bins)."""
     Z_PROMPT,
     Z_NZONE,
     Z_CUR,
-    Z_QBIN,
     Z_QLEN,
     Z_FLUSH,
-) = range(9)
-N_ZS = 9
+) = range(8)
+N_ZS = 8
 
 # sz: integer state of each strip
 (
@@ -84,8 +83,9 @@ N_ZS = 9
     S_CLOSED,
     S_SEEDED,
     S_FREED,
-) = range(10)
-N_SZ = 10
+    S_QBIN,
+) = range(11)
+N_SZ = 11
 
 # per-candidate zone flag
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
@@ -124,12 +124,12 @@ class Lags(NamedTuple):
     """Per particle: the bin of its strip's zone top when it was placed with the
     zone at full height below the domain's top; -1 otherwise (or not placed)."""
     qhead: IntArray
-    """Per bin of the front (up to a zone height and more above the domain's top):
-    the first particle waiting until the front reaches that bin, -1 for none."""
+    """``(strips, bins)``, bins up to a zone height and more above the domain's top:
+    the first particle waiting until that strip's zone top reaches that bin, -1 for none."""
     qtail: IntArray
-    """Per bin: the last particle waiting for it."""
+    """``(strips, bins)``: the last particle waiting for it."""
     qnext: IntArray
-    """Per particle: the next particle waiting for the same bin, -1 for none."""
+    """Per particle: the next particle waiting for the same strip and bin, -1 for none."""
 
 
 class Sweep:
@@ -170,13 +170,13 @@ class Sweep:
         self.bins = Bins(self.bin_head, self.bin_next, self.flag, self.rec)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
         # waiting particles by the bin of the front they wait for; a full zone's front
-        # rises on for a zone height while its bins retire (see _front)
+        # rises on for a zone height while its bins retire (see _top)
         nwait = nbins + 2 * int(self.zs[Z_NZONE]) + 1
         self.lags = Lags(
             np.zeros(max(n, 1), dtype=np.int64),
             np.full(max(n, 1), -1, dtype=np.int64),
-            np.full(nwait, -1, dtype=np.int64),
-            np.full(nwait, -1, dtype=np.int64),
+            np.full((self.nstrip, nwait), -1, dtype=np.int64),
+            np.full((self.nstrip, nwait), -1, dtype=np.int64),
             np.full(max(n, 1), -1, dtype=np.int64),
         )
 
@@ -603,6 +603,7 @@ def _offer(
 def _step(
     i: int,
     queued: bool,
+    prefer: int,
     delta: float,
     swidth: float,
     g: K.Outlines,
@@ -621,7 +622,8 @@ def _step(
     """Offer particle ``i`` to the strips; return 1 when it is placed, else 0.
 
     ``queued``: ``i`` waited for its lag, so an earlier particle of the stream;
-    its refusal does not end the tail closing.
+    its refusal does not end the tail closing. ``prefer``: a strip to offer it
+    to first, if open (-1: the lowest, as for every particle).
     """
     nbins = bn.head.shape[1]
     if zs[Z_STARTED] == 0:
@@ -645,6 +647,8 @@ def _step(
     st = -1
     while True:
         st = _choose(sz, tried, i, zs[Z_CUR])
+        if prefer >= 0 and tried[prefer] != i and _open(prefer, sz):
+            st = prefer
         if st < 0:
             break
         _switch(st, zs, sz, s, bn)
@@ -711,26 +715,34 @@ def _step(
 
 
 @numba.njit(cache=True)
-def _front(zs: IntArray, sz: IntArray) -> tuple[int, bool]:
-    """Return the front, the lowest zone top of the open strips (-1: none), and if it is full.
+def _open(st: int, sz: IntArray) -> bool:
+    """Return whether strip ``st`` has started and not closed."""
+    return sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0
+
+
+@numba.njit(cache=True)
+def _top(st: int, zs: IntArray, sz: IntArray) -> int:
+    """Return the bin of strip ``st``'s zone top, rising on as its full zone's bins retire.
 
     A full zone's top stays under the domain's top while its lowest bins retire
-    (the paced and prompt closings); its front goes on rising with them, as the
+    (the paced and prompt closings); here it goes on rising with them, as the
     top of a zone of full height would.
     """
-    best = -1
-    front = 0
+    if sz[st, S_FULL] == 1:
+        return max(sz[st, S_HI], sz[st, S_LO] + zs[Z_NZONE] - 1)
+    return sz[st, S_HI]
+
+
+@numba.njit(cache=True)
+def _full(sz: IntArray) -> bool:
+    """Return whether every open strip's zone is at the domain's top (False for none)."""
+    seen = False
     for st in range(sz.shape[0]):
-        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
-            top = sz[st, S_HI]
-            if sz[st, S_FULL] == 1:
-                top = max(top, sz[st, S_LO] + zs[Z_NZONE] - 1)
-            if best < 0 or top < front:
-                best = st
-                front = top
-    if best < 0:
-        return -1, False
-    return front, sz[best, S_FULL] == 1
+        if _open(st, sz):
+            seen = True
+            if sz[st, S_FULL] == 0:
+                return False
+    return seen
 
 
 @numba.njit(cache=True)
@@ -738,31 +750,59 @@ def _lowest_open(sz: IntArray) -> int:
     """Return the lowest bin still in a zone of the open strips (a large number for none)."""
     lo = 1 << 62
     for st in range(sz.shape[0]):
-        if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0:
+        if _open(st, sz):
             lo = min(lo, sz[st, S_LO])
     return lo
 
 
 @numba.njit(cache=True)
-def _wait(i: int, front: int, zs: IntArray, lags: Lags) -> bool:
-    """Queue particle ``i`` until the front (now at bin ``front``) has risen by its lag.
+def _wait(i: int, home: int, zs: IntArray, sz: IntArray, lags: Lags) -> bool:
+    """Queue particle ``i`` until strip ``home``'s zone top has risen by its lag.
 
-    Returns False when ``i`` is to be offered now: no lag, before the first
-    particle, or once the waiting particles have been let go.
+    ``home`` is the strip ``i`` would be offered to now. Returns False when
+    ``i`` is to be offered now: no lag, before the first particle, no open
+    strip, or once the waiting particles have been let go.
     """
-    if lags.lag[i] <= 0 or zs[Z_STARTED] == 0 or zs[Z_FLUSH] != 0 or front < 0:
+    if lags.lag[i] <= 0 or zs[Z_STARTED] == 0 or zs[Z_FLUSH] != 0 or home < 0:
         return False
-    nbins = lags.qhead.shape[0]
+    nbins = lags.qhead.shape[1]
     # not below the lowest bin still waited for, which the release has passed
-    b = min(max(front + lags.lag[i], zs[Z_QBIN]), nbins - 1)
-    if lags.qtail[b] < 0:
-        lags.qhead[b] = i
+    b = min(max(_top(home, zs, sz) + lags.lag[i], sz[home, S_QBIN]), nbins - 1)
+    if lags.qtail[home, b] < 0:
+        lags.qhead[home, b] = i
     else:
-        lags.qnext[lags.qtail[b]] = i
-    lags.qtail[b] = i
+        lags.qnext[lags.qtail[home, b]] = i
+    lags.qtail[home, b] = i
     lags.qnext[i] = -1
     zs[Z_QLEN] += 1
     return True
+
+
+@numba.njit(cache=True)
+def _due(zs: IntArray, sz: IntArray, lags: Lags) -> tuple[int, int]:
+    """Return the strip and bin of the next waiting particle to offer, (-1, -1) for none.
+
+    The first started strip, in index order, whose lowest waiting bin its zone
+    top has reached (any waiting bin once they are let go, ``zs[Z_FLUSH] != 0``,
+    or once the strip has closed).
+    """
+    nbins = lags.qhead.shape[1]
+    for st in range(sz.shape[0]):
+        if sz[st, S_SEEDED] == 0:
+            continue  # no particle waits for a strip that has not started
+        if zs[Z_FLUSH] != 0 or sz[st, S_CLOSED] == 1:
+            limit = nbins - 1
+        else:
+            limit = min(_top(st, zs, sz), nbins - 1)
+        # the release passes only bins up to the top, so a particle queued later
+        # never lands below it
+        b = sz[st, S_QBIN]
+        while b <= limit and lags.qhead[st, b] < 0:
+            b += 1
+        sz[st, S_QBIN] = b
+        if b <= limit:
+            return st, b
+    return -1, -1
 
 
 @numba.njit(cache=True)
@@ -786,10 +826,11 @@ def sweep_range(
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.
 
-    A particle with a lag waits in a queue until the front (see :func:`_front`)
-    has risen by that many bins; waiting particles are offered, in the order
-    they became due, before the next particle of the stream. Once the front's
-    zone is at the domain's top no particle waits. Every waiting particle is
+    A particle with a lag waits until the zone top of the strip it would be
+    offered to (its *home*) has risen by that many bins (see :func:`_top`);
+    waiting particles are offered, to their home strip first, in the order
+    they became due, before the next particle of the stream. Once every zone
+    is at the domain's top no particle waits. Every waiting particle is
     then offered at once in the prompt and tail closings (they leave out a
     random tail of the stream), and in any closing when the stream ends below
     the top. In the paced closing, when the stream ends, a waiting particle is
@@ -806,46 +847,42 @@ def sweep_range(
             break
         # the waiting particles that are due (see the docstring for when all are)
         while zs[Z_QLEN] > 0 and zs[Z_DONE] == 0:
-            front, full = _front(zs, sz)
+            full = _full(sz)
             if zs[Z_FLUSH] == 0:
                 if full and zs[Z_PROMPT] == 0:
                     # the paced closing feeds the last zone from the stream at once, at
                     # the rate the lags fed every zone before it. When the stream ends,
-                    # a waiting particle is offered if the bin the front was at when it
-                    # was drawn is still open; the others' pores are filled already
+                    # a waiting particle is offered if the bin its strip's top was at
+                    # when it was drawn is still open; the others' pores are filled
                     if i < end:
                         break
                     zs[Z_FLUSH] = 2
                 elif full or i == end:
                     # the prompt and tail closings leave out a random tail of the
-                    # stream: every particle drawn before it is offered once the front's
+                    # stream: every particle drawn before it is offered once every
                     # zone is at the top; so is every particle when the stream ends
                     # below the top
                     zs[Z_FLUSH] = 1
-            b = zs[Z_QBIN]
-            if zs[Z_FLUSH] == 0 and b > front:
+            st, b = _due(zs, sz, lags)
+            if st < 0:
                 break
-            q = lags.qhead[b]
-            if q < 0:
-                zs[Z_QBIN] = b + 1
-                continue
-            lags.qhead[b] = lags.qnext[q]
-            if lags.qhead[b] < 0:
-                lags.qtail[b] = -1
+            q = lags.qhead[st, b]
+            lags.qhead[st, b] = lags.qnext[q]
+            if lags.qhead[st, b] < 0:
+                lags.qtail[st, b] = -1
             zs[Z_QLEN] -= 1
             if zs[Z_FLUSH] == 2 and b - lags.lag[q] < _lowest_open(sz):
                 continue
             placed += _step(
-                q, True, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
+                q, True, st, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
                 rounded, helpers,
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
-        front, full = _front(zs, sz)
-        if not full and _wait(i, front, zs, lags):
+        if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR]), zs, sz, lags):
             continue
         placed += _step(
-            i, False, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
+            i, False, -1, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
             rounded, helpers,
         )  # fmt: skip
     return placed

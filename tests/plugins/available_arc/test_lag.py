@@ -209,3 +209,26 @@ def test_drawing_what_fits_places_every_particle_with_lags() -> None:
         assert s["lagged"] > 0
         assert s["not_offered"] == 0
         assert out.packing.n_placed + s["refused"] == 6900
+
+
+def test_every_strip_gets_its_share_of_the_lagged_particles() -> None:
+    """Each waiting particle belongs to the strip it would have gone to when drawn."""
+    from regopack.api import pack as pack_scene
+
+    p = pack_scene(
+        "dem",
+        seed=2,
+        **{
+            "domain.width": 2400.0,
+            "domain.height": 600.0,
+            "insertion.strip": 600.0,
+            "insertion.closing": "tail",
+        },
+    )
+    placed = p.placed
+    x = p.centre[placed, 0] + 1200.0
+    # below the top zone, where the tail closing lets every waiting particle go
+    low = p.centre[placed, 1] + 300.0 < 360.0
+    fine = (2.0 * p.radius[placed] < 2.0 * np.sqrt(2.0)) & low
+    per_strip = np.bincount(np.minimum((x // 600.0).astype(int), 3), weights=fine, minlength=4)
+    assert per_strip.min() > 0.85 * per_strip.max(), per_strip
