@@ -232,3 +232,19 @@ def test_every_strip_gets_its_share_of_the_lagged_particles() -> None:
     fine = (2.0 * p.radius[placed] < 2.0 * np.sqrt(2.0)) & low
     per_strip = np.bincount(np.minimum((x // 600.0).astype(int), 3), weights=fine, minlength=4)
     assert per_strip.min() > 0.85 * per_strip.max(), per_strip
+
+
+def test_the_paced_closing_leaves_out_the_fine_particles_still_waiting() -> None:
+    """Offered into bins the closing has fed, they would make a band under the top."""
+    from regopack.api import pack_and_summarise
+
+    out = pack_and_summarise("dem", seed=1, **{"domain.width": 400.0, "domain.height": 800.0})
+    p, s = out.packing, out.summary
+    assert s["lagged"] > 0 and s["not_offered"] > 0
+    last = int(np.flatnonzero(p.placed).max())
+    fine = 2.0 * p.radius < 2.0 * np.sqrt(2.0)
+    # fine particles drawn before the last one placed, yet not placed: they were waiting
+    # (a fine particle is hardly ever refused)
+    waiting = np.count_nonzero(fine[:last] & ~p.placed[:last])
+    assert waiting > 50
+    assert waiting <= s["not_offered"]
