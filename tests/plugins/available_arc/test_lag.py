@@ -191,7 +191,7 @@ def test_lags_remove_the_excess_of_fine_particles_at_the_bottom() -> None:
             r.append((np.sum(fine & band) / 80.0) / (np.sum(fine & bulk) / 400.0))
         ratio[mode] = float(np.mean(r))
     assert ratio["none"] > 1.3  # the band: a third more of the finest particles
-    assert ratio["pilot"] < 1.15
+    assert 0.85 < ratio["pilot"] < 1.15  # neither a band nor a lack (lags too long)
 
 
 def test_drawing_what_fits_places_every_particle_with_lags() -> None:
