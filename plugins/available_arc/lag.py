@@ -13,7 +13,7 @@ top.
 
 The depths are a property of the materials and the zone, not known before a
 packing, so a *pilot* measures them: the first particles of the stream are
-swept into a small walled rectangle at the bottom of the domain (three zone
+swept into a small walled rectangle at the bottom of the domain (two zone
 heights wide, three high), and the depth of every particle placed once the
 pilot's zone top is two zone heights up is averaged per √2 size class.
 """
