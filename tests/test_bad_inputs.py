@@ -142,6 +142,11 @@ CASES: list[tuple[str, list[str], str]] = [
         '--set: insertion.t = "0.9": Input should be a valid number',
     ),
     (
+        "set-unknown-lag",
+        ["run", "dem", "--set", "count=5", "--set", "insertion.lag=pilots", "--quiet"],
+        "--set: insertion.lag = \"pilots\": Input should be 'pilot' or 'none'",
+    ),
+    (
         "set-string-for-size-float",
         ["config", "small", "--set", 'size.d_min="2"'],
         '--set: size.d_min = "2": Input should be a valid number',

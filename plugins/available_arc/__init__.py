@@ -346,7 +346,10 @@ def _child(rng: np.random.Generator) -> np.random.Generator:
     try:
         return rng.spawn(1)[0]
     except (TypeError, ValueError):  # a generator without a seed sequence
-        return np.random.default_rng(rng.integers(2**63))
+        # seeded from a copy of ``rng``, whose own stream stays untouched
+        twin = type(rng.bit_generator)()
+        twin.state = rng.bit_generator.state
+        return np.random.default_rng(np.random.Generator(twin).integers(2**63))
 
 
 def _run_sweep(

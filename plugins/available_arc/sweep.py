@@ -698,9 +698,11 @@ def _step(
             if _choose(sz, tried, -1, -1) < 0:
                 # tail closing: the last open strip has just closed
                 zs[Z_DONE] = 1
-        elif zs[Z_PROMPT] == 1:
+        elif zs[Z_PROMPT] == 1 and not queued:
             # prompt closing: the refusal stands for the rise each full strip that
-            # refused it would have made (a hidden strip's bin retires as well)
+            # refused it would have made (a hidden strip's bin retires as well); a
+            # waiting particle's does not, or the run could close while particles
+            # drawn before it still wait
             for t in range(sz.shape[0]):
                 if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
                     _retire_bin(t, sz[t, S_LO], s, bn)

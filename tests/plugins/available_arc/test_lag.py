@@ -38,6 +38,27 @@ def test_the_head_of_a_population_keeps_its_particles() -> None:
         assert np.array_equal(sub.shapes.outline(j), pop.shapes.outline(j))
 
 
+class _Unspawnable(np.random.Generator):
+    """A generator whose bit generator has no seed sequence to spawn from."""
+
+    def spawn(self, n_children: int) -> list[np.random.Generator]:
+        raise TypeError("no seed sequence")
+
+
+def _unspawnable(seed: int) -> np.random.Generator:
+    return _Unspawnable(np.random.PCG64(seed))
+
+
+@pytest.mark.parametrize("make", [np.random.default_rng, _unspawnable])
+def test_the_pilot_generator_leaves_the_run_stream_untouched(make) -> None:  # type: ignore[no-untyped-def]
+    from regopack.plugins.available_arc import _child
+
+    rng = make(7)
+    child = _child(rng)
+    assert rng.random() == np.random.default_rng(7).random()
+    assert child.random() != np.random.default_rng(7).random()
+
+
 def _lagged(res: object) -> int:
     return int(res.stats["lagged"])  # type: ignore[attr-defined]
 
@@ -248,3 +269,21 @@ def test_the_paced_closing_leaves_out_the_fine_particles_still_waiting() -> None
     waiting = np.count_nonzero(fine[:last] & ~p.placed[:last])
     assert waiting > 50
     assert waiting <= s["not_offered"]
+
+
+def test_the_prompt_closing_ends_with_nothing_waiting_even_with_coarse_lags() -> None:
+    """A waiting particle's refusal is not the stream's: it retires no bin, so the run
+    cannot close while particles drawn earlier still wait."""
+    domain = Rectangle.centred(150.0, 300.0)
+    n = round(2.0 * domain.area / Change5(Change5Config()).mean_area)
+    pop, _ = change5_population(n, 3)
+    # coarse particles wait (the pilot lags only fine ones): their refusals once the
+    # zone is full are frequent
+    lags = np.where(pop.radius > 3.0, 30, 0).astype(np.int64)
+    _, sw = _by_hand(domain, n, 3, lags, "prompt")
+    assert sw.waiting == 0
+    offered = sw.status[:n] != sweep.STATUS_NOT_OFFERED
+    assert np.count_nonzero(~offered) > 0
+    # the particles never offered are a suffix of the stream
+    last = int(np.flatnonzero(offered).max())
+    assert offered[: last + 1].all()
