@@ -10,10 +10,13 @@ computed once more, then the eta control and the random angle, in the
 sequential order), and the analyses after the one that takes the particle are
 dropped.
 
-An analysis reads the packing and writes only scratch space (the envelope
-cache, the grid stamps and their counters), so each thread has its own
-scratch, in :class:`Helpers`. The packing is therefore the same, bit for
-bit, on any number of threads, and so are the counts of analyses.
+An analysis on a thread reads the packing and writes only scratch space (the
+envelope cache, the grid stamps and their counters), so each thread has its
+own scratch, in :class:`Helpers`; the bounds a failed analysis of disks
+proves (:mod:`~regopack.plugins.available_arc.disk_bound`) are left to the
+calling thread, and skip the same analyses whoever proved them. The packing
+is therefore the same, bit for bit, on any number of threads, and so are the
+counts of analyses.
 """
 
 from __future__ import annotations
@@ -96,9 +99,13 @@ def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
         name: stack(getattr(work, name), PAD if name in PADDED else 0) for name in K.Work._fields
     }
     fields["ckey"][:] = -1
+    ipar = stack(packed.ipar, PAD)
+    # the threads read the packing's disk bounds but leave them to the calling thread to
+    # improve (a bound is the same whoever proves it, and this keeps the packing read-only)
+    ipar[:, K.I_BOUND] = 0
     return Helpers(
         **fields,
-        ipar=stack(packed.ipar, PAD),
+        ipar=ipar,
         stamp=np.zeros((t, packed.stamp.shape[0]), dtype=np.int64),
         last=np.full(t * PAD, -1, dtype=np.int64),
         ks=np.zeros(PER_THREAD * t, dtype=np.int64),
@@ -129,13 +136,17 @@ def _analyse_batch(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],
             s.fpar, h.ipar[t], s.walls,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-            s.nb_img,
+            s.nb_img, s.shut,
         )  # fmt: skip
         if last[t * PAD] != i:
             K.begin_particle(i, g, st, w)
             last[t * PAD] = i
         for j in range(t, nb, threads):
-            arcs = K.analyze_candidate(s.order[ks[j]], i, mq, g, st, w, rounded)
+            pk = s.order[ks[j]]
+            if rounded is not None and g.rho[i] >= s.shut[pk]:
+                narcs[j * PAD] = 0  # shown before: no disk this large fits against pk
+                continue
+            arcs = K.analyze_candidate(pk, i, mq, g, st, w, rounded)
             narcs[j * PAD] = arcs.shape[0]
 
 

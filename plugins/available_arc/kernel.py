@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.available_arc.disk_bound import disk_bound
 from regopack.plugins.available_arc.geometry import (
     clip_closed_box,
     clip_open_interior,
@@ -75,8 +76,9 @@ IntArray = NDArray[np.int64]
     F_CY,
     F_REACH,
     F_NBCAP,
-) = range(14)
-N_FPAR = 14
+    F_RMIN,
+) = range(15)
+N_FPAR = 15
 # ipar: scalar integer parameters and counters
 (
     I_TAUMODE,
@@ -97,8 +99,9 @@ N_FPAR = 14
     I_NBLISTS,
     I_NBTOP,
     I_DISKS,
-) = range(18)
-N_IPAR = 18
+    I_BOUND,
+) = range(19)
+N_IPAR = 19
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -146,6 +149,9 @@ class Packed(NamedTuple):
     nb_img: NDArray[np.int8]
     """Per list entry in a periodic domain: which image of the neighbour it is
     (:func:`~regopack.plugins.available_arc.neighbours.image_code`); 0 elsewhere."""
+    shut: FloatArray
+    """Per particle, in a scene of disks: a radius from which no disk fits against it
+    (:mod:`~regopack.plugins.available_arc.disk_bound`); ``inf`` where none is known."""
 
 
 class Work(NamedTuple):
@@ -465,10 +471,17 @@ def analyze_candidate(
         box = np.empty(4)
         box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
         inner = s.walls[0, 2] - grho[i] if mode == WALL_CIRCLE else 0.0
-        return disk_arcs(
+        arcs = disk_arcs(
             grho[pk] + grho[i], pcx, pcy, nf, ocx, ocy, orho,
             mode, s.walls, box, w.woff, w.rx, w.ry, inner,
         )  # fmt: skip
+        if arcs.shape[0] == 0 and ipar[I_BOUND] == 1:
+            for f in range(nf):
+                orho[f] = grho[found[f]]
+            bound = disk_bound(grho[pk], grho[i], fpar[F_RMIN], nf, ocx, ocy, orho)
+            if bound < s.shut[pk]:
+                s.shut[pk] = bound
+        return arcs
 
     wx = w.wx
     wy = w.wy
@@ -733,7 +746,11 @@ def find_site(
     k = first_candidate(s.tree, leaves, start, count, r, t, linear)
     while k >= 0:
         ipar[I_ANALYSES] += 1
-        arcs = analyze_candidate(s.order[k], i, mq, g, s, w, rounded)
+        pk = s.order[k]
+        if rounded is not None and g.rho[i] >= s.shut[pk]:
+            arcs = empty  # shown before: no disk this large fits against pk
+        else:
+            arcs = analyze_candidate(pk, i, mq, g, s, w, rounded)
         if arcs.shape[0] > 0:
             return k, arcs
         ipar[I_EMPTY] += 1

@@ -36,7 +36,11 @@ def try_candidate(
 ) -> bool:
     """Analyse candidate ``k`` exactly for particle ``i`` and place it there if it fits."""
     s.ipar[K.I_ANALYSES] += 1
-    arcs = K.analyze_candidate(s.order[k], i, mq, g, s, w, rounded)
+    pk = s.order[k]
+    if rounded is not None and g.rho[i] >= s.shut[pk]:
+        s.ipar[K.I_EMPTY] += 1  # shown before: no disk this large fits against pk
+        return False
+    arcs = K.analyze_candidate(pk, i, mq, g, s, w, rounded)
     if arcs.shape[0] == 0:
         s.ipar[K.I_EMPTY] += 1
         return False

@@ -125,6 +125,10 @@ class ArcState:
         disks = rounded and n > 0 and bool(np.all(np.diff(offsets) == 1))
         disks = disks and bool(np.all(rho > 0) and np.all(vx == 0.0) and np.all(vy == 0.0))
         ipar[kernel.I_DISKS] = 1 if disks else 0
+        # bounds on what a disk candidate can take (disk_bound.py): their proof needs every
+        # interferer in each analysis, which the tau screening leaves out
+        ipar[kernel.I_BOUND] = 1 if disks and tau is None else 0
+        fpar[kernel.F_RMIN] = float(rho.min()) if n else 0.0
         ipar[kernel.I_NBLISTS] = 1 if lists else 0
         rows, cols = list_capacity(list_rows(n, pool_rows), lists, LIST_CAPACITY)
         ipar[kernel.I_NBTOP] = rows if lists else 0
@@ -151,6 +155,7 @@ class ArcState:
             nb_row=np.full(max(n, 1), -1, dtype=np.int64),
             nb_free=free_stack(rows, lists),
             nb_img=np.zeros((rows, cols), dtype=np.int8),
+            shut=np.full(max(n, 1), np.inf),
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax

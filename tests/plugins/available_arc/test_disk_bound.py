@@ -1,0 +1,165 @@
+"""Bounds on the disks a disk candidate can take: sound, used, and leaving packings unchanged."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from arc_helpers import octagon_population, pack
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from test_batches import _force_threads
+from test_disk_path import _disks
+from test_neighbours import HEXAGON, _rounded_population
+
+from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
+from regopack.plugins.available_arc import kernel
+from regopack.plugins.available_arc.disk_bound import covered, disk_bound
+from regopack.plugins.available_arc.state import ArcState
+
+
+def _free_angles(rk: float, r: float, c: np.ndarray, rad: np.ndarray, samples: int) -> int:
+    """Oracle: how many of ``samples`` centres on the circle of radius ``rk + r`` lie outside
+    every open disk ``(c[f], rad[f] + r)``."""
+    theta = np.linspace(0.0, 2.0 * np.pi, samples, endpoint=False)
+    p = (rk + r) * np.stack([np.cos(theta), np.sin(theta)], axis=1)
+    d = np.linalg.norm(p[:, None, :] - c[None, :, :], axis=2)
+    return int(np.count_nonzero((d >= rad[None, :] + r).all(axis=1)))
+
+
+def _ring(rng: np.random.Generator, rk: float, m: int, spread: float) -> tuple[np.ndarray, ...]:
+    """``m`` disks around a candidate of radius ``rk`` at the origin, none overlapping it."""
+    rad = rk * np.exp(rng.uniform(-spread, spread, m))
+    ang = np.sort(rng.uniform(0.0, 2.0 * np.pi, m))
+    dist = rk + rad + rk * rng.uniform(0.0, 0.3, m)
+    c = np.stack([dist * np.cos(ang), dist * np.sin(ang)], axis=1)
+    return c, rad
+
+
+def test_three_touching_equal_disks_shut_a_fourth_at_their_own_size() -> None:
+    """Hexagonal packing: the pores around a disk of radius 1 take disks below radius 1."""
+    ang = np.array([0.0, 2.0, 4.0]) * np.pi / 3.0
+    c = 2.0 * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    rad = np.ones(3)
+    bound = disk_bound(1.0, 2.0, 0.1, 3, c[:, 0].copy(), c[:, 1].copy(), rad)
+    # six halvings of log(20): the bound lies within 20 ** (1 / 64) of the true 1.0
+    assert 1.0 <= bound <= 1.05
+    assert _free_angles(1.0, 0.99, c, rad, 100_000) > 0
+
+
+def test_a_gap_no_interferer_closes_gives_no_bound() -> None:
+    c = np.array([[2.0, 0.0], [0.0, 2.0]])
+    rad = np.ones(2)
+    assert disk_bound(1.0, 3.0, 0.1, 2, c[:, 0].copy(), c[:, 1].copy(), rad) == math.inf
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    m=st.integers(2, 24),
+    spread=st.sampled_from([0.0, 0.7, 2.3, 4.6]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+)
+def test_no_disk_at_or_above_the_bound_fits_anywhere(
+    seed: int, m: int, spread: float, scale: float
+) -> None:
+    """Soundness against a dense sampling of the circle of centres (size ratios up to 10^4)."""
+    rng = np.random.default_rng(seed)
+    rk = scale
+    c, rad = _ring(rng, rk, m, spread)
+    r_floor = 1e-2 * rk
+    r_fail = rk * float(np.exp(rng.uniform(-2.0, 2.0)))
+    bound = disk_bound(rk, r_fail, r_floor, m, c[:, 0].copy(), c[:, 1].copy(), rad)
+    if bound == math.inf:
+        # no bound means the failed disk itself was not shown shut with margin
+        return
+    assert r_floor <= bound <= r_fail
+    for r in (bound, bound * (1.0 + 1e-9), 1.5 * bound, r_fail, 10.0 * r_fail):
+        assert _free_angles(rk, r, c, rad, 20_000) == 0, r
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**31 - 1), m=st.integers(2, 24), spread=st.sampled_from([0.0, 2.3]))
+def test_a_covered_circle_stays_covered_for_larger_disks(seed: int, m: int, spread: float) -> None:
+    rng = np.random.default_rng(seed)
+    c, rad = _ring(rng, 1.0, m, spread)
+    dist = np.hypot(c[:, 0], c[:, 1])
+    angle = np.arctan2(c[:, 1], c[:, 0])
+    lo = np.empty(2 * m)
+    hi = np.empty(2 * m)
+    radii = np.exp(np.linspace(-5.0, 3.0, 60))
+    shut = [covered(1.0, float(r), m, dist, angle, rad, lo, hi) for r in radii]
+    first = shut.index(True) if True in shut else len(shut)
+    assert all(shut[first:])
+
+
+def _bounds_off(monkeypatch: pytest.MonkeyPatch) -> None:
+    original = ArcState.__init__
+
+    def init(self: ArcState, *args: object, **kwargs: object) -> None:
+        original(self, *args, **kwargs)  # type: ignore[arg-type]
+        self.packed.ipar[kernel.I_BOUND] = 0
+
+    monkeypatch.setattr(ArcState, "__init__", init)
+
+
+def _counts(stats: dict[str, object]) -> dict[str, object]:
+    """A run's statistics other than its times (the analyses counted include skipped ones)."""
+    return {k: v for k, v in stats.items() if "time" not in k}
+
+
+DOMAINS: dict[str, Domain] = {
+    "rectangle": Rectangle.centred(90.0, 80.0, (2.0, -1.0)),
+    "circle": Circle(1.0, 2.0, 48.0),
+    "polygon": ConvexPolygon(HEXAGON),
+    "periodic": PeriodicRectangle(-40.0, 45.0, -35.0, 40.0),
+}
+
+
+@pytest.mark.parametrize("order", ["paper", "sweep"])
+@pytest.mark.parametrize("kind", list(DOMAINS))
+def test_disks_pack_the_same_with_and_without_the_bounds(
+    kind: str, order: str, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The bounds skip only analyses that find nothing, in every domain kind and order."""
+    out = []
+    for bounds in (True, False):
+        if not bounds:
+            _bounds_off(monkeypatch)
+        pop = _rounded_population(400, 7, "disks")
+        rng = np.random.default_rng(7)
+        res = pack(pop, DOMAINS[kind], rng, order=order)
+        out.append((res.centre.tobytes(), res.insertion_index.tobytes(), _counts(res.stats)))
+    assert out[0] == out[1]
+
+
+def test_disks_pack_the_same_on_two_threads_with_the_bounds(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The exact scans of the paced closing, spread over threads, read the bounds."""
+    _force_threads(monkeypatch, 2)
+    out = []
+    for bounds in (True, False):
+        if not bounds:
+            _bounds_off(monkeypatch)
+        pop = _rounded_population(600, 3, "disks")
+        res = pack(pop, Rectangle.centred(80.0, 90.0), np.random.default_rng(3), order="sweep")
+        assert res.stats["threads"] == 2
+        out.append((res.centre.tobytes(), res.insertion_index.tobytes(), _counts(res.stats)))
+    assert out[0] == out[1]
+
+
+def _shut(pop: object, tau: float | None = None) -> int:
+    st_ = ArcState(pop, Rectangle.centred(60.0, 60.0), t=0.999, tau=tau, linear=False)  # type: ignore[arg-type]
+    st_.pack_range(0, len(pop), np.random.default_rng(2))  # type: ignore[arg-type]
+    return int(np.isfinite(st_.packed.shut).sum())
+
+
+def test_the_bounds_are_found_for_disks_only_and_not_under_the_tau_screening() -> None:
+    rng = np.random.default_rng(2)
+    radius = rng.uniform(0.5, 3.0, 500)
+    assert _shut(_disks(radius, rng)) > 20
+    assert _shut(_disks(radius, rng), tau=0.9) == 0
+    assert _shut(_rounded_population(500, 2, "mixed")) == 0
+    assert _shut(octagon_population(radius, rng)) == 0
