@@ -12,9 +12,10 @@ dropped.
 
 An analysis on a thread reads the packing and writes only scratch space (the
 envelope cache, the grid stamps and their counters), so each thread has its
-own scratch, in :class:`Helpers`; the bounds a failed analysis of disks
-proves (:mod:`~regopack.plugins.available_arc.disk_bound`) are left to the
-calling thread, and skip the same analyses whoever proved them. The packing
+own scratch, in :class:`Helpers`. The threads read the bounds that failed
+analyses of disks proved on the calling thread
+(:mod:`~regopack.plugins.available_arc.disk_bound`) but prove none
+themselves: a candidate a thread finds empty is not analysed again. The packing
 is therefore the same, bit for bit, on any number of threads, and so are the
 counts of analyses.
 """
@@ -100,8 +101,8 @@ def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
     }
     fields["ckey"][:] = -1
     ipar = stack(packed.ipar, PAD)
-    # the threads read the packing's disk bounds but leave them to the calling thread to
-    # improve (a bound is the same whoever proves it, and this keeps the packing read-only)
+    # the threads read the packing's disk bounds but prove none, so that the packing stays
+    # read-only while they run (a bound only skips analyses; the packing is the same)
     ipar[:, K.I_BOUND] = 0
     return Helpers(
         **fields,

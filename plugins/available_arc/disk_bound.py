@@ -36,6 +36,9 @@ covered, so that rounding in a later analysis cannot open a gap the bound says i
 (an overlap only deepens as the disk grows)."""
 STEPS = 6
 """Halvings of the logarithmic interval between the smallest radius and the failed one."""
+SORT_IN_PLACE = 32
+"""Up to this many covers are sorted in place; more (a large disk among many small ones)
+go to ``np.argsort``."""
 
 
 @numba.njit(cache=True)
@@ -52,7 +55,8 @@ def covered(
     """Whether the disks of radii ``orad[f] + r`` cover the circle of radius ``rk + r`` about 0.
 
     Interferer ``f`` lies at distance ``dist[f]`` and polar angle ``angle[f]``
-    from the origin. Each cover must exceed :data:`MARGIN` at both ends;
+    from the origin. Each cover must exceed :data:`MARGIN` at both ends (a
+    disk holding the whole circle, by ``MARGIN`` times its radius);
     ``lo`` and ``hi`` are scratch of length ``2 * nf``.
     """
     e = rk + r
@@ -61,8 +65,8 @@ def covered(
         # as rounded._circle_cover, with the interferer's distance and direction known
         d = dist[f]
         r2 = orad[f] + r
-        if d + e <= r2:
-            return True
+        if d + e <= r2 - MARGIN * e:
+            return True  # the whole circle lies inside, deeper than the margin
         if d >= e + r2 or d + r2 <= e or d == 0.0:
             continue
         c = (e * e + d * d - r2 * r2) / (2.0 * e * d)
@@ -71,23 +75,30 @@ def covered(
             continue
         a = angle[f] - half
         a -= 2.0 * math.pi * math.floor(a / (2.0 * math.pi))
-        # insertion by lower end (a few dozen at most), with the copy of an interval
-        # that runs past 2 pi one turn lower
-        for shift in (0.0, 2.0 * math.pi):
-            if shift > 0.0 and a + 2.0 * half <= 2.0 * math.pi:
-                break
-            x = a - shift
-            y = x + 2.0 * half
-            j = k
+        lo[k] = a
+        hi[k] = a + 2.0 * half
+        k += 1
+        if a + 2.0 * half > 2.0 * math.pi:  # its copy one turn lower covers the start
+            lo[k] = a - 2.0 * math.pi
+            hi[k] = a + 2.0 * half - 2.0 * math.pi
+            k += 1
+    if k == 0:
+        return False
+    if k <= SORT_IN_PLACE:
+        for idx in range(1, k):  # insertion sort by lower end
+            x = lo[idx]
+            y = hi[idx]
+            j = idx
             while j > 0 and lo[j - 1] > x:
                 lo[j] = lo[j - 1]
                 hi[j] = hi[j - 1]
                 j -= 1
             lo[j] = x
             hi[j] = y
-            k += 1
-    if k == 0:
-        return False
+    else:
+        order = np.argsort(lo[:k])
+        lo[:k] = lo[:k][order]
+        hi[:k] = hi[:k][order]
     start = lo[0]
     reach = hi[0]
     for idx in range(1, k):

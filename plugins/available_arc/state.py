@@ -125,8 +125,9 @@ class ArcState:
         disks = rounded and n > 0 and bool(np.all(np.diff(offsets) == 1))
         disks = disks and bool(np.all(rho > 0) and np.all(vx == 0.0) and np.all(vy == 0.0))
         ipar[kernel.I_DISKS] = 1 if disks else 0
-        # bounds on what a disk candidate can take (disk_bound.py): their proof needs every
-        # interferer in each analysis, which the tau screening leaves out
+        # bounds on what a disk candidate can take (disk_bound.py): an analysis they skip
+        # must have seen every interferer the bound rests on, and the tau screening's
+        # analyses leave some out
         ipar[kernel.I_BOUND] = 1 if disks and tau is None else 0
         fpar[kernel.F_RMIN] = float(rho.min()) if n else 0.0
         ipar[kernel.I_NBLISTS] = 1 if lists else 0

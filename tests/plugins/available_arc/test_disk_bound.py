@@ -16,7 +16,9 @@ from test_neighbours import HEXAGON, _rounded_population
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.disk_bound import covered, disk_bound
+from regopack.plugins.available_arc.rounded import disk_arcs
 from regopack.plugins.available_arc.state import ArcState
+from regopack.plugins.walls import WALL_BOX
 
 
 def _free_angles(rk: float, r: float, c: np.ndarray, rad: np.ndarray, samples: int) -> int:
@@ -77,6 +79,76 @@ def test_no_disk_at_or_above_the_bound_fits_anywhere(
     assert r_floor <= bound <= r_fail
     for r in (bound, bound * (1.0 + 1e-9), 1.5 * bound, r_fail, 10.0 * r_fail):
         assert _free_angles(rk, r, c, rad, 20_000) == 0, r
+
+
+def _arcs(rk: float, r: float, c: np.ndarray, rad: np.ndarray) -> int:
+    """The kernel's own analysis of a disk of radius ``r`` against ``rk`` (no walls in reach)."""
+    far = 1e6 * (rk + r + float(np.abs(c).max()))
+    box = np.array([-far, far, -far, far])
+    arcs = disk_arcs(
+        rk + r, 0.0, 0.0, len(rad), c[:, 0].copy(), c[:, 1].copy(), rad + r,
+        WALL_BOX, np.zeros((1, 3)), box, np.zeros(1), np.zeros(1), np.zeros(1), 0.0,
+    )  # fmt: skip
+    return int(arcs.shape[0])
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**31 - 1),
+    m=st.integers(2, 40),
+    spread=st.sampled_from([0.0, 0.7, 2.3, 4.6]),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+    gap=st.sampled_from([0.0, 1e-9, 1e-6, 1e-3]),
+)
+def test_the_analysis_finds_no_arc_at_or_above_the_bound(
+    seed: int, m: int, spread: float, scale: float, gap: float
+) -> None:
+    """Soundness against the analysis itself, which sees gaps of any width: interferers
+    that touch the candidate (``gap`` 0) or nearly, at every scale and size ratio."""
+    rng = np.random.default_rng(seed)
+    rk = scale
+    rad = rk * np.exp(rng.uniform(-spread, spread, m))
+    ang = np.sort(rng.uniform(0.0, 2.0 * np.pi, m))
+    dist = (rk + rad) * (1.0 + gap)
+    c = np.stack([dist * np.cos(ang), dist * np.sin(ang)], axis=1)
+    r_fail = rk * float(np.exp(rng.uniform(-3.0, 2.0)))
+    bound = disk_bound(rk, r_fail, 1e-3 * rk, m, c[:, 0].copy(), c[:, 1].copy(), rad)
+    if bound == math.inf:
+        return
+    for r in (bound, bound * (1.0 + 1e-12), 1.1 * bound, r_fail, 100.0 * r_fail):
+        assert _arcs(rk, r, c, rad) == 0, r
+
+
+@pytest.mark.parametrize("eps", [1e-6, 3e-7, 1e-7, 1e-8])
+def test_a_disk_just_small_enough_for_a_closing_pore_still_finds_it(eps: float) -> None:
+    """Three unit disks touch a unit candidate 120 degrees apart: its pores close at radius 1.
+    A disk of radius 1 - eps fits in arcs about eps wide, after a larger one proved a bound."""
+    ang = np.array([0.0, 2.0, 4.0]) * np.pi / 3.0
+    c = 2.0 * np.stack([np.cos(ang), np.sin(ang)], axis=1)
+    rad = np.ones(3)
+    assert _arcs(1.0, 1.0 - eps, c, rad) > 0
+    bound = disk_bound(1.0, 1.5, 1.0 - eps, 3, c[:, 0].copy(), c[:, 1].copy(), rad)
+    assert bound > 1.0 - eps
+    # and through the kernel: the small disk goes where it goes without the bounds
+    found = []
+    for bounds in (True, False):
+        r = np.array([1.0, 1.0, 1.0, 1.0, 1.5, 1.0 - eps])
+        st_ = ArcState(
+            _disks(r, np.random.default_rng(0)), Rectangle.centred(40.0, 40.0),
+            t=0.999, tau=None, linear=False,
+        )  # fmt: skip
+        st_.packed.ipar[kernel.I_BOUND] = 1 if bounds else 0
+        st_.insert(0, 0.0, 0.0)
+        for j in range(3):
+            st_.insert(j + 1, float(c[j, 0]), float(c[j, 1]))
+        kernel.analyze_candidate(0, 4, st_.begin_particle(4), *_state(st_))
+        k, arcs = st_.find_site(5, 0, st_.begin_particle(5))
+        found.append((k, arcs.tobytes()))
+    assert found[0] == found[1]
+
+
+def _state(st_: ArcState) -> tuple[object, ...]:
+    return st_.outlines, st_.packed, st_.work, st_.rounded
 
 
 @settings(max_examples=60, deadline=None)
