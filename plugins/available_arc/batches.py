@@ -12,10 +12,10 @@ dropped.
 
 An analysis on a thread reads the packing and writes only scratch space (the
 envelope cache, the grid stamps and their counters), so each thread has its
-own scratch, in :class:`Helpers`. The threads read the bounds that failed
-analyses of disks proved on the calling thread
-(:mod:`~regopack.plugins.available_arc.disk_bound`) but prove none
-themselves: a candidate a thread finds empty is not analysed again. The packing
+own scratch, in :class:`Helpers`. The bounds that failed analyses of disks
+prove (:mod:`~regopack.plugins.available_arc.disk_bound`) are read from the
+packing and written to each thread's own row, which the calling thread
+merges into the packing after the batch. The packing
 is therefore the same, bit for bit, on any number of threads, and so are the
 counts of analyses.
 """
@@ -78,6 +78,9 @@ class Helpers(NamedTuple):
     """``(B,)``: the candidates of the current batch."""
     narcs: IntArray
     """``narcs[j * PAD]``: how many arcs the analysis of ``ks[j]`` found."""
+    shut: FloatArray
+    """``(T, n)``: the disk bounds each thread proved (see ``Packed.shut``), merged into the
+    packing's by the calling thread after each batch."""
 
 
 PAD = 16
@@ -100,17 +103,16 @@ def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
         name: stack(getattr(work, name), PAD if name in PADDED else 0) for name in K.Work._fields
     }
     fields["ckey"][:] = -1
-    ipar = stack(packed.ipar, PAD)
-    # the threads read the packing's disk bounds but prove none, so that the packing stays
-    # read-only while they run (a bound only skips analyses; the packing is the same)
-    ipar[:, K.I_BOUND] = 0
+    bounds = packed.ipar[K.I_BOUND] == 1
     return Helpers(
         **fields,
-        ipar=ipar,
+        ipar=stack(packed.ipar, PAD),
         stamp=np.zeros((t, packed.stamp.shape[0]), dtype=np.int64),
         last=np.full(t * PAD, -1, dtype=np.int64),
         ks=np.zeros(PER_THREAD * t, dtype=np.int64),
         narcs=np.zeros(PER_THREAD * t * PAD, dtype=np.int64),
+        # a thread writes the bounds it proves here, not into the packing it reads
+        shut=np.full((t, packed.shut.shape[0] if bounds else 1), np.inf),
     )
 
 
@@ -125,6 +127,7 @@ def _analyse_batch(
     last = h.last
     ks = h.ks
     narcs = h.narcs
+    shut = h.shut
     for t in numba.prange(threads):
         w = K.Work(
             h.rx[t], h.ry[t], h.rex[t], h.rey[t], h.rang[t],
@@ -137,7 +140,7 @@ def _analyse_batch(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],
             s.fpar, h.ipar[t], s.walls,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-            s.nb_img, s.shut,
+            s.nb_img, shut[t],
         )  # fmt: skip
         if last[t * PAD] != i:
             K.begin_particle(i, g, st, w)
@@ -169,6 +172,15 @@ def try_batch(
     """
     if nb > 1:
         _analyse_batch(nb, i, mq, g, s, h, rounded)
+        if s.ipar[K.I_BOUND] == 1:
+            # the bounds the threads proved, in the batch's order (any order gives the same)
+            threads = h.ipar.shape[0]
+            for j in range(nb):
+                if h.narcs[j * PAD] == 0:
+                    pk = s.order[h.ks[j]]
+                    b = h.shut[j % threads, pk]
+                    if b < s.shut[pk]:
+                        s.shut[pk] = b
     for j in range(nb):
         if nb > 1 and h.narcs[j * PAD] == 0:
             s.ipar[K.I_ANALYSES] += 1

@@ -209,16 +209,21 @@ def test_disks_pack_the_same_with_and_without_the_bounds(
 def test_disks_pack_the_same_on_two_threads_with_the_bounds(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """The exact scans of the paced closing, spread over threads, read the bounds."""
+    """The exact scans of the paced closing, spread over threads, read the bounds and
+    prove new ones on each thread; the calling thread merges them after each batch."""
+    from regopack.api import pack_and_summarise
+
     _force_threads(monkeypatch, 2)
+    overrides = {f"phases.{k}.shape": {"kind": "disk"} for k in range(6)}
     out = []
     for bounds in (True, False):
         if not bounds:
             _bounds_off(monkeypatch)
-        pop = _rounded_population(600, 3, "disks")
-        res = pack(pop, Rectangle.centred(80.0, 90.0), np.random.default_rng(3), order="sweep")
-        assert res.stats["threads"] == 2
-        out.append((res.centre.tobytes(), res.insertion_index.tobytes(), _counts(res.stats)))
+        run = pack_and_summarise(
+            "dem", seed=2, **{"domain.width": 150.0, "domain.height": 300.0, **overrides}
+        )
+        assert run.summary["threads"] == 2
+        out.append((run.packing.centre.tobytes(), _counts(run.packing.stats)))
     assert out[0] == out[1]
 
 
