@@ -81,6 +81,9 @@ class Helpers(NamedTuple):
     shut: FloatArray
     """``(T, n)``: the disk bounds each thread proved (see ``Packed.shut``), merged into the
     packing's by the calling thread after each batch."""
+    before: IntArray
+    """``before[j]``: candidates passed over before ``ks[j]`` (shut for the particle by a
+    disk bound), counted as empty analyses when the scan reaches ``ks[j]``."""
 
 
 PAD = 16
@@ -113,6 +116,7 @@ def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
         narcs=np.zeros(PER_THREAD * t * PAD, dtype=np.int64),
         # a thread writes the bounds it proves here, not into the packing it reads
         shut=np.full((t, packed.shut.shape[0] if bounds else 1), np.inf),
+        before=np.zeros(PER_THREAD * t + 1, dtype=np.int64),
     )
 
 
@@ -168,7 +172,10 @@ def try_batch(
 ) -> int:
     """Try candidates ``h.ks[:nb]`` in order for particle ``i``, as ``try_candidate`` one by one.
 
-    Returns the new insertion index, or -1 when none takes the particle.
+    The ``h.before[j]`` shut candidates passed over before ``ks[j]`` count as
+    empty analyses as the scan reaches ``ks[j]``, and ``h.before[nb]`` after
+    the last when none takes the particle. Returns the new insertion index,
+    or -1 when none takes the particle.
     """
     if nb > 1:
         _analyse_batch(nb, i, mq, g, s, h, rounded)
@@ -182,10 +189,14 @@ def try_batch(
                     if b < s.shut[pk]:
                         s.shut[pk] = b
     for j in range(nb):
+        s.ipar[K.I_ANALYSES] += h.before[j]
+        s.ipar[K.I_EMPTY] += h.before[j]
         if nb > 1 and h.narcs[j * PAD] == 0:
             s.ipar[K.I_ANALYSES] += 1
             s.ipar[K.I_EMPTY] += 1
             continue
         if try_candidate(h.ks[j], i, mq, g, s, w, rng, rounded):
             return int(s.ipar[K.I_COUNT]) - 1
+    s.ipar[K.I_ANALYSES] += h.before[nb]
+    s.ipar[K.I_EMPTY] += h.before[nb]
     return -1

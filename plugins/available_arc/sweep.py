@@ -325,21 +325,31 @@ def _exhaustive(
                 if bn.flag[k] != RETIRED and try_candidate(k, i, mq, g, s, w, rng, rounded):
                     return s.ipar[K.I_COUNT] - 1
         return -1
+    # candidates a disk bound already shuts for this particle take no place in a batch:
+    # they are counted where the scan passes them (see try_batch)
+    r = g.rho[i]
     nb = 0
+    helpers.before[0] = 0
     for b in range(lo, bn.head.shape[1]):
         e = bn.head[st, b]
         while e >= 0:
             k = e
             e = bn.nxt[e]
             if bn.flag[k] != RETIRED:
+                if rounded is not None and r >= s.shut[s.order[k]]:
+                    helpers.before[nb] += 1
+                    continue
                 helpers.ks[nb] = k
                 nb += 1
+                helpers.before[nb] = 0
                 if nb == helpers.ks.shape[0]:
+                    helpers.before[nb] = 0
                     placed = try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
                     if placed >= 0:
                         return placed
                     nb = 0
-    return try_batch(nb, i, mq, g, s, w, rng, helpers, rounded) if nb > 0 else -1
+                    helpers.before[0] = 0
+    return try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
 
 
 @numba.njit(cache=True)
