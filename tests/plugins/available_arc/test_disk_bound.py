@@ -240,3 +240,33 @@ def test_the_bounds_are_found_for_disks_only_and_not_under_the_tau_screening() -
     assert _shut(_disks(radius, rng), tau=0.9) == 0
     assert _shut(_rounded_population(500, 2, "mixed")) == 0
     assert _shut(octagon_population(radius, rng)) == 0
+
+
+@pytest.mark.parametrize("shut_from", [0, 40])
+def test_an_exact_scan_counts_the_candidates_it_passes_over_as_the_sequential_one(
+    shut_from: int,
+) -> None:
+    """Batched or not, a scan counts one empty analysis per shut candidate it passes, also
+    after its last batch slot (every candidate, or all but the first 40, marked shut)."""
+    from regopack.plugins.available_arc import batches, sweep
+
+    rng = np.random.default_rng(8)
+    radius = rng.uniform(0.5, 2.0, 400)
+    counts = []
+    for threads in (0, 2):
+        pop = _disks(radius, np.random.default_rng(8))
+        st_ = ArcState(pop, Rectangle.centred(60.0, 90.0), t=0.999, tau=None, linear=False)
+        sw = sweep.Sweep(len(pop), 90.0, 12.0, width=60.0)
+        sw.run(0, 300, st_.outlines, st_.packed, st_.work, np.random.default_rng(8), st_.rounded)
+        placed = st_.packed.order[: st_.counter(kernel.I_COUNT)]
+        st_.packed.shut[placed[shut_from:]] = 0.0  # shut for every disk
+        helpers = batches.new_helpers(st_.work, st_.packed, threads) if threads else None
+        before = st_.counter(kernel.I_ANALYSES)
+        mq = st_.begin_particle(350)
+        k = sweep._exhaustive(
+            350, mq, st_.outlines, st_.packed, st_.work, np.random.default_rng(1),
+            st_.rounded, 0, 0, sw.bins, helpers,
+        )  # fmt: skip
+        counts.append((k, st_.counter(kernel.I_ANALYSES) - before))
+    assert counts[0] == counts[1]
+    assert counts[0][1] > 0
