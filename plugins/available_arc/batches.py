@@ -150,11 +150,8 @@ def _analyse_batch(
             K.begin_particle(i, g, st, w)
             last[t * PAD] = i
         for j in range(t, nb, threads):
-            pk = s.order[ks[j]]
-            if rounded is not None and g.rho[i] >= s.shut[pk]:
-                narcs[j * PAD] = 0  # shown before: no disk this large fits against pk
-                continue
-            arcs = K.analyze_candidate(pk, i, mq, g, st, w, rounded)
+            # the scan batches no candidate a bound already shuts (sweep._exhaustive)
+            arcs = K.analyze_candidate(s.order[ks[j]], i, mq, g, st, w, rounded)
             narcs[j * PAD] = arcs.shape[0]
 
 

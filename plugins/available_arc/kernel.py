@@ -725,6 +725,16 @@ def analyze_candidate(
     return close_arcs(arcs, na, first_at_zero and joined_vertex == n, va[n] - va[0])
 
 
+@numba.njit(cache=True, inline="always")
+def shut_for(i: int, pk: int, g: Outlines, s: Packed, rounded: object) -> bool:
+    """Whether a disk bound shows that candidate ``pk`` has no arc for disk ``i``.
+
+    See :mod:`~regopack.plugins.available_arc.disk_bound`; compiled away in a
+    scene of sharp polygons (``rounded`` is ``None``).
+    """
+    return rounded is not None and g.rho[i] >= s.shut[pk]
+
+
 @numba.njit(cache=True)
 def find_site(
     i: int, start: int, mq: int, g: Outlines, s: Packed, w: Work, rounded: object = None
@@ -747,8 +757,8 @@ def find_site(
     while k >= 0:
         ipar[I_ANALYSES] += 1
         pk = s.order[k]
-        if rounded is not None and g.rho[i] >= s.shut[pk]:
-            arcs = empty  # shown before: no disk this large fits against pk
+        if shut_for(i, pk, g, s, rounded):
+            arcs = empty
         else:
             arcs = analyze_candidate(pk, i, mq, g, s, w, rounded)
         if arcs.shape[0] > 0:

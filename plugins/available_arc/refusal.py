@@ -37,8 +37,8 @@ def try_candidate(
     """Analyse candidate ``k`` exactly for particle ``i`` and place it there if it fits."""
     s.ipar[K.I_ANALYSES] += 1
     pk = s.order[k]
-    if rounded is not None and g.rho[i] >= s.shut[pk]:
-        s.ipar[K.I_EMPTY] += 1  # shown before: no disk this large fits against pk
+    if K.shut_for(i, pk, g, s, rounded):
+        s.ipar[K.I_EMPTY] += 1
         return False
     arcs = K.analyze_candidate(pk, i, mq, g, s, w, rounded)
     if arcs.shape[0] == 0:

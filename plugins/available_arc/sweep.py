@@ -327,7 +327,6 @@ def _exhaustive(
         return -1
     # candidates a disk bound already shuts for this particle take no place in a batch:
     # they are counted where the scan passes them (see try_batch)
-    r = g.rho[i]
     nb = 0
     helpers.before[0] = 0
     for b in range(lo, bn.head.shape[1]):
@@ -336,14 +335,13 @@ def _exhaustive(
             k = e
             e = bn.nxt[e]
             if bn.flag[k] != RETIRED:
-                if rounded is not None and r >= s.shut[s.order[k]]:
+                if K.shut_for(i, s.order[k], g, s, rounded):
                     helpers.before[nb] += 1
                     continue
                 helpers.ks[nb] = k
                 nb += 1
                 helpers.before[nb] = 0
                 if nb == helpers.ks.shape[0]:
-                    helpers.before[nb] = 0
                     placed = try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
                     if placed >= 0:
                         return placed
