@@ -42,6 +42,7 @@ from regopack.plugins.available_arc.neighbours import (
     register_neighbours,
 )
 from regopack.plugins.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
+from regopack.plugins.borrowed import borrowed
 from regopack.plugins.halfplane_clip import clip_halfplane
 from regopack.plugins.walls import (
     WALL_BOX,
@@ -308,21 +309,22 @@ def _clip_walls(
     return -np.inf, np.inf
 
 
-@numba.njit(cache=True, inline="always")
-def _interferes(
-    pk: int, o: int, i: int, d2: float, g: Outlines, tau_mode: bool, tau: float
-) -> bool:
-    """Whether ``o``, at squared distance ``d2`` from ``pk``, can cover part of ``E_k``.
+@numba.njit(cache=True)
+def _interferes(d2: float, rpk: float, ro: float, ri2: float, tau_mode: bool, tau: float) -> bool:
+    """Whether a particle at squared distance ``d2`` from ``pk`` can cover part of ``E_k``.
 
-    Inlined where it is used, so that it costs no call.
+    ``rpk``, ``ro`` and ``ri2`` are the radii of ``pk`` and ``o`` and twice that of
+    the new particle: equivalent radii under the τ screening (``tau_mode``),
+    circumradii otherwise. Scalars only: a compiled function that receives the
+    outline tuple counts up each of its arrays at every call.
     """
     if tau_mode:
-        lim = (g.req[pk] + g.req[o] + 2.0 * g.req[i]) / tau
+        lim = (rpk + ro + ri2) / tau
     else:
-        lim = g.circum[pk] + g.circum[o] + 2.0 * g.circum[i]
+        lim = rpk + ro + ri2
     hit = d2 < lim * lim
     if hit and tau_mode:
-        hit = tau * math.sqrt(d2) < g.req[pk] + g.req[o] + 2.0 * g.req[i]
+        hit = tau * math.sqrt(d2) < rpk + ro + ri2
     return hit
 
 
@@ -353,6 +355,10 @@ def analyze_candidate(
     # ---- interferers from the grid
     tau_mode = ipar[I_TAUMODE] == 1
     tau = fpar[F_TAU]
+    # the radii that decide which particles interfere (see _interferes)
+    rad = g.req if tau_mode else g.circum
+    rpk = rad[pk]
+    ri2 = 2.0 * rad[i]
     if tau_mode:
         qrad = (g.req[pk] + 2.0 * g.req[i]) / tau
     else:
@@ -396,7 +402,7 @@ def analyze_candidate(
             o = s.nb_o[row, e]
             ddx = s.nb_dx[row, e]
             ddy = s.nb_dy[row, e]
-            if _interferes(pk, o, i, ddx * ddx + ddy * ddy, g, tau_mode, tau):
+            if _interferes(ddx * ddx + ddy * ddy, rpk, rad[o], ri2, tau_mode, tau):
                 if periodic:
                     # an entry is an image one period away: the grid search finds it
                     # only in the query about pk's image on that side, if it makes it
@@ -406,41 +412,49 @@ def analyze_candidate(
                     found_q[nf] = qs
                 found[nf] = o
                 nf += 1
-    for qs in range(0 if lists else nsx * nsy):
-        token = ipar[I_STAMP] + 1
-        ipar[I_STAMP] = token
-        qcx = pcx
-        qcy = pcy
-        if qs == 0:
-            stamp[pk] = token
-        else:
-            qx = qs % nsx
-            qy = qs // nsx
-            qcx += image_shift(qx, sx1, sx2)
-            qcy += image_shift(qy, sy1, sy2)
-        ia, ib = cell_range(qcx - qrad, qcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
-        ja, jb = cell_range(qcy - qrad, qcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
-        for gj in range(ja, jb + 1):
-            for gi in range(ia, ib + 1):
-                e = s.head[gj * gnx + gi]
-                while e >= 0:
-                    o = s.item[e]
-                    e = s.nxt[e]
-                    if stamp[o] == token:
-                        continue
-                    stamp[o] = token
-                    ddx = cx[o] - qcx
-                    ddy = cy[o] - qcy
-                    d2 = ddx * ddx + ddy * ddy
-                    if _interferes(pk, o, i, d2, g, tau_mode, tau):
-                        if nf == found.shape[0]:
-                            found = _grow_int(found, nf)
-                            if periodic:
-                                found_q = _grow_int(found_q, nf)
-                        found[nf] = o
-                        if periodic:
-                            found_q[nf] = qs
-                        nf += 1
+    # the grid search counts past a full buffer and then runs again into one
+    # large enough: a buffer replaced inside the loops would cost a pair of
+    # reference counts at every particle visited
+    cap = found.shape[0]
+    while not lists:
+        nf = 0
+        for qs in range(nsx * nsy):
+            token = ipar[I_STAMP] + 1
+            ipar[I_STAMP] = token
+            qcx = pcx
+            qcy = pcy
+            if qs == 0:
+                stamp[pk] = token
+            else:
+                qx = qs % nsx
+                qy = qs // nsx
+                qcx += image_shift(qx, sx1, sx2)
+                qcy += image_shift(qy, sy1, sy2)
+            ia, ib = cell_range(qcx - qrad, qcx + qrad, fpar[F_GX0], fpar[F_GCELL], ipar[I_GNX])
+            ja, jb = cell_range(qcy - qrad, qcy + qrad, fpar[F_GY0], fpar[F_GCELL], ipar[I_GNY])
+            for gj in range(ja, jb + 1):
+                for gi in range(ia, ib + 1):
+                    e = s.head[gj * gnx + gi]
+                    while e >= 0:
+                        o = s.item[e]
+                        e = s.nxt[e]
+                        if stamp[o] == token:
+                            continue
+                        stamp[o] = token
+                        ddx = cx[o] - qcx
+                        ddy = cy[o] - qcy
+                        d2 = ddx * ddx + ddy * ddy
+                        if _interferes(d2, rpk, rad[o], ri2, tau_mode, tau):
+                            if nf < cap:
+                                found[nf] = o
+                                if periodic:
+                                    found_q[nf] = qs
+                            nf += 1
+        if nf <= cap:
+            break
+        cap = 2 * nf
+        found = np.empty(cap, dtype=np.int64)
+        found_q = np.empty(cap if periodic else 0, dtype=np.int64)
 
     if rounded is not None and ipar[I_DISKS] == 1:
         # disks only: every envelope is a circle about a centre, so none is built.
@@ -1000,6 +1014,8 @@ def pack_range(
 
     ``fpar[F_ETA]`` is the packing control coefficient (0 draws nothing).
     """
+    # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
+    g, s, w = borrowed(g), borrowed(s), borrowed(w)
     eta = s.fpar[F_ETA]
     placed = 0
     for i in range(begin, end):

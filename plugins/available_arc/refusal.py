@@ -18,6 +18,7 @@ import numpy as np
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.available_arc import kernel as K
+from regopack.plugins.borrowed import borrowed
 
 I_RESCUED = 0
 """Index of the rescued-particle counter in the ``counts`` array."""
@@ -102,6 +103,8 @@ def pack_range_exact(
 
     ``counts[I_RESCUED]`` counts the particles placed by the exact scan.
     """
+    # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
+    g, s, w, counts = borrowed(g), borrowed(s), borrowed(w), borrowed(counts)
     placed = 0
     for i in range(begin, end):
         if s.ipar[K.I_COUNT] == 0:

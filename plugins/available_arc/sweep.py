@@ -47,6 +47,7 @@ from regopack.plugins.available_arc.batches import Helpers, try_batch
 from regopack.plugins.available_arc.candidates import tree_set
 from regopack.plugins.available_arc.neighbours import release_row
 from regopack.plugins.available_arc.refusal import place_screened, try_candidate
+from regopack.plugins.borrowed import borrowed
 from regopack.plugins.walls import WALL_BOX, WALL_PERIODIC, point_fits
 
 FloatArray = NDArray[np.float64]
@@ -850,6 +851,10 @@ def sweep_range(
     ``status`` records each particle offered (placed or refused); particles
     after the run has closed keep ``STATUS_NOT_OFFERED``.
     """
+    # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
+    g, s, w, zs, sz = borrowed(g), borrowed(s), borrowed(w), borrowed(zs), borrowed(sz)
+    bn, status, tried, lags = borrowed(bn), borrowed(status), borrowed(tried), borrowed(lags)
+    helpers = borrowed(helpers)
     placed = 0
     last = end >= status.shape[0]
     for i in range(begin, end + 1 if last else end):
