@@ -106,6 +106,8 @@ N_IPAR = 19
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
+FOUND_SLOTS = 64
+"""Interferers an analysis holds in its scratch before it allocates a larger buffer."""
 CIRCLE_SLACK = 1.0 + 1e-9
 """Relative slack of the squared-circumcircle pre-test of the covered-edge search."""
 
@@ -177,6 +179,10 @@ class Work(NamedTuple):
     cache_n: IntArray
     cache_rad: FloatArray
     woff: FloatArray
+    found: IntArray
+    """The interferers of an analysis (grown by a local copy when too short)."""
+    found_q: IntArray
+    """In a periodic domain, the image query that found each interferer."""
 
 
 @numba.njit(cache=True)
@@ -379,8 +385,8 @@ def analyze_candidate(
         nsx, sx1, sx2 = image_shifts(pcx, span, fpar[F_XMIN], fpar[F_XMAX])
         nsy, sy1, sy2 = image_shifts(pcy, span, fpar[F_YMIN], fpar[F_YMAX])
     gnx = ipar[I_GNX]
-    found = np.empty(32, dtype=np.int64)
-    found_q = np.empty(32 if periodic else 0, dtype=np.int64)
+    found = w.found
+    found_q = w.found_q
     nf = 0
     stamp = s.stamp
     # the candidate's neighbour list, nearest first, holds every interferer of a

@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_arc.disk_bound import SORT_IN_PLACE
 from regopack.plugins.available_arc.geometry import close_arcs, inside_open
 
 FloatArray = NDArray[np.float64]
@@ -673,14 +674,29 @@ def disk_arcs(
             lo[k] = lo[idx] - 2.0 * math.pi
             hi[k] = hi[idx] - 2.0 * math.pi
             k += 1
-    order = np.argsort(lo[:k])
+    if k <= SORT_IN_PLACE:
+        # by lower end; which of two equal lower ends comes first does not change the arcs
+        for idx in range(1, k):
+            x = lo[idx]
+            y = hi[idx]
+            j = idx
+            while j > 0 and lo[j - 1] > x:
+                lo[j] = lo[j - 1]
+                hi[j] = hi[j - 1]
+                j -= 1
+            lo[j] = x
+            hi[j] = y
+    else:
+        order = np.argsort(lo[:k])
+        lo[:k] = lo[:k][order]
+        hi[:k] = hi[:k][order]
     # sweep once around from the start of the first covered interval
-    start = lo[order[0]]
-    reach = hi[order[0]]
+    start = lo[0]
+    reach = hi[0]
     na = 0
     for idx in range(1, k):
-        a = lo[order[idx]]
-        b = hi[order[idx]]
+        a = lo[idx]
+        b = hi[idx]
         if a > reach:
             out[na, 0] = reach
             out[na, 1] = a

@@ -181,6 +181,8 @@ class ArcState:
             cache_n=np.zeros(slots, dtype=np.int64),
             cache_rad=np.zeros(slots),
             woff=np.zeros(walls.shape[0] if mode == WALL_HALFPLANES else 1),
+            found=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
+            found_q=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
         )
 
     def reserve_rows(self, need: int) -> None:
