@@ -10,7 +10,10 @@ took a quarter to a third of the insertion time.
 record: the counts become a test of a null pointer. It is applied where a
 kernel is entered from Python, whose arguments keep the memory alive until
 the kernel returns. A borrowed array must not outlive that call: a kernel
-never returns one to Python and never stores one beyond the call.
+never returns one to Python and never stores one beyond the call. (Each keeps
+its link to the Python array it came from, so a whole argument returned by
+mistake comes back as that array; a view of it would come back as an array
+over memory that Python may free.)
 """
 
 from __future__ import annotations
@@ -28,7 +31,6 @@ def _borrow_value(context: Any, builder: ir.IRBuilder, ty: types.Type, value: ir
     if isinstance(ty, types.Array):
         ary = make_array(ty)(context, builder, value=value)
         ary.meminfo = cgutils.get_null_value(ary.meminfo.type)
-        ary.parent = cgutils.get_null_value(ary.parent.type)
         return ary._getvalue()
     if isinstance(ty, types.BaseTuple):
         out = value
@@ -62,10 +64,11 @@ def _supported(ty: types.Type) -> bool:
 
 
 def _type_borrowed(typingctx: Any, x: types.Type) -> Any:
-    """``x`` (an array, a tuple of arrays, or anything else) with its arrays borrowed.
+    """Type ``borrowed(x)``: ``x`` with its arrays borrowed, for arrays and tuples of them.
 
-    Callable only from compiled code; the result has the type of ``x``. Other
-    counted objects (a generator, a list) are refused when the caller compiles.
+    Tuples may hold arrays, numbers, booleans, ``None`` and such tuples; the
+    result has the type of ``x``. Anything else that numba counts (a
+    generator, a list) is refused when the caller compiles.
     """
     if not _supported(x):
         return None
@@ -77,5 +80,5 @@ def _type_borrowed(typingctx: Any, x: types.Type) -> Any:
 
 
 borrowed: Any = intrinsic(_type_borrowed)
-"""``borrowed(x)``: ``x`` (an array, a tuple of arrays and numbers, or ``None``) with its
-arrays borrowed. Compiled code only; see :func:`_type_borrowed`."""
+"""``borrowed(x)``: ``x`` (an array, ``None``, or a tuple of arrays, numbers, booleans,
+``None`` and such tuples) with its arrays borrowed. Compiled code only."""

@@ -180,7 +180,9 @@ class Work(NamedTuple):
     cache_rad: FloatArray
     woff: FloatArray
     found: IntArray
-    """The interferers of an analysis (grown by a local copy when too short)."""
+    """The interferers of an analysis. When they do not fit, the grid search runs again into
+    a buffer twice their number, and a longer neighbour list (none while the lists hold
+    ``LIST_CAPACITY = FOUND_SLOTS`` entries) gets a buffer of its length."""
     found_q: IntArray
     """In a periodic domain, the image query that found each interferer."""
 

@@ -43,14 +43,29 @@ def _probe_array(a: np.ndarray) -> tuple[bool, bool, float]:
 @numba.njit
 def _probe_tuple(p: Pair, k: int) -> tuple[bool, bool, int, float]:
     q = borrowed(p)
-    both = (q, k)
-    r = borrowed(both)
     return (
         _meminfo_is_null(q.x) and _meminfo_is_null(q.n),
-        _meminfo_is_null(r[0].x[1:]),  # a view of a borrowed array is borrowed too
-        r[1],
+        _meminfo_is_null(q.x[1:]),  # a view of a borrowed array is borrowed too
+        k,
         q.x[2] + q.n[0],
     )
+
+
+@numba.njit
+def _probe_nested(p: Pair, a: np.ndarray, k: int, flag: bool) -> tuple[bool, bool, int, bool]:
+    r = borrowed(((p, k), flag, (None, a)))
+    (q, k2), flag2, (_, b) = r
+    return (
+        _meminfo_is_null(q.x) and _meminfo_is_null(q.n),
+        _meminfo_is_null(b) and not _meminfo_is_null(a),
+        k2,
+        flag2,
+    )
+
+
+@numba.njit
+def _return_borrowed(a: np.ndarray) -> np.ndarray:
+    return borrowed(a)
 
 
 @numba.njit
@@ -75,6 +90,16 @@ def test_tuples_are_borrowed_item_by_item() -> None:
     assert value == 13.0
 
 
+def test_nested_tuples_are_borrowed_through() -> None:
+    p = Pair(np.array([1.0, 2.0, 3.0]), np.array([10, 20]))
+    assert _probe_nested(p, np.zeros(3), 4, True) == (True, True, 4, True)
+
+
+def test_a_whole_argument_returned_comes_back_as_itself() -> None:
+    a = np.arange(3.0)
+    assert _return_borrowed(a) is a
+
+
 def test_none_passes_through() -> None:
     assert _borrow_none(None)
 
@@ -84,5 +109,11 @@ def test_other_counted_objects_are_refused() -> None:
     def borrow_generator(rng: np.random.Generator) -> Any:
         return borrowed(rng)
 
+    @numba.njit
+    def borrow_tuple_with_generator(a: np.ndarray, rng: np.random.Generator) -> Any:
+        return borrowed((a, rng))
+
     with pytest.raises(TypingError):
         borrow_generator(np.random.default_rng(1))
+    with pytest.raises(TypingError):
+        borrow_tuple_with_generator(np.zeros(2), np.random.default_rng(1))
