@@ -42,6 +42,31 @@ go to ``np.argsort``."""
 
 
 @numba.njit(cache=True)
+def sort_covers(lo: FloatArray, hi: FloatArray, k: int) -> None:
+    """Sort the intervals ``(lo[m], hi[m])``, ``m < k``, by their lower ends, in place.
+
+    Up to :data:`SORT_IN_PLACE` by insertion, more with ``np.argsort``. Which
+    of two equal lower ends comes first is left open: the sweeps over the
+    sorted covers do not depend on it.
+    """
+    if k <= SORT_IN_PLACE:
+        for idx in range(1, k):
+            x = lo[idx]
+            y = hi[idx]
+            j = idx
+            while j > 0 and lo[j - 1] > x:
+                lo[j] = lo[j - 1]
+                hi[j] = hi[j - 1]
+                j -= 1
+            lo[j] = x
+            hi[j] = y
+    else:
+        order = np.argsort(lo[:k])
+        lo[:k] = lo[:k][order]
+        hi[:k] = hi[:k][order]
+
+
+@numba.njit(cache=True)
 def covered(
     rk: float,
     r: float,
@@ -84,21 +109,7 @@ def covered(
             k += 1
     if k == 0:
         return False
-    if k <= SORT_IN_PLACE:
-        for idx in range(1, k):  # insertion sort by lower end
-            x = lo[idx]
-            y = hi[idx]
-            j = idx
-            while j > 0 and lo[j - 1] > x:
-                lo[j] = lo[j - 1]
-                hi[j] = hi[j - 1]
-                j -= 1
-            lo[j] = x
-            hi[j] = y
-    else:
-        order = np.argsort(lo[:k])
-        lo[:k] = lo[:k][order]
-        hi[:k] = hi[:k][order]
+    sort_covers(lo, hi, k)
     start = lo[0]
     reach = hi[0]
     for idx in range(1, k):

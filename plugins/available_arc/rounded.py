@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-from regopack.plugins.available_arc.disk_bound import SORT_IN_PLACE
+from regopack.plugins.available_arc.disk_bound import sort_covers
 from regopack.plugins.available_arc.geometry import close_arcs, inside_open
 
 FloatArray = NDArray[np.float64]
@@ -674,22 +674,7 @@ def disk_arcs(
             lo[k] = lo[idx] - 2.0 * math.pi
             hi[k] = hi[idx] - 2.0 * math.pi
             k += 1
-    if k <= SORT_IN_PLACE:
-        # by lower end; which of two equal lower ends comes first does not change the arcs
-        for idx in range(1, k):
-            x = lo[idx]
-            y = hi[idx]
-            j = idx
-            while j > 0 and lo[j - 1] > x:
-                lo[j] = lo[j - 1]
-                hi[j] = hi[j - 1]
-                j -= 1
-            lo[j] = x
-            hi[j] = y
-    else:
-        order = np.argsort(lo[:k])
-        lo[:k] = lo[:k][order]
-        hi[:k] = hi[:k][order]
+    sort_covers(lo, hi, k)
     # sweep once around from the start of the first covered interval
     start = lo[0]
     reach = hi[0]

@@ -15,7 +15,12 @@ from test_neighbours import HEXAGON, _rounded_population
 
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.plugins.available_arc import kernel
-from regopack.plugins.available_arc.disk_bound import covered, disk_bound
+from regopack.plugins.available_arc.disk_bound import (
+    SORT_IN_PLACE,
+    covered,
+    disk_bound,
+    sort_covers,
+)
 from regopack.plugins.available_arc.rounded import disk_arcs
 from regopack.plugins.available_arc.state import ArcState
 from regopack.plugins.walls import WALL_BOX
@@ -270,3 +275,16 @@ def test_an_exact_scan_counts_the_candidates_it_passes_over_as_the_sequential_on
         counts.append((k, st_.counter(kernel.I_ANALYSES) - before))
     assert counts[0] == counts[1]
     assert counts[0][1] > 0
+
+
+@pytest.mark.parametrize("k", [0, 1, 2, 7, SORT_IN_PLACE, SORT_IN_PLACE + 1, 200])
+def test_sort_covers_orders_pairs_by_lower_end(k: int) -> None:
+    rng = np.random.default_rng(k)
+    lo = np.round(rng.uniform(-1.0, 7.0, k + 3), 1)  # ties among the lower ends
+    hi = lo + rng.uniform(0.0, 2.0, k + 3)
+    pairs = sorted(zip(lo[:k].tolist(), hi[:k].tolist(), strict=True))
+    tail = (lo[k:].copy(), hi[k:].copy())
+    sort_covers(lo, hi, k)
+    assert np.all(np.diff(lo[:k]) >= 0.0)
+    assert sorted(zip(lo[:k].tolist(), hi[:k].tolist(), strict=True)) == pairs  # pairs kept
+    assert np.array_equal(lo[k:], tail[0]) and np.array_equal(hi[k:], tail[1])
