@@ -264,20 +264,6 @@ def _angle_on_edge(
 
 
 @numba.njit(cache=True)
-def _grow_int(a: IntArray, used: int) -> IntArray:
-    out = np.empty(2 * a.shape[0] + 16, dtype=np.int64)
-    out[:used] = a[:used]
-    return out
-
-
-@numba.njit(cache=True)
-def _grow_float(a: FloatArray, used: int) -> FloatArray:
-    out = np.empty(2 * a.shape[0] + 16)
-    out[:used] = a[:used]
-    return out
-
-
-@numba.njit(cache=True)
 def begin_particle(i: int, g: Outlines, s: Packed, w: Work) -> int:
     """Prepare the scratch buffers for new particle ``i``; return its vertex count."""
     mq = reflect_outline(
@@ -367,10 +353,7 @@ def analyze_candidate(
     rad = g.req if tau_mode else g.circum
     rpk = rad[pk]
     ri2 = 2.0 * rad[i]
-    if tau_mode:
-        qrad = (g.req[pk] + 2.0 * g.req[i]) / tau
-    else:
-        qrad = g.circum[pk] + 2.0 * g.circum[i]
+    qrad = (rpk + ri2) / tau if tau_mode else rpk + ri2
     mode = ipar[I_WALLMODE]
     periodic = mode == WALL_PERIODIC
     # query boxes: the one about pk and, in a periodic domain, its images one
