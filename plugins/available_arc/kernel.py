@@ -372,7 +372,10 @@ def analyze_candidate(
     gnx = ipar[I_GNX]
     found = w.found
     found_q = w.found_q
-    nf = 0
+    # np.int64(0) rather than 0 here and wherever a counter starting at a constant
+    # reaches a compiled call: numba would first type the call with the literal 0
+    # and compile a specialisation of the callee that no run uses
+    nf = np.int64(0)
     stamp = s.stamp
     # the candidate's neighbour list, nearest first, holds every interferer of a
     # new particle whose reach is at most the lists' cap: read it up to the gap
@@ -408,7 +411,7 @@ def analyze_candidate(
     # reference counts at every particle visited
     cap = found.shape[0]
     while not lists:
-        nf = 0
+        nf = np.int64(0)
         for qs in range(nsx * nsy):
             token = ipar[I_STAMP] + 1
             ipar[I_STAMP] = token
@@ -1015,7 +1018,7 @@ def pack_range(
                 placed += 1
             continue
         mq = begin_particle(i, g, s, w)
-        start = 0
+        start = np.int64(0)
         while True:
             k, arcs = find_site(i, start, mq, g, s, w, rounded)
             if k < 0:

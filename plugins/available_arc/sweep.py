@@ -328,7 +328,7 @@ def _exhaustive(
         return -1
     # candidates a disk bound already shuts for this particle take no place in a batch:
     # they are counted where the scan passes them (see try_batch)
-    nb = 0
+    nb = np.int64(0)
     helpers.before[0] = 0
     for b in range(lo, bn.head.shape[1]):
         e = bn.head[st, b]
@@ -346,7 +346,7 @@ def _exhaustive(
                     placed = try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
                     if placed >= 0:
                         return placed
-                    nb = 0
+                    nb = np.int64(0)
                     helpers.before[0] = 0
     return try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
 
@@ -888,8 +888,9 @@ def sweep_range(
             zs[Z_QLEN] -= 1
             if zs[Z_FLUSH] == 2 and b - lags.lag[q] < _lowest_open(sz):
                 continue
+            # (no literal flags or strips in these calls: see kernel.analyze_candidate's nf)
             placed += _step(
-                q, True, st, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
+                q, np.bool_(True), st, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
                 rounded, helpers,
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
@@ -897,7 +898,7 @@ def sweep_range(
         if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR]), zs, sz, lags):
             continue
         placed += _step(
-            i, False, -1, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
-            rounded, helpers,
+            i, np.bool_(False), np.int64(-1), delta, swidth, g, s, w, rng, zs, sz, bn, status,
+            tried, lags, rounded, helpers,
         )  # fmt: skip
     return placed
