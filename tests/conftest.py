@@ -1,8 +1,17 @@
 from __future__ import annotations
 
 import importlib.metadata
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
+
+WARMUP_MIN_TESTS = 500
+"""Sessions with fewer tests compile only what they use, in the test process."""
+
+_warmup: list[subprocess.Popen[bytes]] = []
 
 
 def _version(dist: str) -> str:
@@ -22,3 +31,46 @@ def registry():
     from fakes import fake_registry
 
     return fake_registry()
+
+
+def _sweep_cached() -> bool:
+    """Whether the kernel cache of the current sources already holds the sweep."""
+    import regopack.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
+
+    folder = Path(os.environ.get("NUMBA_CACHE_DIR", ""))
+    return folder.is_dir() and any(folder.rglob("*sweep_range*.nbi"))
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Start ``kernel_warmup.py`` on a second core for a large session with a cold cache.
+
+    ``REGOPACK_TEST_WARMUP=0`` turns it off.
+    """
+    if (
+        len(session.items) < WARMUP_MIN_TESTS
+        or (os.cpu_count() or 1) < 2
+        or os.environ.get("REGOPACK_TEST_WARMUP") == "0"
+        or _sweep_cached()
+    ):
+        return
+    script = Path(__file__).with_name("kernel_warmup.py")
+    _warmup.append(
+        subprocess.Popen(
+            [sys.executable, str(script)],
+            stdin=subprocess.DEVNULL,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+        )
+    )
+
+
+def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
+    """Stop the warm-up if it is still compiling."""
+    for proc in _warmup:
+        if proc.poll() is None:
+            proc.terminate()
+            try:
+                proc.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()

@@ -1,0 +1,48 @@
+"""Compile the sweep's kernels in a second process while the test suite runs.
+
+``conftest.py`` starts this script when a large test session meets a cold
+kernel cache (a fresh clone, as in CI). The test process compiles what its
+first tests need (the paper's loop, the 3D scan) while this one compiles the
+four variants of the sweep (sharp polygons or rounded particles, on one thread
+or several), about half of the suite's compilation, which the tests meet only
+minutes later. Both processes write the same on-disk cache
+(:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
+with the same result. The script stops early when its parent goes away.
+"""
+
+from __future__ import annotations
+
+import os
+from typing import Any
+
+import numba
+
+import regopack
+
+TINY: dict[str, Any] = {"domain.width": 60.0, "domain.height": 60.0, "count": 60}
+"""The ``small`` scene made tiny: a packing takes milliseconds once compiled."""
+
+STEPS: tuple[tuple[dict[str, Any], int], ...] = (
+    ({"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}}, 2),
+    ({"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}}, 1),
+    ({"insertion.order": "sweep"}, 2),
+    ({"insertion.order": "sweep"}, 1),
+    ({"insertion": {"kind": "rsa"}}, 1),
+    ({"insertion.screening": "exact"}, 1),
+)
+"""Scene changes and thread counts, in the reverse order of the suite's first use."""
+
+
+def main() -> None:
+    """Pack each step's tiny scene once (compiling or loading its kernels)."""
+    parent = os.getppid()
+    most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+    for changes, threads in STEPS:
+        if os.getppid() != parent:
+            return
+        numba.set_num_threads(min(threads, most))
+        regopack.pack("small", **{**TINY, **changes})
+
+
+if __name__ == "__main__":
+    main()
