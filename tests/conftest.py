@@ -37,17 +37,19 @@ def _sweep_cached() -> bool:
     """Whether the kernel cache of the current sources already holds the sweep."""
     import regopack.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
 
-    folder = Path(os.environ.get("NUMBA_CACHE_DIR", ""))
-    return folder.is_dir() and any(folder.rglob("*sweep_range*.nbi"))
+    folder = os.environ.get("NUMBA_CACHE_DIR")
+    if not folder:
+        return False
+    return any(Path(folder).rglob("*sweep_range*.nbi"))
 
 
-def pytest_collection_finish(session: pytest.Session) -> None:
-    """Start ``kernel_warmup.py`` on a second core for a large session with a cold cache.
+def _start_warmup() -> None:
+    """Start ``kernel_warmup.py`` on a second core, once, unless the cache holds the sweep.
 
     ``REGOPACK_TEST_WARMUP=0`` turns it off.
     """
     if (
-        len(session.items) < WARMUP_MIN_TESTS
+        _warmup
         or (os.cpu_count() or 1) < 2
         or os.environ.get("REGOPACK_TEST_WARMUP") == "0"
         or _sweep_cached()
@@ -62,6 +64,19 @@ def pytest_collection_finish(session: pytest.Session) -> None:
             stderr=subprocess.DEVNULL,
         )
     )
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    """Start the warm-up before collection (12 s) when the whole suite is asked for."""
+    here = Path(__file__).resolve().parent
+    if config.args and all(Path(arg).resolve() == here for arg in config.args):
+        _start_warmup()
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """Start the warm-up for any other session of at least ``WARMUP_MIN_TESTS`` tests."""
+    if len(session.items) >= WARMUP_MIN_TESTS:
+        _start_warmup()
 
 
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
