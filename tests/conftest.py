@@ -79,6 +79,24 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         _start_warmup()
 
 
+LATE_MODULES = "plugins/analysis/test_*3d.py"
+"""Tests run after all others, so that the warm-up has compiled their kernels (the 3D
+scan) by then; every other test keeps its place."""
+
+
+def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.Item]) -> None:
+    """Move the tests of :data:`LATE_MODULES` to the end of the session."""
+    here = Path(__file__).resolve().parent
+    late = [
+        item
+        for item in items
+        if here in item.path.parents and item.path.relative_to(here).match(LATE_MODULES)
+    ]
+    if late:
+        late_ids = {id(item) for item in late}
+        items[:] = [item for item in items if id(item) not in late_ids] + late
+
+
 def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
     """Stop the warm-up if it is still compiling."""
     for proc in _warmup:

@@ -4,8 +4,8 @@
 kernel cache (a fresh clone, as in CI). The test process compiles what its
 first tests need (the paper's loop, the 3D scan) while this one compiles the
 four variants of the sweep (sharp polygons or rounded particles, on one thread
-or several), about half of the suite's compilation, which the tests meet only
-minutes later. Both processes write the same on-disk cache
+or several), then the 3D scan and analyses, which the tests meet only minutes
+later. Both processes write the same on-disk cache
 (:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
 with the same result. The script stops early when its parent goes away.
 """
@@ -32,9 +32,23 @@ STEPS: tuple[tuple[dict[str, Any], int], ...] = (
 )
 """Scene changes and thread counts, in the reverse order of the suite's first use."""
 
+BOX: dict[str, Any] = {
+    "domain.kind": "box",
+    "domain.depth": 60.0,
+    "domain.center": [0.0, 0.0, 0.0],
+    "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "polyhedron"}}],
+    "insertion": {"kind": "available-surface"},
+    "count": 12,
+}
+"""The last step: a tiny 3D packing, packed and given every 3D analysis (the suite
+runs the 3D analysis tests last, see ``conftest.py``)."""
+
 
 def main() -> None:
     """Pack each step's tiny scene once (compiling or loading its kernels)."""
+    from regopack.analysis import dimensions_of
+    from regopack.manager import default_registry
+
     parent = os.getppid()
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
     for changes, threads in STEPS:
@@ -42,6 +56,11 @@ def main() -> None:
             return
         numba.set_num_threads(min(threads, most))
         regopack.pack("small", **{**TINY, **changes})
+    if os.getppid() != parent:
+        return
+    registry = default_registry()
+    names = [n for n in sorted(registry.names("analysis")) if 3 in dimensions_of(registry, n)]
+    regopack.analyze(regopack.pack("small", **{**TINY, **BOX}), names)
 
 
 if __name__ == "__main__":

@@ -15,3 +15,6 @@ def test_every_warmup_step_is_a_valid_scene() -> None:
         resolved = regopack.scene("small", **{**kernel_warmup.TINY, **changes})
         kinds.add((resolved.insertion.kind, threads))
     assert ("available-arc", 2) in kinds and ("rsa", 1) in kinds
+    box = regopack.scene("small", **{**kernel_warmup.TINY, **kernel_warmup.BOX})
+    assert box.insertion.kind == "available-surface"
+
