@@ -372,10 +372,11 @@ def analyze_candidate(
     gnx = ipar[I_GNX]
     found = w.found
     found_q = w.found_q
-    # np.int64(0) rather than 0 here and wherever a counter starting at a constant
-    # reaches a compiled call: numba would first type the call with the literal 0
-    # and compile a specialisation of the callee that no run uses
-    nf = np.int64(0)
+    # int(np.int64(0)) rather than 0 here and wherever a counter starting at a
+    # constant (or a constant flag) reaches a compiled call: numba would first type
+    # the call with the literal 0 and compile a specialisation of the callee that no
+    # run uses; the int() keeps the type checker's view an int
+    nf = int(np.int64(0))
     stamp = s.stamp
     # the candidate's neighbour list, nearest first, holds every interferer of a
     # new particle whose reach is at most the lists' cap: read it up to the gap
@@ -411,7 +412,7 @@ def analyze_candidate(
     # reference counts at every particle visited
     cap = found.shape[0]
     while not lists:
-        nf = np.int64(0)
+        nf = int(np.int64(0))
         for qs in range(nsx * nsy):
             token = ipar[I_STAMP] + 1
             ipar[I_STAMP] = token
@@ -1018,7 +1019,7 @@ def pack_range(
                 placed += 1
             continue
         mq = begin_particle(i, g, s, w)
-        start = np.int64(0)
+        start = int(np.int64(0))
         while True:
             k, arcs = find_site(i, start, mq, g, s, w, rounded)
             if k < 0:

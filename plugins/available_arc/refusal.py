@@ -72,7 +72,7 @@ def place_screened(
     the search goes on. Returns the new insertion index, or -1.
     """
     eta = s.fpar[K.F_ETA]
-    start = np.int64(0)
+    start = int(np.int64(0))
     while True:
         k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
         if k < 0:

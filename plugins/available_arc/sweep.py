@@ -328,7 +328,7 @@ def _exhaustive(
         return -1
     # candidates a disk bound already shuts for this particle take no place in a batch:
     # they are counted where the scan passes them (see try_batch)
-    nb = np.int64(0)
+    nb = int(np.int64(0))
     helpers.before[0] = 0
     for b in range(lo, bn.head.shape[1]):
         e = bn.head[st, b]
@@ -346,7 +346,7 @@ def _exhaustive(
                     placed = try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
                     if placed >= 0:
                         return placed
-                    nb = np.int64(0)
+                    nb = int(np.int64(0))
                     helpers.before[0] = 0
     return try_batch(nb, i, mq, g, s, w, rng, helpers, rounded)
 
@@ -890,15 +890,15 @@ def sweep_range(
                 continue
             # (no literal flags or strips in these calls: see kernel.analyze_candidate's nf)
             placed += _step(
-                q, np.bool_(True), st, delta, swidth, g, s, w, rng, zs, sz, bn, status, tried, lags,
-                rounded, helpers,
+                q, bool(np.bool_(True)), st, delta, swidth, g, s, w, rng, zs, sz, bn, status,
+                tried, lags, rounded, helpers,
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
         if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR]), zs, sz, lags):
             continue
         placed += _step(
-            i, np.bool_(False), np.int64(-1), delta, swidth, g, s, w, rng, zs, sz, bn, status,
-            tried, lags, rounded, helpers,
+            i, bool(np.bool_(False)), int(np.int64(-1)), delta, swidth, g, s, w, rng, zs, sz, bn,
+            status, tried, lags, rounded, helpers,
         )  # fmt: skip
     return placed
