@@ -18,9 +18,7 @@ from typing import Any
 import numba
 
 import regopack
-
-TINY: dict[str, Any] = {"domain.width": 60.0, "domain.height": 60.0, "count": 60}
-"""The ``small`` scene made tiny: a packing takes milliseconds once compiled."""
+from regopack.compilation import TINY, VARIANTS
 
 STEPS: tuple[tuple[dict[str, Any], int], ...] = (
     ({"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}}, 2),
@@ -32,14 +30,7 @@ STEPS: tuple[tuple[dict[str, Any], int], ...] = (
 )
 """Scene changes and thread counts, in the reverse order of the suite's first use."""
 
-BOX: dict[str, Any] = {
-    "domain.kind": "box",
-    "domain.depth": 60.0,
-    "domain.center": [0.0, 0.0, 0.0],
-    "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "polyhedron"}}],
-    "insertion": {"kind": "available-surface"},
-    "count": 12,
-}
+BOX: dict[str, Any] = next(c for label, c in VARIANTS if label.endswith("(3D)"))
 """The last step: a tiny 3D packing, packed and given every 3D analysis (the suite
 runs the 3D analysis tests last, see ``conftest.py``)."""
 
