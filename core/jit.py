@@ -22,6 +22,7 @@ import os
 import sys
 from importlib import metadata
 from pathlib import Path
+from typing import Any
 
 KERNEL_SOURCES_GROUP = "regopack.kernel_sources"
 """Entry-point group whose values name packages holding numba kernels."""
@@ -113,5 +114,44 @@ def configure_threads() -> None:
     os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
 
 
+def lock_cache_saves() -> None:
+    """Make numba's cache saves exclusive between processes, on POSIX systems.
+
+    numba saves a compiled signature by reading the function's cache index,
+    choosing a data file name that the index does not use, writing the index and
+    then the data. Two processes that save different signatures of one function
+    at the same moment can choose the same name, and the index may then point
+    one signature at the other's machine code. A lock file beside each index
+    (``fcntl.flock``) makes each save whole; loading is unchanged. Without
+    ``fcntl``, or with a numba whose cache class differs, nothing changes.
+    """
+    try:
+        import fcntl
+
+        from numba.core import caching
+    except ImportError:
+        return
+    cls = getattr(caching, "IndexDataCacheFile", None)
+    original = getattr(cls, "save", None)
+    if cls is None or original is None or getattr(original, "regopack_locked", False):
+        return
+
+    def save(self: Any, key: Any, data: Any) -> None:
+        path = getattr(self, "_index_path", None)
+        if not isinstance(path, str):
+            original(self, key, data)
+            return
+        with open(path + ".lock", "a") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)
+            try:
+                original(self, key, data)
+            finally:
+                fcntl.flock(lock, fcntl.LOCK_UN)
+
+    save.regopack_locked = True  # type: ignore[attr-defined]
+    cls.save = save
+
+
 configure_cache()
 configure_threads()
+lock_cache_saves()

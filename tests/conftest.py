@@ -50,7 +50,7 @@ def _start_warmup() -> None:
     """
     if (
         _warmup
-        or (os.cpu_count() or 1) < 2
+        or len(os.sched_getaffinity(0)) < 2
         or os.environ.get("REGOPACK_TEST_WARMUP") == "0"
         or _sweep_cached()
     ):
@@ -58,7 +58,7 @@ def _start_warmup() -> None:
     script = Path(__file__).with_name("kernel_warmup.py")
     _warmup.append(
         subprocess.Popen(
-            [sys.executable, str(script)],
+            [sys.executable, str(script), str(os.getpid())],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -97,8 +97,8 @@ def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.It
         items[:] = [item for item in items if id(item) not in late_ids] + late
 
 
-def pytest_sessionfinish(session: pytest.Session, exitstatus: int) -> None:
-    """Stop the warm-up if it is still compiling."""
+def pytest_unconfigure(config: pytest.Config) -> None:
+    """Stop the warm-up if it is still compiling (also after ``--markers`` or a failed start)."""
     for proc in _warmup:
         if proc.poll() is None:
             proc.terminate()

@@ -7,12 +7,14 @@ four variants of the sweep (sharp polygons or rounded particles, on one thread
 or several), then the 3D scan and analyses, which the tests meet only minutes
 later. Both processes write the same on-disk cache
 (:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
-with the same result. The script stops early when its parent goes away.
+with the same result. Between steps the script stops once the process named by
+its argument (the test session) has gone.
 """
 
 from __future__ import annotations
 
 import os
+import sys
 from typing import Any
 
 import numba
@@ -40,7 +42,7 @@ def main() -> None:
     from regopack.analysis import dimensions_of
     from regopack.manager import default_registry
 
-    parent = os.getppid()
+    parent = int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid()
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
     for changes, threads in STEPS:
         if os.getppid() != parent:

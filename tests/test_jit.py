@@ -109,3 +109,35 @@ def test_kernel_threads_sleep_while_they_wait_unless_the_user_chose(
     monkeypatch.setenv("OMP_WAIT_POLICY", "ACTIVE")
     jit.configure_threads()
     assert os.environ["OMP_WAIT_POLICY"] == "ACTIVE"
+
+
+def test_cache_saves_hold_a_lock_and_keep_every_entry(tmp_path) -> None:
+    # two processes that save signatures of one function at once could otherwise
+    # give both the same data file (regopack.jit.lock_cache_saves)
+    import multiprocessing
+
+    from numba.core import caching
+
+    import regopack.jit  # noqa: F401
+
+    assert getattr(caching.IndexDataCacheFile.save, "regopack_locked", False)
+    ctx = multiprocessing.get_context("fork")
+    procs = [ctx.Process(target=_save_entries, args=(str(tmp_path), k)) for k in range(4)]
+    for proc in procs:
+        proc.start()
+    for proc in procs:
+        proc.join(60)
+        assert proc.exitcode == 0
+    cache = caching.IndexDataCacheFile(str(tmp_path), "f", ("stamp", 1))
+    for k in range(4):
+        for j in range(25):
+            assert cache.load(("key", k, j)) == ("data", k, j)
+    assert (tmp_path / "f.nbi.lock").exists()
+
+
+def _save_entries(folder: str, k: int) -> None:
+    from numba.core import caching
+
+    cache = caching.IndexDataCacheFile(folder, "f", ("stamp", 1))
+    for j in range(25):
+        cache.save(("key", k, j), ("data", k, j))

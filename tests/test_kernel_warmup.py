@@ -17,4 +17,3 @@ def test_every_warmup_step_is_a_valid_scene() -> None:
     assert ("available-arc", 2) in kinds and ("rsa", 1) in kinds
     box = regopack.scene("small", **{**kernel_warmup.TINY, **kernel_warmup.BOX})
     assert box.insertion.kind == "available-surface"
-
