@@ -43,6 +43,12 @@ def _sweep_cached() -> bool:
     return any(Path(folder).rglob("*sweep_range*.nbi"))
 
 
+def _usable_cpus() -> int:
+    """CPUs this process may run on (its affinity where the system tells it)."""
+    affinity = getattr(os, "sched_getaffinity", None)
+    return len(affinity(0)) if affinity is not None else os.cpu_count() or 1
+
+
 def _start_warmup() -> None:
     """Start ``kernel_warmup.py`` on a second core, once, unless the cache holds the sweep.
 
@@ -50,7 +56,7 @@ def _start_warmup() -> None:
     """
     if (
         _warmup
-        or len(os.sched_getaffinity(0)) < 2
+        or _usable_cpus() < 2
         or os.environ.get("REGOPACK_TEST_WARMUP") == "0"
         or _sweep_cached()
     ):

@@ -120,6 +120,8 @@ def test_cache_saves_hold_a_lock_and_keep_every_entry(tmp_path) -> None:
 
     import regopack.jit  # noqa: F401
 
+    pytest.importorskip("fcntl")  # the lock is taken on POSIX systems only
+
     assert getattr(caching.IndexDataCacheFile.save, "regopack_locked", False)
     ctx = multiprocessing.get_context("fork")
     procs = [ctx.Process(target=_save_entries, args=(str(tmp_path), k)) for k in range(4)]
