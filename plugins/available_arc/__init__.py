@@ -32,6 +32,7 @@ from regopack.population import Population
 
 if TYPE_CHECKING:
     from regopack.plugins.available_arc.batches import Helpers
+    from regopack.plugins.available_arc.partner import PartnerThread
     from regopack.plugins.available_arc.state import ArcState
     from regopack.plugins.available_arc.sweep import Sweep
 
@@ -281,7 +282,7 @@ def _pack_sweep(
     """Insert in the sweep order (see :mod:`regopack.plugins.available_arc.sweep`)."""
     import numba
 
-    from regopack.plugins.available_arc import batches, kernel, sweep
+    from regopack.plugins.available_arc import batches, kernel, partner, sweep
     from regopack.plugins.available_arc.lag import pilot_lags
 
     n = len(population)
@@ -317,8 +318,23 @@ def _pack_sweep(
         sw.set_lags(lags)
     threads = min(numba.get_num_threads(), batches.MAX_THREADS) if n else 1
     helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
+    # a partner thread analyses the screened search's next candidates (partner.py); not
+    # for disks alone, whose analyses are too quick and mostly skipped by their bounds
+    disks = st.packed.ipar[kernel.I_DISKS] == 1
+    team = (
+        partner.PartnerThread(st.work, st.packed)
+        if threads > 1 and partner.available() and not disks
+        else None
+    )
     piloted = time.perf_counter()
-    placed = _run_sweep(st, sw, n, rng, helpers, progress)
+    try:
+        placed = _run_sweep(st, sw, n, rng, helpers, progress, team)
+    finally:
+        # an error that ended the partner is raised once the insertion is over, unless
+        # the insertion itself failed (its own error then goes on)
+        failure = team.stop() if team is not None else None
+    if failure is not None:
+        raise failure
     index = np.full(n, -1, dtype=np.int64)
     order = st.packed.order[: st.count]
     index[order] = np.arange(order.shape[0])
@@ -331,6 +347,7 @@ def _pack_sweep(
         "zone_raises": sw.raises,
         "strips": sw.nstrip,
         "threads": threads,
+        "partner": int(team is not None),
         "refused": refused,
         "not_offered": n - placed - refused,
         **lag_info,
@@ -359,6 +376,7 @@ def _run_sweep(
     rng: np.random.Generator,
     helpers: Helpers | None,
     progress: ProgressCallback | None,
+    team: PartnerThread | None = None,
 ) -> int:
     """Offer particles ``0 .. n - 1`` to ``sw`` in chunks; return how many were placed."""
     placed = 0
@@ -369,7 +387,9 @@ def _run_sweep(
         # every placement takes at most one list row: this chunk's particles, and
         # at the end those still waiting for their lag
         st.reserve_rows(end - begin + sw.waiting)
-        placed += sw.run(begin, end, st.outlines, st.packed, st.work, rng, st.rounded, helpers)
+        placed += sw.run(
+            begin, end, st.outlines, st.packed, st.work, rng, st.rounded, helpers, team
+        )
     if progress is not None:
         progress(n, placed, n)
     return placed

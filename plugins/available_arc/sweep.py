@@ -42,11 +42,19 @@ from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins import strips
+from regopack.plugins.atomics import store_release
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.batches import Helpers, try_batch
 from regopack.plugins.available_arc.candidates import tree_set
 from regopack.plugins.available_arc.neighbours import release_row
-from regopack.plugins.available_arc.refusal import place_screened, try_candidate
+from regopack.plugins.available_arc.partner import (
+    C_PARK,
+    Partner,
+    PartnerThread,
+    new_partner,
+    place_screened_shared,
+)
+from regopack.plugins.available_arc.refusal import try_candidate
 from regopack.plugins.borrowed import borrowed
 from regopack.plugins.walls import WALL_BOX, WALL_PERIODIC, point_fits
 
@@ -170,6 +178,7 @@ class Sweep:
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
         self.bins = Bins(self.bin_head, self.bin_next, self.flag, self.rec)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
+        self._alone: Partner | None = None  # the shared arrays of a run without a partner
         # waiting particles by the bin of the front they wait for; a full zone's front
         # rises on for a zone height while its bins retire (see _top)
         nwait = nbins + 2 * int(self.zs[Z_NZONE]) + 1
@@ -198,16 +207,39 @@ class Sweep:
         rng: np.random.Generator,
         rounded: object = None,
         helpers: Helpers | None = None,
+        partner: PartnerThread | None = None,
     ) -> int:
         """Offer particles ``begin`` to ``end - 1``; return how many were placed.
 
         ``helpers``: per-thread scratch that spreads the exact scans over threads
-        (see :mod:`~regopack.plugins.available_arc.batches`); the packing is the same.
+        (see :mod:`~regopack.plugins.available_arc.batches`); ``partner``: a thread
+        that analyses the screened search's next candidates ahead of it (see
+        :mod:`~regopack.plugins.available_arc.partner`). The packing is the same.
         """
+        if partner is not None:
+            shared = partner.attach(g, s, rounded)
+        else:
+            if self._alone is None:
+                self._alone = new_partner()
+            shared = self._alone
+        return self._sweep(begin, end, g, s, w, rng, rounded, helpers, shared)
+
+    def _sweep(
+        self,
+        begin: int,
+        end: int,
+        g: K.Outlines,
+        s: K.Packed,
+        w: K.Work,
+        rng: np.random.Generator,
+        rounded: object,
+        helpers: Helpers | None,
+        shared: Partner,
+    ) -> int:
         return int(
             sweep_range(
                 begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bins, self.status, self.tried, self.lags, rounded, helpers,
+                self.bins, self.status, self.tried, self.lags, rounded, helpers, shared,
             )
         )  # fmt: skip
 
@@ -580,6 +612,7 @@ def _offer(
     bn: Bins,
     rounded: object,
     helpers: Helpers | None,
+    partner: Partner,
 ) -> int:
     """Offer particle ``i`` to strip ``st``: the screened zone search, rising, then exact.
 
@@ -590,7 +623,7 @@ def _offer(
     lo0 = sz[st, S_LO]
     hi0 = sz[st, S_HI]
     while True:
-        k = place_screened(i, mq, g, s, w, rng, rounded)
+        k = place_screened_shared(i, mq, g, s, w, rng, rounded, partner)
         if k >= 0:
             return k
         if sz[st, S_FULL] == 0 and raises < zs[Z_NZONE]:
@@ -605,7 +638,11 @@ def _offer(
             # opened freeze again, unless the zone reached the top (the closing)
             keep_hi = sz[st, S_HI] if sz[st, S_FULL] == 1 else hi0
             _roll_back(st, sz, lo0, keep_hi, sz[st, S_FULL], raises, s, bn)
-        return _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bn, helpers)
+        # the exact scan's batches take every thread: the partner sleeps meanwhile
+        store_release(partner.ctl, C_PARK, 1)
+        k = _exhaustive(i, mq, g, s, w, rng, rounded, st, sz[st, S_LO], bn, helpers)
+        store_release(partner.ctl, C_PARK, 0)
+        return k
 
 
 @numba.njit(cache=True)
@@ -627,6 +664,7 @@ def _step(
     lags: Lags,
     rounded: object,
     helpers: Helpers | None,
+    partner: Partner,
 ) -> int:
     """Offer particle ``i`` to the strips; return 1 when it is placed, else 0.
 
@@ -678,7 +716,7 @@ def _step(
         was_full = sz[st, S_FULL]
         if offered < 0:
             offered = st
-        k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded, helpers)
+        k = _offer(i, st, g, s, w, rng, zs, sz, bn, rounded, helpers, partner)
         if k >= 0:
             break
         if zs[Z_PROMPT] == 2 and was_full == 1 and not queued:
@@ -816,7 +854,7 @@ def _due(zs: IntArray, sz: IntArray, lags: Lags) -> tuple[int, int]:
     return -1, -1
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def sweep_range(
     begin: int,
     end: int,
@@ -832,8 +870,9 @@ def sweep_range(
     status: IntArray,
     tried: IntArray,
     lags: Lags,
-    rounded: object = None,
-    helpers: Helpers | None = None,
+    rounded: object,
+    helpers: Helpers | None,
+    partner: Partner,
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.
 
@@ -854,7 +893,7 @@ def sweep_range(
     # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
     g, s, w, zs, sz = borrowed(g), borrowed(s), borrowed(w), borrowed(zs), borrowed(sz)
     bn, status, tried, lags = borrowed(bn), borrowed(status), borrowed(tried), borrowed(lags)
-    helpers = borrowed(helpers)
+    helpers, partner = borrowed(helpers), borrowed(partner)
     placed = 0
     last = end >= status.shape[0]
     for i in range(begin, end + 1 if last else end):
@@ -891,7 +930,7 @@ def sweep_range(
             # (no literal flags or strips in these calls: see kernel.analyze_candidate's nf)
             placed += _step(
                 q, bool(np.bool_(True)), st, delta, swidth, g, s, w, rng, zs, sz, bn, status,
-                tried, lags, rounded, helpers,
+                tried, lags, rounded, helpers, partner,
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
@@ -899,6 +938,6 @@ def sweep_range(
             continue
         placed += _step(
             i, bool(np.bool_(False)), int(np.int64(-1)), delta, swidth, g, s, w, rng, zs, sz, bn,
-            status, tried, lags, rounded, helpers,
+            status, tried, lags, rounded, helpers, partner,
         )  # fmt: skip
     return placed

@@ -46,7 +46,9 @@ def _run(
     pop: Population, domain: Domain, seed: int, **cfg: object
 ) -> tuple[bytes, dict[str, object]]:
     res = pack(pop, domain, np.random.default_rng(seed), order="sweep", **cfg)
-    stats = {k: v for k, v in res.stats.items() if "time" not in k and k != "threads"}
+    stats = {
+        k: v for k, v in res.stats.items() if "time" not in k and k not in ("threads", "partner")
+    }
     return res.centre.tobytes() + res.insertion_index.tobytes(), stats
 
 
