@@ -34,6 +34,7 @@ can run in chunks between progress reports.
 from __future__ import annotations
 
 import math
+import threading
 from typing import NamedTuple
 
 import numba
@@ -236,12 +237,16 @@ class Sweep:
         helpers: Helpers | None,
         shared: Partner,
     ) -> int:
-        return int(
-            sweep_range(
-                begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
-                self.bins, self.status, self.tried, self.lags, rounded, helpers, shared,
-            )
-        )  # fmt: skip
+        # sweep_range releases the GIL (for the partner thread); sweeps run from several
+        # Python threads still take turns chunk by chunk, as they did holding it: numba's
+        # workqueue threading layer aborts on parallel regions entered concurrently
+        with _RUN_LOCK:
+            return int(
+                sweep_range(
+                    begin, end, self.delta, self.swidth, g, s, w, rng, self.zs, self.sz,
+                    self.bins, self.status, self.tried, self.lags, rounded, helpers, shared,
+                )
+            )  # fmt: skip
 
     @property
     def raises(self) -> int:
@@ -258,6 +263,9 @@ class Sweep:
         """Particles refused."""
         return int(self.zs[Z_REFUSED])
 
+
+_RUN_LOCK = threading.Lock()
+"""Held while a chunk of a sweep runs (see ``Sweep._sweep``)."""
 
 CLOSINGS: dict[str, int] = {"paced": 0, "prompt": 1, "tail": 2}
 """Code of each closing in ``zs[Z_PROMPT]``."""

@@ -230,3 +230,22 @@ def test_the_caller_takes_back_what_a_stalled_partner_holds(
         key, stats = _run(m, pop, domain, 10, 2)
     assert key == alone
     assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
+
+
+def test_sweeps_from_two_python_threads_give_their_own_packings(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    from concurrent.futures import ThreadPoolExecutor
+
+    pops = [change5_population(400, seed)[0] for seed in (11, 12)]
+    domain = Rectangle.centred(70.0, 70.0)
+    alone = [_run(monkeypatch, pop, domain, 11, 2)[0] for pop in pops]
+    with monkeypatch.context() as m:
+        _threads(m, 2)
+        with ThreadPoolExecutor(2) as pool:
+            jobs = [
+                pool.submit(pack, pop, domain, np.random.default_rng(11), order="sweep")
+                for pop in pops
+            ]
+            results = [job.result() for job in jobs]
+    assert [r.centre.tobytes() + r.insertion_index.tobytes() for r in results] == alone
