@@ -242,16 +242,22 @@ class AvailableArc(InsertionStrategy):
             )
         counts = np.zeros(1, dtype=np.int64)
         placed = 0
-        for begin in range(0, n, PROGRESS_EVERY):
-            if progress is not None:
-                progress(begin, placed, n)
-            end = min(begin + PROGRESS_EVERY, n)
-            if exact:
-                placed += st.pack_range_exact(begin, end, rng, counts)
-            elif compiled:
-                placed += st.pack_range(begin, end, rng)
-            else:
-                placed += _pack_python(st, begin, end, controller, rng)
+        team = _partner_for(st) if compiled and not exact else None
+        try:
+            for begin in range(0, n, PROGRESS_EVERY):
+                if progress is not None:
+                    progress(begin, placed, n)
+                end = min(begin + PROGRESS_EVERY, n)
+                if exact:
+                    placed += st.pack_range_exact(begin, end, rng, counts)
+                elif compiled:
+                    placed += st.pack_range(begin, end, rng, team)
+                else:
+                    placed += _pack_python(st, begin, end, controller, rng)
+        finally:
+            failure = team.stop() if team is not None else None
+        if failure is not None:
+            raise failure
         if progress is not None:
             progress(n, placed, n)
         index = np.full(n, -1, dtype=np.int64)
@@ -282,7 +288,7 @@ def _pack_sweep(
     """Insert in the sweep order (see :mod:`regopack.plugins.available_arc.sweep`)."""
     import numba
 
-    from regopack.plugins.available_arc import batches, kernel, partner, sweep
+    from regopack.plugins.available_arc import batches, kernel, sweep
     from regopack.plugins.available_arc.lag import pilot_lags
 
     n = len(population)
@@ -318,14 +324,7 @@ def _pack_sweep(
         sw.set_lags(lags)
     threads = min(numba.get_num_threads(), batches.MAX_THREADS) if n else 1
     helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
-    # a partner thread analyses the screened search's next candidates (partner.py); not
-    # for disks alone, whose analyses are too quick and mostly skipped by their bounds
-    disks = st.packed.ipar[kernel.I_DISKS] == 1
-    team = (
-        partner.PartnerThread(st.work, st.packed)
-        if threads > 1 and partner.available() and not disks
-        else None
-    )
+    team = _partner_for(st)
     piloted = time.perf_counter()
     try:
         placed = _run_sweep(st, sw, n, rng, helpers, progress, team)
@@ -356,6 +355,24 @@ def _pack_sweep(
         "insert_time_s": time.perf_counter() - prepared,
     }
     return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+
+def _partner_for(st: ArcState) -> PartnerThread | None:
+    """Return a partner thread for the screened searches of ``st``, or None.
+
+    With two threads or more (numba's count) where threads can sleep (POSIX);
+    not for disks alone, whose analyses are too quick to hand over and mostly
+    skipped by their bounds. The packing is the same with it or without it.
+    """
+    import numba
+
+    from regopack.plugins.available_arc import kernel, partner
+
+    if numba.get_num_threads() < 2 or not partner.available():
+        return None
+    if st.packed.ipar[kernel.I_DISKS] == 1:
+        return None
+    return partner.PartnerThread(st.work, st.packed)
 
 
 def _child(rng: np.random.Generator) -> np.random.Generator:

@@ -453,3 +453,33 @@ def place_screened_shared(
         angle = K.sample_angle(arcs, rng.random())
         x, y = K.locate(s.order[k], i, mq, angle, g, s, w, rounded)
         return K.insert_particle(i, x, y, g, s)
+
+
+@numba.njit(cache=True, nogil=True)
+def pack_range_shared(
+    begin: int,
+    end: int,
+    g: K.Outlines,
+    s: K.Packed,
+    w: K.Work,
+    rng: np.random.Generator,
+    rounded: object,
+    p: Partner,
+) -> int:
+    """:func:`kernel.pack_range` (the paper's order) with the partner analysing ahead.
+
+    The same particles in the same order through the same calls; the search
+    of each is :func:`find_site_shared`, so the packing is the same bit for bit.
+    """
+    # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
+    g, s, w, p = borrowed(g), borrowed(s), borrowed(w), borrowed(p)
+    placed = 0
+    for i in range(begin, end):
+        if s.ipar[K.I_COUNT] == 0:
+            if K.place_first(i, g, s, rng):
+                placed += 1
+            continue
+        mq = K.begin_particle(i, g, s, w)
+        if place_screened_shared(i, mq, g, s, w, rng, rounded, p) >= 0:
+            placed += 1
+    return placed

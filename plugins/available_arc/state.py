@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,6 +19,9 @@ from regopack.plugins.walls import (
     wall_arrays,
 )
 from regopack.population import Population
+
+if TYPE_CHECKING:
+    from regopack.plugins.available_arc.partner import PartnerThread
 
 FloatArray = NDArray[np.float64]
 
@@ -222,8 +225,22 @@ class ArcState:
         """Value of integer counter ``index`` of ``kernel.I_*``."""
         return int(self.packed.ipar[index])
 
-    def pack_range(self, begin: int, end: int, rng: np.random.Generator) -> int:
-        """Insert particles ``begin`` to ``end - 1`` with the compiled eta rule."""
+    def pack_range(
+        self, begin: int, end: int, rng: np.random.Generator, team: PartnerThread | None = None
+    ) -> int:
+        """Insert particles ``begin`` to ``end - 1`` with the compiled eta rule.
+
+        ``team``: a partner thread for the searches (the same packing).
+        """
+        if team is not None:
+            from regopack.plugins.available_arc.partner import pack_range_shared
+
+            shared = team.attach(self.outlines, self.packed, self.rounded)
+            return int(
+                pack_range_shared(
+                    begin, end, self.outlines, self.packed, self.work, rng, self.rounded, shared
+                )
+            )
         return int(
             kernel.pack_range(begin, end, self.outlines, self.packed, self.work, rng, self.rounded)
         )

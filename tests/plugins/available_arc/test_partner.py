@@ -58,7 +58,7 @@ def _run(
             return stop(self)
 
         m.setattr(partner.PartnerThread, "stop", counted)
-        res = pack(pop, domain, np.random.default_rng(seed), order="sweep", **cfg)
+        res = pack(pop, domain, np.random.default_rng(seed), **{"order": "sweep", **cfg})
     stats = dict(res.stats)
     if served:
         stats["served"] = served[-1]
@@ -249,3 +249,20 @@ def test_sweeps_from_two_python_threads_give_their_own_packings(
             ]
             results = [job.result() for job in jobs]
     assert [r.centre.tobytes() + r.insertion_index.tobytes() for r in results] == alone
+
+
+@pytest.mark.parametrize("eta", [0.0, 20.0])
+def test_partner_in_the_papers_order_gives_the_reference_packing(
+    monkeypatch: pytest.MonkeyPatch, eta: float
+) -> None:
+    pop, _ = change5_population(500, 13)
+    domain = DOMAINS["periodic"] if eta else DOMAINS["circle"]
+    alone, alone_stats = _run(monkeypatch, pop, domain, 13, 1, order="paper", eta=eta)
+    assert "served" not in alone_stats
+    for defer in (False, True):
+        key, stats = _run(monkeypatch, pop, domain, 13, 2, defer, order="paper", eta=eta)
+        assert key == alone
+        assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
+        assert isinstance(stats["served"], int)
+        if defer:
+            assert stats["served"] >= 0.5 * stats["candidate_analyses"]
