@@ -106,23 +106,16 @@ class Partner(NamedTuple):
     """``k[slot]``: the posted candidate's insertion index (the caller's own)."""
     arcs: FloatArray
     """``(SLOTS, ARC_CAP, 2)``: the arcs of the partner's analyses."""
-    shut: FloatArray
-    """The partner's ``Packed.shut`` (one entry: it proves no bounds of disks)."""
 
 
-def new_partner(packed: K.Packed | None = None) -> Partner:
-    """Shared arrays for a search and its partner; none serves yet.
-
-    ``packed`` is accepted for symmetry with the other scratch builders; the
-    arrays do not depend on it.
-    """
+def new_partner() -> Partner:
+    """Shared arrays for a search and its partner; none serves yet."""
     return Partner(
         ctl=np.zeros(N_CTL, dtype=np.int64),
         state=np.zeros(SLOTS * PAD, dtype=np.int64),
         task=np.zeros(SLOTS * PAD, dtype=np.int64),
         k=np.zeros(SLOTS, dtype=np.int64),
         arcs=np.zeros((SLOTS, ARC_CAP, 2)),
-        shut=np.full(1, np.inf),
     )
 
 
@@ -141,7 +134,7 @@ class PartnerThread:
     """
 
     def __init__(self, work: K.Work, packed: K.Packed) -> None:
-        self.shared = new_partner(packed)
+        self.shared = new_partner()
         self.helpers = new_helpers(work, packed, 1)
         # the partner proves no bounds of disks: they would go to its own row, and one
         # proved by an analysis the caller gave up on could rest on a changing packing
@@ -212,7 +205,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[0],
         s.fpar, h.ipar[0], s.walls,
         s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-        s.nb_img, p.shut,
+        s.nb_img, h.shut[0],
     )  # fmt: skip
     idle = 0
     while load_acquire(p.ctl, C_STOP) == 0:

@@ -31,8 +31,8 @@ def _threads(monkeypatch: pytest.MonkeyPatch, threads: int, defer: bool = False)
     if defer:
         shared = partner.new_partner
 
-        def deferring(packed: Any = None) -> partner.Partner:
-            p = shared(packed)
+        def deferring() -> partner.Partner:
+            p = shared()
             p.ctl[partner.C_DEFER] = 1
             return p
 
@@ -182,8 +182,8 @@ def test_arcs_too_many_to_hand_back_are_found_again_by_the_caller(
     alone, alone_stats = _run(monkeypatch, pop, domain, 9, 1)
     shared = partner.new_partner
 
-    def one_arc(packed: Any = None) -> partner.Partner:
-        p = shared(packed)
+    def one_arc() -> partner.Partner:
+        p = shared()
         p.ctl[partner.C_DEFER] = 1  # the partner analyses everything, hands back one arc
         return p._replace(arcs=np.zeros((partner.SLOTS, 1, 2)))
 
