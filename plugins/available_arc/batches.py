@@ -70,6 +70,7 @@ class Helpers(NamedTuple):
     woff: FloatArray
     found: IntArray
     found_q: IntArray
+    fs: FloatArray
     ipar: IntArray
     """``(T, N_IPAR)``: each thread's copy of the parameters and its scratch counters."""
     stamp: IntArray
@@ -140,7 +141,7 @@ def _analyse_batch(
             h.wx[t], h.wy[t], h.wex[t], h.wey[t], h.va[t],
             h.ckey[t], h.cslot[t],
             h.cache_x[t], h.cache_y[t], h.cache_ex[t], h.cache_ey[t],
-            h.cache_n[t], h.cache_rad[t], h.woff[t], h.found[t], h.found_q[t],
+            h.cache_n[t], h.cache_rad[t], h.woff[t], h.found[t], h.found_q[t], h.fs[t],
         )  # fmt: skip
         st = K.Packed(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],

@@ -28,14 +28,21 @@ def tree_size(n: int) -> int:
 
 @numba.njit(cache=True)
 def tree_set(tree: FloatArray, leaves: int, k: int, value: float) -> None:
-    """Set ``rmin`` of insertion index ``k`` and update the maxima above it."""
+    """Set ``rmin`` of insertion index ``k`` and update the maxima above it.
+
+    The update stops at the first node whose maximum does not change: every
+    node above it holds the maximum of its children already.
+    """
     node = k + leaves
     tree[node] = value
     node >>= 1
     while node >= 1:
         a = tree[2 * node]
         b = tree[2 * node + 1]
-        tree[node] = a if a >= b else b
+        m = a if a >= b else b
+        if tree[node] == m:
+            return
+        tree[node] = m
         node >>= 1
 
 

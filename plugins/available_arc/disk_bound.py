@@ -129,6 +129,7 @@ def disk_bound(
     ocx: FloatArray,
     ocy: FloatArray,
     orad: FloatArray,
+    scratch: FloatArray | None = None,
 ) -> float:
     """Radius from which no disk touching the candidate fits; ``inf`` if none is shown.
 
@@ -142,13 +143,22 @@ def disk_bound(
         The smallest radius of the scene: a candidate covered there is shut for all.
     nf, ocx, ocy, orad
         That analysis's interferers: centres relative to the candidate and radii.
+    scratch
+        Rows 6 to 9 serve as the covers, distances and angles when they fit (see
+        ``kernel.Work.fs``).
     """
     if nf < 2:
         return math.inf
-    lo = np.empty(2 * nf)
-    hi = np.empty(2 * nf)
-    dist = np.empty(nf)
-    angle = np.empty(nf)
+    if scratch is not None and 2 * nf <= scratch.shape[1]:
+        lo = scratch[6]
+        hi = scratch[7]
+        dist = scratch[8]
+        angle = scratch[9]
+    else:
+        lo = np.empty(2 * nf)
+        hi = np.empty(2 * nf)
+        dist = np.empty(nf)
+        angle = np.empty(nf)
     for f in range(nf):
         dist[f] = math.hypot(ocx[f], ocy[f])
         angle[f] = math.atan2(ocy[f], ocx[f])

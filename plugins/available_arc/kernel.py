@@ -108,6 +108,9 @@ FIRST_RANDOM_TRIES = 10_000
 CACHE_SLOTS = 512
 FOUND_SLOTS = 64
 """Interferers an analysis holds in its scratch before it allocates a larger buffer."""
+SCRATCH_ROWS = 10
+SCRATCH_WIDTH = 2 * (FOUND_SLOTS + 8)
+"""Shape of ``Work.fs``: room for the covers of ``FOUND_SLOTS`` interferers and 8 walls."""
 CIRCLE_SLACK = 1.0 + 1e-9
 """Relative slack of the squared-circumcircle pre-test of the covered-edge search."""
 
@@ -185,6 +188,11 @@ class Work(NamedTuple):
     ``LIST_CAPACITY = FOUND_SLOTS`` entries) gets a buffer of its length."""
     found_q: IntArray
     """In a periodic domain, the image query that found each interferer."""
+    fs: FloatArray
+    """``(SCRATCH_ROWS, SCRATCH_WIDTH)``: rows of scratch for an analysis of disks
+    (:func:`~regopack.plugins.available_arc.rounded.disk_arcs` and
+    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`); one with more
+    interferers allocates its own."""
 
 
 @numba.njit(cache=True)
@@ -462,9 +470,17 @@ def analyze_candidate(
         goff = g.offsets
         q0x = w.rx[0]
         q0y = w.ry[0]
-        ocx = np.empty(nf)
-        ocy = np.empty(nf)
-        orho = np.empty(nf)
+        fs = w.fs
+        if nf <= fs.shape[1]:
+            ocx = fs[0]
+            ocy = fs[1]
+            orho = fs[2]
+            box = fs[3]
+        else:
+            ocx = np.empty(nf)
+            ocy = np.empty(nf)
+            orho = np.empty(nf)
+            box = np.empty(4)
         for f in range(nf):
             o = found[f]
             odx_ = cx[o] - pcx
@@ -477,17 +493,16 @@ def analyze_candidate(
             ocx[f] = odx_ + (gvx[goff[o]] + q0x)
             ocy[f] = ody_ + (gvy[goff[o]] + q0y)
             orho[f] = grho[o] + grho[i]
-        box = np.empty(4)
         box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
         inner = s.walls[0, 2] - grho[i] if mode == WALL_CIRCLE else 0.0
         arcs = disk_arcs(
             grho[pk] + grho[i], pcx, pcy, nf, ocx, ocy, orho,
-            mode, s.walls, box, w.woff, w.rx, w.ry, inner,
+            mode, s.walls, box, w.woff, w.rx, w.ry, inner, fs,
         )  # fmt: skip
         if arcs.shape[0] == 0 and ipar[I_BOUND] == 1:
             for f in range(nf):
                 orho[f] = grho[found[f]]
-            bound = disk_bound(grho[pk], grho[i], fpar[F_RMIN], nf, ocx, ocy, orho)
+            bound = disk_bound(grho[pk], grho[i], fpar[F_RMIN], nf, ocx, ocy, orho, fs)
             if bound < s.shut[pk]:
                 s.shut[pk] = bound
         return arcs

@@ -622,6 +622,7 @@ def disk_arcs(
     qx: FloatArray,
     qy: FloatArray,
     inner: float,
+    scratch: FloatArray | None = None,
 ) -> FloatArray:
     """:func:`rounded_arcs` when the candidate, the new particle and every interferer are disks.
 
@@ -630,11 +631,16 @@ def disk_arcs(
     ocy[f])`` (relative to the candidate's centre ``pc``), covers one open arc
     of it, and every wall (or, in a circle, the outside of the one admissible
     disk) covers one arc. The free arcs are the gaps between the covered
-    ones, in polar angle from 0.
+    ones, in polar angle from 0. ``scratch``: rows 4 and 5 hold the covers when they
+    fit (see ``kernel.Work.fs``).
     """
     k_walls = 4 if mode == WALL_BOX else (walls.shape[0] if mode == WALL_HALFPLANES else 1)
-    lo = np.empty(2 * (nf + k_walls))
-    hi = np.empty(2 * (nf + k_walls))
+    if scratch is not None and 2 * (nf + k_walls) <= scratch.shape[1]:
+        lo = scratch[4]
+        hi = scratch[5]
+    else:
+        lo = np.empty(2 * (nf + k_walls))
+        hi = np.empty(2 * (nf + k_walls))
     k = 0
     for f in range(nf):
         centre, half = _circle_cover(rho, ocx[f], ocy[f], orho[f])

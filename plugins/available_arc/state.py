@@ -186,6 +186,7 @@ class ArcState:
             woff=np.zeros(walls.shape[0] if mode == WALL_HALFPLANES else 1),
             found=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
             found_q=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
+            fs=np.empty((kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH)),
         )
 
     def reserve_rows(self, need: int) -> None:

@@ -126,3 +126,48 @@ def test_the_sweep_packs_disks_the_same_with_and_without_their_own_analysis(
         res = pack(pop, Rectangle.centred(80.0, 110.0), rng, order="sweep", closing=closing)
         out.append(res.centre.tobytes() + res.insertion_index.tobytes())
     assert out[0] == out[1]
+
+
+@given(
+    nf=st.integers(0, 90),
+    seed=st.integers(0, 10_000),
+    mode=st.sampled_from(["box", "circle"]),
+)
+@settings(max_examples=60, deadline=None)
+def test_the_scratch_rows_give_what_fresh_arrays_give(nf: int, seed: int, mode: str) -> None:
+    """disk_arcs and disk_bound on the rows of Work.fs, laid out as the analysis lays them
+    out (interferers in rows 0-2, the box in row 3), give the same arcs and bound as on
+    arrays of their own, also past the rows' width (nf > 68: they allocate)."""
+    from regopack.plugins.available_arc.disk_bound import disk_bound
+    from regopack.plugins.available_arc.rounded import disk_arcs
+    from regopack.plugins.walls import WALL_BOX, WALL_CIRCLE
+
+    rng = np.random.default_rng(seed)
+    rho = 1.0
+    ang = rng.uniform(0, 2 * np.pi, nf)
+    dist = rng.uniform(0.8, 3.0, nf)
+    ocx, ocy = dist * np.cos(ang), dist * np.sin(ang)
+    orho = rng.uniform(0.2, 1.5, nf)
+    box = np.array([-2.5, 2.5, -2.0, 2.0])
+    walls = np.array([[0.0, 0.0, 2.2]]) if mode == "circle" else np.zeros((1, 3))
+    code = WALL_CIRCLE if mode == "circle" else WALL_BOX
+    q = np.zeros(1)
+    fs = np.full((kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH), np.nan)
+    if nf <= fs.shape[1]:
+        fs[0, :nf], fs[1, :nf], fs[2, :nf] = ocx, ocy, orho
+        fs[3, :4] = box
+        args = (fs[0], fs[1], fs[2], code, walls, fs[3])
+    else:
+        args = (ocx.copy(), ocy.copy(), orho.copy(), code, walls, box.copy())
+    fresh = disk_arcs(rho, 0.1, -0.2, nf, ocx, ocy, orho, code, walls, box, q, q, q, 2.2 - 0.5)
+    inner = 2.2 - 0.5
+    rows = disk_arcs(rho, 0.1, -0.2, nf, *args, q, q, q, inner, fs)
+    np.testing.assert_array_equal(rows, fresh)
+    radii = orho * 0.5
+    expected = disk_bound(0.5, 0.5, 0.05, nf, ocx, ocy, radii)
+    if nf <= fs.shape[1]:
+        fs[2, :nf] = radii
+    got = disk_bound(
+        0.5, 0.5, 0.05, nf, args[0], args[1], fs[2] if nf <= fs.shape[1] else radii, fs
+    )
+    assert got == expected
