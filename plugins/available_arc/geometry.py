@@ -198,29 +198,34 @@ def minkowski_envelope(
     direction of the edge that starts at each vertex goes to ``wex, wey``.
     Returns the number of vertices, ``m_P + m_Q``.
     """
-    s = offsets[p]
-    mp = offsets[p + 1] - s
-    ip = 0
-    iq = 0
-    n = 0
-    while ip < mp or iq < mq:
-        pi_ = ip if ip < mp else 0
-        qi = iq if iq < mq else 0
+    # unsigned indices: an index that cannot be negative needs no wraparound test,
+    # which otherwise costs each access of this loop a few instructions
+    zero = np.uint64(0)
+    one = np.uint64(1)
+    s = np.uint64(offsets[p])
+    mp = np.uint64(offsets[p + 1]) - s
+    mqu = np.uint64(mq)
+    ip = zero
+    iq = zero
+    n = zero
+    while ip < mp or iq < mqu:
+        pi_ = ip if ip < mp else zero
+        qi = iq if iq < mqu else zero
         wx[n] = vx[s + pi_] + rx[qi]
         wy[n] = vy[s + pi_] + ry[qi]
-        if iq >= mq or (ip < mp and ang[s + ip] <= rang[iq]):
+        if iq >= mqu or (ip < mp and ang[s + ip] <= rang[iq]):
             wex[n] = ex[s + ip]
             wey[n] = ey[s + ip]
-            ip += 1
+            ip += one
         else:
             wex[n] = rex[iq]
             wey[n] = rey[iq]
-            iq += 1
-        n += 1
-    return n
+            iq += one
+        n += one
+    return int(n)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, error_model="numpy", fastmath={"nnan", "nsz"})
 def clip_open_interior(
     ax: float,
     ay: float,
@@ -235,26 +240,30 @@ def clip_open_interior(
     """Parameter interval ``(lo, hi)`` of ``a + s d`` inside the open interior of a convex polygon.
 
     The polygon is given by its vertices ``w`` and unit edge directions ``we``
-    (counter-clockwise). The interval is empty when ``lo >= hi``.
+    (counter-clockwise). The interval is empty when ``lo >= hi`` (its ends are
+    then of no use). Every side is clipped, with no early exit and no branch on
+    the side's direction, so that the loop compiles to vector instructions: a
+    non-empty interval is the largest lower and the smallest upper end, as a
+    clip that stops at the first empty one gives. The compiler may assume no
+    NaN (the inputs are finite) and ignore the sign of a zero, which only an
+    end at exactly 0 can carry and which no comparison of the callers tells
+    apart; no product is fused and no sum reordered.
     """
     lo = -np.inf
     hi = np.inf
+    shut = False
     for j in range(n):
         # cross(e, a + s d - w) > 0  <=>  f0 + s f1 > 0
         f0 = wex[j] * (ay - wy[j]) - wey[j] * (ax - wx[j])
         f1 = wex[j] * dy - wey[j] * dx
-        if f1 > 0.0:
-            t = -f0 / f1
-            if t > lo:
-                lo = t
-        elif f1 < 0.0:
-            t = -f0 / f1
-            if t < hi:
-                hi = t
-        elif f0 <= 0.0:
-            return 1.0, 0.0
-        if lo >= hi:
-            return lo, hi
+        up = f1 > 0.0
+        down = f1 < 0.0
+        t = -f0 / (f1 if up or down else 1.0)
+        lo = max(lo, t if up else -np.inf)
+        hi = min(hi, t if down else np.inf)
+        shut |= not up and not down and f0 <= 0.0
+    if shut:
+        return 1.0, 0.0
     return lo, hi
 
 
@@ -268,11 +277,15 @@ def inside_open(
     wey: FloatArray,
     n: int,
 ) -> bool:
-    """Return whether point ``p`` lies in the open interior of a convex polygon."""
+    """Return whether point ``p`` lies in the open interior of a convex polygon.
+
+    Every side is tested, with no early exit: the loop then compiles to vector
+    instructions, and most points tested lie inside, where every side is needed.
+    """
+    inside = True
     for j in range(n):
-        if wex[j] * (py - wy[j]) - wey[j] * (px - wx[j]) <= 0.0:
-            return False
-    return True
+        inside &= not (wex[j] * (py - wy[j]) - wey[j] * (px - wx[j]) <= 0.0)
+    return inside
 
 
 @numba.njit(cache=True)

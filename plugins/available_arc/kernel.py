@@ -639,9 +639,10 @@ def analyze_candidate(
         # fast path: both ends strictly inside one interferer's envelope cover the edge
         full = False
         if cur >= 0:
-            sl = slot[cur]
+            # unsigned slot numbers: no wraparound test at each access below
+            us = np.uint64(slot[cur])
             full = inside_open(
-                bx - odx[cur], by - ody[cur], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                bx - odx[cur], by - ody[cur], ox[us], oy[us], oex[us], oey[us], on[us]
             )
         mx = ax + 0.5 * dx
         my = ay + 0.5 * dy
@@ -651,16 +652,16 @@ def analyze_candidate(
             for f in range(nf):
                 gx = odx[f] - mx
                 gy = ody[f] - my
-                sl = slot[f]
+                us = np.uint64(slot[f])
                 # both ends within the circumcircle need |mid - c|^2 <= R^2 - half^2; the
                 # slack keeps rounding from rejecting an envelope that holds both ends,
                 # so that coverage does not depend on which interferer the fast path kept
-                if gx * gx + gy * gy + half * half > orad[sl] * orad[sl] * CIRCLE_SLACK:
+                if gx * gx + gy * gy + half * half > orad[us] * orad[us] * CIRCLE_SLACK:
                     continue
                 if inside_open(
-                    ax - odx[f], ay - ody[f], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                    ax - odx[f], ay - ody[f], ox[us], oy[us], oex[us], oey[us], on[us]
                 ) and inside_open(
-                    bx - odx[f], by - ody[f], ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                    bx - odx[f], by - ody[f], ox[us], oy[us], oex[us], oey[us], on[us]
                 ):
                     full = True
                     cur = f
@@ -685,12 +686,12 @@ def analyze_candidate(
         for f in range(nf):
             gx = odx[f] - mx
             gy = ody[f] - my
-            sl = slot[f]
-            lim = orad[sl] + half
+            us = np.uint64(slot[f])
+            lim = orad[us] + half
             if gx * gx + gy * gy >= lim * lim:
                 continue
             lo, hi = clip_open_interior(
-                ax - odx[f], ay - ody[f], dx, dy, ox[sl], oy[sl], oex[sl], oey[sl], on[sl]
+                ax - odx[f], ay - ody[f], dx, dy, ox[us], oy[us], oex[us], oey[us], on[us]
             )
             if lo < hi and hi > 0.0 and lo < 1.0:
                 if lo <= 0.0 and hi >= 1.0:

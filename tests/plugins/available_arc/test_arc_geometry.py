@@ -156,3 +156,72 @@ def test_split_lowest_edge_listed_first() -> None:
 def test_clip_against_an_empty_box_is_empty() -> None:
     lo, hi = clip_closed_box(-2.0, 0.0, 4.0, 1.0, 1.0, -1.0, -1.0, 1.0)
     assert lo > hi
+
+
+def _clip_oracle(ax, ay, dx, dy, wx, wy, wex, wey, n):
+    """The clip side by side, stopping at the first empty interval (plain Python floats)."""
+    lo, hi = -np.inf, np.inf
+    for j in range(n):
+        f0 = float(wex[j]) * (ay - float(wy[j])) - float(wey[j]) * (ax - float(wx[j]))
+        f1 = float(wex[j]) * dy - float(wey[j]) * dx
+        if f1 > 0.0:
+            lo = max(lo, -f0 / f1)
+        elif f1 < 0.0:
+            hi = min(hi, -f0 / f1)
+        elif f0 <= 0.0:
+            return 1.0, 0.0
+        if lo >= hi:
+            return lo, hi
+    return lo, hi
+
+
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    psi=st.floats(0.01, 1000),
+    ratio=st.floats(1e-4, 1e4),
+    scale=st.sampled_from([1e-6, 1.0, 1e6]),
+    kind=st.sampled_from(["random", "along an edge", "through a vertex", "parallel"]),
+)
+@settings(max_examples=200, deadline=None)
+def test_clip_and_inside_match_the_side_by_side_tests(seed, psi, ratio, scale, kind) -> None:
+    """The branch-free clip and the point test without early exit give what testing the
+    sides one by one gives: the same interval when it is not empty, empty when it is;
+    points on the outline (vertices, edge midpoints) are outside the open interior."""
+    from regopack.plugins.available_arc.geometry import inside_open
+    from regopack.population import Population, concat_shapes
+
+    rng = np.random.default_rng(seed)
+    pop_p = octagon_population(np.array([scale]), rng, psi=psi, a=0.5, m=8)
+    pop_q = octagon_population(np.array([scale * ratio]), rng, psi=psi, a=0.5, m=8)
+    shapes = concat_shapes([(np.array([0]), pop_p.shapes), (np.array([1]), pop_q.shapes)], 2)
+    pop = Population(np.array([scale, scale * ratio]), np.zeros(2, dtype=np.int64), ("m",), shapes)
+    n, (wx, wy, wex, wey) = _envelope(pop, 0, 1)
+    size = float(np.ptp(wx[:n]) + np.ptp(wy[:n]))
+    for _ in range(20):
+        j = int(rng.integers(n))
+        j2 = (j + 1) % n
+        if kind == "along an edge":
+            ax, ay = float(wx[j]), float(wy[j])
+            dx, dy = float(wx[j2] - wx[j]), float(wy[j2] - wy[j])
+        elif kind == "through a vertex":
+            ax, ay = float(wx[j]), float(wy[j])
+            dx, dy = rng.normal(size=2) * size
+        elif kind == "parallel":
+            t = rng.uniform(-1, 1) * size
+            ax, ay = float(wx[j] - wey[j] * t), float(wy[j] + wex[j] * t)
+            dx, dy = float(wex[j]) * size, float(wey[j]) * size
+        else:
+            ax, ay = rng.uniform(-1, 1, 2) * size
+            dx, dy = rng.normal(size=2) * size
+        got = clip_open_interior(ax, ay, dx, dy, wx, wy, wex, wey, n)
+        want = _clip_oracle(ax, ay, dx, dy, wx, wy, wex, wey, n)
+        assert (got[0] < got[1]) == (want[0] < want[1])
+        if want[0] < want[1]:
+            assert got == want
+        px, py = rng.uniform(-0.6, 0.6, 2) * size
+        side = [
+            float(wex[k]) * (py - float(wy[k])) - float(wey[k]) * (px - float(wx[k]))
+            for k in range(n)
+        ]
+        assert inside_open(px, py, wx, wy, wex, wey, n) == all(c > 0.0 for c in side)
+        assert not inside_open(float(wx[j]), float(wy[j]), wx, wy, wex, wey, n)
