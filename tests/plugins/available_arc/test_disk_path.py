@@ -171,3 +171,62 @@ def test_the_scratch_rows_give_what_fresh_arrays_give(nf: int, seed: int, mode: 
         0.5, 0.5, 0.05, nf, args[0], args[1], fs[2] if nf <= fs.shape[1] else radii, fs
     )
     assert got == expected
+
+
+@pytest.mark.parametrize("k_walls", [3, 40, 71, 72, 100])
+@pytest.mark.parametrize("nf", [0, 2, 64, 70, 73, 145])
+def test_scratch_rows_with_many_walls_give_what_fresh_arrays_give(k_walls: int, nf: int) -> None:
+    """A polygon domain of many sides: ``2 (nf + walls)`` covers cross the rows' width at
+    some point; on both sides of it the rows, full of stale values, give what fresh arrays
+    give, and ``disk_arcs`` leaves the interferers' rows as they were for ``disk_bound``."""
+    from regopack.plugins.available_arc.disk_bound import disk_bound
+    from regopack.plugins.available_arc.rounded import disk_arcs
+    from regopack.plugins.walls import WALL_HALFPLANES
+
+    rng = np.random.default_rng(1000 * k_walls + nf)
+    a = 0.3 + 2 * np.pi * np.arange(k_walls) / k_walls
+    walls = np.zeros((k_walls, 3))
+    walls[:, 0], walls[:, 1] = np.cos(a), np.sin(a)
+    woff = 1.2 + rng.uniform(0, 0.5, k_walls)  # some walls cut the circle of centres
+    ang = rng.uniform(0, 2 * np.pi, nf)
+    dist = rng.uniform(0.8, 3.0, nf)
+    ocx, ocy = dist * np.cos(ang), dist * np.sin(ang)
+    orho = rng.uniform(0.05, 0.6, nf)
+    box = np.zeros(4)
+    q = np.zeros(1)
+    code = WALL_HALFPLANES
+    fresh = disk_arcs(1.0, 0.05, -0.1, nf, ocx, ocy, orho, code, walls, box, woff, q, q, 0.0)
+    fs = np.full((kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH), np.nan)
+    fits = nf <= fs.shape[1]
+    if fits:  # laid out as analyze_candidate lays them out
+        fs[0, :nf], fs[1, :nf], fs[2, :nf] = ocx, ocy, orho
+        fs[3, :4] = box
+        args = (fs[0], fs[1], fs[2], code, walls, fs[3])
+    else:
+        args = (ocx.copy(), ocy.copy(), orho.copy(), code, walls, box.copy())
+    rows = disk_arcs(1.0, 0.05, -0.1, nf, *args, woff, q, q, 0.0, fs)
+    np.testing.assert_array_equal(rows, fresh)
+    radii = orho * 0.5
+    if fits:
+        np.testing.assert_array_equal(fs[0, :nf], ocx)
+        np.testing.assert_array_equal(fs[1, :nf], ocy)
+        fs[2, :nf] = radii
+    got = disk_bound(0.5, 0.5, 0.05, nf, args[0], args[1], fs[2] if fits else radii, fs)
+    assert got == disk_bound(0.5, 0.5, 0.05, nf, ocx, ocy, radii)
+
+
+def test_every_thread_and_the_partner_have_scratch_rows_of_their_own() -> None:
+    """The batches' threads, the partner and the calling thread write their analyses'
+    scratch rows at the same time: no two may share memory."""
+    from regopack.plugins.available_arc import batches, partner
+
+    rng = np.random.default_rng(3)
+    pop = _disks(rng.uniform(1.0, 2.0, 30), rng)
+    st_ = ArcState(pop, Rectangle(0.0, 40.0, 0.0, 40.0), t=0.999, tau=None, linear=False)
+    h = batches.new_helpers(st_.work, st_.packed, 4)
+    mate = partner.PartnerThread(st_.work, st_.packed)
+    rows = [h.fs[t] for t in range(4)] + [mate.helpers.fs[0], st_.work.fs]
+    assert h.fs.shape == (4, kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH)
+    for a in range(len(rows)):
+        for b in range(a + 1, len(rows)):
+            assert not np.shares_memory(rows[a], rows[b])
