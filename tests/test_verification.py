@@ -1,7 +1,5 @@
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -172,14 +170,13 @@ def grid_packing(k: int, scale: float = 1.0) -> Packing:
     )
 
 
-def test_large_packing_is_fast():
-    p = grid_packing(200)  # 40 000 touching particles
-    start = time.perf_counter()
+def test_a_large_touching_packing_is_verified():
+    """40 000 touching particles: every one checked, none overlapping (the time it takes is
+    a benchmark's figure: ``benchmarks/bench_verification.py``)."""
+    p = grid_packing(200)
     report = verify(p)
-    elapsed = time.perf_counter() - start
     assert report.ok
     assert report.n_checked == 40_000
-    assert elapsed < 20
 
 
 @pytest.mark.parametrize(
