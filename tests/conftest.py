@@ -73,8 +73,13 @@ def _start_warmup() -> None:
 
 
 def pytest_configure(config: pytest.Config) -> None:
-    """Start the warm-up before collection (12 s) when the whole suite is asked for."""
+    """Start the warm-up before collection (12 s) when the whole suite is asked for.
+
+    A selection by keyword (``-k``) waits for the collection: it may pick a few tests.
+    """
     here = Path(__file__).resolve().parent
+    if config.getoption("keyword", ""):
+        return
     if config.args and all(Path(arg).resolve() == here for arg in config.args):
         _start_warmup()
 
