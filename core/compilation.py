@@ -58,6 +58,10 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ),
     ("the sweep order", {"insertion.order": "sweep"}),
     (
+        "disks among polygons, the sweep order",
+        {"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}},
+    ),
+    (
         "polyhedra in a box (3D)",
         {
             "domain.kind": "box",
