@@ -54,6 +54,7 @@ __all__ = [
     "extreme_radii",
     "make_registry",
     "packing_from_polygons",
+    "touching_squares",
     "verify",
 ]
 
@@ -169,6 +170,31 @@ def packing_from_polygons(
 
 # ---------------------------------------------------------------------------
 # contract checks
+
+
+def touching_squares(k: int, scale: float = 1.0) -> Packing:
+    """Return a ``k`` by ``k`` grid of touching squares of side ``scale``, 8 vertices each.
+
+    Every neighbour touches along a whole side: no pair of an overlap test can
+    be passed over by its distance (a worst case for :func:`verify`).
+    """
+    n = k * k
+    t = np.linspace(0, 1, 3)[:-1]
+    edge = [np.c_[t, 0 * t], np.c_[1 + 0 * t, t], np.c_[1 - t, 1 + 0 * t], np.c_[0 * t, 1 - t]]
+    local = (np.concatenate(edge) - 0.5) * scale
+    g = (np.arange(k) + 0.5) * scale
+    cx, cy = np.meshgrid(g, g)
+    return Packing(
+        radius=np.full(n, scale / np.sqrt(np.pi)),
+        mineral=np.zeros(n, dtype=np.int64),
+        mineral_names=("a",),
+        vertices=np.tile(local, (n, 1)),
+        offsets=np.arange(0, 8 * n + 1, 8, dtype=np.int64),
+        orientation=np.zeros(n),
+        centre=np.c_[cx.ravel(), cy.ravel()],
+        insertion_index=np.arange(n, dtype=np.int64),
+        domain=Rectangle(0, k * scale, 0, k * scale),
+    )
 
 
 def _name(obj: object) -> str:

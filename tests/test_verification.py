@@ -6,8 +6,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import regopack.testing
-from regopack.domain import Rectangle
-from regopack.packing import Packing
 from regopack.testing import packing_from_polygons
 from regopack.verification import VerifyReport, assert_valid_packing, verify
 
@@ -149,31 +147,10 @@ def test_assert_valid_packing():
     assert regopack.testing.assert_valid_packing is assert_valid_packing
 
 
-def grid_packing(k: int, scale: float = 1.0) -> Packing:
-    """k*k touching regular octagons' bounding squares (squares with 8 vertices)."""
-    n = k * k
-    t = np.linspace(0, 1, 3)[:-1]
-    edge = [np.c_[t, 0 * t], np.c_[1 + 0 * t, t], np.c_[1 - t, 1 + 0 * t], np.c_[0 * t, 1 - t]]
-    local = (np.concatenate(edge) - 0.5) * scale
-    g = (np.arange(k) + 0.5) * scale
-    cx, cy = np.meshgrid(g, g)
-    return Packing(
-        radius=np.full(n, scale / np.sqrt(np.pi)),
-        mineral=np.zeros(n, dtype=np.int64),
-        mineral_names=("a",),
-        vertices=np.tile(local, (n, 1)),
-        offsets=np.arange(0, 8 * n + 1, 8, dtype=np.int64),
-        orientation=np.zeros(n),
-        centre=np.c_[cx.ravel(), cy.ravel()],
-        insertion_index=np.arange(n, dtype=np.int64),
-        domain=Rectangle(0, k * scale, 0, k * scale),
-    )
-
-
 def test_a_large_touching_packing_is_verified():
     """40 000 touching particles: every one checked, none overlapping (the time it takes is
     a benchmark's figure: ``benchmarks/bench_verification.py``)."""
-    p = grid_packing(200)
+    p = regopack.testing.touching_squares(200)
     report = verify(p)
     assert report.ok
     assert report.n_checked == 40_000
