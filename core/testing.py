@@ -178,6 +178,10 @@ def touching_squares(k: int, scale: float = 1.0) -> Packing:
     Every neighbour touches along a whole side: no pair of an overlap test can
     be passed over by its distance (a worst case for :func:`verify`).
     """
+    if not (isinstance(k, (int, np.integer)) and k >= 1):
+        raise ValueError(f"touching_squares: k = {k!r}; allowed: an integer >= 1")
+    if not (np.isfinite(scale) and scale > 0):
+        raise ValueError(f"touching_squares: scale = {scale!r}; allowed: a finite number > 0")
     n = k * k
     t = np.linspace(0, 1, 3)[:-1]
     edge = [np.c_[t, 0 * t], np.c_[1 + 0 * t, t], np.c_[1 - t, 1 + 0 * t], np.c_[0 * t, 1 - t]]

@@ -188,3 +188,16 @@ def test_circle_and_polygon_walls(centre, ok) -> None:
     assert report.n_outside == 1 and report.worst_outside is not None
     assert report.worst_outside[0] == 1
     assert report.worst_outside[1] == pytest.approx(0.2)
+
+
+@pytest.mark.parametrize(
+    ("k", "scale"), [(0, 1.0), (-3, 1.0), (2.5, 1.0), (2, 0.0), (2, float("nan"))]
+)
+def test_touching_squares_refuses_a_bad_grid(k, scale) -> None:
+    with pytest.raises(ValueError, match=r"touching_squares: (k|scale) = .*allowed"):
+        regopack.testing.touching_squares(k, scale)
+
+
+def test_touching_squares_touch_and_do_not_overlap() -> None:
+    report = verify(regopack.testing.touching_squares(3, scale=1e-6))
+    assert report.ok and report.n_checked == 9
