@@ -90,22 +90,71 @@ def pytest_collection_finish(session: pytest.Session) -> None:
         _start_warmup()
 
 
-LATE_MODULES = "plugins/analysis/test_*3d.py"
-"""Tests run after all others, so that the warm-up has compiled their kernels (the 3D
-scan) by then; every other test keeps its place."""
+KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
+    # the paper's order with disks (its loop for rounded particles)
+    (
+        "plugins/analysis/test_common.py",
+        "plugins/analysis/test_homogeneity.py",
+        "plugins/test_disk.py",
+        "plugins/test_image_export.py",
+        "test_cli_domains.py",
+    ),
+    # the sweep (sharp and rounded, one thread and several), exact refusals, RSA
+    (
+        "plugins/available_arc/test_batches.py",
+        "plugins/available_arc/test_disk_bound.py",
+        "plugins/available_arc/test_disk_path.py",
+        "plugins/available_arc/test_domains.py",
+        "plugins/available_arc/test_lag.py",
+        "plugins/available_arc/test_neighbours.py",
+        "plugins/available_arc/test_partner.py",
+        "plugins/available_arc/test_sweep.py",
+        "plugins/test_rsa.py",
+        "test_summary_counts.py",
+        "test_doctests.py",
+    ),
+    # three dimensions (and the modules that run every kind of scene)
+    (
+        "plugins/available_surface/test_*.py",
+        "plugins/polyhedra/test_*.py",
+        "plugins/analysis/test_*3d.py",
+        "plugins/test_*3d*.py",
+        "plugins/test_slice_export.py",
+        "plugins/test_solid_export_common.py",
+        "plugins/test_stl_export.py",
+        "plugins/solid_templates/test_*.py",
+        "test_*3d*.py",
+        "test_solids.py",
+        "test_cli_end_to_end.py",
+        "test_compilation.py",
+        "test_howto_export.py",
+    ),
+)
+"""Test modules by the kernels they compile first, in the order the warm-up compiles them.
+
+The session runs the other modules first (they need the paper's loop for sharp
+polygons, which the test process compiles itself, and the analyses), then each
+stage in turn: by the time it starts, ``kernel_warmup.py`` has compiled its
+kernels in the second process, instead of both processes compiling them at
+once. Within a stage, and among the other modules, the tests keep their order.
+"""
+
+
+def _stage(item: pytest.Item, here: Path) -> int:
+    """Return the index of the first stage after the unlisted modules that lists ``item``."""
+    if here not in item.path.parents:
+        return 0
+    rel = item.path.relative_to(here)
+    for n, patterns in enumerate(KERNEL_STAGES, start=1):
+        if any(rel.match(p) for p in patterns):
+            return n
+    return 0
 
 
 def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.Item]) -> None:
-    """Move the tests of :data:`LATE_MODULES` to the end of the session."""
+    """Order the session by :data:`KERNEL_STAGES` (a stable sort: nothing else moves)."""
     here = Path(__file__).resolve().parent
-    late = [
-        item
-        for item in items
-        if here in item.path.parents and item.path.relative_to(here).match(LATE_MODULES)
-    ]
-    if late:
-        late_ids = {id(item) for item in late}
-        items[:] = [item for item in items if id(item) not in late_ids] + late
+    items.sort(key=lambda item: _stage(item, here))
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

