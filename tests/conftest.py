@@ -95,7 +95,6 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
     (
         "plugins/analysis/test_common.py",
         "plugins/analysis/test_homogeneity.py",
-        "plugins/test_disk.py",
         "plugins/test_image_export.py",
         "test_cli_domains.py",
     ),
@@ -109,6 +108,7 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "plugins/available_arc/test_neighbours.py",
         "plugins/available_arc/test_partner.py",
         "plugins/available_arc/test_sweep.py",
+        "plugins/test_disk.py",
         "plugins/test_rsa.py",
         "test_summary_counts.py",
         "test_doctests.py",

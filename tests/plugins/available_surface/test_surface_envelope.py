@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from scipy.spatial import ConvexHull
 from surface_helpers import (
@@ -68,6 +68,11 @@ def test_random_polyhedra(seed: int, npoints: int, scale: float, ratio: float) -
 
 
 @given(seed=st.integers(0, 2**32 - 1), aspect=st.sampled_from([10.0, 100.0, 1000.0]))
+@example(seed=3513128, aspect=1000.0).xfail(
+    raises=AssertionError,
+    reason="a sliver face beside a nearly parallel large one: both kept, the surface does not "
+    "close (docs/explanation/method.md, 'A known limit of the 3D envelope')",
+)
 @settings(max_examples=40, deadline=None)
 def test_extreme_aspect_ratios(seed: int, aspect: float) -> None:
     rng = np.random.default_rng(seed)
