@@ -4,6 +4,7 @@ import importlib.metadata
 import os
 import subprocess
 import sys
+from fnmatch import fnmatchcase
 from pathlib import Path
 
 import pytest
@@ -33,14 +34,16 @@ def registry():
     return fake_registry()
 
 
-def _sweep_cached() -> bool:
-    """Whether the kernel cache of the current sources already holds the sweep."""
+WARMUP_DONE = "test-warmup.done"
+"""File that ``kernel_warmup.py`` writes into the kernel cache folder when it has run to its end."""
+
+
+def _warmup_marker() -> Path | None:
+    """Return where the warm-up marks the kernel cache of the current sources as warm."""
     import regopack.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
 
     folder = os.environ.get("NUMBA_CACHE_DIR")
-    if not folder:
-        return False
-    return any(Path(folder).rglob("*sweep_range*.nbi"))
+    return Path(folder) / WARMUP_DONE if folder else None
 
 
 def _usable_cpus() -> int:
@@ -50,21 +53,19 @@ def _usable_cpus() -> int:
 
 
 def _start_warmup() -> None:
-    """Start ``kernel_warmup.py`` on a second core, once, unless the cache holds the sweep.
+    """Start ``kernel_warmup.py`` on a second core, once, unless it has run on this cache.
 
     ``REGOPACK_TEST_WARMUP=0`` turns it off.
     """
-    if (
-        _warmup
-        or _usable_cpus() < 2
-        or os.environ.get("REGOPACK_TEST_WARMUP") == "0"
-        or _sweep_cached()
-    ):
+    if _warmup or _usable_cpus() < 2 or os.environ.get("REGOPACK_TEST_WARMUP") == "0":
+        return
+    marker = _warmup_marker()
+    if marker is None or marker.exists():
         return
     script = Path(__file__).with_name("kernel_warmup.py")
     _warmup.append(
         subprocess.Popen(
-            [sys.executable, str(script), str(os.getpid())],
+            [sys.executable, str(script), str(os.getpid()), str(marker)],
             stdin=subprocess.DEVNULL,
             stdout=subprocess.DEVNULL,
             stderr=subprocess.DEVNULL,
@@ -132,11 +133,15 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
 )
 """Test modules by the kernels they compile first, in the order the warm-up compiles them.
 
-The session runs the other modules first (they need the paper's loop for sharp
-polygons, which the test process compiles itself, and the analyses), then each
-stage in turn: by the time it starts, ``kernel_warmup.py`` has compiled its
-kernels in the second process, instead of both processes compiling them at
-once. Within a stage, and among the other modules, the tests keep their order.
+Patterns are matched against the whole path below ``tests/`` (``fnmatch``). A
+session of at least ``WARMUP_MIN_TESTS`` tests runs the other modules first
+(they need the paper's loop for sharp polygons, which the test process
+compiles itself, and the analyses), then each stage in turn: by the time a
+stage starts, ``kernel_warmup.py`` is expected to have compiled its kernels in
+the second process (nothing waits for it: a kernel not yet in the cache is
+compiled by the test that needs it, with the same result). Within a stage,
+and among the other modules, the tests keep their order; a smaller session
+keeps the order it was given.
 """
 
 
@@ -144,17 +149,18 @@ def _stage(item: pytest.Item, here: Path) -> int:
     """Return the index of the first stage after the unlisted modules that lists ``item``."""
     if here not in item.path.parents:
         return 0
-    rel = item.path.relative_to(here)
+    rel = item.path.relative_to(here).as_posix()
     for n, patterns in enumerate(KERNEL_STAGES, start=1):
-        if any(rel.match(p) for p in patterns):
+        if any(fnmatchcase(rel, p) for p in patterns):
             return n
     return 0
 
 
 def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.Item]) -> None:
-    """Order the session by :data:`KERNEL_STAGES` (a stable sort: nothing else moves)."""
-    here = Path(__file__).resolve().parent
-    items.sort(key=lambda item: _stage(item, here))
+    """Order a large session by :data:`KERNEL_STAGES` (a stable sort: nothing else moves)."""
+    if len(items) >= WARMUP_MIN_TESTS:
+        here = Path(__file__).resolve().parent
+        items.sort(key=lambda item: _stage(item, here))
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

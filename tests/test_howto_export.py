@@ -71,6 +71,8 @@ def _run_regopack(
         status = main(args)
     finally:
         os.chdir(here)
+    if status in (130, 143):  # regopack turned Ctrl-C (or SIGTERM) into its exit status
+        raise KeyboardInterrupt
     captured = capsys.readouterr()
     assert status == 0, f"{line}\n{captured.out[-1500:]}\n{captured.err[-1500:]}"
 

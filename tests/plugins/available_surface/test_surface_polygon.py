@@ -83,6 +83,22 @@ def test_convex_hull_matches_shapely(seed: int, n: int, scale: float) -> None:
     assert k == len(shapely.Polygon(ref_unit.exterior.coords).simplify(0).exterior.coords) - 1
 
 
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_a_corner_is_a_point_farther_than_the_tolerance_from_its_neighbours_line(
+    scale: float,
+) -> None:
+    # a square with a point near the middle of its bottom side, pushed out by a
+    # multiple of the tolerance, and collinear points along the other sides
+    tol = 1e-9 * scale
+    for push, corners in ((3.0, 5), (0.3, 4)):
+        x = np.array([0.0, 1.0, 2.0, 2.0, 2.0, 2.0, 1.0, 0.0, 0.0]) * scale
+        y = np.array([0.0, -push * 1e-9, 0.0, 0.5, 1.5, 2.0, 2.0, 2.0, 1.0]) * scale
+        out = np.empty(2 * len(x) + 1, dtype=np.int64)
+        k = convex_hull_2d(x, y, len(x), tol, out)
+        assert k == corners, (scale, push)
+        assert (1 in out[:k]) == (corners == 5)
+
+
 def test_collinear_points_are_not_corners() -> None:
     x = np.array([0.0, 1.0, 2.0, 2.0, 2.0, 1.0, 0.0, 0.0, 1.0, 1.0])
     y = np.array([0.0, 0.0, 0.0, 1.0, 2.0, 2.0, 2.0, 1.0, 1.0, 0.0])
