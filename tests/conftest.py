@@ -145,11 +145,11 @@ keeps the order it was given.
 """
 
 
-def _stage(item: pytest.Item, here: Path) -> int:
-    """Return the index of the first stage after the unlisted modules that lists ``item``."""
-    if here not in item.path.parents:
+def _stage(path: Path, here: Path) -> int:
+    """Return the stage of test module ``path`` (0: unlisted; ``here``: the tests folder)."""
+    if here not in path.parents:
         return 0
-    rel = item.path.relative_to(here).as_posix()
+    rel = path.relative_to(here).as_posix()
     for n, patterns in enumerate(KERNEL_STAGES, start=1):
         if any(fnmatchcase(rel, p) for p in patterns):
             return n
@@ -160,7 +160,7 @@ def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.It
     """Order a large session by :data:`KERNEL_STAGES` (a stable sort: nothing else moves)."""
     if len(items) >= WARMUP_MIN_TESTS:
         here = Path(__file__).resolve().parent
-        items.sort(key=lambda item: _stage(item, here))
+        items.sort(key=lambda item: _stage(item.path, here))
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:

@@ -7,8 +7,8 @@ one compiles, in the order of the suite's later stages (``KERNEL_STAGES`` in
 ``conftest.py``), the paper's loop for disks, the four variants of the sweep
 (sharp polygons or rounded particles, on one thread or several), the loops of
 exact refusals and RSA, then the 3D scan and analyses. Both processes write the
-same on-disk cache (:mod:`regopack.jit`); a test that reaches a kernel first compiles it itself,
-with the same result. Between steps the script stops once the process named by
+same on-disk cache (:mod:`regopack.jit`); a test that reaches a kernel first
+compiles it itself, with the same result. Between steps the script stops once the process named by
 its first argument (the test session) has gone; at the end it creates the file
 named by its second argument, which tells later sessions that the cache is warm.
 """

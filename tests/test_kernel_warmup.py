@@ -39,28 +39,17 @@ def test_every_stage_pattern_names_a_test_module_of_its_stage() -> None:
     # its kernels in the test process again
     conftest = _suite_conftest()
     here = Path(conftest.__file__).resolve().parent
-
-    class Item:
-        def __init__(self, path: Path) -> None:
-            self.path = path
-
     modules = list(here.rglob("test_*.py"))
     for n, patterns in enumerate(conftest.KERNEL_STAGES, start=1):
         for pattern in patterns:
             named = [m for m in modules if fnmatchcase(m.relative_to(here).as_posix(), pattern)]
             assert named, pattern
-            assert any(conftest._stage(Item(m), here) == n for m in named), pattern
+            assert any(conftest._stage(m, here) == n for m in named), pattern
 
 
 def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
     conftest = _suite_conftest()
-
     here = Path(conftest.__file__).resolve().parent
-
-    class Item:
-        def __init__(self, rel: str) -> None:
-            self.path = here / rel
-
     names = [
         "test_cli_end_to_end.py",
         "plugins/available_arc/test_sweep.py",
@@ -70,4 +59,4 @@ def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
         "plugins/analysis/test_contacts3d.py",
         "plugins/test_octagon.py",
     ]
-    assert [conftest._stage(Item(n), here) for n in names] == [3, 2, 0, 1, 0, 3, 0]
+    assert [conftest._stage(here / n, here) for n in names] == [3, 2, 0, 1, 0, 3, 0]
