@@ -96,6 +96,7 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
     (
         "plugins/analysis/test_common.py",
         "plugins/analysis/test_homogeneity.py",
+        "plugins/available_arc/test_bound_queue.py",
         "plugins/test_image_export.py",
         "test_cli_domains.py",
     ),

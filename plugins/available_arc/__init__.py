@@ -360,9 +360,11 @@ def _pack_sweep(
 def _partner_for(st: ArcState) -> PartnerThread | None:
     """Return a partner thread for the screened searches of ``st``, or None.
 
-    With two threads or more (numba's count) where threads can sleep (POSIX);
-    not for disks alone, whose analyses are too quick to hand over and mostly
-    skipped by their bounds. The packing is the same with it or without it.
+    With two threads or more (numba's count) where threads can sleep (POSIX).
+    In a scene of disks alone, whose analyses are too quick to hand over, the
+    partner proves the disk bounds instead (see
+    :mod:`~regopack.plugins.available_arc.bound_queue`). The packing is the
+    same with it or without it.
     """
     import numba
 
@@ -371,7 +373,9 @@ def _partner_for(st: ArcState) -> PartnerThread | None:
     if numba.get_num_threads() < 2 or not partner.available():
         return None
     if st.packed.ipar[kernel.I_DISKS] == 1:
-        return None
+        if st.packed.ipar[kernel.I_BOUND] == kernel.BOUND_OFF:
+            return None
+        return partner.PartnerThread(st.work, st.packed, bounds=True)
     return partner.PartnerThread(st.work, st.packed)
 
 

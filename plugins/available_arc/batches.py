@@ -109,10 +109,13 @@ def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
         name: stack(getattr(work, name), PAD if name in PADDED else 0) for name in K.Work._fields
     }
     fields["ckey"][:] = -1
-    bounds = packed.ipar[K.I_BOUND] == 1
+    bounds = packed.ipar[K.I_BOUND] != K.BOUND_OFF
+    ipar = stack(packed.ipar, PAD)
+    if bounds:  # a helper proves its bounds into its own row (the ring is the caller's)
+        ipar[:, K.I_BOUND] = K.BOUND_PROVE
     return Helpers(
         **fields,
-        ipar=stack(packed.ipar, PAD),
+        ipar=ipar,
         stamp=np.zeros((t, packed.stamp.shape[0]), dtype=np.int64),
         last=np.full(t * PAD, -1, dtype=np.int64),
         ks=np.zeros(PER_THREAD * t, dtype=np.int64),
@@ -147,7 +150,7 @@ def _analyse_batch(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],
             s.fpar, h.ipar[t], s.walls,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-            s.nb_img, shut[t],
+            s.nb_img, shut[t], s.bq, s.bqf,
         )  # fmt: skip
         if last[t * PAD] != i:
             K.begin_particle(i, g, st, w)
@@ -179,7 +182,7 @@ def try_batch(
     """
     if nb > 1:
         _analyse_batch(nb, i, mq, g, s, h, rounded)
-        if s.ipar[K.I_BOUND] == 1:
+        if s.ipar[K.I_BOUND] != K.BOUND_OFF:
             # the bounds the threads proved, in the batch's order (any order gives the same)
             threads = h.ipar.shape[0]
             for j in range(nb):

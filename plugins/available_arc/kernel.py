@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.available_arc.bound_queue import post_bound
 from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.available_arc.disk_bound import disk_bound
 from regopack.plugins.available_arc.geometry import (
@@ -103,6 +104,10 @@ N_FPAR = 15
     I_BOUND,
 ) = range(19)
 N_IPAR = 19
+BOUND_OFF, BOUND_PROVE, BOUND_POST = 0, 1, 2
+"""Values of ``ipar[I_BOUND]``: no disk bounds; proved by the analysis that found no arc;
+posted to the partner thread (the calling thread's parameters only; see
+:mod:`~regopack.plugins.available_arc.bound_queue`)."""
 FIRST_RANDOM_TRIES = 10_000
 """Random draws in the domain's box for a feasible first centre before giving up."""
 CACHE_SLOTS = 512
@@ -158,6 +163,11 @@ class Packed(NamedTuple):
     shut: FloatArray
     """Per particle, in a scene of disks: a radius from which no disk fits against it
     (:mod:`~regopack.plugins.available_arc.disk_bound`); ``inf`` where none is known."""
+    bq: IntArray
+    """Counters of the ring of bounds the partner proves
+    (:mod:`~regopack.plugins.available_arc.bound_queue`)."""
+    bqf: FloatArray
+    """Slots of that ring."""
 
 
 class Work(NamedTuple):
@@ -499,12 +509,17 @@ def analyze_candidate(
             grho[pk] + grho[i], pcx, pcy, nf, ocx, ocy, orho,
             mode, s.walls, box, w.woff, w.rx, w.ry, inner, fs,
         )  # fmt: skip
-        if arcs.shape[0] == 0 and ipar[I_BOUND] == 1:
+        if arcs.shape[0] == 0 and ipar[I_BOUND] != BOUND_OFF and nf >= 2:
             for f in range(nf):
                 orho[f] = grho[found[f]]
-            bound = disk_bound(grho[pk], grho[i], fpar[F_RMIN], nf, ocx, ocy, orho, fs)
-            if bound < s.shut[pk]:
-                s.shut[pk] = bound
+            # handed to the partner (BOUND_POST, the calling thread only) unless its
+            # ring is full; the bound is the same number either way
+            if ipar[I_BOUND] != BOUND_POST or not post_bound(
+                s.bq, s.bqf, pk, grho[pk], grho[i], nf, ocx, ocy, orho
+            ):
+                bound = disk_bound(grho[pk], grho[i], fpar[F_RMIN], nf, ocx, ocy, orho, fs)
+                if bound < s.shut[pk]:
+                    s.shut[pk] = bound
         return arcs
 
     wx = w.wx

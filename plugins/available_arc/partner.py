@@ -55,6 +55,7 @@ from regopack.plugins.atomics import (
 )
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.batches import Helpers, new_helpers
+from regopack.plugins.available_arc.bound_queue import prove_next
 from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.borrowed import borrowed
 
@@ -133,12 +134,16 @@ class PartnerThread:
     the new arrays); :meth:`stop` when the insertion ends, also after an error.
     """
 
-    def __init__(self, work: K.Work, packed: K.Packed) -> None:
+    def __init__(self, work: K.Work, packed: K.Packed, bounds: bool = False) -> None:
         self.shared = new_partner()
         self.helpers = new_helpers(work, packed, 1)
-        # the partner proves no bounds of disks: they would go to its own row, and one
-        # proved by an analysis the caller gave up on could rest on a changing packing
-        self.helpers.ipar[0, K.I_BOUND] = 0
+        # the partner's analyses prove no bounds of disks: they would go to its own row, and
+        # one proved by an analysis the caller gave up on could rest on a changing packing
+        self.helpers.ipar[0, K.I_BOUND] = K.BOUND_OFF
+        self.bounds = bounds
+        """Whether the partner proves the bounds the caller posts (see
+        :mod:`~regopack.plugins.available_arc.bound_queue`) instead of analysing
+        candidates ahead of the search."""
         self._thread: threading.Thread | None = None
         self._arrays: tuple[K.Outlines, K.Packed] | None = None
         self._failure: list[BaseException] = []
@@ -171,15 +176,20 @@ class PartnerThread:
         p.ctl[C_STOP] = 0
         p.ctl[C_DEAD] = 0
         p.ctl[C_PARK] = 0
-        p.ctl[C_ON] = 1
+        # the search posts its candidates only to a partner that analyses them
+        p.ctl[C_ON] = 0 if self.bounds else 1
         self._arrays = (g, s)
         self._thread = threading.Thread(target=run, name="regopack-partner", daemon=True)
         self._thread.start()
+        if self.bounds and s.ipar[K.I_BOUND] != K.BOUND_OFF:
+            s.ipar[K.I_BOUND] = K.BOUND_POST
         return p
 
     def stop(self) -> BaseException | None:
         """End the thread, if one runs; return the error that ended it, if any."""
         p = self.shared
+        if self._arrays is not None and self._arrays[1].ipar[K.I_BOUND] == K.BOUND_POST:
+            self._arrays[1].ipar[K.I_BOUND] = K.BOUND_PROVE  # no one left to prove them
         if self._thread is not None:
             p.ctl[C_STOP] = 1
             self._thread.join()
@@ -191,7 +201,11 @@ class PartnerThread:
 
 @numba.njit(cache=True, nogil=True)
 def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -> None:
-    """Claim posted slots and analyse them until asked to stop (the partner's loop)."""
+    """Claim posted slots and analyse them until asked to stop (the partner's loop).
+
+    Between analyses it proves the disk bounds the caller has posted (see
+    :mod:`~regopack.plugins.available_arc.bound_queue`), unless it is parked.
+    """
     # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
     g, s, h, p = borrowed(g), borrowed(s), borrowed(h), borrowed(p)
     w = K.Work(
@@ -205,7 +219,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[0],
         s.fpar, h.ipar[0], s.walls,
         s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-        s.nb_img, h.shut[0],
+        s.nb_img, h.shut[0], s.bq, s.bqf,
     )  # fmt: skip
     idle = 0
     while load_acquire(p.ctl, C_STOP) == 0:
@@ -217,8 +231,12 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
                 best = sl
                 word = v
         if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
+            parked = load_acquire(p.ctl, C_PARK) != 0
+            if not parked and prove_next(s.bq, s.bqf, s.shut, s.fpar[K.F_RMIN], w.fs):
+                idle = 0
+                continue
             idle += 1
-            if load_acquire(p.ctl, C_PARK) != 0:
+            if parked:
                 sleep_us(PARKED_SLEEP_US)
             elif idle < SPINS:
                 spin_hint()

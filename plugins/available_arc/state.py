@@ -9,6 +9,7 @@ from numpy.typing import NDArray
 
 from regopack.domain import Domain
 from regopack.plugins.available_arc import kernel
+from regopack.plugins.available_arc.bound_queue import new_queue
 from regopack.plugins.available_arc.candidates import tree_size
 from regopack.plugins.available_arc.geometry import prepare_outlines
 from regopack.plugins.available_arc.grid import grid_layout
@@ -138,6 +139,7 @@ class ArcState:
         ipar[kernel.I_NBTOP] = rows if lists else 0
         # the kernels compile their rounded path only for rounded scenes
         self.rounded: bool | None = True if rounded else None
+        queue = new_queue(bool(ipar[kernel.I_BOUND]))
         self.packed = kernel.Packed(
             cx=np.full(n, np.nan),
             cy=np.full(n, np.nan),
@@ -160,6 +162,8 @@ class ArcState:
             nb_free=free_stack(rows, lists),
             nb_img=np.zeros((rows, cols), dtype=np.int8),
             shut=np.full(max(n, 1), np.inf),
+            bq=queue[0],
+            bqf=queue[1],
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax

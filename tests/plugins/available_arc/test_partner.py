@@ -65,6 +65,11 @@ def _run(
     return res.centre.tobytes() + res.insertion_index.tobytes(), stats
 
 
+def _counts(stats: dict[str, object]) -> dict[str, object]:
+    """A run's statistics other than its times and the partner's own count."""
+    return {k: v for k, v in stats.items() if "time" not in k and k != "served"}
+
+
 def _same(
     monkeypatch: pytest.MonkeyPatch,
     pop: Population,
@@ -124,11 +129,21 @@ def test_partner_with_disks_among_octagons(monkeypatch: pytest.MonkeyPatch) -> N
     _same(monkeypatch, pop, Rectangle.centred(110.0, 70.0), 6, closing="tail")
 
 
-def test_no_partner_for_disks_alone_or_one_thread(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_disks_alone_have_a_partner_that_proves_bounds(monkeypatch: pytest.MonkeyPatch) -> None:
     rng = np.random.default_rng(7)
     pop = disks_and_octagons(Change5(Change5Config()).sample(300, rng), rng, 1.0)
-    _, stats = _run(monkeypatch, pop, Rectangle.centred(60.0, 60.0), 7, 2)
-    assert stats["partner"] == 0 and "served" not in stats
+    domain = Rectangle.centred(60.0, 60.0)
+    for order in ("sweep", "paper"):
+        alone, alone_stats = _run(monkeypatch, pop, domain, 7, 1, order=order)
+        assert "served" not in alone_stats
+        key, stats = _run(monkeypatch, pop, domain, 7, 2, order=order)
+        assert stats["served"] == 0  # a partner that proves bounds, not analyses
+        assert key == alone
+        same = {"partner": 1, "threads": 2} if order == "sweep" else {}
+        assert _counts(stats) == _counts(alone_stats) | same
+
+
+def test_no_partner_on_one_thread(monkeypatch: pytest.MonkeyPatch) -> None:
     pop, _ = change5_population(300, 7)
     _, stats = _run(monkeypatch, pop, Rectangle.centred(60.0, 60.0), 7, 1)
     assert stats["partner"] == 0 and "served" not in stats
