@@ -150,7 +150,7 @@ def _analyse_batch(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],
             s.fpar, h.ipar[t], s.walls,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-            s.nb_img, shut[t], s.bq, s.bqf,
+            s.nb_img, shut[t], s.bq, s.bqf, s.home, s.hnext, s.hhead,
         )  # fmt: skip
         if last[t * PAD] != i:
             K.begin_particle(i, g, st, w)

@@ -102,8 +102,11 @@ N_FPAR = 15
     I_NBTOP,
     I_DISKS,
     I_BOUND,
-) = range(19)
-N_IPAR = 19
+    I_STRIP,
+) = range(20)
+N_IPAR = 20
+STRIP_SLOTS = 4096
+"""Most strips of the sweep (``Packed.hhead``'s length)."""
 BOUND_OFF, BOUND_PROVE, BOUND_POST = 0, 1, 2
 """Values of ``ipar[I_BOUND]``: no disk bounds; proved by the analysis that found no arc;
 posted to the partner thread (the calling thread's parameters only; see
@@ -168,6 +171,13 @@ class Packed(NamedTuple):
     (:mod:`~regopack.plugins.available_arc.bound_queue`)."""
     bqf: FloatArray
     """Slots of that ring."""
+    home: IntArray
+    """Per insertion index, in the sweep: the strip of the candidate (``ipar[I_STRIP]``: the
+    strip searched, -1 for every candidate; see :func:`next_candidate`)."""
+    hnext: IntArray
+    """Per insertion index: the next candidate hidden in the same strip, -1 for none."""
+    hhead: IntArray
+    """Per strip: the last candidate hidden in it, -1 for none."""
 
 
 class Work(NamedTuple):
@@ -793,7 +803,7 @@ def find_site(
     leaves = ipar[I_LEAVES]
     count = ipar[I_COUNT]
     linear = ipar[I_LINEAR] == 1
-    k = first_candidate(s.tree, leaves, start, count, r, t, linear)
+    k = next_candidate(s, start, count, r, t, linear)
     while k >= 0:
         ipar[I_ANALYSES] += 1
         pk = s.order[k]
@@ -805,8 +815,43 @@ def find_site(
             return k, arcs
         ipar[I_EMPTY] += 1
         tree_set(s.tree, leaves, k, r)
-        k = first_candidate(s.tree, leaves, k + 1, count, r, t, linear)
+        k = next_candidate(s, k + 1, count, r, t, linear)
     return -1, empty
+
+
+@numba.njit(cache=True)
+def hide_candidate(k: int, value: float, s: Packed) -> None:
+    """Hide candidate ``k`` from the search, among its strip's hidden candidates.
+
+    Its screening radius becomes ``value``, not positive, which no particle passes.
+    """
+    st = s.home[k]
+    tree_set(s.tree, s.ipar[I_LEAVES], k, value)
+    s.hnext[k] = s.hhead[st]
+    s.hhead[st] = k
+
+
+@numba.njit(cache=True)
+def next_candidate(s: Packed, start: int, count: int, r: float, t: float, linear: bool) -> int:
+    """Return the first candidate from ``start`` on that passes screening in the strip searched.
+
+    As :func:`~regopack.plugins.available_arc.candidates.first_candidate`, within the
+    strip ``ipar[I_STRIP]`` (every candidate when it is -1).
+
+    A candidate of another strip met on the way is hidden with its radius negated, to
+    be shown again when its strip is searched (the sweep's ``_show``): the candidates
+    of the other strips, which the search must not meet, are thus hidden only as far as
+    a search reaches them, not all at every change of strip.
+    """
+    leaves = s.ipar[I_LEAVES]
+    k = first_candidate(s.tree, leaves, start, count, r, t, linear)
+    cur = s.ipar[I_STRIP]
+    if cur < 0:
+        return k
+    while k >= 0 and s.home[k] != cur:
+        hide_candidate(k, -s.tree[leaves + k], s)
+        k = first_candidate(s.tree, leaves, k + 1, count, r, t, linear)
+    return k
 
 
 @numba.njit(cache=True)

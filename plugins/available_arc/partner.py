@@ -13,8 +13,11 @@ particle with those arcs; the analyses posted after it are dropped.
 
 An analysis reads the packing and writes only scratch space (the envelope
 cache, the grid stamps and their counters), so the partner has its own
-scratch; it proves no bounds of disks (its copy of the parameters has them
-off), so nothing it writes reaches the packing. Records of screening radii
+scratch; its analyses prove no bounds of disks (its copy of the parameters
+has them off), so nothing they write reaches the packing. (In a scene of
+disks alone the partner makes no analyses: it proves the bounds the search
+posts, :func:`serve_bounds`, which only lets the search skip analyses that
+would find no arc.) Records of screening radii
 are written by the calling thread only, to the screening tree, which the
 analyses do not read. The packing is therefore the same, bit for bit, with
 a partner or without one, and so are the counts of analyses.
@@ -56,7 +59,7 @@ from regopack.plugins.atomics import (
 from regopack.plugins.available_arc import kernel as K
 from regopack.plugins.available_arc.batches import Helpers, new_helpers
 from regopack.plugins.available_arc.bound_queue import prove_next
-from regopack.plugins.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.available_arc.candidates import tree_set
 from regopack.plugins.borrowed import borrowed
 
 FloatArray = NDArray[np.float64]
@@ -136,14 +139,17 @@ class PartnerThread:
 
     def __init__(self, work: K.Work, packed: K.Packed, bounds: bool = False) -> None:
         self.shared = new_partner()
-        self.helpers = new_helpers(work, packed, 1)
-        # the partner's analyses prove no bounds of disks: they would go to its own row, and
-        # one proved by an analysis the caller gave up on could rest on a changing packing
-        self.helpers.ipar[0, K.I_BOUND] = K.BOUND_OFF
         self.bounds = bounds
         """Whether the partner proves the bounds the caller posts (see
         :mod:`~regopack.plugins.available_arc.bound_queue`) instead of analysing
-        candidates ahead of the search."""
+        candidates ahead of the search; it then needs only the bounds' scratch."""
+        self.helpers = None if bounds else new_helpers(work, packed, 1)
+        if self.helpers is not None:
+            # the partner's analyses prove no bounds of disks: they would go to its own row,
+            # and one proved by an analysis the caller gave up on could rest on a changing
+            # packing
+            self.helpers.ipar[0, K.I_BOUND] = K.BOUND_OFF
+        self.scratch = np.empty((K.SCRATCH_ROWS, K.SCRATCH_WIDTH) if bounds else (1, 1))
         self._thread: threading.Thread | None = None
         self._arrays: tuple[K.Outlines, K.Packed] | None = None
         self._failure: list[BaseException] = []
@@ -163,11 +169,15 @@ class PartnerThread:
             raise failure
         p = self.shared
         h = self.helpers
+        scratch = self.scratch
         failures = self._failure
 
         def run() -> None:
             try:
-                serve(g, s, h, p, rounded)
+                if h is None:
+                    serve_bounds(s, scratch, p)
+                else:
+                    serve(g, s, h, p, rounded)
             except BaseException as exc:  # handed to the caller by stop
                 failures.append(exc)
             finally:
@@ -201,11 +211,7 @@ class PartnerThread:
 
 @numba.njit(cache=True, nogil=True)
 def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -> None:
-    """Claim posted slots and analyse them until asked to stop (the partner's loop).
-
-    Between analyses it proves the disk bounds the caller has posted (see
-    :mod:`~regopack.plugins.available_arc.bound_queue`), unless it is parked.
-    """
+    """Claim posted slots and analyse them until asked to stop (the partner's loop)."""
     # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
     g, s, h, p = borrowed(g), borrowed(s), borrowed(h), borrowed(p)
     w = K.Work(
@@ -219,7 +225,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[0],
         s.fpar, h.ipar[0], s.walls,
         s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_reach, s.nb_row, s.nb_free,
-        s.nb_img, h.shut[0], s.bq, s.bqf,
+        s.nb_img, h.shut[0], s.bq, s.bqf, s.home, s.hnext, s.hhead,
     )  # fmt: skip
     idle = 0
     while load_acquire(p.ctl, C_STOP) == 0:
@@ -231,12 +237,8 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
                 best = sl
                 word = v
         if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
-            parked = load_acquire(p.ctl, C_PARK) != 0
-            if not parked and prove_next(s.bq, s.bqf, s.shut, s.fpar[K.F_RMIN], w.fs):
-                idle = 0
-                continue
             idle += 1
-            if parked:
+            if load_acquire(p.ctl, C_PARK) != 0:
                 sleep_us(PARKED_SLEEP_US)
             elif idle < SPINS:
                 spin_hint()
@@ -262,6 +264,33 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         # published only if the caller has not taken the slot back meanwhile
         claimed = word - POSTED + PARTNER
         compare_swap(p.state, base, claimed, claimed - PARTNER + (ARCS if na > 0 else EMPTY))
+
+
+@numba.njit(cache=True, nogil=True)
+def serve_bounds(s: K.Packed, scratch: FloatArray, p: Partner) -> None:
+    """Prove the disk bounds the caller posts until asked to stop (disks alone).
+
+    See :mod:`~regopack.plugins.available_arc.bound_queue`. It proves them while
+    parked too: the exact scans, which park it, skip the candidates that bounds
+    shut, and the ring holds a few hundred at most.
+    """
+    # the arrays stay alive in the caller: no reference counts below (regopack.plugins.borrowed)
+    s, p = borrowed(s), borrowed(p)
+    r_floor = s.fpar[K.F_RMIN]
+    idle = 0
+    while load_acquire(p.ctl, C_STOP) == 0:
+        if prove_next(s.bq, s.bqf, s.shut, r_floor, scratch):
+            idle = 0
+            continue
+        idle += 1
+        if load_acquire(p.ctl, C_PARK) != 0:
+            sleep_us(PARKED_SLEEP_US)
+        elif idle < SPINS:
+            spin_hint()
+        elif idle < 2 * SPINS:
+            yield_processor()
+        else:
+            sleep_us(IDLE_SLEEP_US)
 
 
 @numba.njit(cache=True, inline="always")
@@ -337,7 +366,7 @@ def find_site_shared(
     linear = ipar[K.I_LINEAR] == 1
     defer = p.ctl[C_DEFER] != 0
     waits = 0  # polls in a row that found nothing to do
-    nxt = first_candidate(s.tree, leaves, start, count, r, t, linear)
+    nxt = K.next_candidate(s, start, count, r, t, linear)
     head = 0  # the next position of the search to read
     tail = 0  # positions posted
     found = -1  # the first position known to have arcs
@@ -360,7 +389,7 @@ def find_site_shared(
                 p.task[base + T_MQ] = mq
                 store_release(p.state, base, pid * 8 + POSTED)
             tail += 1
-            nxt = first_candidate(s.tree, leaves, nxt + 1, count, r, t, linear)
+            nxt = K.next_candidate(s, nxt + 1, count, r, t, linear)
         if head == tail:
             return -1, empty
         sl = head % SLOTS

@@ -133,6 +133,7 @@ class ArcState:
         # must have seen every interferer the bound rests on, and the tau screening's
         # analyses leave some out
         ipar[kernel.I_BOUND] = 1 if disks and tau is None else 0
+        ipar[kernel.I_STRIP] = -1  # every candidate is searched (the sweep sets its strip)
         fpar[kernel.F_RMIN] = float(rho.min()) if n else 0.0
         ipar[kernel.I_NBLISTS] = 1 if lists else 0
         rows, cols = list_capacity(list_rows(n, pool_rows), lists, LIST_CAPACITY)
@@ -164,6 +165,9 @@ class ArcState:
             shut=np.full(max(n, 1), np.inf),
             bq=queue[0],
             bqf=queue[1],
+            home=np.zeros(max(n, 1), dtype=np.int64),
+            hnext=np.full(max(n, 1), -1, dtype=np.int64),
+            hhead=np.full(kernel.STRIP_SLOTS, -1, dtype=np.int64),
         )
         mmax = int(np.diff(offsets).max()) if n else 1
         width = 2 * mmax

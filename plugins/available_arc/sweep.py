@@ -100,7 +100,7 @@ N_SZ = 11
 # per-candidate zone flag
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
 
-MAX_STRIPS = 4096
+MAX_STRIPS = K.STRIP_SLOTS
 """Most strips across the domain."""
 MAX_CELLS = 1 << 24
 """Most bins over all strips (strips times bins per strip)."""
@@ -112,7 +112,7 @@ def strip_count(width: float, strip: float) -> int:
 
 
 class Bins(NamedTuple):
-    """Candidates filed by strip and bin, with their zone flags and hidden screening radii."""
+    """Candidates filed by strip and bin, with their zone flags."""
 
     head: IntArray
     """``(strips, bins)``: the last candidate filed in each bin, -1 for none."""
@@ -120,8 +120,6 @@ class Bins(NamedTuple):
     """Per candidate: the candidate filed before it in its bin, -1 for none."""
     flag: IntArray
     """Per candidate: ``FROZEN``, ``ACTIVE`` or ``RETIRED``."""
-    rec: FloatArray
-    """Per candidate: its screening radius while its strip is hidden."""
 
 
 class Lags(NamedTuple):
@@ -170,14 +168,13 @@ class Sweep:
         self.bin_head = np.full((self.nstrip, nbins), -1, dtype=np.int64)
         self.bin_next = np.full(max(n, 1), -1, dtype=np.int64)
         self.flag = np.full(max(n, 1), FROZEN, dtype=np.int64)
-        self.rec = np.full(max(n, 1), np.inf)
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
         self.zs[Z_NZONE] = max(1, round(zone / self.delta))
         self.zs[Z_PROMPT] = CLOSINGS[closing]
         self.zs[Z_CUR] = -1
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
-        self.bins = Bins(self.bin_head, self.bin_next, self.flag, self.rec)
+        self.bins = Bins(self.bin_head, self.bin_next, self.flag)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
         self._alone: Partner | None = None  # the shared arrays of a run without a partner
         # waiting particles by the bin of the front they wait for; a full zone's front
@@ -478,28 +475,19 @@ def _roll_back(
 
 
 @numba.njit(cache=True)
-def _show(
-    st: int,
-    visible: bool,
-    sz: IntArray,
-    s: K.Packed,
-    bn: Bins,
-) -> None:
-    """Make strip ``st``'s zone candidates visible to the search, or hide them.
+def _show(st: int, s: K.Packed, bn: Bins) -> None:
+    """Show the search strip ``st``'s hidden candidates again (see ``kernel.next_candidate``).
 
-    Hiding keeps each screening radius in ``bn.rec``; showing puts it back.
+    A hidden candidate's screening radius is the negated one; those retired while
+    hidden stay hidden.
     """
     leaves = s.ipar[K.I_LEAVES]
-    for b in range(sz[st, S_LO], sz[st, S_HI] + 1):
-        e = bn.head[st, b]
-        while e >= 0:
-            if bn.flag[e] == ACTIVE:
-                if visible:
-                    tree_set(s.tree, leaves, e, bn.rec[e])
-                else:
-                    bn.rec[e] = s.tree[leaves + e]
-                    tree_set(s.tree, leaves, e, -np.inf)
-            e = bn.nxt[e]
+    e = s.hhead[st]
+    while e >= 0:
+        if bn.flag[e] == ACTIVE:
+            tree_set(s.tree, leaves, e, -s.tree[leaves + e])
+        e = s.hnext[e]
+    s.hhead[st] = -1
 
 
 @numba.njit(cache=True)
@@ -538,19 +526,24 @@ def _switch(
     s: K.Packed,
     bn: Bins,
 ) -> None:
-    """Offer the next particles to strip ``st``: hide the current strip's zone, show ``st``'s."""
-    cur = zs[Z_CUR]
-    if cur == st:
+    """Offer the next particles to strip ``st``: show its hidden candidates, search only it.
+
+    The candidates of the strip searched before stay visible in the screening tree until
+    a search meets them (``kernel.next_candidate`` hides them then).
+    """
+    if zs[Z_CUR] == st:
         return
-    if cur >= 0:
-        _show(cur, False, sz, s, bn)
-    _show(st, True, sz, s, bn)
+    _show(st, s, bn)
     zs[Z_CUR] = st
+    s.ipar[K.I_STRIP] = st
 
 
 @numba.njit(cache=True)
 def _thaw(st: int, lo: int, hi: int, visible: bool, s: K.Packed, bn: Bins) -> None:
-    """Make the frozen candidates of strip ``st``'s bins ``lo..hi`` active (with rmin = inf)."""
+    """Make the frozen candidates of strip ``st``'s bins ``lo..hi`` active (with rmin = inf).
+
+    Not ``visible``: hidden until the strip is searched.
+    """
     leaves = s.ipar[K.I_LEAVES]
     for b in range(lo, hi + 1):
         e = bn.head[st, b]
@@ -560,7 +553,7 @@ def _thaw(st: int, lo: int, hi: int, visible: bool, s: K.Packed, bn: Bins) -> No
                 if visible:
                     tree_set(s.tree, leaves, e, np.inf)
                 else:
-                    bn.rec[e] = np.inf
+                    K.hide_candidate(e, -np.inf, s)
             e = bn.nxt[e]
 
 
@@ -583,6 +576,7 @@ def _register(
     q = s.order[k]
     st = _strip_of(s.cx[q], s.fpar[K.F_XMIN], swidth, bn.head.shape[0])
     b = _bin_of(s.cy[q], s.fpar[K.F_YMIN], delta, bn.head.shape[1])
+    s.home[k] = st
     bn.nxt[k] = bn.head[st, b]
     bn.head[st, b] = k
     cur = zs[Z_CUR]
@@ -600,11 +594,10 @@ def _register(
         tree_set(s.tree, leaves, k, -np.inf)
         if b < sz[st, S_FREED]:  # behind the zone for good: its list is not needed
             s.ipar[K.I_NBTOP] = release_row(q, s.nb_row, s.nb_free, s.ipar[K.I_NBTOP])
-    else:
+    elif bn.flag[k] != ACTIVE:  # (not thawed with its strip above)
         bn.flag[k] = ACTIVE
         if st != zs[Z_CUR]:
-            bn.rec[k] = np.inf
-            tree_set(s.tree, leaves, k, -np.inf)
+            K.hide_candidate(k, -np.inf, s)
 
 
 @numba.njit(cache=True)
@@ -693,6 +686,7 @@ def _step(
         sz[st, S_LO] = 0
         sz[st, S_HI] = _bin_of(y, s.fpar[K.F_YMIN], delta, nbins)
         zs[Z_CUR] = st
+        s.ipar[K.I_STRIP] = st
         k = K.insert_particle(i, x, y, g, s)
         _register(k, zs, sz, s, delta, swidth, bn)
         status[i] = STATUS_PLACED

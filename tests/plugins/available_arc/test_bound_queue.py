@@ -14,8 +14,8 @@ from test_disk_bound import _ring
 from test_disk_path import _disks
 
 from regopack.domain import Rectangle
+from regopack.plugins.available_arc import batches, kernel, partner
 from regopack.plugins.available_arc import bound_queue as Q
-from regopack.plugins.available_arc import kernel, partner
 from regopack.plugins.available_arc.disk_bound import disk_bound
 from regopack.plugins.available_arc.state import ArcState
 
@@ -105,15 +105,35 @@ def test_an_analysis_posts_its_bound_and_the_partner_proves_it() -> None:
     try:
         shared = team.attach(st_.outlines, p, st_.rounded)
         assert shared.ctl[partner.C_ON] == 0  # it analyses no candidates
-        deadline = time.monotonic() + 30.0
+        deadline = time.monotonic() + 60.0
         while p.bq[Q.HEAD] < 1 and time.monotonic() < deadline:
             time.sleep(0.001)
+        assert p.bq[Q.HEAD] == 1, "the partner proved no bound in a minute"
         assert p.shut[0] == inline
+    finally:
+        assert team.stop() is None
+
+
+def test_the_partner_has_the_search_post_its_bounds_while_it_runs() -> None:
+    st_ = _filled(False)  # proved at once so far
+    p = st_.packed
+    assert st_.counter(kernel.I_BOUND) == kernel.BOUND_PROVE and p.bq[Q.TAIL] == 0
+    team = partner.PartnerThread(st_.work, p, bounds=True)
+    try:
+        team.attach(st_.outlines, p, st_.rounded)
+        assert st_.counter(kernel.I_BOUND) == kernel.BOUND_POST
+        st_.reserve_rows(10 * p.nb_o.shape[0])  # new arrays: the thread restarts
+        team.attach(st_.outlines, st_.packed, st_.rounded)
         assert st_.counter(kernel.I_BOUND) == kernel.BOUND_POST
     finally:
         assert team.stop() is None
     # no one proves posted bounds once the partner has stopped
     assert st_.counter(kernel.I_BOUND) == kernel.BOUND_PROVE
+    # nor does a helper of the exact scans: its bounds go to its own row
+    st_.packed.ipar[kernel.I_BOUND] = kernel.BOUND_POST
+    helpers = batches.new_helpers(st_.work, st_.packed, 2)
+    assert np.all(helpers.ipar[:, kernel.I_BOUND] == kernel.BOUND_PROVE)
+    assert helpers.shut.shape == (2, st_.packed.shut.shape[0])
 
 
 def _packed(bounds: int) -> tuple[bytes, int, int]:

@@ -14,7 +14,7 @@ from test_sweep import DOMAINS, disks_and_octagons
 
 from regopack.domain import Domain, Rectangle
 from regopack.plugins.atomics import compare_swap, load_acquire, spin_hint
-from regopack.plugins.available_arc import batches, partner
+from regopack.plugins.available_arc import batches, bound_queue, partner
 from regopack.plugins.change5 import Change5, Change5Config
 from regopack.population import Population
 
@@ -49,12 +49,15 @@ def _run(
     **cfg: object,
 ) -> tuple[bytes, dict[str, object]]:
     served: list[int] = []
+    posted: list[int] = []
     with monkeypatch.context() as m:
         _threads(m, threads, defer)
         stop = partner.PartnerThread.stop
 
         def counted(self: partner.PartnerThread) -> BaseException | None:
             served.append(self.served)
+            if self._arrays is not None:
+                posted.append(int(self._arrays[1].bq[bound_queue.TAIL]))
             return stop(self)
 
         m.setattr(partner.PartnerThread, "stop", counted)
@@ -62,12 +65,14 @@ def _run(
     stats = dict(res.stats)
     if served:
         stats["served"] = served[-1]
+    if posted:
+        stats["posted"] = posted[-1]
     return res.centre.tobytes() + res.insertion_index.tobytes(), stats
 
 
 def _counts(stats: dict[str, object]) -> dict[str, object]:
     """A run's statistics other than its times and the partner's own count."""
-    return {k: v for k, v in stats.items() if "time" not in k and k != "served"}
+    return {k: v for k, v in stats.items() if "time" not in k and k not in ("served", "posted")}
 
 
 def _same(
@@ -138,6 +143,7 @@ def test_disks_alone_have_a_partner_that_proves_bounds(monkeypatch: pytest.Monke
         assert "served" not in alone_stats
         key, stats = _run(monkeypatch, pop, domain, 7, 2, order=order)
         assert stats["served"] == 0  # a partner that proves bounds, not analyses
+        assert isinstance(stats["posted"], int) and stats["posted"] > 0
         assert key == alone
         same = {"partner": 1, "threads": 2} if order == "sweep" else {}
         assert _counts(stats) == _counts(alone_stats) | same

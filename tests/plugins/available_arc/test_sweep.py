@@ -14,7 +14,7 @@ from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Re
 from regopack.errors import ConfigError
 from regopack.interfaces import DensityController
 from regopack.packing import Packing
-from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig
+from regopack.plugins.available_arc import AvailableArc, AvailableArcConfig, sweep
 from regopack.plugins.change5 import Change5, Change5Config
 from regopack.plugins.disk import Disk
 from regopack.plugins.octagon import OctagonConfig, RandomPolygon
@@ -530,3 +530,99 @@ def test_the_sweep_with_a_python_controller_is_refused_before_drawing() -> None:
     from regopack.run import check_inserter
 
     check_inserter(regopack.scene("table1", registry=registry, density={"kind": "half"}))
+
+
+def _tree_holds_its_maxima(tree: np.ndarray, leaves: int) -> bool:
+    inner = np.arange(1, leaves)
+    return bool(np.array_equal(tree[inner], np.maximum(tree[2 * inner], tree[2 * inner + 1])))
+
+
+def _hidden(s: object, strip: int) -> list[int]:
+    out = []
+    e = int(s.hhead[strip])  # type: ignore[attr-defined]
+    while e >= 0:
+        out.append(e)
+        e = int(s.hnext[e])  # type: ignore[attr-defined]
+        assert len(out) <= len(s.hnext)  # type: ignore[attr-defined]
+    return out
+
+
+def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_them() -> None:
+    from regopack.plugins.available_arc import kernel
+    from regopack.plugins.available_arc.state import ArcState
+
+    pop, _ = change5_population(40, 2)
+    st_ = ArcState(pop, Rectangle.centred(100.0, 100.0), t=0.999, tau=None, linear=False)
+    s = st_.packed
+    leaves = st_.counter(kernel.I_LEAVES)
+    rmin = np.array([np.inf, 2.0, 0.5, 3.0, np.inf, 1.5])
+    home = np.array([1, 0, 1, 1, 0, 1])
+    for k, (r, h) in enumerate(zip(rmin, home, strict=True)):
+        kernel.tree_set(s.tree, leaves, k, r)
+        s.home[k] = h
+    s.ipar[kernel.I_STRIP] = 0
+    # strip 0's first candidate passing r = 1.0 is 1; candidate 0 (strip 1) is met first
+    assert kernel.next_candidate(s, 0, 6, 1.0, 1.0, False) == 1
+    assert _hidden(s, 1) == [0] and s.tree[leaves] == -np.inf
+    # from 2 on: 2 does not pass (0.5), 3 (strip 1) is met and hidden, 4 passes
+    assert kernel.next_candidate(s, 2, 6, 1.0, 1.0, False) == 4
+    assert _hidden(s, 1) == [3, 0] and s.tree[leaves + 3] == -3.0
+    assert s.tree[leaves + 2] == 0.5  # not met: the screening passed over it
+    assert kernel.next_candidate(s, 5, 6, 1.0, 1.0, False) == -1  # 5 is hidden on the way
+    assert _hidden(s, 1) == [5, 3, 0]
+    assert _tree_holds_its_maxima(s.tree, leaves)
+    # the same in the paper's order finds every strip's candidates, hiding none
+    s.ipar[kernel.I_STRIP] = -1
+    assert kernel.next_candidate(s, 0, 6, 0.1, 1.0, False) == 1  # 0 is hidden now
+    # switching to strip 1 puts back the radii of its active candidates
+    bins = sweep.Bins(np.full((2, 1), -1), np.full(6, -1), np.full(6, sweep.ACTIVE))
+    bins.flag[5] = sweep.RETIRED  # retired while hidden: stays hidden
+    sweep._show(1, s, bins)
+    assert _hidden(s, 1) == []
+    assert list(s.tree[leaves : leaves + 6]) == [np.inf, 2.0, 0.5, 3.0, np.inf, -1.5]
+    assert _tree_holds_its_maxima(s.tree, leaves)
+
+
+@pytest.mark.parametrize("closing", ["paced", "prompt", "tail"])
+def test_candidates_of_the_strips_not_searched_are_hidden_or_left_as_they_were(
+    closing: str,
+) -> None:
+    """Run in chunks; after each: the strip searched shows every active candidate's radius,
+    the others' active candidates are visible or on their strip's hidden list, negated."""
+    from regopack.plugins.available_arc import kernel
+    from regopack.plugins.available_arc.state import ArcState
+
+    domain = Rectangle.centred(160.0, 90.0)
+    n = round(1.2 * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 11)
+    st_ = ArcState(pop, domain, t=0.999, tau=None, linear=False)
+    sw = sweep.Sweep(n, domain.height, 6.0 * float(pop.radius.max()), closing, 160.0, 30.0)
+    assert sw.nstrip == 5
+    s = st_.packed
+    leaves = st_.counter(kernel.I_LEAVES)
+    switches = hidden_seen = 0
+    last = -1
+    for begin in range(0, n, 29):
+        sw.run(begin, min(n, begin + 29), st_.outlines, s, st_.work, rng, st_.rounded)
+        count = st_.count
+        cur = int(sw.zs[sweep.Z_CUR])
+        switches += cur != last
+        last = cur
+        assert st_.counter(kernel.I_STRIP) == cur
+        leaf = s.tree[leaves : leaves + count]
+        flag = sw.flag[:count]
+        home = s.home[:count]
+        lists = {t: _hidden(s, t) for t in range(sw.nstrip)}
+        assert lists[cur] == []
+        on_list = np.zeros(count, dtype=bool)
+        for t, ks in lists.items():
+            assert len(set(ks)) == len(ks) and np.all(home[ks] == t)
+            on_list[ks] = True
+        active = flag == sweep.ACTIVE
+        assert np.all(leaf[~active] == -np.inf)
+        assert np.all(leaf[active & (home == cur)] > 0)
+        other = active & (home != cur)
+        assert np.all((leaf[other] > 0) != on_list[other])  # visible, or hidden on a list
+        hidden_seen += int(np.count_nonzero(on_list & active))
+        assert _tree_holds_its_maxima(s.tree, leaves)
+    assert switches > 3 and hidden_seen > 0
