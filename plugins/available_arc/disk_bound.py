@@ -37,33 +37,45 @@ covered, so that rounding in a later analysis cannot open a gap the bound says i
 STEPS = 6
 """Halvings of the logarithmic interval between the smallest radius and the failed one."""
 SORT_IN_PLACE = 32
-"""Up to this many covers are sorted in place; more (a large disk among many small ones)
-go to ``np.argsort``."""
+"""Up to this many covers are sorted by insertion; more (a large disk among many small ones)
+by Shell's passes first (:data:`SHELL_GAPS`), in place as well."""
+SHELL_GAPS = (
+    1, 4, 10, 23, 57, 132, 301, 701, 1577, 3548, 7983, 17961, 40412, 90927, 204585, 460316,
+    1035711, 2330349, 5243285, 11797391,
+)  # fmt: skip
+"""Gaps of the passes before the last (Ciura's, then 2.25 times the one before)."""
+
+
+@numba.njit(cache=True, inline="always")
+def _insertion_pass(lo: FloatArray, hi: FloatArray, k: int, gap: int) -> None:
+    """Sort every ``gap``-th pair of ``(lo, hi)[:k]`` by ``lo``, by insertion."""
+    for idx in range(gap, k):
+        x = lo[idx]
+        y = hi[idx]
+        j = idx
+        while j >= gap and lo[j - gap] > x:
+            lo[j] = lo[j - gap]
+            hi[j] = hi[j - gap]
+            j -= gap
+        lo[j] = x
+        hi[j] = y
 
 
 @numba.njit(cache=True)
 def sort_covers(lo: FloatArray, hi: FloatArray, k: int) -> None:
     """Sort the intervals ``(lo[m], hi[m])``, ``m < k``, by their lower ends, in place.
 
-    Up to :data:`SORT_IN_PLACE` by insertion, more with ``np.argsort``. Which
-    of two equal lower ends comes first is left open: the sweeps over the
-    sorted covers do not depend on it.
+    Up to :data:`SORT_IN_PLACE` by insertion; more by Shell's passes, the last
+    of which is that insertion (no allocation). Which of two equal lower ends
+    comes first is left open: the sweeps over the sorted covers do not depend
+    on it.
     """
-    if k <= SORT_IN_PLACE:
-        for idx in range(1, k):
-            x = lo[idx]
-            y = hi[idx]
-            j = idx
-            while j > 0 and lo[j - 1] > x:
-                lo[j] = lo[j - 1]
-                hi[j] = hi[j - 1]
-                j -= 1
-            lo[j] = x
-            hi[j] = y
-    else:
-        order = np.argsort(lo[:k])
-        lo[:k] = lo[:k][order]
-        hi[:k] = hi[:k][order]
+    if k > SORT_IN_PLACE:
+        for m in range(len(SHELL_GAPS) - 1, 0, -1):
+            gap = SHELL_GAPS[m]
+            if gap < k:
+                _insertion_pass(lo, hi, k, gap)
+    _insertion_pass(lo, hi, k, 1)
 
 
 @numba.njit(cache=True)

@@ -257,7 +257,7 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
             i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
             s.head, s.nxt, s.item, s.stamp, token,
             s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_row, s.nb_free, ipar[I_NBTOP],
-            s.nb_img, periodic, s.fpar[F_XMIN : F_YMAX + 1],
+            s.nb_img, periodic, s.fpar[F_XMIN : F_YMAX + 1], s.shut, s.fpar[F_RMIN],
         )  # fmt: skip
         if periodic:  # the image queries took stamps of their own
             ipar[I_STAMP] = token + IMAGE_QUERIES

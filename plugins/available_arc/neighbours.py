@@ -170,6 +170,8 @@ def register_neighbours(
     img: NDArray[np.int8],
     periodic: bool = False,
     bounds: FloatArray | None = None,
+    shut: FloatArray | None = None,
+    floor: float = 0.0,
 ) -> int:
     """Start ``p``'s list and add ``p`` to its neighbours' lists; return the new stack top.
 
@@ -183,6 +185,10 @@ def register_neighbours(
     image (``img``) and its offset computed as the analysis's grid search
     computes it from that image, so that both find the same interferers at the
     same offsets.
+
+    A neighbour ``o`` with ``shut[o] <= floor`` (a disk bound shuts it for every
+    particle of the scene, ``floor`` being the smallest radius: it is never
+    analysed again) gives its row back instead of taking ``p``.
     """
     x = cx[p]
     y = cy[p]
@@ -256,7 +262,9 @@ def register_neighbours(
                             rp_row, o, d - ro, dx, dy, code, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
                         )
                     ro_row = row[o]
-                    if ro_row >= 0 and bd < lim:
+                    if ro_row >= 0 and shut is not None and shut[o] <= floor:
+                        top = release_row(o, row, free, top)
+                    elif ro_row >= 0 and bd < lim:
                         _add_entry(
                             ro_row, p, bd - rp, bx, by, back, nb_o, nb_gap, nb_dx, nb_dy, nb_n, img
                         )

@@ -278,7 +278,7 @@ def test_an_exact_scan_counts_the_candidates_it_passes_over_as_the_sequential_on
     assert counts[0][1] > 0
 
 
-@pytest.mark.parametrize("k", [0, 1, 2, 7, SORT_IN_PLACE, SORT_IN_PLACE + 1, 200])
+@pytest.mark.parametrize("k", [0, 1, 2, 7, SORT_IN_PLACE, SORT_IN_PLACE + 1, 200, 5000])
 def test_sort_covers_orders_pairs_by_lower_end(k: int) -> None:
     rng = np.random.default_rng(k)
     lo = np.round(rng.uniform(-1.0, 7.0, k + 3), 1)  # ties among the lower ends

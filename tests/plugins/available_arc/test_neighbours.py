@@ -442,3 +442,25 @@ def test_each_image_code_maps_to_the_query_that_looks_for_it(
         queried[image_code(ix, iy)] = qs
     for code in range(9):
         assert image_query(code, nsx, sx1, sx2, nsy, sy1, sy2) == queried.get(code, -1)
+
+
+def test_a_disk_shut_for_every_particle_gives_its_list_back_when_a_neighbour_comes() -> None:
+    from test_disk_path import _disks
+
+    st_ = ArcState(
+        _disks(np.ones(4), np.random.default_rng(0)), Rectangle.centred(40.0, 40.0),
+        t=0.999, tau=None, linear=False,
+    )  # fmt: skip
+    p = st_.packed
+    st_.insert(0, 0.0, 0.0)
+    st_.insert(1, 2.0, 0.0)
+    assert p.nb_row[0] >= 0 and p.nb_row[1] >= 0
+    free = st_.counter(kernel.I_NBTOP)
+    p.shut[0] = p.fpar[kernel.F_RMIN]  # no disk of the scene fits against 0 any more
+    p.shut[1] = 1.5 * p.fpar[kernel.F_RMIN]  # only disks below 1.5 fit against 1
+    st_.insert(2, 0.0, 2.0)  # a neighbour of both
+    assert p.nb_row[0] == -1 and p.nb_row[1] >= 0
+    # the row of 0 went back to the pool, the new disk took one
+    assert st_.counter(kernel.I_NBTOP) == free
+    n1 = p.nb_n[p.nb_row[1]]
+    assert 2 in p.nb_o[p.nb_row[1], :n1]
