@@ -107,6 +107,8 @@ N_FPAR = 15
 N_IPAR = 20
 STRIP_SLOTS = 4096
 """Most strips of the sweep (``Packed.hhead``'s length)."""
+NOT_LISTED = -2
+"""``Packed.hnext`` of a candidate on no list of hidden candidates."""
 BOUND_OFF, BOUND_PROVE, BOUND_POST = 0, 1, 2
 """Values of ``ipar[I_BOUND]``: no disk bounds; proved by the analysis that found no arc;
 posted to the partner thread (the calling thread's parameters only; see
@@ -175,7 +177,8 @@ class Packed(NamedTuple):
     """Per insertion index, in the sweep: the strip of the candidate (``ipar[I_STRIP]``: the
     strip searched, -1 for every candidate; see :func:`next_candidate`)."""
     hnext: IntArray
-    """Per insertion index: the next candidate hidden in the same strip, -1 for none."""
+    """Per insertion index: the next candidate hidden in the same strip, -1 for none;
+    ``NOT_LISTED`` for a candidate on no list."""
     hhead: IntArray
     """Per strip: the last candidate hidden in it, -1 for none."""
 
@@ -825,10 +828,11 @@ def hide_candidate(k: int, value: float, s: Packed) -> None:
 
     Its screening radius becomes ``value``, not positive, which no particle passes.
     """
-    st = s.home[k]
     tree_set(s.tree, s.ipar[I_LEAVES], k, value)
-    s.hnext[k] = s.hhead[st]
-    s.hhead[st] = k
+    if s.hnext[k] == NOT_LISTED:  # never twice on a list (a cycle would never end)
+        st = s.home[k]
+        s.hnext[k] = s.hhead[st]
+        s.hhead[st] = k
 
 
 @numba.njit(cache=True)

@@ -166,7 +166,7 @@ class ArcState:
             bq=queue[0],
             bqf=queue[1],
             home=np.zeros(max(n, 1), dtype=np.int64),
-            hnext=np.full(max(n, 1), -1, dtype=np.int64),
+            hnext=np.full(max(n, 1), kernel.NOT_LISTED, dtype=np.int64),
             hhead=np.full(kernel.STRIP_SLOTS, -1, dtype=np.int64),
         )
         mmax = int(np.diff(offsets).max()) if n else 1

@@ -486,7 +486,9 @@ def _show(st: int, s: K.Packed, bn: Bins) -> None:
     while e >= 0:
         if bn.flag[e] == ACTIVE:
             tree_set(s.tree, leaves, e, -s.tree[leaves + e])
-        e = s.hnext[e]
+        nxt = s.hnext[e]
+        s.hnext[e] = K.NOT_LISTED
+        e = nxt
     s.hhead[st] = -1
 
 

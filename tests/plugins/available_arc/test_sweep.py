@@ -579,7 +579,13 @@ def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_
     bins.flag[5] = sweep.RETIRED  # retired while hidden: stays hidden
     sweep._show(1, s, bins)
     assert _hidden(s, 1) == []
+    assert np.all(s.hnext[:6] == kernel.NOT_LISTED)
     assert list(s.tree[leaves : leaves + 6]) == [np.inf, 2.0, 0.5, 3.0, np.inf, -1.5]
+    # a candidate already on a list is not put on it twice (a cycle would never end)
+    s.ipar[kernel.I_STRIP] = 0
+    kernel.hide_candidate(3, -np.inf, s)
+    kernel.hide_candidate(3, -np.inf, s)
+    assert _hidden(s, 1) == [3]
     assert _tree_holds_its_maxima(s.tree, leaves)
 
 
