@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import shapely
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from regopack.plugins.exporters import polygon_moments
@@ -65,6 +65,7 @@ def test_clean_outline_of_octagon_with_inactive_supports():
 
 @settings(max_examples=40, deadline=None)
 @given(seed=st.integers(0, 10**6), frac=st.one_of(st.just(0.0), st.floats(1e-6, 0.3)))
+@example(seed=117, frac=0.1121652312576953)
 def test_erosion_is_shapely_inward_offset(seed, frac):
     v = convex(seed)
     orig = shapely.Polygon(v)
@@ -75,7 +76,11 @@ def test_erosion_is_shapely_inward_offset(seed, frac):
         assert len(core) < 3 or shapely.Polygon(core).area < 1e-9
         return
     got = shapely.Polygon(core)
-    assert got.symmetric_difference(expect).area <= 1e-9 * orig.area
+    # the same polygon: equal areas, and every vertex of each on the other. (Not their
+    # symmetric difference: GEOS's overlay found 4.4 for two equal quadrilaterals with a
+    # nearly straight corner, seed 117, frac 0.1121652312576953.)
+    assert abs(got.area - expect.area) <= 1e-9 * orig.area
+    assert got.hausdorff_distance(expect) <= 1e-9 * math.sqrt(orig.area)
     # the rounded body fills the particle but never reaches past it
     body = got.buffer(r, quad_segs=64)
     assert body.difference(orig).area <= 1e-9 * orig.area
