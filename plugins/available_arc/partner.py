@@ -209,6 +209,23 @@ class PartnerThread:
         return self._failure.pop() if self._failure else None
 
 
+@numba.njit(cache=True, inline="always")
+def _idle(p: Partner, polls: int) -> None:
+    """Wait after ``polls`` empty polls in a row.
+
+    Sleep when parked; else spin, then yield, then sleep (the caller is busy
+    elsewhere, or compiling).
+    """
+    if load_acquire(p.ctl, C_PARK) != 0:
+        sleep_us(PARKED_SLEEP_US)
+    elif polls < SPINS:
+        spin_hint()
+    elif polls < 2 * SPINS:
+        yield_processor()
+    else:
+        sleep_us(IDLE_SLEEP_US)
+
+
 @numba.njit(cache=True, nogil=True)
 def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -> None:
     """Claim posted slots and analyse them until asked to stop (the partner's loop)."""
@@ -238,14 +255,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
                 word = v
         if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
             idle += 1
-            if load_acquire(p.ctl, C_PARK) != 0:
-                sleep_us(PARKED_SLEEP_US)
-            elif idle < SPINS:
-                spin_hint()
-            elif idle < 2 * SPINS:
-                yield_processor()
-            else:
-                sleep_us(IDLE_SLEEP_US)
+            _idle(p, idle)
             continue
         idle = 0
         base = best * PAD
@@ -283,14 +293,7 @@ def serve_bounds(s: K.Packed, scratch: FloatArray, p: Partner) -> None:
             idle = 0
             continue
         idle += 1
-        if load_acquire(p.ctl, C_PARK) != 0:
-            sleep_us(PARKED_SLEEP_US)
-        elif idle < SPINS:
-            spin_hint()
-        elif idle < 2 * SPINS:
-            yield_processor()
-        else:
-            sleep_us(IDLE_SLEEP_US)
+        _idle(p, idle)
 
 
 @numba.njit(cache=True, inline="always")
