@@ -64,6 +64,11 @@ IntArray = NDArray[np.int64]
 
 ZONE_BINS = 80
 """Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
+STAY_SHARE = 10
+"""The zone top of the strip searched may stand a ``1 / STAY_SHARE`` of a zone above
+the lowest top before particles go to another strip: a change of strip hides one
+zone's candidates and shows another's, so the strips take turns in runs rather than
+particle by particle."""
 MAX_BINS = 1 << 20
 """Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
 has fewer than ``ZONE_BINS`` bins)."""
@@ -505,12 +510,14 @@ def _show(st: int, s: K.Packed, bn: Bins) -> None:
 
 
 @numba.njit(cache=True)
-def _choose(sz: IntArray, tried: IntArray, i: int, cur: int) -> int:
+def _choose(sz: IntArray, tried: IntArray, i: int, cur: int, stay: int) -> int:
     """Return the strip to offer particle ``i`` to next; -1 when no open strip is left.
 
     The open strip whose zone top is lowest, the first such one, among those
-    not yet tried for ``i``. Among full strips (whose tops cannot rise) the
-    turn passes on after ``cur``, so that they close together.
+    not yet tried for ``i``; but the strip searched, ``cur``, keeps the turn
+    while it is open, not full, not tried for ``i`` and its top stands at most
+    ``stay`` bins above that lowest one (-1 for no ``cur``). Among full strips (whose tops cannot
+    rise) the turn passes on after ``cur``, so that they close together.
     """
     nstrip = sz.shape[0]
     best = -1
@@ -518,6 +525,17 @@ def _choose(sz: IntArray, tried: IntArray, i: int, cur: int) -> int:
         if sz[st, S_SEEDED] == 1 and sz[st, S_CLOSED] == 0 and tried[st] != i:
             if best < 0 or sz[st, S_HI] < sz[best, S_HI]:
                 best = st
+    if (
+        best >= 0
+        and cur >= 0
+        and cur != best
+        and tried[cur] != i
+        and sz[cur, S_SEEDED] == 1
+        and sz[cur, S_CLOSED] == 0
+        and sz[cur, S_FULL] == 0
+        and sz[cur, S_HI] - sz[best, S_HI] <= stay
+    ):
+        return cur
     if best >= 0 and nstrip > 1 and sz[best, S_FULL] == 1 and cur >= 0:
         for d in range(1, nstrip + 1):
             st = (cur + d) % nstrip
@@ -714,7 +732,7 @@ def _step(
     offered = -1  # the first strip particle i is offered to
     st = -1
     while True:
-        st = _choose(sz, tried, i, zs[Z_CUR])
+        st = _choose(sz, tried, i, zs[Z_CUR], zs[Z_NZONE] // STAY_SHARE)
         if prefer >= 0 and tried[prefer] != i and _open(prefer, sz):
             st = prefer
         if st < 0:
@@ -763,7 +781,7 @@ def _step(
         status[i] = STATUS_REFUSED
         zs[Z_REFUSED] += 1
         if zs[Z_PROMPT] == 2:
-            if _choose(sz, tried, -1, -1) < 0:
+            if _choose(sz, tried, -1, -1, 0) < 0:
                 # tail closing: the last open strip has just closed
                 zs[Z_DONE] = 1
         elif zs[Z_PROMPT] == 1 and not queued:
@@ -777,7 +795,7 @@ def _step(
                     sz[t, S_LO] += 1
                     if sz[t, S_LO] > sz[t, S_HI]:
                         sz[t, S_CLOSED] = 1
-            if _choose(sz, tried, -1, -1) < 0:
+            if _choose(sz, tried, -1, -1, 0) < 0:
                 zs[Z_DONE] = 1
         return 0
     status[i] = STATUS_PLACED
@@ -955,7 +973,9 @@ def sweep_range(
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
-        if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR]), zs, sz, lags):
+        if not _full(sz) and _wait(
+            i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_NZONE] // STAY_SHARE), zs, sz, lags
+        ):
             continue
         placed += _step(
             i, bool(np.bool_(False)), int(np.int64(-1)), delta, swidth, g, s, w, rng, zs, sz, bn,

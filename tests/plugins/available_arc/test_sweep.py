@@ -639,3 +639,32 @@ def test_candidates_of_the_strips_not_searched_are_hidden_or_left_as_they_were(
         assert _tree_holds_its_maxima(s.tree, leaves)
     assert switches > 3 and hidden_seen > 0
     assert (visible_seen > 0) == disks
+
+
+def test_the_strip_searched_keeps_the_turn_within_a_tenth_of_a_zone() -> None:
+    """The lowest open strip takes the next particle, unless the strip searched stands
+    at most ``stay`` bins above it (and is open, not full and not tried)."""
+    choose = sweep._choose
+    sz = np.zeros((3, sweep.N_SZ), dtype=np.int64)
+    sz[:, sweep.S_SEEDED] = 1
+    sz[:, sweep.S_HI] = [13, 5, 20]
+    tried = np.full(3, -2, dtype=np.int64)
+    assert choose(sz, tried, 7, 0, 8) == 0  # 13 - 5 = 8 bins: stays
+    assert choose(sz, tried, 7, 0, 7) == 1  # beyond: the lowest
+    assert choose(sz, tried, 7, 2, 8) == 1  # 20 - 5 = 15 bins
+    assert choose(sz, tried, 7, -1, 8) == 1  # no strip searched yet
+    assert choose(sz, tried, 7, 0, -1) == 1  # no stay: always the lowest
+    sz[1, sweep.S_HI] = 13
+    assert choose(sz, tried, 7, 1, 0) == 1  # a tie keeps the turn too
+    sz[1, sweep.S_HI] = 5
+    tried[0] = 7  # particle 7 was refused by strip 0: the lowest of the others
+    assert choose(sz, tried, 7, 0, 8) == 1
+    tried[0] = -2
+    sz[0, sweep.S_FULL] = 1  # a full strip passes the turn at once
+    assert choose(sz, tried, 7, 0, 8) == 1
+    sz[0, sweep.S_FULL] = 0
+    sz[0, sweep.S_CLOSED] = 1
+    assert choose(sz, tried, 7, 0, 8) == 1
+    # the default: a tenth of a zone
+    zone = sweep.Sweep(10, 1000.0, 100.0, width=400.0, strip=100.0)
+    assert zone.zs[sweep.Z_NZONE] // sweep.STAY_SHARE == sweep.ZONE_BINS // 10
