@@ -842,10 +842,10 @@ def next_candidate(s: Packed, start: int, count: int, r: float, t: float, linear
     As :func:`~regopack.plugins.available_arc.candidates.first_candidate`, within the
     strip ``ipar[I_STRIP]`` (every candidate when it is -1).
 
-    A candidate of another strip met on the way is hidden with its radius negated, to
-    be shown again when its strip is searched (the sweep's ``_show``): the candidates
-    of the other strips, which the search must not meet, are thus hidden only as far as
-    a search reaches them, not all at every change of strip.
+    The sweep hides the other strips' candidates when it changes strip, so the search
+    should meet none; one met all the same is hidden with its radius negated, to be
+    shown again when its strip is searched (the sweep's ``_show``), and the search
+    goes on past it.
     """
     leaves = s.ipar[I_LEAVES]
     k = first_candidate(s.tree, leaves, start, count, r, t, linear)

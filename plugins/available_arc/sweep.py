@@ -560,15 +560,15 @@ def _switch(
 ) -> None:
     """Offer the next particles to strip ``st``: show its hidden candidates, search only it.
 
-    In a scene of disks alone the candidates of the strip searched before stay
-    visible in the screening tree until a search meets them (``kernel.next_candidate``
-    hides them then); in other scenes they are all hidden now, which measured faster
-    for octagons (see docs/benchmarks.md). The search meets the same candidates either way.
+    The candidates of the strip searched before are all hidden now. (Hiding them only
+    as a search meets them, ``kernel.next_candidate``, measured slower once the strips
+    took turns in runs; see docs/benchmarks.md. The search meets the same candidates
+    either way.)
     """
     cur = zs[Z_CUR]
     if cur == st:
         return
-    if cur >= 0 and s.ipar[K.I_DISKS] == 0:
+    if cur >= 0:
         _hide_zone(cur, sz, s, bn)
     _show(st, s, bn)
     zs[Z_CUR] = st
