@@ -136,7 +136,8 @@ class AvailableArcConfig(BaseModel):
         description=(
             "Width of the sweep's strips (length units): the domain's width is cut into "
             "equal vertical strips of about this width, each with its own rising zone, and "
-            "each particle is offered to the strip whose zone is lowest, so that the work "
+            "each particle is offered to the strip whose zone is lowest (or within a tenth "
+            "of a zone of it, the strip offered the particles before), so that the work "
             "per particle no longer grows with the domain's width. 0: one zone across the "
             "whole width. Ignored by order = 'paper'."
         ),

@@ -65,10 +65,10 @@ IntArray = NDArray[np.int64]
 ZONE_BINS = 80
 """Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
 STAY_SHARE = 10
-"""The zone top of the strip searched may stand a ``1 / STAY_SHARE`` of a zone above
-the lowest top before particles go to another strip: a change of strip hides one
-zone's candidates and shows another's, so the strips take turns in runs rather than
-particle by particle."""
+"""The zone top of the strip searched may stand a ``1 / STAY_SHARE`` of a zone (of at
+most ``ZONE_BINS`` bins) above the lowest top before particles go to another strip
+(``zs[Z_STAY]`` bins): a change of strip hides one zone's candidates and shows
+another's, so the strips take turns in runs rather than after every few particles."""
 MAX_BINS = 1 << 20
 """Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
 has fewer than ``ZONE_BINS`` bins)."""
@@ -83,8 +83,9 @@ has fewer than ``ZONE_BINS`` bins)."""
     Z_CUR,
     Z_QLEN,
     Z_FLUSH,
-) = range(8)
-N_ZS = 8
+    Z_STAY,
+) = range(9)
+N_ZS = 9
 
 # sz: integer state of each strip
 (
@@ -176,6 +177,9 @@ class Sweep:
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
         self.zs[Z_NZONE] = max(1, round(zone / self.delta))
+        # a zone taller than the domain has more than ZONE_BINS bins: the band stays a
+        # tenth of ZONE_BINS, or a strip would keep the turn up to the top
+        self.zs[Z_STAY] = min(int(self.zs[Z_NZONE]), ZONE_BINS) // STAY_SHARE
         self.zs[Z_PROMPT] = CLOSINGS[closing]
         self.zs[Z_CUR] = -1
         self.sz = np.zeros((self.nstrip, N_SZ), dtype=np.int64)
@@ -516,7 +520,8 @@ def _choose(sz: IntArray, tried: IntArray, i: int, cur: int, stay: int) -> int:
     The open strip whose zone top is lowest, the first such one, among those
     not yet tried for ``i``; but the strip searched, ``cur``, keeps the turn
     while it is open, not full, not tried for ``i`` and its top stands at most
-    ``stay`` bins above that lowest one (-1 for no ``cur``). Among full strips (whose tops cannot
+    ``stay`` bins above that lowest one (``stay = -1``: always the lowest, the first
+    such one). Among full strips (whose tops cannot
     rise) the turn passes on after ``cur``, so that they close together.
     """
     nstrip = sz.shape[0]
@@ -708,7 +713,7 @@ def _step(
 
     ``queued``: ``i`` waited for its lag, so an earlier particle of the stream;
     its refusal does not end the tail closing. ``prefer``: a strip to offer it
-    to first, if open (-1: the lowest, as for every particle).
+    to first, if open (-1: the one :func:`_choose` picks, as for every particle).
     """
     nbins = bn.head.shape[1]
     if zs[Z_STARTED] == 0:
@@ -732,7 +737,7 @@ def _step(
     offered = -1  # the first strip particle i is offered to
     st = -1
     while True:
-        st = _choose(sz, tried, i, zs[Z_CUR], zs[Z_NZONE] // STAY_SHARE)
+        st = _choose(sz, tried, i, zs[Z_CUR], zs[Z_STAY])
         if prefer >= 0 and tried[prefer] != i and _open(prefer, sz):
             st = prefer
         if st < 0:
@@ -973,9 +978,7 @@ def sweep_range(
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
-        if not _full(sz) and _wait(
-            i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_NZONE] // STAY_SHARE), zs, sz, lags
-        ):
+        if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_STAY]), zs, sz, lags):
             continue
         placed += _step(
             i, bool(np.bool_(False)), int(np.int64(-1)), delta, swidth, g, s, w, rng, zs, sz, bn,

@@ -660,6 +660,27 @@ def test_the_strip_searched_keeps_the_turn_within_a_tenth_of_a_zone() -> None:
     sz[0, sweep.S_FULL] = 0
     sz[0, sweep.S_CLOSED] = 1
     assert choose(sz, tried, 7, 0, 8) == 1
-    # the default: a tenth of a zone
-    zone = sweep.Sweep(10, 1000.0, 100.0, width=400.0, strip=100.0)
-    assert zone.zs[sweep.Z_NZONE] // sweep.STAY_SHARE == sweep.ZONE_BINS // 10
+    sz[0, sweep.S_CLOSED] = 0
+    # measured from the lowest strip not tried: 13 - 10 = 3 bins
+    sz[:, sweep.S_HI] = [13, 5, 10]
+    tried[1] = 7
+    assert choose(sz, tried, 7, 0, 3) == 0 and choose(sz, tried, 7, 0, 2) == 2
+    tried[1] = -2
+    assert choose(sz, tried, 7, 1, 8) == 1  # the strip searched is the lowest
+    # at the top, a strip not yet marked full keeps the turn over a full one ...
+    sz[:, sweep.S_HI] = 30
+    sz[:, sweep.S_FULL] = [1, 1, 0]
+    assert choose(sz, tried, 7, 2, 8) == 2
+    # ... and full strips take turns after the strip searched, so they close together
+    sz[2, sweep.S_FULL] = 1
+    assert [choose(sz, tried, 7, c, 8) for c in (0, 1, 2)] == [1, 2, 0]
+    sz[:, sweep.S_CLOSED] = 1
+    assert choose(sz, tried, -1, -1, 0) == -1  # no open strip left
+
+
+@pytest.mark.parametrize(("zone", "stay"), [(100.0, 8), (2000.0, 8), (0.008, 0)])
+def test_the_band_is_a_tenth_of_a_zone_of_at_most_80_bins(zone: float, stay: int) -> None:
+    """A zone taller than the domain (more than ``ZONE_BINS`` bins) keeps the band of
+    8 bins; a zone of fewer than ten bins (``MAX_BINS``) keeps the turn on ties only."""
+    sw = sweep.Sweep(10, 1000.0, zone, width=400.0, strip=100.0)
+    assert sw.zs[sweep.Z_STAY] == stay
