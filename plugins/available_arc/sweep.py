@@ -68,7 +68,7 @@ STAY_SHARE = 10
 """The zone top of the strip searched may stand a ``1 / STAY_SHARE`` of a zone (of at
 most ``ZONE_BINS`` bins) above the lowest top before particles go to another strip
 (``zs[Z_STAY]`` bins): a change of strip hides one zone's candidates and shows
-another's, so the strips take turns in runs rather than after every few particles."""
+another's, so the strips take turns in runs rather than after every few dozen particles."""
 MAX_BINS = 1 << 20
 """Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
 has fewer than ``ZONE_BINS`` bins)."""
@@ -520,9 +520,9 @@ def _choose(sz: IntArray, tried: IntArray, i: int, cur: int, stay: int) -> int:
     The open strip whose zone top is lowest, the first such one, among those
     not yet tried for ``i``; but the strip searched, ``cur``, keeps the turn
     while it is open, not full, not tried for ``i`` and its top stands at most
-    ``stay`` bins above that lowest one (``stay = -1``: always the lowest, the first
-    such one). Among full strips (whose tops cannot
-    rise) the turn passes on after ``cur``, so that they close together.
+    ``stay`` bins above that lowest one (``stay = -1``: always the lowest, the
+    first such one). Among full strips (whose tops cannot rise) the turn passes
+    on after ``cur``, so that they close together.
     """
     nstrip = sz.shape[0]
     best = -1
