@@ -173,6 +173,63 @@ def test_fully_covered_candidate_has_no_arcs() -> None:
     assert arcs.shape == (0, 2)
 
 
+def _cluster() -> tuple[ArcState, int]:
+    """A 5 x 5 block of touching-distance particles, every one a candidate; new particle last."""
+    rng = np.random.default_rng(8)
+    n = 25
+    pop = mixed_population(np.append(rng.uniform(1.2, 1.8, n), 1.0), rng)
+    st_ = ArcState(pop, Rectangle(-20.0, 20.0, -20.0, 20.0), t=1.0, tau=None, linear=False)
+    for j in range(n):
+        st_.insert(j, 3.1 * (j % 5) - 6.2, 3.1 * (j // 5) - 6.2)
+    return st_, n
+
+
+@pytest.mark.parametrize("slots", [*range(1, 13), 512])
+def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
+    """Candidates analysed in a row share the envelope cache (candidates reuse their
+    envelopes as interferers and the other way round, the cache refills when full, and
+    fewer slots than interferers bypass it): the arcs are those of a fresh cache, bit for
+    bit, and every envelope the cache holds is its particle's."""
+    st_, i = _cluster()
+    g, s = st_.outlines, st_.packed
+    fresh = []
+    for k in range(i):
+        mq = st_.begin_particle(i)  # a new generation: nothing cached
+        fresh.append(kernel.analyze_candidate(k, i, mq, g, s, st_.work))
+    w0 = st_.work
+    width = w0.cache_x.shape[1]
+    w = w0._replace(
+        ckey=np.full_like(w0.ckey, -1),
+        cache_x=np.zeros((slots, width)),
+        cache_y=np.zeros((slots, width)),
+        cache_ex=np.zeros((slots, width)),
+        cache_ey=np.zeros((slots, width)),
+        cache_n=np.zeros(slots, dtype=np.int64),
+        cache_rad=np.zeros(slots),
+    )
+    mq = kernel.begin_particle(i, g, s, w)
+    order = np.random.default_rng(slots).permutation(np.tile(np.arange(i), 3))
+    for k in order:
+        arcs = kernel.analyze_candidate(k, i, mq, g, s, w)
+        assert arcs.tobytes() == fresh[k].tobytes(), k
+        assert s.ipar[kernel.I_CUSED] <= slots  # no slot beyond the cache
+    gen = s.ipar[kernel.I_GEN]
+    held = np.flatnonzero(w.ckey == gen)
+    if slots == 512:  # room for all: every particle's envelope made once, and kept
+        assert held.size == i
+    for o in held:
+        sl = w.cslot[o]
+        m = kernel.minkowski_envelope(o, *g[:6], *w[:5], mq, w0.wx, w0.wy, w0.wex, w0.wey)
+        assert w.cache_n[sl] == m
+        for got, want in zip(
+            (w.cache_x, w.cache_y, w.cache_ex, w.cache_ey),
+            (w0.wx, w0.wy, w0.wex, w0.wey),
+            strict=True,
+        ):
+            assert got[sl, :m].tobytes() == want[:m].tobytes()
+        assert w.cache_rad[sl] == math.sqrt(np.max(w0.wx[:m] ** 2 + w0.wy[:m] ** 2))
+
+
 def test_sample_angle_is_uniform_over_union() -> None:
     arcs = np.array([[0.0, 1.0], [2.0, 4.0]])
     assert kernel.sample_angle(arcs, 0.0) == 0.0
