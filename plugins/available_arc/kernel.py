@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.atomics import load_acquire
 from regopack.plugins.available_arc.bound_queue import post_bound
 from regopack.plugins.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.available_arc.disk_bound import disk_bound
@@ -423,13 +424,24 @@ def _make_envelope(
 
 @numba.njit(cache=True)
 def analyze_candidate(
-    pk: int, i: int, mq: int, g: Outlines, s: Packed, w: Work, rounded: object = None
+    pk: int,
+    i: int,
+    mq: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rounded: object = None,
+    cut: tuple[IntArray, int, int] | None = None,
 ) -> FloatArray:
     """Available arcs of candidate particle ``pk`` for the new particle ``i``.
 
     ``begin_particle(i, ...)`` must have been called. ``rounded`` is ``None``
     in a scene of sharp polygons (the rounded path is then pruned at compile
     time and never compiled) and ``True`` when some particle is rounded.
+    ``cut`` is ``None`` (compiled away), or ``(words, index, id)`` for a
+    partner's analysis (:mod:`~regopack.plugins.available_arc.partner`):
+    before each envelope edge it stops, with no arcs, once ``words[index]``
+    has reached ``id`` (the caller will not read the result).
 
     Returns
     -------
@@ -703,6 +715,8 @@ def analyze_candidate(
     first_at_zero = False
     cur = -1  # an interferer whose open envelope contains the start vertex of edge j
     for j in range(n):
+        if cut is not None and load_acquire(cut[0], cut[1]) >= cut[2]:
+            return np.empty((0, 2))
         j2 = j + 1 if j + 1 < n else 0
         ax = wx[j]
         ay = wy[j]

@@ -89,9 +89,11 @@ POSTED, PARTNER, CALLER, EMPTY, ARCS, SHUT, CANCELLED = 1, 2, 3, 4, 5, 6, 7
 TAG = 7
 
 # control words (times PAD); C_DEFER: the caller leaves every posted slot to the partner
-# (a test of the partner's path: then it analyses every candidate that is not shut)
-C_ON, C_STOP, C_PARK, C_DEAD, C_ID, C_SERVED, C_DEFER = (PAD * j for j in range(7))
-N_CTL = 7 * PAD
+# (a test of the partner's path: then it analyses every candidate that is not shut);
+# C_CUT: the partner drops an analysis of a post id up to this one between two envelope
+# edges (the caller has found the particle's place before it and will not read it)
+C_ON, C_STOP, C_PARK, C_DEAD, C_ID, C_SERVED, C_DEFER, C_CUT = (PAD * j for j in range(8))
+N_CTL = 8 * PAD
 
 # task words within a slot's block; T_ID: the post id (the caller's own)
 T_PK, T_I, T_MQ, T_NARCS, T_ID = 0, 1, 2, 3, 4
@@ -263,7 +265,9 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         if h.last[0] != i:
             K.begin_particle(i, g, own, w)
             h.last[0] = i
-        arcs = K.analyze_candidate(p.task[base + T_PK], i, p.task[base + T_MQ], g, own, w, rounded)
+        pk = p.task[base + T_PK]
+        cut = (p.ctl, C_CUT, word >> 3)
+        arcs = K.analyze_candidate(pk, i, p.task[base + T_MQ], g, own, w, rounded, cut)
         na = arcs.shape[0]
         if na <= p.arcs.shape[1]:
             for a in range(na):
@@ -312,9 +316,12 @@ def _wait(polls: int) -> None:
 def _settle(p: Partner, head: int, tail: int) -> None:
     """Cancel the slots ``head .. tail - 1``.
 
-    Posted ones at once; the partner's after its analysis, or after
-    :data:`TAKEOVER` polls (its result is then dropped).
+    Posted ones at once; the partner's when it has left its analysis (cut
+    short at the next envelope edge), or after :data:`TAKEOVER` polls (its
+    result is then dropped).
     """
+    if tail > head:  # the posts' ids grow: the last one's cuts them all
+        store_release(p.ctl, C_CUT, p.task[((tail - 1) % SLOTS) * PAD + T_ID])
     for q in range(head, tail):
         sl = q % SLOTS
         polls = 0

@@ -230,6 +230,20 @@ def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
         assert w.cache_rad[sl] == math.sqrt(np.max(w0.wx[:m] ** 2 + w0.wy[:m] ** 2))
 
 
+def test_a_cut_analysis_stops_with_no_arcs() -> None:
+    """A partner's analysis ends with no arcs once its cut word reaches its id, else runs."""
+    domain = Rectangle(-1e3, 1e3, -1e3, 1e3)
+    _, st_, i, arcs = _setup(3, 4, domain)
+    assert arcs.shape[0] > 0
+    mq = st_.begin_particle(i)
+    g, s, w = st_.outlines, st_.packed, st_.work
+    words = np.array([0, 7], dtype=np.int64)
+    run = kernel.analyze_candidate(0, i, mq, g, s, w, None, (words, 1, 8))
+    assert run.tobytes() == arcs.tobytes()
+    for cut_id in (7, 6):
+        assert kernel.analyze_candidate(0, i, mq, g, s, w, None, (words, 1, cut_id)).shape == (0, 2)
+
+
 def test_sample_angle_is_uniform_over_union() -> None:
     arcs = np.array([[0.0, 1.0], [2.0, 4.0]])
     assert kernel.sample_angle(arcs, 0.0) == 0.0

@@ -253,6 +253,23 @@ def test_the_caller_takes_back_what_a_stalled_partner_holds(
     assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
 
 
+def test_settling_cancels_the_later_slots_and_cuts_their_analyses() -> None:
+    """After a success the later slots are cancelled, and the cut reaches their last post id
+    (the partner's analysis of any of them stops at its next envelope edge)."""
+    p = partner.new_partner()
+    pad = partner.PAD
+    for q, tag in enumerate([partner.ARCS, partner.POSTED, partner.EMPTY, partner.POSTED]):
+        pid = 11 + q
+        p.task[q * pad + partner.T_ID] = pid
+        p.state[q * pad] = pid * 8 + tag
+    partner._settle(p, 1, 4)
+    assert p.ctl[partner.C_CUT] == 14
+    tags = [int(p.state[q * pad]) & partner.TAG for q in range(4)]
+    assert tags == [partner.ARCS, partner.CANCELLED, partner.EMPTY, partner.CANCELLED]
+    partner._settle(p, 1, 1)  # nothing to settle: the cut stays
+    assert p.ctl[partner.C_CUT] == 14
+
+
 def test_sweeps_from_two_python_threads_give_their_own_packings(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
