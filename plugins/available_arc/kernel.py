@@ -357,7 +357,7 @@ def _interferes(d2: float, rpk: float, ro: float, ri2: float, tau_mode: bool, ta
     return hit
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _envelope_into(
     p: int,
     g: Outlines,
@@ -375,7 +375,7 @@ def _envelope_into(
     )  # fmt: skip
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _circumradius(wx: FloatArray, wy: FloatArray, n: int) -> float:
     """Largest distance of the ``n`` vertices ``w`` from the origin."""
     rr = 0.0
@@ -386,7 +386,7 @@ def _circumradius(wx: FloatArray, wy: FloatArray, n: int) -> float:
     return math.sqrt(rr)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _make_envelope(
     f: int,
     found: IntArray,
