@@ -124,9 +124,6 @@ SCRATCH_WIDTH = 2 * (FOUND_SLOTS + 8)
 """Shape of ``Work.fs``: room for the covers of ``FOUND_SLOTS`` interferers and 8 walls."""
 CIRCLE_SLACK = 1.0 + 1e-9
 """Relative slack of the squared-circumcircle pre-test of the covered-edge search."""
-BOUND_SLACK = 1.0 + 1e-9
-"""Relative slack of the bound ``R_o + R_i`` of an envelope's circumradius, far above the
-rounding of the vertex sums; the bound only decides whether the envelope is made."""
 
 
 class Outlines(NamedTuple):
@@ -357,71 +354,6 @@ def _interferes(d2: float, rpk: float, ro: float, ri2: float, tau_mode: bool, ta
     return hit
 
 
-@numba.njit(cache=True, inline="always")
-def _envelope_into(
-    p: int,
-    g: Outlines,
-    w: Work,
-    mq: int,
-    wx: FloatArray,
-    wy: FloatArray,
-    wex: FloatArray,
-    wey: FloatArray,
-) -> int:
-    """Envelope of particle ``p`` and the new particle (``begin_particle``'s ``-Q``) into ``w*``."""
-    return minkowski_envelope(
-        p, g.vx, g.vy, g.ex, g.ey, g.ang, g.offsets,
-        w.rx, w.ry, w.rex, w.rey, w.rang, mq, wx, wy, wex, wey,
-    )  # fmt: skip
-
-
-@numba.njit(cache=True, inline="always")
-def _circumradius(wx: FloatArray, wy: FloatArray, n: int) -> float:
-    """Largest distance of the ``n`` vertices ``w`` from the origin."""
-    rr = 0.0
-    for j in range(n):
-        d2 = wx[j] * wx[j] + wy[j] * wy[j]
-        if d2 > rr:
-            rr = d2
-    return math.sqrt(rr)
-
-
-@numba.njit(cache=True, inline="always")
-def _make_envelope(
-    f: int,
-    found: IntArray,
-    slot: IntArray,
-    cached: bool,
-    gen: int,
-    mq: int,
-    g: Outlines,
-    w: Work,
-    ipar: IntArray,
-    ox: FloatArray,
-    oy: FloatArray,
-    oex: FloatArray,
-    oey: FloatArray,
-    on: IntArray,
-    orad: FloatArray,
-) -> int:
-    """Envelope of interferer ``found[f]`` into a cache slot (or row ``f``); return the slot."""
-    o = found[f]
-    if cached:
-        if w.ckey[o] == gen:  # met before in this analysis (a periodic image)
-            slot[f] = w.cslot[o]
-            return slot[f]
-        sl = ipar[I_CUSED]
-        ipar[I_CUSED] = sl + 1
-        w.ckey[o] = gen
-        w.cslot[o] = sl
-    else:
-        sl = f
-    slot[f] = sl
-    on[sl] = _envelope_into(o, g, w, mq, ox[sl], oy[sl], oex[sl], oey[sl])
-    orad[sl] = _circumradius(ox[sl], oy[sl], on[sl])
-    return sl
-
-
 @numba.njit(cache=True)
 def analyze_candidate(
     pk: int,
@@ -615,22 +547,31 @@ def analyze_candidate(
                     s.shut[pk] = bound
         return arcs
 
-    # ---- envelopes (cached per new particle), relative to the particles' centres: the
-    # candidate's and its interferers'. A candidate met earlier as an interferer (its
-    # zone's neighbours are the next candidates) reuses that envelope, the same numbers
+    wx = w.wx
+    wy = w.wy
+    n = minkowski_envelope(
+        pk,
+        g.vx,
+        g.vy,
+        g.ex,
+        g.ey,
+        g.ang,
+        g.offsets,
+        w.rx,
+        w.ry,
+        w.rex,
+        w.rey,
+        w.rang,
+        mq,
+        wx,
+        wy,
+        w.wex,
+        w.wey,
+    )
+
+    # ---- interferer envelopes (cached per new particle), relative to their centres
     ncache = w.cache_n.shape[0]
-    cached = nf < ncache
-    if cached:
-        ox = w.cache_x
-        oy = w.cache_y
-        oex = w.cache_ex
-        oey = w.cache_ey
-        on = w.cache_n
-        orad = w.cache_rad
-        if ipar[I_CUSED] + nf + 1 > ncache:
-            ipar[I_GEN] += 1
-            ipar[I_CUSED] = 0
-    else:
+    if nf > ncache:
         width = w.cache_x.shape[1]
         ox = np.empty((nf, width))
         oy = np.empty((nf, width))
@@ -638,32 +579,18 @@ def analyze_candidate(
         oey = np.empty((nf, width))
         on = np.empty(nf, dtype=np.int64)
         orad = np.empty(nf)
-    gen = ipar[I_GEN]
-    if cached:
-        if w.ckey[pk] == gen:
-            sl = w.cslot[pk]
-        else:
-            sl = ipar[I_CUSED]
-            ipar[I_CUSED] = sl + 1
-            w.ckey[pk] = gen
-            w.cslot[pk] = sl
-            on[sl] = _envelope_into(pk, g, w, mq, ox[sl], oy[sl], oex[sl], oey[sl])
-            orad[sl] = _circumradius(ox[sl], oy[sl], on[sl])
-        wx = ox[sl]
-        wy = oy[sl]
-        wex = oex[sl]
-        wey = oey[sl]
-        # unsigned, as minkowski_envelope returns it (numba's int() keeps an unsigned
-        # integer unsigned): the edge loop's indices need no wraparound test
-        n = int(np.uint64(on[sl]))
     else:
-        wx = w.wx
-        wy = w.wy
-        wex = w.wex
-        wey = w.wey
-        n = _envelope_into(pk, g, w, mq, wx, wy, wex, wey)
+        ox = w.cache_x
+        oy = w.cache_y
+        oex = w.cache_ex
+        oey = w.cache_ey
+        on = w.cache_n
+        orad = w.cache_rad
+        if ipar[I_CUSED] + nf > ncache:
+            ipar[I_GEN] += 1
+            ipar[I_CUSED] = 0
+    gen = ipar[I_GEN]
     slot = np.empty(nf, dtype=np.int64)
-    obound = np.empty(nf)
     odx = np.empty(nf)
     ody = np.empty(nf)
     for f in range(nf):
@@ -675,25 +602,52 @@ def analyze_candidate(
             qy = found_q[f] // nsx
             odx[f] -= image_shift(qx, sx1, sx2)
             ody[f] -= image_shift(qy, sy1, sy2)
-        # an envelope not in the cache is made when an edge first needs it (the bound
-        # of its circumradius passes a pre-test below): the nearer interferers mostly
-        # cover every edge before the others are looked at
-        slot[f] = w.cslot[o] if cached and w.ckey[o] == gen else -1
-        obound[f] = (g.circum[o] + g.circum[i]) * BOUND_SLACK
+        if nf <= ncache:
+            if w.ckey[o] == gen:
+                slot[f] = w.cslot[o]
+                continue
+            sl = ipar[I_CUSED]
+            ipar[I_CUSED] = sl + 1
+            w.ckey[o] = gen
+            w.cslot[o] = sl
+        else:
+            sl = f
+        slot[f] = sl
+        on[sl] = minkowski_envelope(
+            o,
+            g.vx,
+            g.vy,
+            g.ex,
+            g.ey,
+            g.ang,
+            g.offsets,
+            w.rx,
+            w.ry,
+            w.rex,
+            w.rey,
+            w.rang,
+            mq,
+            ox[sl],
+            oy[sl],
+            oex[sl],
+            oey[sl],
+        )
+        rr = 0.0
+        for j in range(on[sl]):
+            d2 = ox[sl, j] * ox[sl, j] + oy[sl, j] * oy[sl, j]
+            if d2 > rr:
+                rr = d2
+        orad[sl] = math.sqrt(rr)
 
     if rounded is not None:
         orho = np.empty(nf)
         for f in range(nf):
             orho[f] = g.rho[found[f]] + g.rho[i]
-            if slot[f] < 0:
-                _make_envelope(
-                    f, found, slot, cached, gen, mq, g, w, ipar, ox, oy, oex, oey, on, orad
-                )
         box = np.empty(4)
         box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
         inner = s.walls[0, 2] - g.rho[i] if mode == WALL_CIRCLE else 0.0
         return rounded_arcs(
-            wx, wy, wex, wey, n, g.rho[pk] + g.rho[i], pcx, pcy,
+            wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy,
             nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho,
             mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner,
         )  # fmt: skip
@@ -740,15 +694,7 @@ def analyze_candidate(
             for f in range(nf):
                 gx = odx[f] - mx
                 gy = ody[f] - my
-                sl = slot[f]
-                if sl < 0:
-                    ob = obound[f]
-                    if gx * gx + gy * gy + half * half > ob * ob * CIRCLE_SLACK:
-                        continue
-                    sl = _make_envelope(
-                        f, found, slot, cached, gen, mq, g, w, ipar, ox, oy, oex, oey, on, orad
-                    )
-                us = np.uint64(sl)
+                us = np.uint64(slot[f])
                 # both ends within the circumcircle need |mid - c|^2 <= R^2 - half^2; the
                 # slack keeps rounding from rejecting an envelope that holds both ends,
                 # so that coverage does not depend on which interferer the fast path kept
@@ -782,15 +728,7 @@ def analyze_candidate(
         for f in range(nf):
             gx = odx[f] - mx
             gy = ody[f] - my
-            sl = slot[f]
-            if sl < 0:
-                lim = obound[f] + half
-                if gx * gx + gy * gy >= lim * lim:
-                    continue
-                sl = _make_envelope(
-                    f, found, slot, cached, gen, mq, g, w, ipar, ox, oy, oex, oey, on, orad
-                )
-            us = np.uint64(sl)
+            us = np.uint64(slot[f])
             lim = orad[us] + half
             if gx * gx + gy * gy >= lim * lim:
                 continue

@@ -186,10 +186,10 @@ def _cluster() -> tuple[ArcState, int]:
 
 @pytest.mark.parametrize("slots", [*range(1, 13), 512])
 def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
-    """Candidates analysed in a row share the envelope cache (candidates reuse their
-    envelopes as interferers and the other way round, the cache refills when full, and
-    fewer slots than interferers bypass it): the arcs are those of a fresh cache, bit for
-    bit, and every envelope the cache holds is its particle's."""
+    """Candidates analysed in a row share the envelope cache (interferers met again reuse
+    their envelopes, the cache refills when full, and fewer slots than interferers bypass
+    it): the arcs are those of a fresh cache, bit for bit, and every envelope the cache
+    holds is its particle's."""
     st_, i = _cluster()
     g, s = st_.outlines, st_.packed
     fresh = []
