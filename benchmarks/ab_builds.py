@@ -4,10 +4,12 @@ This machine's speed drifts by tens of percent between processes and within
 minutes, so two builds are timed in the same process, turn about (the order
 swapped every round), and the ratio of each round is reported with the
 median. The revision's ``core`` and ``plugins`` are exported with
-``git archive`` into a temporary folder as a package named ``regopack_<rev>``
-(its imports rewritten), so both builds load side by side; the revision's
-kernels compile on the first run. The packings are checked to be the same
-(placed count and analyses); run from the repository root:
+``git archive`` into ``<temp>/regopack-ab/<sha>`` as a package named
+``regopack_<sha>`` (every ``regopack`` in its sources renamed), so both
+builds load side by side; every module of each build is checked to come
+from its own folder, and the packings to be the same (placed count and
+analyses). The revision's kernels compile on its first run and are cached
+with the working tree's. Run from the repository root:
 
     python benchmarks/ab_builds.py --rev HEAD --size 2400 --rounds 6
     NUMBA_NUM_THREADS=1 python benchmarks/ab_builds.py --rev HEAD~1 --size 1200
@@ -35,12 +37,16 @@ from types import ModuleType
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def export_revision(rev: str, into: Path) -> str:
-    """Write ``rev``'s package as ``regopack_<sha>`` under ``into``; return the name."""
+def export_revision(rev: str) -> tuple[str, Path]:
+    """Write ``rev``'s package as ``regopack_<sha>``; return its name and the folder holding it."""
     sha = subprocess.run(
         ["git", "rev-parse", "--short", rev], cwd=ROOT, check=True, capture_output=True, text=True
     ).stdout.strip()
     name = f"regopack_{sha}"
+    into = Path(tempfile.gettempdir()) / "regopack-ab" / sha
+    done = into / "exported"
+    if done.exists():  # the same files, so that numba's cache of them stays valid
+        return name, into
     blob = subprocess.run(
         ["git", "archive", "--format=tar", rev, "core", "plugins"],
         cwd=ROOT,
@@ -59,13 +65,21 @@ def export_revision(rev: str, into: Path) -> str:
             assert data is not None
             content = data.read()
             if rel.suffix == ".py":
-                text = content.decode()
-                text = re.sub(r"\bregopack\b(?=[.:])", name, text)
-                text = re.sub(r"^import regopack$", f"import {name} as regopack", text, flags=re.M)
-                text = text.replace('"regopack"', f'"{name}"')
-                content = text.encode()
+                content = re.sub(rb"\bregopack\b", name.encode(), content)
             target.write_bytes(content)
-    return name
+    done.write_text(rev)
+    return name, into
+
+
+def check_origin(name: str, folder: Path) -> None:
+    """Stop unless every loaded module of package ``name`` lies in ``folder`` (and no other's)."""
+    for mod_name, mod in list(sys.modules.items()):
+        file = getattr(mod, "__file__", None)
+        if file is None or mod_name.partition(".")[0] not in (name, "regopack"):
+            continue
+        inside = Path(file).resolve().is_relative_to(folder.resolve())
+        if inside != (mod_name.partition(".")[0] == name):
+            raise SystemExit(f"module {mod_name} loaded from {file}: the builds are mixed")
 
 
 def main() -> None:
@@ -76,15 +90,15 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=6)
     parser.add_argument("--set", action="append", default=[], dest="overrides")
     args = parser.parse_args()
-    tmp = Path(tempfile.mkdtemp(prefix="regopack-ab-"))
-    old_name = export_revision(args.rev, tmp)
-    sys.path.insert(0, str(tmp))
-    import regopack
+    import regopack  # first: its kernel cache folder is the one both builds use
 
+    old_name, folder = export_revision(args.rev)
+    sys.path.insert(0, str(folder))
     builds: dict[str, ModuleType] = {
         args.rev: importlib.import_module(old_name),
         "tree": regopack,
     }
+    print(f"tree: {Path(regopack.__file__).parent}; {args.rev}: {folder / old_name}")
     base = [
         'insertion.closing="tail"',
         "insertion.strip=800",
@@ -96,6 +110,7 @@ def main() -> None:
     print(f"{args.scene}, L = {args.size:g}, {' '.join(base)}")
     for mod in builds.values():  # compile
         mod.pack(args.scene, **_kw(base + ["domain.width=60", "domain.height=60"]))
+    check_origin(old_name, folder / old_name)
     for r in range(args.rounds):
         seen = set()
         for key in list(builds) if r % 2 == 0 else list(builds)[::-1]:

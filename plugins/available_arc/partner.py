@@ -266,8 +266,13 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
             K.begin_particle(i, g, own, w)
             h.last[0] = i
         pk = p.task[base + T_PK]
-        cut = (p.ctl, C_CUT, word >> 3)
-        arcs = K.analyze_candidate(pk, i, p.task[base + T_MQ], g, own, w, rounded, cut)
+        mq = p.task[base + T_MQ]
+        if rounded is None:
+            # the index as a plain integer: the specialisation the tests compile too
+            cut = (p.ctl, int(np.int64(C_CUT)), word >> 3)
+            arcs = K.analyze_candidate(pk, i, mq, g, own, w, rounded, cut)
+        else:  # rounded envelopes are analysed before the edge loop that reads a cut
+            arcs = K.analyze_candidate(pk, i, mq, g, own, w, rounded)
         na = arcs.shape[0]
         if na <= p.arcs.shape[1]:
             for a in range(na):
@@ -317,8 +322,8 @@ def _settle(p: Partner, head: int, tail: int) -> None:
     """Cancel the slots ``head .. tail - 1``.
 
     Posted ones at once; the partner's when it has left its analysis (cut
-    short at the next envelope edge), or after :data:`TAKEOVER` polls (its
-    result is then dropped).
+    short at the next envelope edge in a scene of sharp polygons), or after
+    :data:`TAKEOVER` polls (its result is then dropped).
     """
     if tail > head:  # the posts' ids grow: the last one's cuts them all
         store_release(p.ctl, C_CUT, p.task[((tail - 1) % SLOTS) * PAD + T_ID])

@@ -185,12 +185,7 @@ class ArcState:
             va=np.empty(width + 1),
             ckey=np.full(n, -1, dtype=np.int64),
             cslot=np.zeros(n, dtype=np.int64),
-            cache_x=np.empty((slots, width)),
-            cache_y=np.empty((slots, width)),
-            cache_ex=np.empty((slots, width)),
-            cache_ey=np.empty((slots, width)),
-            cache_n=np.zeros(slots, dtype=np.int64),
-            cache_rad=np.zeros(slots),
+            **envelope_cache(slots, width),
             woff=np.zeros(walls.shape[0] if mode == WALL_HALFPLANES else 1),
             found=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
             found_q=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
@@ -302,3 +297,15 @@ class ArcState:
     def reject(self, k: int, r: float) -> None:
         """Record that candidate ``k`` cannot take a particle of radius ``r``."""
         kernel.reject(k, r, self.packed)
+
+
+def envelope_cache(slots: int, width: int) -> dict[str, Any]:
+    """Return the ``cache_*`` arrays of a :class:`kernel.Work`: ``slots`` rows of ``width``."""
+    return {
+        "cache_x": np.empty((slots, width)),
+        "cache_y": np.empty((slots, width)),
+        "cache_ex": np.empty((slots, width)),
+        "cache_ey": np.empty((slots, width)),
+        "cache_n": np.zeros(slots, dtype=np.int64),
+        "cache_rad": np.zeros(slots),
+    }

@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 from regopack.domain import Rectangle
 from regopack.plugins.available_arc import kernel
-from regopack.plugins.available_arc.state import ArcState
+from regopack.plugins.available_arc.state import ArcState, envelope_cache
 
 MARGIN = 1e-3  # radians kept away from arc ends, where the oracle is ambiguous
 OVERLAP = 1e-12  # relative overlap area the oracle counts as interference
@@ -198,15 +198,7 @@ def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
         fresh.append(kernel.analyze_candidate(k, i, mq, g, s, st_.work))
     w0 = st_.work
     width = w0.cache_x.shape[1]
-    w = w0._replace(
-        ckey=np.full_like(w0.ckey, -1),
-        cache_x=np.zeros((slots, width)),
-        cache_y=np.zeros((slots, width)),
-        cache_ex=np.zeros((slots, width)),
-        cache_ey=np.zeros((slots, width)),
-        cache_n=np.zeros(slots, dtype=np.int64),
-        cache_rad=np.zeros(slots),
-    )
+    w = w0._replace(ckey=np.full_like(w0.ckey, -1), **envelope_cache(slots, width))
     mq = kernel.begin_particle(i, g, s, w)
     order = np.random.default_rng(slots).permutation(np.tile(np.arange(i), 3))
     for k in order:
