@@ -98,7 +98,10 @@ def write_map() -> int:
     lines = []
     for library, obj in _OBJECTS.values():
         functions = _functions(obj)
-        engine = library._codegen._engine
+        try:
+            engine = library._codegen._engine
+        except ReferenceError:  # a compiled library held by a weak proxy, since freed
+            continue
         base: dict[int, int] = {}
         for name, section, value, _, binding in functions:
             if binding == 1 and section not in base:  # a global: the engine knows it
@@ -112,7 +115,7 @@ def write_map() -> int:
 
     for name in ("NRT_incref", "NRT_decref"):  # called by every library, defined in one
         address = nrt.rtsys.library.get_pointer_to_function(name)
-        if address:
+        if address and not any(line.startswith(f"{address:x} ") for line in lines):
             lines.append(f"{address:x} 10 {name}")
     with open(f"/tmp/perf-{os.getpid()}.map", "w") as out:
         out.write("\n".join(lines) + "\n")

@@ -793,14 +793,13 @@ def analyze_candidate(
 
 
 @numba.njit(cache=True, inline="always")
-def shut_for(i: int, pk: int, rho: FloatArray, shut: FloatArray, rounded: object) -> bool:
+def shut_for(i: int, pk: int, g: Outlines, s: Packed, rounded: object) -> bool:
     """Whether a disk bound shows that candidate ``pk`` has no arc for disk ``i``.
 
-    ``rho`` and ``shut`` are ``Outlines.rho`` and ``Packed.shut``. See
-    :mod:`~regopack.plugins.available_arc.disk_bound`; compiled away in a
+    See :mod:`~regopack.plugins.available_arc.disk_bound`; compiled away in a
     scene of sharp polygons (``rounded`` is ``None``).
     """
-    return rounded is not None and rho[i] >= shut[pk]
+    return rounded is not None and g.rho[i] >= s.shut[pk]
 
 
 @numba.njit(cache=True)
@@ -821,12 +820,11 @@ def find_site(
     leaves = ipar[I_LEAVES]
     count = ipar[I_COUNT]
     linear = ipar[I_LINEAR] == 1
-    c = screen(s)
-    k = next_candidate(c, start, count, r, t, linear)
+    k = next_candidate(s, start, count, r, t, linear)
     while k >= 0:
         ipar[I_ANALYSES] += 1
         pk = s.order[k]
-        if shut_for(i, pk, g.rho, s.shut, rounded):
+        if shut_for(i, pk, g, s, rounded):
             arcs = empty
         else:
             arcs = analyze_candidate(pk, i, mq, g, s, w, rounded)
@@ -834,34 +832,12 @@ def find_site(
             return k, arcs
         ipar[I_EMPTY] += 1
         tree_set(s.tree, leaves, k, r)
-        k = next_candidate(c, k + 1, count, r, t, linear)
+        k = next_candidate(s, k + 1, count, r, t, linear)
     return -1, empty
 
 
-class Screen(NamedTuple):
-    """The arrays that the candidate search reads and hides candidates in.
-
-    :func:`next_candidate` and :func:`hide_candidate` take this or the whole
-    :class:`Packed` (the same fields). A compiled call counts a reference to
-    each array it receives, on entry and again on return, so the searches pass
-    these five rather than the packing's twenty-six for every candidate.
-    """
-
-    tree: FloatArray
-    ipar: IntArray
-    home: IntArray
-    hnext: IntArray
-    hhead: IntArray
-
-
-@numba.njit(cache=True, inline="always")
-def screen(s: Packed) -> Screen:
-    """Return the search's arrays of packing ``s``."""
-    return Screen(s.tree, s.ipar, s.home, s.hnext, s.hhead)
-
-
 @numba.njit(cache=True)
-def hide_candidate(k: int, value: float, s: Packed | Screen) -> None:
+def hide_candidate(k: int, value: float, s: Packed) -> None:
     """Hide candidate ``k`` from the search, among its strip's hidden candidates.
 
     Its screening radius becomes ``value``, not positive, which no particle passes.
@@ -874,9 +850,7 @@ def hide_candidate(k: int, value: float, s: Packed | Screen) -> None:
 
 
 @numba.njit(cache=True)
-def next_candidate(
-    s: Packed | Screen, start: int, count: int, r: float, t: float, linear: bool
-) -> int:
+def next_candidate(s: Packed, start: int, count: int, r: float, t: float, linear: bool) -> int:
     """Return the first candidate from ``start`` on that passes screening in the strip searched.
 
     As :func:`~regopack.plugins.available_arc.candidates.first_candidate`, within the

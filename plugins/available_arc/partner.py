@@ -381,8 +381,7 @@ def find_site_shared(
     linear = ipar[K.I_LINEAR] == 1
     defer = p.ctl[C_DEFER] != 0
     waits = 0  # polls in a row that found nothing to do
-    c = K.screen(s)
-    nxt = K.next_candidate(c, start, count, r, t, linear)
+    nxt = K.next_candidate(s, start, count, r, t, linear)
     head = 0  # the next position of the search to read
     tail = 0  # positions posted
     found = -1  # the first position known to have arcs
@@ -397,7 +396,7 @@ def find_site_shared(
             pid = p.ctl[C_ID] + 1
             p.ctl[C_ID] = pid
             p.task[base + T_ID] = pid
-            if K.shut_for(i, pk, g.rho, s.shut, rounded):
+            if K.shut_for(i, pk, g, s, rounded):
                 store_release(p.state, base, pid * 8 + SHUT)
             else:
                 p.task[base + T_PK] = pk
@@ -405,7 +404,7 @@ def find_site_shared(
                 p.task[base + T_MQ] = mq
                 store_release(p.state, base, pid * 8 + POSTED)
             tail += 1
-            nxt = K.next_candidate(c, nxt + 1, count, r, t, linear)
+            nxt = K.next_candidate(s, nxt + 1, count, r, t, linear)
         if head == tail:
             return -1, empty
         sl = head % SLOTS
