@@ -16,6 +16,11 @@ with the working tree's. Run from the repository root:
 
 The scene is ``dem`` with the tail closing and strips of 800 µm unless
 ``--set`` changes it (``--set 'phases.0.shape={kind="disk"}'``).
+
+Run it against ``--rev HEAD`` on a clean tree first: the same build against
+itself has given medians of 1.035 (two threads) and 1.084 (one thread) on
+one machine, the working tree the slower; a change's ratio means something
+only against that baseline (docs/benchmarks.md).
 """
 
 from __future__ import annotations
