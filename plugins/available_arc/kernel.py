@@ -215,8 +215,14 @@ class Work(NamedTuple):
     fs: FloatArray
     """``(SCRATCH_ROWS, SCRATCH_WIDTH)``: rows of scratch for an analysis of disks
     (:func:`~regopack.plugins.available_arc.rounded.disk_arcs` and
-    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`); one with more
+    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`), or of polygons (the
+    interferers' offsets and an edge's covered intervals); one with more
     interferers allocates its own."""
+    islot: IntArray
+    """``(FOUND_SLOTS,)``: the envelope-cache slot of each interferer of an analysis of
+    polygons; one with more interferers allocates its own."""
+    no_arcs: FloatArray
+    """``(0, 2)``: the arcs of an analysis that finds none (returned, not allocated)."""
 
 
 @numba.njit(cache=True)
@@ -590,9 +596,20 @@ def analyze_candidate(
             ipar[I_GEN] += 1
             ipar[I_CUSED] = 0
     gen = ipar[I_GEN]
-    slot = np.empty(nf, dtype=np.int64)
-    odx = np.empty(nf)
-    ody = np.empty(nf)
+    # the thread's own scratch: an analysis allocates nothing unless it finds arcs
+    fs = w.fs
+    if nf <= w.islot.shape[0] and nf + 2 <= fs.shape[1]:
+        slot = w.islot
+        odx = fs[0]
+        ody = fs[1]
+        ilo = fs[2]
+        ihi = fs[3]
+    else:
+        slot = np.empty(nf, dtype=np.int64)
+        odx = np.empty(nf)
+        ody = np.empty(nf)
+        ilo = np.empty(nf + 2)
+        ihi = np.empty(nf + 2)
     for f in range(nf):
         o = found[f]
         odx[f] = cx[o] - pcx
@@ -661,16 +678,14 @@ def analyze_candidate(
 
     va = w.va
     have_angles = False
-    ilo = np.empty(nf + 2)
-    ihi = np.empty(nf + 2)
-    arcs = np.empty((0, 2))
+    arcs = w.no_arcs
     na = 0
     joined_vertex = -1  # the last arc ends exactly at this envelope vertex
     first_at_zero = False
     cur = -1  # an interferer whose open envelope contains the start vertex of edge j
     for j in range(n):
         if cut is not None and load_acquire(cut[0], cut[1]) >= cut[2]:
-            return np.empty((0, 2))
+            return w.no_arcs
         j2 = j + 1 if j + 1 < n else 0
         ax = wx[j]
         ay = wy[j]
@@ -793,13 +808,14 @@ def analyze_candidate(
 
 
 @numba.njit(cache=True, inline="always")
-def shut_for(i: int, pk: int, g: Outlines, s: Packed, rounded: object) -> bool:
+def shut_for(i: int, pk: int, rho: FloatArray, shut: FloatArray, rounded: object) -> bool:
     """Whether a disk bound shows that candidate ``pk`` has no arc for disk ``i``.
 
-    See :mod:`~regopack.plugins.available_arc.disk_bound`; compiled away in a
+    ``rho`` and ``shut`` are ``Outlines.rho`` and ``Packed.shut``. See
+    :mod:`~regopack.plugins.available_arc.disk_bound`; compiled away in a
     scene of sharp polygons (``rounded`` is ``None``).
     """
-    return rounded is not None and g.rho[i] >= s.shut[pk]
+    return rounded is not None and rho[i] >= shut[pk]
 
 
 @numba.njit(cache=True)
@@ -820,11 +836,12 @@ def find_site(
     leaves = ipar[I_LEAVES]
     count = ipar[I_COUNT]
     linear = ipar[I_LINEAR] == 1
-    k = next_candidate(s, start, count, r, t, linear)
+    c = screen(s)
+    k = next_candidate(c, start, count, r, t, linear)
     while k >= 0:
         ipar[I_ANALYSES] += 1
         pk = s.order[k]
-        if shut_for(i, pk, g, s, rounded):
+        if shut_for(i, pk, g.rho, s.shut, rounded):
             arcs = empty
         else:
             arcs = analyze_candidate(pk, i, mq, g, s, w, rounded)
@@ -832,12 +849,34 @@ def find_site(
             return k, arcs
         ipar[I_EMPTY] += 1
         tree_set(s.tree, leaves, k, r)
-        k = next_candidate(s, k + 1, count, r, t, linear)
+        k = next_candidate(c, k + 1, count, r, t, linear)
     return -1, empty
 
 
+class Screen(NamedTuple):
+    """The arrays that the candidate search reads and hides candidates in.
+
+    :func:`next_candidate` and :func:`hide_candidate` take this or the whole
+    :class:`Packed` (the same fields). A compiled call counts a reference to
+    each array it receives, on entry and again on return, so the searches pass
+    these five rather than the packing's twenty-six for every candidate.
+    """
+
+    tree: FloatArray
+    ipar: IntArray
+    home: IntArray
+    hnext: IntArray
+    hhead: IntArray
+
+
+@numba.njit(cache=True, inline="always")
+def screen(s: Packed) -> Screen:
+    """Return the search's arrays of packing ``s``."""
+    return Screen(s.tree, s.ipar, s.home, s.hnext, s.hhead)
+
+
 @numba.njit(cache=True)
-def hide_candidate(k: int, value: float, s: Packed) -> None:
+def hide_candidate(k: int, value: float, s: Packed | Screen) -> None:
     """Hide candidate ``k`` from the search, among its strip's hidden candidates.
 
     Its screening radius becomes ``value``, not positive, which no particle passes.
@@ -850,7 +889,9 @@ def hide_candidate(k: int, value: float, s: Packed) -> None:
 
 
 @numba.njit(cache=True)
-def next_candidate(s: Packed, start: int, count: int, r: float, t: float, linear: bool) -> int:
+def next_candidate(
+    s: Packed | Screen, start: int, count: int, r: float, t: float, linear: bool
+) -> int:
     """Return the first candidate from ``start`` on that passes screening in the strip searched.
 
     As :func:`~regopack.plugins.available_arc.candidates.first_candidate`, within the

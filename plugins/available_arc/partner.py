@@ -239,6 +239,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         h.ckey[0], h.cslot[0],
         h.cache_x[0], h.cache_y[0], h.cache_ex[0], h.cache_ey[0],
         h.cache_n[0], h.cache_rad[0], h.woff[0], h.found[0], h.found_q[0], h.fs[0],
+        h.islot[0], h.no_arcs[0],
     )  # fmt: skip
     own = K.Packed(
         s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[0],
@@ -381,7 +382,8 @@ def find_site_shared(
     linear = ipar[K.I_LINEAR] == 1
     defer = p.ctl[C_DEFER] != 0
     waits = 0  # polls in a row that found nothing to do
-    nxt = K.next_candidate(s, start, count, r, t, linear)
+    c = K.screen(s)
+    nxt = K.next_candidate(c, start, count, r, t, linear)
     head = 0  # the next position of the search to read
     tail = 0  # positions posted
     found = -1  # the first position known to have arcs
@@ -396,7 +398,7 @@ def find_site_shared(
             pid = p.ctl[C_ID] + 1
             p.ctl[C_ID] = pid
             p.task[base + T_ID] = pid
-            if K.shut_for(i, pk, g, s, rounded):
+            if K.shut_for(i, pk, g.rho, s.shut, rounded):
                 store_release(p.state, base, pid * 8 + SHUT)
             else:
                 p.task[base + T_PK] = pk
@@ -404,7 +406,7 @@ def find_site_shared(
                 p.task[base + T_MQ] = mq
                 store_release(p.state, base, pid * 8 + POSTED)
             tail += 1
-            nxt = K.next_candidate(s, nxt + 1, count, r, t, linear)
+            nxt = K.next_candidate(c, nxt + 1, count, r, t, linear)
         if head == tail:
             return -1, empty
         sl = head % SLOTS

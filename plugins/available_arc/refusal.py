@@ -38,7 +38,7 @@ def try_candidate(
     """Analyse candidate ``k`` exactly for particle ``i`` and place it there if it fits."""
     s.ipar[K.I_ANALYSES] += 1
     pk = s.order[k]
-    if K.shut_for(i, pk, g, s, rounded):
+    if K.shut_for(i, pk, g.rho, s.shut, rounded):
         s.ipar[K.I_EMPTY] += 1
         return False
     arcs = K.analyze_candidate(pk, i, mq, g, s, w, rounded)

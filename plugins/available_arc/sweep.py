@@ -382,7 +382,7 @@ def _exhaustive(
             k = e
             e = bn.nxt[e]
             if bn.flag[k] != RETIRED:
-                if K.shut_for(i, s.order[k], g, s, rounded):
+                if K.shut_for(i, s.order[k], g.rho, s.shut, rounded):
                     helpers.before[nb] += 1
                     continue
                 helpers.ks[nb] = k

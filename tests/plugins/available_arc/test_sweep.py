@@ -547,13 +547,18 @@ def _hidden(s: object, strip: int) -> list[int]:
     return out
 
 
-def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_them() -> None:
+@pytest.mark.parametrize("narrow", [False, True])
+def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_them(
+    narrow: bool,
+) -> None:
+    """The walk given the packing or only its search's arrays (``kernel.Screen``)."""
     from regopack.plugins.available_arc import kernel
     from regopack.plugins.available_arc.state import ArcState
 
     pop, _ = change5_population(40, 2)
     st_ = ArcState(pop, Rectangle.centred(100.0, 100.0), t=0.999, tau=None, linear=False)
     s = st_.packed
+    c = kernel.Screen(s.tree, s.ipar, s.home, s.hnext, s.hhead) if narrow else s
     leaves = st_.counter(kernel.I_LEAVES)
     rmin = np.array([np.inf, 2.0, 0.5, 3.0, np.inf, 1.5])
     home = np.array([1, 0, 1, 1, 0, 1])
@@ -562,18 +567,18 @@ def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_
         s.home[k] = h
     s.ipar[kernel.I_STRIP] = 0
     # strip 0's first candidate passing r = 1.0 is 1; candidate 0 (strip 1) is met first
-    assert kernel.next_candidate(s, 0, 6, 1.0, 1.0, False) == 1
+    assert kernel.next_candidate(c, 0, 6, 1.0, 1.0, False) == 1
     assert _hidden(s, 1) == [0] and s.tree[leaves] == -np.inf
     # from 2 on: 2 does not pass (0.5), 3 (strip 1) is met and hidden, 4 passes
-    assert kernel.next_candidate(s, 2, 6, 1.0, 1.0, False) == 4
+    assert kernel.next_candidate(c, 2, 6, 1.0, 1.0, False) == 4
     assert _hidden(s, 1) == [3, 0] and s.tree[leaves + 3] == -3.0
     assert s.tree[leaves + 2] == 0.5  # not met: the screening passed over it
-    assert kernel.next_candidate(s, 5, 6, 1.0, 1.0, False) == -1  # 5 is hidden on the way
+    assert kernel.next_candidate(c, 5, 6, 1.0, 1.0, False) == -1  # 5 is hidden on the way
     assert _hidden(s, 1) == [5, 3, 0]
     assert _tree_holds_its_maxima(s.tree, leaves)
     # the same in the paper's order finds every strip's candidates, hiding none
     s.ipar[kernel.I_STRIP] = -1
-    assert kernel.next_candidate(s, 0, 6, 0.1, 1.0, False) == 1  # 0 is hidden now
+    assert kernel.next_candidate(c, 0, 6, 0.1, 1.0, False) == 1  # 0 is hidden now
     # switching to strip 1 puts back the radii of its active candidates
     bins = sweep.Bins(np.full((2, 1), -1), np.full(6, -1), np.full(6, sweep.ACTIVE))
     bins.flag[5] = sweep.RETIRED  # retired while hidden: stays hidden
@@ -583,8 +588,8 @@ def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_
     assert list(s.tree[leaves : leaves + 6]) == [np.inf, 2.0, 0.5, 3.0, np.inf, -1.5]
     # a candidate already on a list is not put on it twice (a cycle would never end)
     s.ipar[kernel.I_STRIP] = 0
-    kernel.hide_candidate(3, -np.inf, s)
-    kernel.hide_candidate(3, -np.inf, s)
+    kernel.hide_candidate(3, -np.inf, c)
+    kernel.hide_candidate(3, -np.inf, c)
     assert _hidden(s, 1) == [3]
     assert _tree_holds_its_maxima(s.tree, leaves)
 
