@@ -87,6 +87,8 @@ def export(ident: str, files: dict[Path, bytes]) -> tuple[str, Path]:
     done = into / "exported"
     if done.exists():  # the same files, so that numba's cache of them stays valid
         return name, into
+    if not files:
+        raise SystemExit(f"no exported build at {into}")
     pkg = into / name
     for rel, content in files.items():
         target = pkg / (rel.relative_to("core") if rel.parts[0] == "core" else rel)
@@ -119,16 +121,23 @@ def main() -> None:
     parser.add_argument("--passes", type=int, default=2, help="processes, loading order swapped")
     parser.add_argument("--set", action="append", default=[], dest="overrides")
     parser.add_argument("--first", choices=("rev", "new"), help=argparse.SUPPRESS)
+    parser.add_argument("--ids", nargs=2, help=argparse.SUPPRESS)
     args = parser.parse_args()
+    if args.rounds < 1 or args.passes < 1:
+        parser.error("--rounds and --passes take 1 or more")
     new_label = args.new or "tree"
-    exported = {
-        args.rev: export(*revision_files(args.rev)),
-        new_label: export(*(revision_files(args.new) if args.new else tree_files())),
-    }
+    if args.ids:  # a pass: the builds its parent exported
+        exported = {args.rev: export(args.ids[0], {}), new_label: export(args.ids[1], {})}
+    else:
+        exported = {
+            args.rev: export(*revision_files(args.rev)),
+            new_label: export(*(revision_files(args.new) if args.new else tree_files())),
+        }
     if len({name for name, _ in exported.values()}) != 2:
         raise SystemExit("--rev and --new name the same files; export one of them as the tree")
     if args.first is None:
-        passes(args, new_label)
+        ids = [name.removeprefix("regopack_") for name, _ in exported.values()]
+        passes(args, new_label, ids)
         return
     if args.first == "new":
         exported = dict(reversed(exported.items()))
@@ -139,15 +148,21 @@ def main() -> None:
 MARK = "ratios-of-pass:"
 
 
-def passes(args: argparse.Namespace, new_label: str) -> None:
-    """Run ``args.passes`` processes, loading first the base and the new build in turn."""
+def passes(args: argparse.Namespace, new_label: str, ids: list[str]) -> None:
+    """Run ``args.passes`` processes, loading first the base and the new build in turn.
+
+    Each process times the builds exported here (``ids``), even if the tree or
+    the revisions change meanwhile.
+    """
     by_order: dict[str, list[float]] = {"rev": [], "new": []}
     argv = list(sys.argv[1:])
     for k in range(args.passes):
         first = "rev" if k % 2 == 0 else "new"
         print(f"pass {k}: {args.rev if first == 'rev' else new_label} loaded first", flush=True)
         child = subprocess.run(
-            [sys.executable, __file__, *argv, "--first", first], capture_output=True, text=True
+            [sys.executable, __file__, *argv, "--first", first, "--ids", *ids],
+            capture_output=True,
+            text=True,
         )
         if child.returncode != 0:
             raise SystemExit(f"pass {k} failed:\n{child.stdout}{child.stderr}")
@@ -163,6 +178,8 @@ def passes(args: argparse.Namespace, new_label: str) -> None:
     if len(medians) == 2:
         both = (medians["rev"] * medians["new"]) ** 0.5
         print(f"{new_label} / {args.rev}: {both:.3f} (geometric mean of the two orders)")
+    else:
+        print("one loading order only: its median carries the first-loaded build's advantage")
 
 
 def time_builds(args: argparse.Namespace, exported: dict[str, tuple[str, Path]]) -> list[float]:
