@@ -71,8 +71,6 @@ class Helpers(NamedTuple):
     found: IntArray
     found_q: IntArray
     fs: FloatArray
-    islot: IntArray
-    no_arcs: FloatArray
     ipar: IntArray
     """``(T, N_IPAR)``: each thread's copy of the parameters and its scratch counters."""
     stamp: IntArray
@@ -147,7 +145,6 @@ def _analyse_batch(
             h.ckey[t], h.cslot[t],
             h.cache_x[t], h.cache_y[t], h.cache_ex[t], h.cache_ey[t],
             h.cache_n[t], h.cache_rad[t], h.woff[t], h.found[t], h.found_q[t], h.fs[t],
-            h.islot[t], h.no_arcs[t],
         )  # fmt: skip
         st = K.Packed(
             s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[t],

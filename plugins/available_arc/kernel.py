@@ -215,14 +215,8 @@ class Work(NamedTuple):
     fs: FloatArray
     """``(SCRATCH_ROWS, SCRATCH_WIDTH)``: rows of scratch for an analysis of disks
     (:func:`~regopack.plugins.available_arc.rounded.disk_arcs` and
-    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`), or of polygons (the
-    interferers' offsets and an edge's covered intervals); one with more
+    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`); one with more
     interferers allocates its own."""
-    islot: IntArray
-    """``(FOUND_SLOTS,)``: the envelope-cache slot of each interferer of an analysis of
-    polygons; one with more interferers allocates its own."""
-    no_arcs: FloatArray
-    """``(0, 2)``: the arcs of an analysis that finds none (returned, not allocated)."""
 
 
 @numba.njit(cache=True)
@@ -596,20 +590,9 @@ def analyze_candidate(
             ipar[I_GEN] += 1
             ipar[I_CUSED] = 0
     gen = ipar[I_GEN]
-    # the thread's own scratch: an analysis allocates nothing unless it finds arcs
-    fs = w.fs
-    if nf <= w.islot.shape[0] and nf + 2 <= fs.shape[1]:
-        slot = w.islot
-        odx = fs[0]
-        ody = fs[1]
-        ilo = fs[2]
-        ihi = fs[3]
-    else:
-        slot = np.empty(nf, dtype=np.int64)
-        odx = np.empty(nf)
-        ody = np.empty(nf)
-        ilo = np.empty(nf + 2)
-        ihi = np.empty(nf + 2)
+    slot = np.empty(nf, dtype=np.int64)
+    odx = np.empty(nf)
+    ody = np.empty(nf)
     for f in range(nf):
         o = found[f]
         odx[f] = cx[o] - pcx
@@ -678,14 +661,16 @@ def analyze_candidate(
 
     va = w.va
     have_angles = False
-    arcs = w.no_arcs
+    ilo = np.empty(nf + 2)
+    ihi = np.empty(nf + 2)
+    arcs = np.empty((0, 2))
     na = 0
     joined_vertex = -1  # the last arc ends exactly at this envelope vertex
     first_at_zero = False
     cur = -1  # an interferer whose open envelope contains the start vertex of edge j
     for j in range(n):
         if cut is not None and load_acquire(cut[0], cut[1]) >= cut[2]:
-            return w.no_arcs
+            return np.empty((0, 2))
         j2 = j + 1 if j + 1 < n else 0
         ax = wx[j]
         ay = wy[j]

@@ -239,7 +239,6 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
         h.ckey[0], h.cslot[0],
         h.cache_x[0], h.cache_y[0], h.cache_ex[0], h.cache_ey[0],
         h.cache_n[0], h.cache_rad[0], h.woff[0], h.found[0], h.found_q[0], h.fs[0],
-        h.islot[0], h.no_arcs[0],
     )  # fmt: skip
     own = K.Packed(
         s.cx, s.cy, s.order, s.tree, s.head, s.nxt, s.item, h.stamp[0],

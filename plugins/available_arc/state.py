@@ -190,8 +190,6 @@ class ArcState:
             found=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
             found_q=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
             fs=np.empty((kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH)),
-            islot=np.empty(kernel.FOUND_SLOTS, dtype=np.int64),
-            no_arcs=np.empty((0, 2)),
         )
 
     def reserve_rows(self, need: int) -> None:

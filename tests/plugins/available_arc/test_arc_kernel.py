@@ -222,40 +222,6 @@ def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
         assert w.cache_rad[sl] == math.sqrt(np.max(w0.wx[:m] ** 2 + w0.wy[:m] ** 2))
 
 
-def _ringed() -> tuple[ArcState, int]:
-    """A large candidate with 80 small particles about it, all interferers of a new one."""
-    rng = np.random.default_rng(5)
-    m = 80
-    pop = mixed_population(np.array([12.0] + [0.9] * m + [0.8]), rng)
-    st_ = ArcState(pop, Rectangle(-50.0, 50.0, -50.0, 50.0), t=1.0, tau=None, linear=False)
-    st_.insert(0, 0.0, 0.0)
-    for j in range(1, m + 1):
-        a = 2 * np.pi * j / m + 0.3 * rng.random()
-        st_.insert(j, 13.5 * math.cos(a), 13.5 * math.sin(a))
-    return st_, m + 1
-
-
-@pytest.mark.parametrize("scene", [_cluster, _ringed])
-def test_scratch_and_allocated_arrays_give_the_same_arcs(scene) -> None:
-    """An analysis of polygons works in its thread's scratch rows (up to FOUND_SLOTS
-    interferers) or in arrays of its own: the arcs are the same bit for bit, and an
-    analysis that finds none returns the thread's empty array unchanged."""
-    st_, i = scene()
-    g, s, w = st_.outlines, st_.packed, st_.work
-    own = w._replace(islot=np.empty(0, dtype=np.int64))  # too short: the analysis allocates
-    seen_arcs = seen_empty = 0
-    for k in range(i):
-        mq = st_.begin_particle(i)
-        scratch = kernel.analyze_candidate(k, i, mq, g, s, w).copy()
-        mq = kernel.begin_particle(i, g, s, own)
-        allocated = kernel.analyze_candidate(k, i, mq, g, s, own)
-        assert scratch.tobytes() == allocated.tobytes(), k
-        seen_arcs += scratch.shape[0] > 0
-        seen_empty += scratch.shape[0] == 0
-    assert seen_arcs > 0 and seen_empty > 0
-    assert w.no_arcs.shape == (0, 2)
-
-
 def test_a_cut_analysis_stops_with_no_arcs() -> None:
     """A partner's analysis ends with no arcs once its cut word reaches its id, else runs."""
     domain = Rectangle(-1e3, 1e3, -1e3, 1e3)
