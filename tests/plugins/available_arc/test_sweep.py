@@ -558,7 +558,7 @@ def test_a_search_hides_the_other_strips_candidates_it_meets_and_a_switch_shows_
     pop, _ = change5_population(40, 2)
     st_ = ArcState(pop, Rectangle.centred(100.0, 100.0), t=0.999, tau=None, linear=False)
     s = st_.packed
-    c = kernel.Screen(s.tree, s.ipar, s.home, s.hnext, s.hhead) if narrow else s
+    c = kernel.screen(s) if narrow else s
     leaves = st_.counter(kernel.I_LEAVES)
     rmin = np.array([np.inf, 2.0, 0.5, 3.0, np.inf, 1.5])
     home = np.array([1, 0, 1, 1, 0, 1])
