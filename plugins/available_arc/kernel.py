@@ -211,11 +211,13 @@ class Work(NamedTuple):
     a buffer twice their number, and a longer neighbour list (none while the lists hold
     ``LIST_CAPACITY = FOUND_SLOTS`` entries) gets a buffer of its length."""
     found_q: IntArray
-    """In a periodic domain, the image query that found each interferer."""
+    """In a periodic domain, the image query that found each interferer; an analysis of
+    sharp polygons then overwrites it with the interferers' envelope-cache slots."""
     fs: FloatArray
     """``(SCRATCH_ROWS, SCRATCH_WIDTH)``: rows of scratch for an analysis of disks
     (:func:`~regopack.plugins.available_arc.rounded.disk_arcs` and
-    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`); one with more
+    :func:`~regopack.plugins.available_arc.disk_bound.disk_bound`) or of sharp polygons
+    (the interferers' offsets and an edge's covered intervals); one with more
     interferers allocates its own."""
 
 
@@ -590,9 +592,19 @@ def analyze_candidate(
             ipar[I_GEN] += 1
             ipar[I_CUSED] = 0
     gen = ipar[I_GEN]
-    slot = np.empty(nf, dtype=np.int64)
-    odx = np.empty(nf)
-    ody = np.empty(nf)
+    # sharp polygons take their per-interferer arrays from the thread's scratch: the
+    # slots overwrite found_q, each entry after it is read; ilo and ihi hold an edge's
+    # covered intervals. The rounded path (compiled apart) keeps arrays of its own
+    fs = w.fs
+    scratch = rounded is None and nf + 2 <= fs.shape[1] and nf <= found_q.shape[0]
+    if scratch:
+        slot = found_q
+        odx = fs[0]
+        ody = fs[1]
+    else:
+        slot = np.empty(nf, dtype=np.int64)
+        odx = np.empty(nf)
+        ody = np.empty(nf)
     for f in range(nf):
         o = found[f]
         odx[f] = cx[o] - pcx
@@ -661,16 +673,20 @@ def analyze_candidate(
 
     va = w.va
     have_angles = False
-    ilo = np.empty(nf + 2)
-    ihi = np.empty(nf + 2)
-    arcs = np.empty((0, 2))
+    if scratch:
+        ilo = fs[2]
+        ihi = fs[3]
+    else:
+        ilo = np.empty(nf + 2)
+        ihi = np.empty(nf + 2)
+    arcs = va[:0].reshape((0, 2))  # no arcs yet: an empty view, not an allocation
     na = 0
     joined_vertex = -1  # the last arc ends exactly at this envelope vertex
     first_at_zero = False
     cur = -1  # an interferer whose open envelope contains the start vertex of edge j
     for j in range(n):
         if cut is not None and load_acquire(cut[0], cut[1]) >= cut[2]:
-            return np.empty((0, 2))
+            return arcs[:0]
         j2 = j + 1 if j + 1 < n else 0
         ax = wx[j]
         ay = wy[j]

@@ -11,7 +11,7 @@ from arc_helpers import mixed_population
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from regopack.domain import Rectangle
+from regopack.domain import PeriodicRectangle, Rectangle
 from regopack.plugins.available_arc import kernel
 from regopack.plugins.available_arc.state import ArcState, envelope_cache
 
@@ -220,6 +220,98 @@ def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
         ):
             assert got[sl, :m].tobytes() == want[:m].tobytes()
         assert w.cache_rad[sl] == math.sqrt(np.max(w0.wx[:m] ** 2 + w0.wy[:m] ** 2))
+
+
+def _ringed(m: int = 80, periodic: bool = False) -> tuple[ArcState, int]:
+    """A large candidate ringed by ``m`` small particles, all interferers of a new one;
+    in a periodic domain the ring crosses the sides."""
+    rng = np.random.default_rng(5)
+    pop = mixed_population(np.array([12.0] + [0.9] * m + [0.8]), rng)
+    domain = PeriodicRectangle(0.0, 100.0, 0.0, 100.0) if periodic else Rectangle(-50, 50, -50, 50)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    st_.insert(0, 0.0, 0.0)
+    for j in range(1, m + 1):
+        a = 2 * np.pi * j / m + 0.3 * rng.random()
+        x, y = 13.5 * math.cos(a), 13.5 * math.sin(a)
+        st_.insert(j, x % 100.0 if periodic else x, y % 100.0 if periodic else y)
+    return st_, m + 1
+
+
+def _block(domain: Rectangle) -> tuple[ArcState, int]:
+    """The 5 x 5 block of ``_cluster`` at the lower left corner of ``domain``."""
+    rng = np.random.default_rng(8)
+    n = 25
+    pop = mixed_population(np.append(rng.uniform(1.2, 1.8, n), 1.0), rng)
+    st_ = ArcState(pop, domain, t=1.0, tau=None, linear=False)
+    for j in range(n):
+        st_.insert(j, 3.1 * (j % 5) + 0.4, 3.1 * (j // 5) + 0.4)
+    return st_, n
+
+
+def _wrapped() -> tuple[ArcState, int]:
+    """The block in a periodic domain 4.1 wider: its particles meet images across the sides."""
+    return _block(PeriodicRectangle(0.0, 16.5, 0.0, 16.5))
+
+
+SCENES = {
+    "cluster": _cluster,
+    "ring of 62": lambda: _ringed(62),  # up to FOUND_SLOTS interferers: the scratch
+    "ring of 80": _ringed,  # more: arrays of its own
+    "wrapped": _wrapped,
+    "wrapped ring of 100": lambda: _ringed(100, periodic=True),  # image slots past 64
+}
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_scratch_and_allocated_arrays_give_the_same_arcs(name: str) -> None:
+    """An analysis of sharp polygons works in its thread's scratch (``fs`` rows, and
+    ``found_q`` for the slots, up to FOUND_SLOTS interferers) or in arrays of its own:
+    the arcs are the same bit for bit, with and without periodic images."""
+    st_, i = SCENES[name]()
+    g, s, w = st_.outlines, st_.packed, st_.work
+    own = w._replace(fs=np.empty((kernel.SCRATCH_ROWS, 0)))  # too narrow: it allocates
+    seen_arcs = seen_empty = 0
+    for k in range(i):
+        mq = st_.begin_particle(i)
+        w.fs[:4] = np.nan  # rows the scratch analysis must write before it reads them
+        scratch = kernel.analyze_candidate(k, i, mq, g, s, w).copy()
+        mq = kernel.begin_particle(i, g, s, own)
+        allocated = kernel.analyze_candidate(k, i, mq, g, s, own)
+        assert scratch.shape[1:] == allocated.shape[1:] == (2,)
+        assert scratch.tobytes() == allocated.tobytes(), k
+        seen_arcs += scratch.shape[0] > 0
+        seen_empty += scratch.shape[0] == 0
+    assert seen_arcs > 0 and seen_empty > 0
+
+
+def test_the_scratch_holds_the_offsets_and_slots() -> None:
+    """The scratch path runs: after an analysis with nf interferers, row 0 of ``fs`` holds
+    their x offsets and ``found_q`` their envelope-cache slots."""
+    st_, i = _ringed(62)
+    g, s, w = st_.outlines, st_.packed, st_.work
+    mq = st_.begin_particle(i)
+    w.found_q[:] = -7
+    kernel.analyze_candidate(0, i, mq, g, s, w)
+    nf = 62
+    assert sorted(w.found_q[:nf]) == list(range(nf))  # a fresh cache: slots 0 .. nf - 1
+    assert np.all(w.found_q[nf:] == -7)
+    found = np.flatnonzero(w.ckey == s.ipar[kernel.I_GEN])
+    np.testing.assert_array_equal(np.sort(w.fs[0, :nf]), np.sort(s.cx[found] - s.cx[0]))
+
+
+def test_the_periodic_block_meets_its_images() -> None:
+    """The wrapped block's arcs differ from those of the same block in open space, so an
+    image's offset read wrong (a slot written before its image query is read) shows."""
+    wrapped, i = _wrapped()
+    walled, _ = _block(Rectangle(-100.0, 100.0, -100.0, 100.0))
+    differ = 0
+    for k in range(i):
+        arcs = []
+        for st_ in (wrapped, walled):
+            mq = st_.begin_particle(i)
+            arcs.append(kernel.analyze_candidate(k, i, mq, st_.outlines, st_.packed, st_.work))
+        differ += arcs[0].tobytes() != arcs[1].tobytes()
+    assert differ > 0
 
 
 def test_a_cut_analysis_stops_with_no_arcs() -> None:

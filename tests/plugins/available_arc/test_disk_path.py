@@ -225,8 +225,10 @@ def test_every_thread_and_the_partner_have_scratch_rows_of_their_own() -> None:
     st_ = ArcState(pop, Rectangle(0.0, 40.0, 0.0, 40.0), t=0.999, tau=None, linear=False)
     h = batches.new_helpers(st_.work, st_.packed, 4)
     mate = partner.PartnerThread(st_.work, st_.packed)
-    rows = [h.fs[t] for t in range(4)] + [mate.helpers.fs[0], st_.work.fs]
     assert h.fs.shape == (4, kernel.SCRATCH_ROWS, kernel.SCRATCH_WIDTH)
-    for a in range(len(rows)):
-        for b in range(a + 1, len(rows)):
-            assert not np.shares_memory(rows[a], rows[b])
+    for field in ("fs", "found_q", "va"):  # an analysis of polygons writes all three
+        rows = [getattr(h, field)[t] for t in range(4)]
+        rows += [getattr(mate.helpers, field)[0], getattr(st_.work, field)]
+        for a in range(len(rows)):
+            for b in range(a + 1, len(rows)):
+                assert not np.shares_memory(rows[a], rows[b]), field
