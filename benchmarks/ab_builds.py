@@ -100,6 +100,16 @@ def export(ident: str, files: dict[Path, bytes]) -> tuple[str, Path]:
     return name, into
 
 
+def export_revision(rev: str) -> tuple[str, Path]:
+    """Export ``rev`` with :func:`export`, reading it from git only when not yet exported."""
+    sha = subprocess.run(
+        ["git", "rev-parse", "--short", rev], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout.strip()
+    if (Path(tempfile.gettempdir()) / "regopack-ab" / sha / "exported").exists():
+        return export(sha, {})
+    return export(*revision_files(rev))
+
+
 def check_origin(packages: dict[str, Path]) -> None:
     """Stop unless every loaded module of each package lies in that package's folder."""
     for mod_name, mod in list(sys.modules.items()):
@@ -125,13 +135,25 @@ def main() -> None:
     args = parser.parse_args()
     if args.rounds < 1 or args.passes < 1:
         parser.error("--rounds and --passes take 1 or more")
+    for item in args.overrides:
+        try:
+            _kw([item])
+        except (ValueError, tomllib.TOMLDecodeError) as exc:
+            parser.error(f"--set {item!r}: {exc} (expected field=TOML value)")
+    import regopack
+    from regopack.errors import RegopackError
+
+    try:  # the scene as the passes will build it, checked once here
+        regopack.scene(args.scene, **_kw([*BASE, *args.overrides]))
+    except RegopackError as exc:
+        parser.error(str(exc))
     new_label = args.new or "tree"
     if args.ids:  # a pass: the builds its parent exported
         exported = {args.rev: export(args.ids[0], {}), new_label: export(args.ids[1], {})}
     else:
         exported = {
-            args.rev: export(*revision_files(args.rev)),
-            new_label: export(*(revision_files(args.new) if args.new else tree_files())),
+            args.rev: export_revision(args.rev),
+            new_label: export_revision(args.new) if args.new else export(*tree_files()),
         }
     if len({name for name, _ in exported.values()}) != 2:
         raise SystemExit("--rev and --new name the same files; export one of them as the tree")
@@ -146,6 +168,8 @@ def main() -> None:
 
 
 MARK = "ratios-of-pass:"
+BASE = ['insertion.closing="tail"', "insertion.strip=800"]
+"""Settings of every timed run, before ``--set``'s."""
 
 
 def passes(args: argparse.Namespace, new_label: str, ids: list[str]) -> None:
@@ -159,18 +183,21 @@ def passes(args: argparse.Namespace, new_label: str, ids: list[str]) -> None:
     for k in range(args.passes):
         first = "rev" if k % 2 == 0 else "new"
         print(f"pass {k}: {args.rev if first == 'rev' else new_label} loaded first", flush=True)
-        child = subprocess.run(
-            [sys.executable, __file__, *argv, "--first", first, "--ids", *ids],
-            capture_output=True,
+        # the pass's output (its warnings too) is shown as it comes
+        with subprocess.Popen(
+            [sys.executable, "-u", __file__, *argv, "--first", first, "--ids", *ids],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
             text=True,
-        )
+        ) as child:
+            assert child.stdout is not None
+            for line in child.stdout:
+                if line.startswith(MARK):
+                    by_order[first] += [float(x) for x in line.split()[2:]]
+                else:
+                    print("  " + line.rstrip("\n"), flush=True)
         if child.returncode != 0:
-            raise SystemExit(f"pass {k} failed:\n{child.stdout}{child.stderr}")
-        for line in child.stdout.splitlines():
-            if line.startswith(MARK):
-                by_order[first] += [float(x) for x in line.split()[2:]]
-            else:
-                print("  " + line, flush=True)
+            raise SystemExit(f"pass {k} failed (exit status {child.returncode})")
     medians = {k: statistics.median(v) for k, v in by_order.items() if v}
     for k, m in medians.items():
         loaded = args.rev if k == "rev" else new_label
@@ -191,11 +218,7 @@ def time_builds(args: argparse.Namespace, exported: dict[str, tuple[str, Path]])
         sys.path.insert(0, str(folder))
         builds[label] = importlib.import_module(name)
         print(f"{label}: {folder / name}")
-    base = [
-        'insertion.closing="tail"',
-        "insertion.strip=800",
-        *args.overrides,
-    ]
+    base = [*BASE, *args.overrides]
     sized = [f"domain.width={args.size}", f"domain.height={args.size}"]
     times: dict[str, list[float]] = {k: [] for k in builds}
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
@@ -228,8 +251,10 @@ def _kw(overrides: list[str]) -> dict[str, object]:
     """``--set``-style overrides as keyword arguments of ``regopack.pack``."""
     out: dict[str, object] = {}
     for item in overrides:
-        key, _, value = item.partition("=")
-        out[key] = tomllib.loads(f"v = {value}")["v"]
+        key, eq, value = item.partition("=")
+        if not eq or not key.strip():
+            raise ValueError("no '=' after a field name")
+        out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
     return out
 
 

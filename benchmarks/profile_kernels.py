@@ -139,8 +139,19 @@ def main() -> None:
         "domain.height": args.size,
     }
     for item in args.overrides:
-        key, _, value = item.partition("=")
-        settings[key] = tomllib.loads(f"v = {value}")["v"]
+        key, eq, value = item.partition("=")
+        try:
+            if not eq or not key.strip():
+                raise ValueError("no '=' after a field name")
+            settings[key.strip()] = tomllib.loads(f"v = {value}")["v"]
+        except (ValueError, tomllib.TOMLDecodeError) as exc:
+            parser.error(f"--set {item!r}: {exc} (expected field=TOML value)")
+    from regopack.errors import RegopackError
+
+    try:
+        regopack.scene(args.scene, **settings)
+    except RegopackError as exc:
+        parser.error(str(exc))
     run = available_arc._run_sweep
     windows: list[tuple[float, float]] = []
 
