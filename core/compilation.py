@@ -12,6 +12,7 @@ image.
 from __future__ import annotations
 
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -82,29 +83,57 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
 class CompileTime:
     """Seconds spent compiling inside a :func:`compile_timer` block.
 
+    A helper thread (the sweep's partner) may compile its kernels while the
+    thread that opened the block goes on packing, so the two are told apart.
+
     Attributes
     ----------
     seconds
-        Wall time of the outermost compilations (nested ones counted once).
+        Wall time during which any thread compiled (nested compilations counted once).
+    own_seconds
+        Wall time during which the thread that opened the block compiled; the rest
+        of that thread's time is its own work, including waits for the compiler
+        while another thread holds it.
     functions
         Number of compilations (each kernel signature compiled, nested ones included).
     """
 
     seconds: float = 0.0
+    own_seconds: float = 0.0
     functions: int = 0
-    _depth: int = field(default=0, repr=False)
-    _start: float = field(default=0.0, repr=False)
+    _owner: int = field(default_factory=threading.get_ident, repr=False)
+    _depth: dict[int, int] = field(default_factory=dict, repr=False)
+    _start: dict[int, float] = field(default_factory=dict, repr=False)
+    _busy: int = field(default=0, repr=False)
+    _since: float = field(default=0.0, repr=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+
+    @property
+    def elsewhere(self) -> bool:
+        """Whether some compilation ran on another thread than the block's."""
+        return self.seconds > self.own_seconds
 
     def _event(self, event: Any) -> None:
-        if event.is_start:
-            if self._depth == 0:
-                self._start = time.perf_counter()
-            self._depth += 1
-            self.functions += 1
-        elif self._depth > 0:
-            self._depth -= 1
-            if self._depth == 0:
-                self.seconds += time.perf_counter() - self._start
+        me = threading.get_ident()
+        now = time.perf_counter()
+        with self._lock:
+            depth = self._depth.get(me, 0)
+            if event.is_start:
+                if depth == 0:
+                    self._start[me] = now
+                    if self._busy == 0:
+                        self._since = now
+                    self._busy += 1
+                self._depth[me] = depth + 1
+                self.functions += 1
+            elif depth > 0:
+                self._depth[me] = depth - 1
+                if depth == 1:
+                    if me == self._owner:
+                        self.own_seconds += now - self._start[me]
+                    self._busy -= 1
+                    if self._busy == 0:
+                        self.seconds += now - self._since
 
 
 @contextmanager

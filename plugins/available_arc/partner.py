@@ -185,6 +185,14 @@ class PartnerThread:
             finally:
                 p.ctl[C_DEAD] = 1
 
+        # the loop entered here first, told to stop at once: it compiles (or loads from the
+        # cache) on the calling thread, so the search never runs alone while its partner
+        # compiles, and a run's compile time is its own thread's
+        p.ctl[C_STOP] = 1
+        if h is None:
+            serve_bounds(s, scratch, p)
+        else:
+            serve(g, s, h, p, rounded)
         p.ctl[C_STOP] = 0
         p.ctl[C_DEAD] = 0
         p.ctl[C_PARK] = 0

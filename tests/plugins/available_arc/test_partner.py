@@ -161,8 +161,9 @@ def test_a_failing_partner_leaves_the_search_to_the_caller_and_is_reported(
     pop, _ = change5_population(300, 8)
     alone, _ = _run(monkeypatch, pop, Rectangle.centred(60.0, 60.0), 8, 1)
 
-    def broken(*args: object) -> None:
-        raise RuntimeError("partner failed")
+    def broken(g: object, s: object, h: object, p: partner.Partner, rounded: object) -> None:
+        if p.ctl[partner.C_STOP] == 0:  # serving, not the entry that compiles the loop
+            raise RuntimeError("partner failed")
 
     with monkeypatch.context() as m:
         m.setattr(partner, "serve", broken)
@@ -174,6 +175,34 @@ def test_a_failing_partner_leaves_the_search_to_the_caller_and_is_reported(
         m.setattr(partner.PartnerThread, "stop", lambda self: None)  # no report
         res = pack(pop, Rectangle.centred(60.0, 60.0), np.random.default_rng(8), order="sweep")
     assert res.centre.tobytes() + res.insertion_index.tobytes() == alone
+
+
+@pytest.mark.parametrize("bounds", [False, True])
+def test_the_partners_loop_is_first_entered_on_the_calling_thread(
+    monkeypatch: pytest.MonkeyPatch, bounds: bool
+) -> None:
+    """attach enters the loop once on its own thread, told to stop at once, so that it
+    compiles there; then the thread runs it."""
+    import threading
+
+    from regopack.plugins.available_arc.state import ArcState
+
+    entries: list[tuple[bool, int]] = []
+
+    def loop(*args: Any) -> None:
+        p = args[-2] if not bounds else args[-1]
+        on_main = threading.current_thread() is threading.main_thread()
+        entries.append((on_main, int(p.ctl[partner.C_STOP])))
+
+    monkeypatch.setattr(partner, "serve_bounds" if bounds else "serve", loop)
+    pop, _ = change5_population(50, 1)
+    st_ = ArcState(pop, Rectangle.centred(40.0, 40.0), t=0.999, tau=None, linear=False)
+    team = partner.PartnerThread(st_.work, st_.packed, bounds=bounds)
+    try:
+        team.attach(st_.outlines, st_.packed, st_.rounded)
+    finally:
+        team.stop()
+    assert entries == [(True, 1), (False, 0)]
 
 
 def test_partner_thread_restarts_when_the_arrays_change() -> None:
