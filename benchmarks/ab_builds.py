@@ -121,6 +121,19 @@ def check_origin(packages: dict[str, Path]) -> None:
             raise SystemExit(f"module {mod_name} loaded from {file}: the builds are mixed")
 
 
+def _check_scene(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Stop with one line unless the scene builds with the fixed settings, ``--set``
+    and the size (checked with the installed package, not the builds compared)."""
+    import regopack
+    from regopack.errors import RegopackError
+
+    sized = [f"domain.width={args.size}", f"domain.height={args.size}"]
+    try:
+        regopack.scene(args.scene, **_kw([*BASE, *args.overrides, *sized]))
+    except RegopackError as exc:
+        parser.error(str(exc))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rev", default="HEAD", help="the base build (a git revision)")
@@ -140,13 +153,8 @@ def main() -> None:
             _kw([item])
         except (ValueError, tomllib.TOMLDecodeError) as exc:
             parser.error(f"--set {item!r}: {exc} (expected field=TOML value)")
-    import regopack
-    from regopack.errors import RegopackError
-
-    try:  # the scene as the passes will build it, checked once here
-        regopack.scene(args.scene, **_kw([*BASE, *args.overrides]))
-    except RegopackError as exc:
-        parser.error(str(exc))
+    if args.first is None:  # the passes' parent checks the scene once for them
+        _check_scene(parser, args)
     new_label = args.new or "tree"
     if args.ids:  # a pass: the builds its parent exported
         exported = {args.rev: export(args.ids[0], {}), new_label: export(args.ids[1], {})}

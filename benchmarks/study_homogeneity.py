@@ -49,13 +49,17 @@ def main() -> None:
             f"largest ring deviation: number density {100 * r['density_max_rel_dev']:.2f} %, "
             f"mean diameter {100 * r['mean_d_max_rel_dev']:.2f} %"
         )
-        print(
-            f"  trends per 100 µm: number density "
-            f"({1e3 * r['density_slope_per_100']:.4f} ± {1e3 * r['density_slope_err']:.4f})"
-            f" 1e-3 µm^-2 (chi2/dof {r['density_trend_chi2_dof']:.2f}), mean diameter "
-            f"({r['mean_d_slope_per_100']:.4f} ± {r['mean_d_slope_err']:.4f}) µm"
-            f" (chi2/dof {r['mean_d_trend_chi2_dof']:.2f})"
-        )
+        if r["density_slope_per_100"] is None or r["mean_d_slope_per_100"] is None:
+            print("  trends: not defined (too few rings; narrow them)")
+        else:
+            print(
+                f"  trends per 100 µm: number density "
+                f"({1e3 * r['density_slope_per_100']:.4f} ± {1e3 * r['density_slope_err']:.4f})"
+                f" 1e-3 µm^-2 (chi2/dof {r['density_trend_chi2_dof'] or float('nan'):.2f}),"
+                f" mean diameter ({r['mean_d_slope_per_100']:.4f}"
+                f" ± {r['mean_d_slope_err']:.4f}) µm"
+                f" (chi2/dof {r['mean_d_trend_chi2_dof'] or float('nan'):.2f})"
+            )
         print("  ring  particles  density dev (err) %  mean d dev (err) %")
         for k in range(len(dens)):
             print(

@@ -83,30 +83,30 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
 class CompileTime:
     """Seconds spent compiling inside a :func:`compile_timer` block.
 
-    A helper thread (the sweep's partner) may compile its kernels while the
-    thread that opened the block goes on packing, so the two are told apart.
+    Another thread (a helper of the insertion) may compile while the thread that
+    opened the block goes on working, so the two are told apart.
 
     Attributes
     ----------
     seconds
         Wall time during which any thread compiled (nested compilations counted once).
+    functions
+        Number of compilations (each kernel signature compiled, nested ones included).
     own_seconds
         Wall time during which the thread that opened the block compiled; the rest
         of that thread's time is its own work, including waits for the compiler
         while another thread holds it.
-    functions
-        Number of compilations (each kernel signature compiled, nested ones included).
     """
 
     seconds: float = 0.0
-    own_seconds: float = 0.0
     functions: int = 0
-    _owner: int = field(default_factory=threading.get_ident, repr=False)
-    _depth: dict[int, int] = field(default_factory=dict, repr=False)
-    _start: dict[int, float] = field(default_factory=dict, repr=False)
-    _busy: int = field(default=0, repr=False)
-    _since: float = field(default=0.0, repr=False)
-    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False)
+    own_seconds: float = 0.0
+    _owner: int = field(default_factory=threading.get_ident, repr=False, compare=False)
+    _depth: dict[int, int] = field(default_factory=dict, repr=False, compare=False)
+    _start: dict[int, float] = field(default_factory=dict, repr=False, compare=False)
+    _busy: int = field(default=0, repr=False, compare=False)
+    _since: float = field(default=0.0, repr=False, compare=False)
+    _lock: threading.Lock = field(default_factory=threading.Lock, repr=False, compare=False)
 
     @property
     def elsewhere(self) -> bool:

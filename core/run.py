@@ -495,8 +495,8 @@ def _run(
     }
     if compiled_elsewhere:
         summary["insertion_time_note"] = (
-            "a helper thread compiled kernels during the insertion, which went on without"
-            " it meanwhile: the next run's insertion time is the usual one"
+            "another thread compiled kernels during the insertion, which may have waited"
+            " for it or gone on without its help: time a second run for the usual figure"
         )
     if math.isnan(phi_interior):
         summary["phi_interior_note"] = (

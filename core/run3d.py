@@ -407,8 +407,8 @@ def _run3d(
     }
     if compiled_elsewhere:
         summary["insertion_time_note"] = (
-            "a helper thread compiled kernels during the insertion, which went on without"
-            " it meanwhile: the next run's insertion time is the usual one"
+            "another thread compiled kernels during the insertion, which may have waited"
+            " for it or gone on without its help: time a second run for the usual figure"
         )
     if packing.n_placed < packing.n_particles:
         from regopack.sieve import unplaced_per_class

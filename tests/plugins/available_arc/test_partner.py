@@ -188,11 +188,14 @@ def test_the_partners_loop_is_first_entered_on_the_calling_thread(
     from regopack.plugins.available_arc.state import ArcState
 
     entries: list[tuple[bool, int]] = []
+    served = threading.Event()
 
     def loop(*args: Any) -> None:
         p = args[-2] if not bounds else args[-1]
         on_main = threading.current_thread() is threading.main_thread()
         entries.append((on_main, int(p.ctl[partner.C_STOP])))
+        if not on_main:
+            served.set()
 
     monkeypatch.setattr(partner, "serve_bounds" if bounds else "serve", loop)
     pop, _ = change5_population(50, 1)
@@ -200,6 +203,7 @@ def test_the_partners_loop_is_first_entered_on_the_calling_thread(
     team = partner.PartnerThread(st_.work, st_.packed, bounds=bounds)
     try:
         team.attach(st_.outlines, st_.packed, st_.rounded)
+        assert served.wait(timeout=60.0)  # the thread's entry, before stop sets the word
     finally:
         team.stop()
     assert entries == [(True, 1), (False, 0)]
