@@ -6,9 +6,14 @@ sampling errors (about 5 %) hide a deviation of 3 %. Wider rings on a larger
 domain hold thousands each: this script packs the scene for each seed and
 prints, per ring, its particles, its number-density and mean-diameter
 deviations from the window's values with their sampling errors, and the
-radial trends. Run from the repository root::
+radial trends. With ``--slab``, it also counts the particles in horizontal
+slabs that high in the bounding box's top and bottom ``--band`` (centres
+farther than ``--margin`` from the side walls), each slab's number density
+and mean diameter against those of the middle half of the height: the bands
+that the walls and the closing leave. Run from the repository root::
 
     python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --seeds 1 2 3
+    python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --slab 40 --seeds 1
     python benchmarks/study_homogeneity.py --scene table1 --size 800 --ring-width 90
 """
 
@@ -28,7 +33,12 @@ def main() -> None:
     parser.add_argument("--size", type=float, default=3200.0)
     parser.add_argument("--ring-width", type=float, default=390.0)
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2, 3])
+    parser.add_argument("--slab", type=float, default=0.0, help="slab height; 0: no slabs")
+    parser.add_argument("--band", type=float, default=160.0, help="height counted at each end")
+    parser.add_argument("--margin", type=float, default=40.0, help="from the side walls")
     args = parser.parse_args()
+    if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0:
+        parser.error("--size must be positive; --slab, --band and --margin 0 or more")
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
     print(f"{args.scene}, L = {args.size:g}, rings {args.ring_width:g} wide")
     for seed in args.seeds:
@@ -66,6 +76,30 @@ def main() -> None:
                 f"  {k:4d}  {int(rings['n'][k]):9d}  {dens_dev[k]:+6.2f} ({dens_err[k]:.2f})"
                 f"            {diam_dev[k]:+6.2f} ({diam_err[k]:.2f})"
             )
+        if args.slab > 0:
+            print_slabs(p, args.slab, args.band, args.margin)
+
+
+def print_slabs(p: regopack.Packing, slab: float, band: float, margin: float) -> None:
+    """Slabs ``slab`` high in the top and bottom ``band`` against the middle half."""
+    xmin, xmax, ymin, ymax = (float(v) for v in p.domain.bounds())
+    centre = p.centre[p.placed]
+    diameter = 2.0 * p.radius[p.placed]
+    keep = (centre[:, 0] > xmin + margin) & (centre[:, 0] < xmax - margin)
+    y, d = centre[keep, 1], diameter[keep]
+    width = xmax - xmin - 2.0 * margin
+    quarter = 0.25 * (ymax - ymin)
+    middle = (y > ymin + quarter) & (y < ymax - quarter)
+    dens0 = middle.sum() / (width * 2.0 * quarter)
+    diam0 = d[middle].mean()
+    print("  slab (y from, to)   particles  density dev %  mean d dev %")
+    starts = list(np.arange(ymin, ymin + band, slab)) + list(np.arange(ymax - band, ymax, slab))
+    for lo in starts:
+        sel = (y >= lo) & (y < lo + slab)
+        n = int(sel.sum())
+        dev = 100 * (n / (width * slab) / dens0 - 1)
+        ddev = 100 * (d[sel].mean() / diam0 - 1) if n else float("nan")
+        print(f"  {lo:8.0f} {lo + slab:8.0f}  {n:9d}  {dev:+12.1f}  {ddev:+12.1f}")
 
 
 if __name__ == "__main__":
