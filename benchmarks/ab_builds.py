@@ -40,7 +40,6 @@ import subprocess
 import sys
 import tarfile
 import tempfile
-import tomllib
 from pathlib import Path
 from types import ModuleType
 
@@ -122,14 +121,15 @@ def check_origin(packages: dict[str, Path]) -> None:
 
 
 def _check_scene(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
-    """Stop with one line unless the scene builds with the fixed settings, ``--set``
-    and the size (checked with the installed package, not the builds compared)."""
-    import regopack
+    """Stop with regopack's one line unless the scene builds with the fixed settings,
+    ``--set`` and the size (checked with the installed package, not the builds compared)."""
     from regopack.errors import RegopackError
+    from regopack.manager import default_registry
+    from regopack.scene_model import load_scene, resolve_scene
 
     sized = [f"domain.width={args.size}", f"domain.height={args.size}"]
     try:
-        regopack.scene(args.scene, **_kw([*BASE, *args.overrides, *sized]))
+        resolve_scene(load_scene(args.scene, [*BASE, *args.overrides, *sized]), default_registry())
     except RegopackError as exc:
         parser.error(str(exc))
 
@@ -148,11 +148,6 @@ def main() -> None:
     args = parser.parse_args()
     if args.rounds < 1 or args.passes < 1:
         parser.error("--rounds and --passes take 1 or more")
-    for item in args.overrides:
-        try:
-            _kw([item])
-        except (ValueError, tomllib.TOMLDecodeError) as exc:
-            parser.error(f"--set {item!r}: {exc} (expected field=TOML value)")
     if args.first is None:  # the passes' parent checks the scene once for them
         _check_scene(parser, args)
     new_label = args.new or "tree"
@@ -256,14 +251,11 @@ def time_builds(args: argparse.Namespace, exported: dict[str, tuple[str, Path]])
 
 
 def _kw(overrides: list[str]) -> dict[str, object]:
-    """``--set``-style overrides as keyword arguments of ``regopack.pack``."""
-    out: dict[str, object] = {}
-    for item in overrides:
-        key, eq, value = item.partition("=")
-        if not eq or not key.strip():
-            raise ValueError("no '=' after a field name")
-        out[key.strip()] = tomllib.loads(f"v = {value}")["v"]
-    return out
+    """``--set``-style overrides as keyword arguments of ``regopack.pack``, read as
+    ``regopack run --set`` reads them."""
+    from regopack.scene_model import _parse_override
+
+    return dict(_parse_override(item) for item in overrides)
 
 
 if __name__ == "__main__":

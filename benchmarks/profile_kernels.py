@@ -24,7 +24,6 @@ import os
 import struct
 import sys
 import time
-import tomllib
 import zlib
 from typing import Any
 
@@ -138,20 +137,18 @@ def main() -> None:
         "domain.width": args.size,
         "domain.height": args.size,
     }
-    for item in args.overrides:
-        key, eq, value = item.partition("=")
-        try:
-            if not eq or not key.strip():
-                raise ValueError("no '=' after a field name")
-            settings[key.strip()] = tomllib.loads(f"v = {value}")["v"]
-        except (ValueError, tomllib.TOMLDecodeError) as exc:
-            parser.error(f"--set {item!r}: {exc} (expected field=TOML value)")
     from regopack.errors import RegopackError
+    from regopack.manager import default_registry
+    from regopack.scene_model import _parse_override, load_scene, resolve_scene
 
-    try:
-        regopack.scene(args.scene, **settings)
+    fixed = ['insertion.closing="tail"', "insertion.strip=800"]
+    sized = [f"domain.width={args.size}", f"domain.height={args.size}"]
+    try:  # regopack's own reading of --set, and its one line on a mistake
+        scene = load_scene(args.scene, [*fixed, *args.overrides, *sized])
+        resolve_scene(scene, default_registry())
     except RegopackError as exc:
         parser.error(str(exc))
+    settings.update(_parse_override(item) for item in args.overrides)
     run = available_arc._run_sweep
     windows: list[tuple[float, float]] = []
 
