@@ -10,11 +10,17 @@ radial trends. With ``--slab``, it also counts the particles in horizontal
 slabs that high in the bounding box's top and bottom ``--band`` (centres
 farther than ``--margin`` from the side walls), each slab's number density
 and mean diameter against those of the middle half of the height: the bands
-that the walls and the closing leave. Run from the repository root::
+that the walls and the closing leave; ``--columns N`` counts the slabs
+in N columns of equal width (one per strip of ``dem``, for instance), and
+each slab's share of the finest √2 class (equivalent diameter under
+2√2 µm) against the middle's. ``--height`` sets a domain height other
+than the size. Run from the repository root::
 
     python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --seeds 1 2 3
     python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --slab 40 --seeds 1
     python benchmarks/study_homogeneity.py --scene table1 --size 800 --ring-width 90
+    python benchmarks/study_homogeneity.py --size 3200 --height 800 --ring-width 390 \
+        --slab 80 --band 120 --columns 4 --seeds 1 2 3 4
 """
 
 from __future__ import annotations
@@ -36,13 +42,18 @@ def main() -> None:
     parser.add_argument("--slab", type=float, default=0.0, help="slab height; 0: no slabs")
     parser.add_argument("--band", type=float, default=160.0, help="height counted at each end")
     parser.add_argument("--margin", type=float, default=40.0, help="from the side walls")
+    parser.add_argument("--height", type=float, default=0.0, help="domain height; 0: the size")
+    parser.add_argument("--columns", type=int, default=1, help="slabs counted per column")
     args = parser.parse_args()
-    if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0:
-        parser.error("--size must be positive; --slab, --band and --margin 0 or more")
+    if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0 or args.height < 0:
+        parser.error("--size must be positive; --slab, --band, --margin, --height 0 or more")
+    if args.columns < 1:
+        parser.error("--columns must be 1 or more")
+    height = args.height or args.size
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
-    print(f"{args.scene}, L = {args.size:g}, rings {args.ring_width:g} wide")
+    print(f"{args.scene}, {args.size:g} × {height:g} µm, rings {args.ring_width:g} wide")
     for seed in args.seeds:
-        p = regopack.pack(args.scene, seed=seed, domain__width=args.size, domain__height=args.size)
+        p = regopack.pack(args.scene, seed=seed, domain__width=args.size, domain__height=height)
         h = regopack.analyze(p, "homogeneity", homogeneity__ring_width=args.ring_width)[
             "homogeneity"
         ]
@@ -77,29 +88,43 @@ def main() -> None:
                 f"            {diam_dev[k]:+6.2f} ({diam_err[k]:.2f})"
             )
         if args.slab > 0:
-            print_slabs(p, args.slab, args.band, args.margin)
+            xmin, xmax = (float(v) for v in p.domain.bounds()[:2])
+            step = (xmax - xmin) / args.columns
+            for c in range(args.columns):
+                left, right = xmin + c * step, xmin + (c + 1) * step
+                if args.columns > 1:
+                    print(f"  column {c} (x from {left:.0f} to {right:.0f})")
+                print_slabs(p, args.slab, args.band, args.margin, left, right)
 
 
-def print_slabs(p: regopack.Packing, slab: float, band: float, margin: float) -> None:
-    """Slabs ``slab`` high in the top and bottom ``band`` against the middle half."""
-    xmin, xmax, ymin, ymax = (float(v) for v in p.domain.bounds())
+def print_slabs(
+    p: regopack.Packing, slab: float, band: float, margin: float, left: float, right: float
+) -> None:
+    """Slabs ``slab`` high in the top and bottom ``band`` against the middle half.
+
+    Counted between ``left + margin`` and ``right - margin``.
+    """
+    ymin, ymax = (float(v) for v in p.domain.bounds()[2:])
     centre = p.centre[p.placed]
     diameter = 2.0 * p.radius[p.placed]
-    keep = (centre[:, 0] > xmin + margin) & (centre[:, 0] < xmax - margin)
+    keep = (centre[:, 0] > left + margin) & (centre[:, 0] < right - margin)
     y, d = centre[keep, 1], diameter[keep]
-    width = xmax - xmin - 2.0 * margin
+    fine = d < 2.0 * np.sqrt(2.0)
+    width = right - left - 2.0 * margin
     quarter = 0.25 * (ymax - ymin)
     middle = (y > ymin + quarter) & (y < ymax - quarter)
     dens0 = middle.sum() / (width * 2.0 * quarter)
     diam0 = d[middle].mean()
-    print("  slab (y from, to)   particles  density dev %  mean d dev %")
+    fine0 = fine[middle].mean()
+    print("  slab (y from, to)   particles  density dev %  mean d dev %  finest share dev %")
     starts = list(np.arange(ymin, ymin + band, slab)) + list(np.arange(ymax - band, ymax, slab))
     for lo in starts:
         sel = (y >= lo) & (y < lo + slab)
         n = int(sel.sum())
         dev = 100 * (n / (width * slab) / dens0 - 1)
         ddev = 100 * (d[sel].mean() / diam0 - 1) if n else float("nan")
-        print(f"  {lo:8.0f} {lo + slab:8.0f}  {n:9d}  {dev:+12.1f}  {ddev:+12.1f}")
+        fdev = 100 * (fine[sel].mean() / fine0 - 1) if n else float("nan")
+        print(f"  {lo:8.0f} {lo + slab:8.0f}  {n:9d}  {dev:+12.1f}  {ddev:+12.1f}  {fdev:+17.1f}")
 
 
 if __name__ == "__main__":

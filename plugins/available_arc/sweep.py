@@ -923,13 +923,15 @@ def sweep_range(
     A particle with a lag waits until the zone top of the strip it would be
     offered to (its *home*) has risen by that many bins (see :func:`_top`);
     waiting particles are offered, to their home strip first, in the order
-    they became due, before the next particle of the stream. Once every zone
-    is at the domain's top no particle waits. Every waiting particle is
-    then offered at once in the prompt and tail closings (they leave out a
-    random tail of the stream), and in any closing when the stream ends below
-    the top. In the paced closing, when the stream ends, a waiting particle is
-    offered only if the bin the front was at when it was drawn is still in a
-    zone; the others are not offered.
+    they became due, before the next particle of the stream. In the prompt
+    and tail closings no particle waits once every zone is at the domain's
+    top, and every waiting particle is offered at once then (they leave out
+    a random tail of the stream); so is every waiting particle in any closing
+    when the stream ends below the top. In the paced closing the lags go on
+    as before, by the zone top that keeps rising as the lowest bins retire;
+    when the stream ends, a waiting particle is offered only if the bin the
+    front was at when it was drawn is still in a zone, and the particles
+    still waiting when the last zone has retired are not offered.
 
     ``status`` records each particle offered (placed or refused); particles
     after the run has closed keep ``STATUS_NOT_OFFERED``.
@@ -948,13 +950,14 @@ def sweep_range(
             full = _full(sz)
             if zs[Z_FLUSH] == 0:
                 if full and zs[Z_PROMPT] == 0:
-                    # the paced closing feeds the last zone from the stream at once, at
-                    # the rate the lags fed every zone before it. When the stream ends,
-                    # a waiting particle is offered if the bin its strip's top was at
-                    # when it was drawn is still open; the others' pores are filled
-                    if i < end:
-                        break
-                    zs[Z_FLUSH] = 2
+                    # in the paced closing the lags go on: the zone top keeps rising as
+                    # the lowest bins retire (see _top), and a particle is due when it
+                    # has risen by its lag, as in every zone before. When the stream
+                    # ends, a waiting particle is offered if the bin its strip's top
+                    # was at when it was drawn is still open; the others' pores are
+                    # filled
+                    if i == end:
+                        zs[Z_FLUSH] = 2
                 elif full or i == end:
                     # the prompt and tail closings leave out a random tail of the
                     # stream: every particle drawn before it is offered once every
@@ -978,7 +981,9 @@ def sweep_range(
             )  # fmt: skip
         if i == end or zs[Z_DONE] == 1:
             break
-        if not _full(sz) and _wait(i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_STAY]), zs, sz, lags):
+        # no particle waits once every zone is at the top, except in the paced closing
+        waits = not _full(sz) or zs[Z_PROMPT] == 0
+        if waits and _wait(i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_STAY]), zs, sz, lags):
             continue
         placed += _step(
             i, bool(np.bool_(False)), int(np.int64(-1)), delta, swidth, g, s, w, rng, zs, sz, bn,

@@ -271,6 +271,35 @@ def test_the_paced_closing_leaves_out_the_fine_particles_still_waiting() -> None
     assert waiting <= s["not_offered"]
 
 
+def test_the_paced_closing_keeps_the_lags_so_the_top_band_gets_its_fine_particles() -> None:
+    """Four strips that reach the top at different times: the fine particles waiting for
+    each are let go as its closing zone's top rises on, so the band under the top wall
+    holds as many particles, and as many fine ones, as the bulk (within sampling)."""
+    from regopack.api import pack as pack_scene
+
+    top = bulk = top_fine = bulk_fine = 0
+    for seed in (1, 2):
+        p = pack_scene(
+            "dem",
+            seed=seed,
+            **{"domain.width": 1200.0, "domain.height": 600.0, "insertion.strip": 300.0},
+        )
+        c = p.centre[p.placed]
+        fine = 2.0 * p.radius[p.placed] < 2.0 * np.sqrt(2.0)
+        y = c[:, 1] + 300.0
+        inner = np.abs(c[:, 0]) < 560.0
+        # between one and three largest diameters under the top wall, against the bulk
+        in_top = inner & (y > 480.0) & (y < 560.0)
+        in_bulk = inner & (y > 200.0) & (y < 400.0)
+        top, top_fine = top + np.sum(in_top), top_fine + np.sum(in_top & fine)
+        bulk, bulk_fine = bulk + np.sum(in_bulk), bulk_fine + np.sum(in_bulk & fine)
+    number = (top / 80.0) / (bulk / 200.0)
+    finest = (top_fine / 80.0) / (bulk_fine / 200.0)
+    # stopping the lags when every zone is at the top: 0.88 and 0.55 of the bulk
+    assert 0.94 < number < 1.06, number
+    assert 0.8 < finest < 1.2, finest
+
+
 def test_the_prompt_closing_ends_with_nothing_waiting_even_with_coarse_lags() -> None:
     """A waiting particle's refusal is not the stream's: it retires no bin, so the run
     cannot close while particles drawn earlier still wait."""
