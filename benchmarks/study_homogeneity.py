@@ -14,7 +14,9 @@ that the walls and the closing leave; ``--columns N`` counts the slabs
 in N columns of equal width (one per strip of ``dem``, for instance), and
 each slab's share of the finest √2 class (equivalent diameter under
 2√2 µm) against the middle's. ``--height`` sets a domain height other
-than the size. Run from the repository root::
+than the size; ``--psd`` adds the ``psd`` analyzer's worst size classes
+and the counts of refused and not offered particles. Run from the
+repository root::
 
     python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --seeds 1 2 3
     python benchmarks/study_homogeneity.py --size 3200 --ring-width 390 --slab 40 --seeds 1
@@ -44,6 +46,7 @@ def main() -> None:
     parser.add_argument("--margin", type=float, default=40.0, help="from the side walls")
     parser.add_argument("--height", type=float, default=0.0, help="domain height; 0: the size")
     parser.add_argument("--columns", type=int, default=1, help="slabs counted per column")
+    parser.add_argument("--psd", action="store_true", help="also the size classes' errors")
     args = parser.parse_args()
     if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0 or args.height < 0:
         parser.error("--size must be positive; --slab, --band, --margin, --height 0 or more")
@@ -70,6 +73,13 @@ def main() -> None:
             f"largest ring deviation: number density {100 * r['density_max_rel_dev']:.2f} %, "
             f"mean diameter {100 * r['mean_d_max_rel_dev']:.2f} %"
         )
+        if args.psd:
+            q = regopack.analyze(p, "psd")["psd"].scalars
+            print(
+                f"  refused {p.stats['refused']}, not offered {p.stats['not_offered']}; "
+                f"worst class by number {100 * q['worst_number_rel_error']:+.2f} %, "
+                f"by mass {100 * q['worst_mass_rel_error']:+.2f} %, KS {q['ks_number']:.4f}"
+            )
         if r["density_slope_per_100"] is None or r["mean_d_slope_per_100"] is None:
             print("  trends: not defined (too few rings; narrow them)")
         else:
@@ -81,6 +91,10 @@ def main() -> None:
                 f" ± {r['mean_d_slope_err']:.4f}) µm"
                 f" (chi2/dof {r['mean_d_trend_chi2_dof'] or float('nan'):.2f})"
             )
+        print(
+            f"  tiles chi2/dof: number density {r['tile_density_chi2_dof'] or float('nan'):.2f},"
+            f" mean diameter {r['tile_mean_d_chi2_dof'] or float('nan'):.2f}"
+        )
         print("  ring  particles  density dev (err) %  mean d dev (err) %")
         for k in range(len(dens)):
             print(
@@ -119,6 +133,8 @@ def print_slabs(
     print("  slab (y from, to)   particles  density dev %  mean d dev %  finest share dev %")
     starts = list(np.arange(ymin, ymin + band, slab)) + list(np.arange(ymax - band, ymax, slab))
     for lo in starts:
+        if lo + slab > ymax + 1e-9 * (ymax - ymin):
+            continue  # a slab that would reach past the top
         sel = (y >= lo) & (y < lo + slab)
         n = int(sel.sum())
         dev = 100 * (n / (width * slab) / dens0 - 1)
