@@ -14,7 +14,8 @@ that the walls and the closing leave; ``--columns N`` counts the slabs
 in N columns of equal width (one per strip of ``dem``, for instance), and
 each slab's share of the finest √2 class (equivalent diameter under
 2√2 µm) against the middle's. ``--height`` sets a domain height other
-than the size; ``--psd`` adds the ``psd`` analyzer's worst size classes
+than the size, ``--count`` a number of particles drawn other than the
+scene's; ``--psd`` adds the ``psd`` analyzer's worst size classes
 and the counts of refused and not offered particles. Run from the
 repository root::
 
@@ -47,16 +48,22 @@ def main() -> None:
     parser.add_argument("--height", type=float, default=0.0, help="domain height; 0: the size")
     parser.add_argument("--columns", type=int, default=1, help="slabs counted per column")
     parser.add_argument("--psd", action="store_true", help="also the size classes' errors")
+    parser.add_argument("--count", type=int, default=0, help="particles drawn; 0: the scene's")
     args = parser.parse_args()
     if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0 or args.height < 0:
         parser.error("--size must be positive; --slab, --band, --margin, --height 0 or more")
+    if args.count < 0:
+        parser.error("--count must be 0 or more")
     if args.columns < 1:
         parser.error("--columns must be 1 or more")
     height = args.height or args.size
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
     print(f"{args.scene}, {args.size:g} × {height:g} µm, rings {args.ring_width:g} wide")
     for seed in args.seeds:
-        p = regopack.pack(args.scene, seed=seed, domain__width=args.size, domain__height=height)
+        extra = {"count": args.count} if args.count else {}
+        p = regopack.pack(
+            args.scene, seed=seed, domain__width=args.size, domain__height=height, **extra
+        )
         h = regopack.analyze(p, "homogeneity", homogeneity__ring_width=args.ring_width)[
             "homogeneity"
         ]

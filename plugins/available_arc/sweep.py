@@ -839,16 +839,6 @@ def _full(sz: IntArray) -> bool:
 
 
 @numba.njit(cache=True)
-def _lowest_open(sz: IntArray) -> int:
-    """Return the lowest bin still in a zone of the open strips (a large number for none)."""
-    lo = 1 << 62
-    for st in range(sz.shape[0]):
-        if _open(st, sz):
-            lo = min(lo, sz[st, S_LO])
-    return lo
-
-
-@numba.njit(cache=True)
 def _wait(i: int, home: int, zs: IntArray, sz: IntArray, lags: Lags) -> bool:
     """Queue particle ``i`` until strip ``home``'s zone top has risen by its lag.
 
@@ -929,9 +919,9 @@ def sweep_range(
     a random tail of the stream); so is every waiting particle in any closing
     when the stream ends below the top. In the paced closing the lags go on
     as before, by the zone top that keeps rising as the lowest bins retire;
-    when the stream ends, a waiting particle is offered only if the bin the
-    front was at when it was drawn is still in a zone, and the particles
-    still waiting when the last zone has retired are not offered.
+    when the stream ends, each strip's top rises on to its waiting particles'
+    bins in turn, retiring the bins below as the stream would have. A waiting
+    particle whose strip has closed before it was due is not offered.
 
     ``status`` records each particle offered (placed or refused); particles
     after the run has closed keep ``STATUS_NOT_OFFERED``.
@@ -952,10 +942,8 @@ def sweep_range(
                 if full and zs[Z_PROMPT] == 0:
                     # in the paced closing the lags go on: the zone top keeps rising as
                     # the lowest bins retire (see _top), and a particle is due when it
-                    # has risen by its lag, as in every zone before. When the stream
-                    # ends, a waiting particle is offered if the bin its strip's top
-                    # was at when it was drawn is still open; the others' pores are
-                    # filled
+                    # has risen by its lag, as in every zone before; when the stream
+                    # ends, the tops rise on without it (below)
                     if i == end:
                         zs[Z_FLUSH] = 2
                 elif full or i == end:
@@ -972,8 +960,17 @@ def sweep_range(
             if lags.qhead[st, b] < 0:
                 lags.qtail[st, b] = -1
             zs[Z_QLEN] -= 1
-            if zs[Z_FLUSH] == 2 and b - lags.lag[q] < _lowest_open(sz):
-                continue
+            if zs[Z_PROMPT] == 0 and zs[Z_FLUSH] != 1:
+                if zs[Z_FLUSH] == 2:
+                    # the stream has ended: the strip's top rises on to the particle's
+                    # bin, as the stream would have raised it, retiring the bins below
+                    while sz[st, S_CLOSED] == 0 and _top(st, zs, sz) < b:
+                        _retire_bin(st, sz[st, S_LO], s, bn)
+                        sz[st, S_LO] += 1
+                        if sz[st, S_LO] > sz[st, S_HI]:
+                            sz[st, S_CLOSED] = 1
+                if sz[st, S_CLOSED] == 1:
+                    continue  # its strip closed before it was due: not offered
             # (no literal flags or strips in these calls: see kernel.analyze_candidate's nf)
             placed += _step(
                 q, bool(np.bool_(True)), st, delta, swidth, g, s, w, rng, zs, sz, bn, status,
