@@ -69,7 +69,8 @@ def _profile(ax: Axes, h: Homogeneity, prefix: str, column: str, label: str, sca
         )
         ax.set_title(
             f"trend {scale * fit.slope * PER_LENGTH:+.3g} ± "
-            f"{scale * fit.slope_err * PER_LENGTH:.2g} per 100 µm"
+            f"{scale * fit.slope_err * PER_LENGTH:.2g} per 100 µm",
+            fontsize=7,
         )
     ax.set_xlim(0.0, float(hi[-1]))
     ax.set_xlabel("distance from the centre (µm)")
