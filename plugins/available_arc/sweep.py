@@ -917,7 +917,8 @@ def sweep_range(
     and tail closings no particle waits once every zone is at the domain's
     top, and every waiting particle is offered at once then (they leave out
     a random tail of the stream); so is every waiting particle in any closing
-    when the stream ends below the top. In the paced closing the lags go on
+    when the stream ends below the top (but for those of a strip that has
+    closed, in the paced closing). In the paced closing the lags go on
     as before, by the zone top that keeps rising as the lowest bins retire;
     when the stream ends, each strip's top rises on to its waiting particles'
     bins in turn, retiring the bins below as the stream would have. A waiting

@@ -311,9 +311,37 @@ def test_a_stream_ending_in_the_paced_closing_does_not_crowd_the_top_with_fine_p
     """Drawing between what fits and the auto count: the stream ends while particles
     still wait; each is offered only once its strip's top has risen on to its bin."""
     number, finest = _top_band_against_bulk((1, 2, 3), 400.0, 800.0, count=7450)
-    # offering every waiting particle when the stream ends gave 1.02 and 1.26
-    assert 0.9 < number < 1.1, number
-    assert 0.8 < finest < 1.12, finest
+    # offering every waiting particle when the stream ends gave 1.02 and 1.26; the band
+    # is a little short of the finest class instead (0.88 over seeds 1-9, 0.79 over 7-9)
+    assert 0.85 < number < 1.1, number
+    assert 0.7 < finest < 1.12, finest
+
+
+@pytest.mark.parametrize("fill", [0.8, 1.5])
+def test_in_the_paced_closing_a_particle_never_due_is_never_offered(fill: float) -> None:
+    """Four strips and lags longer than the domain: once the zones reach the top no
+    waiting particle is ever due, so none is offered: not when the stream ends inside
+    the closing (0.8: the strips' tops rise on and close first), and not to the strips
+    still open when its own strip closes while the stream goes on (1.5)."""
+    domain = Rectangle.centred(400.0, 300.0)
+    n = round(fill * domain.area / Change5(Change5Config()).mean_area)
+    pop, rng = change5_population(n, 4)
+    st = ArcState(pop, domain, t=0.999, tau=None, linear=False, eta=0.0)
+    sw = sweep.Sweep(
+        n, domain.height, 6.0 * float(pop.radius.max()), closing="paced",
+        width=domain.width, strip=100.0,
+    )  # fmt: skip
+    lags = np.where(pop.radius < 1.5, 10**6, 0).astype(np.int64)
+    lags[0] = 0  # the first particle is offered whatever its lag
+    sw.set_lags(lags)
+    for begin in range(0, n, 97):
+        sw.run(begin, min(n, begin + 97), st.outlines, st.packed, st.work, rng, st.rounded)
+    assert sw.nstrip == 4 and (lags > 0).sum() > 500
+    offered = sw.status[:n] != sweep.STATUS_NOT_OFFERED
+    assert not (offered & (lags > 0)).any(), int((offered & (lags > 0)).sum())
+    # 0.8: the stream ended inside the closing; 1.5: it outlasted it
+    assert sw.zs[sweep.Z_FLUSH] == (2 if fill < 1.0 else 0)
+    assert (sw.sz[:, sweep.S_CLOSED] == 1).all()
 
 
 def test_the_prompt_closing_ends_with_nothing_waiting_even_with_coarse_lags() -> None:
