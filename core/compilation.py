@@ -113,6 +113,24 @@ class CompileTime:
         """Whether some compilation ran on another thread than the block's."""
         return self.seconds > self.own_seconds
 
+    def run_times(self, wall: float) -> dict[str, Any]:
+        """Return a run summary's timing fields for a block of ``wall`` seconds so far.
+
+        The insertion time leaves out only the opening thread's compilations (a helper
+        compiling meanwhile does not stop it); a note says when another thread compiled.
+        """
+        times: dict[str, Any] = {
+            "wall_time_s": wall,
+            "insertion_time_s": max(wall - self.own_seconds, 0.0),
+            "compile_time_s": self.seconds,
+        }
+        if self.elsewhere:
+            times["insertion_time_note"] = (
+                "another thread compiled kernels during the insertion, which may have waited"
+                " for it or gone on without its help: time a second run for the usual figure"
+            )
+        return times
+
     def _event(self, event: Any) -> None:
         me = threading.get_ident()
         now = time.perf_counter()

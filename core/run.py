@@ -464,11 +464,7 @@ def _run(
     controller: DensityController = _build(resolved.density, DensityController, "density")
     domain = resolved.domain
     result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
-    wall = time.perf_counter() - start
-    compile_insertion = compiling.seconds
-    # the insertion's own thread: a helper compiling meanwhile does not stop it
-    own_compile = compiling.own_seconds
-    compiled_elsewhere = compiling.elsewhere
+    times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
 
     scene_dict = resolved.to_dict()
@@ -489,15 +485,8 @@ def _run(
         "phi_domain": phi_domain,
         "phi_interior": phi_interior,
         "interior_margin": margin,
-        "wall_time_s": wall,
-        "insertion_time_s": max(wall - own_compile, 0.0),
-        "compile_time_s": compile_insertion,
+        **times,
     }
-    if compiled_elsewhere:
-        summary["insertion_time_note"] = (
-            "another thread compiled kernels during the insertion, which may have waited"
-            " for it or gone on without its help: time a second run for the usual figure"
-        )
     if math.isnan(phi_interior):
         summary["phi_interior_note"] = (
             f"the interior window is empty: the domain is not wider than 2 x {margin:g}"

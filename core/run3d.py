@@ -374,11 +374,7 @@ def _run3d(
     controller: DensityController = _build(resolved.density, DensityController, "density")
     box = _box(resolved)
     result: InsertionResult = inserter.pack(population, box, controller, rng, progress)  # type: ignore[arg-type]
-    wall = time.perf_counter() - start
-    compile_insertion = compiling.seconds
-    # the insertion's own thread: a helper compiling meanwhile does not stop it
-    own_compile = compiling.own_seconds
-    compiled_elsewhere = compiling.elsewhere
+    times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
     packing = Packing3D.from_parts(
         population, result, box, resolved.to_dict(), resolved.seed, result.stats
@@ -401,15 +397,8 @@ def _run3d(
         "phi_domain": packing.phi,
         "phi_interior": phi_interior,
         "interior_margin": margin,
-        "wall_time_s": wall,
-        "insertion_time_s": max(wall - own_compile, 0.0),
-        "compile_time_s": compile_insertion,
+        **times,
     }
-    if compiled_elsewhere:
-        summary["insertion_time_note"] = (
-            "another thread compiled kernels during the insertion, which may have waited"
-            " for it or gone on without its help: time a second run for the usual figure"
-        )
     if packing.n_placed < packing.n_particles:
         from regopack.sieve import unplaced_per_class
 

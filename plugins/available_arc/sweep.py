@@ -409,6 +409,20 @@ def _retire_bin(st: int, b: int, s: K.Packed, bn: Bins) -> None:
 
 
 @numba.njit(cache=True)
+def _retire_lowest(st: int, sz: IntArray, s: K.Packed, bn: Bins) -> bool:
+    """Retire the lowest bin of strip ``st``'s full zone; return True when none is left.
+
+    A strip with no bin left is closed.
+    """
+    _retire_bin(st, sz[st, S_LO], s, bn)
+    sz[st, S_LO] += 1
+    if sz[st, S_LO] > sz[st, S_HI]:
+        sz[st, S_CLOSED] = 1
+        return True
+    return False
+
+
+@numba.njit(cache=True)
 def _release(st: int, sz: IntArray, s: K.Packed, bn: Bins) -> None:
     """Give back the neighbour-list rows of strip ``st``'s bins below its zone.
 
@@ -750,10 +764,7 @@ def _step(
             sz[st, S_SINCE] += 1
             if sz[st, S_SINCE] > sz[st, S_PACE]:
                 sz[st, S_SINCE] = 0
-                _retire_bin(st, sz[st, S_LO], s, bn)
-                sz[st, S_LO] += 1
-                if sz[st, S_LO] > sz[st, S_HI]:
-                    sz[st, S_CLOSED] = 1
+                if _retire_lowest(st, sz, s, bn):
                     continue
         elif sz[st, S_FULL] == 0:
             sz[st, S_OFFERED] += 1
@@ -796,10 +807,7 @@ def _step(
             # drawn before it still wait
             for t in range(sz.shape[0]):
                 if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
-                    _retire_bin(t, sz[t, S_LO], s, bn)
-                    sz[t, S_LO] += 1
-                    if sz[t, S_LO] > sz[t, S_HI]:
-                        sz[t, S_CLOSED] = 1
+                    _retire_lowest(t, sz, s, bn)
             if _choose(sz, tried, -1, -1, 0) < 0:
                 zs[Z_DONE] = 1
         return 0
@@ -966,10 +974,7 @@ def sweep_range(
                     # the stream has ended: the strip's top rises on to the particle's
                     # bin, as the stream would have raised it, retiring the bins below
                     while sz[st, S_CLOSED] == 0 and _top(st, zs, sz) < b:
-                        _retire_bin(st, sz[st, S_LO], s, bn)
-                        sz[st, S_LO] += 1
-                        if sz[st, S_LO] > sz[st, S_HI]:
-                            sz[st, S_CLOSED] = 1
+                        _retire_lowest(st, sz, s, bn)
                 if sz[st, S_CLOSED] == 1:
                     continue  # its strip closed before it was due: not offered
             # (no literal flags or strips in these calls: see kernel.analyze_candidate's nf)
@@ -980,7 +985,7 @@ def sweep_range(
         if i == end or zs[Z_DONE] == 1:
             break
         # no particle waits once every zone is at the top, except in the paced closing
-        waits = not _full(sz) or zs[Z_PROMPT] == 0
+        waits = zs[Z_PROMPT] == 0 or not _full(sz)
         if waits and _wait(i, _choose(sz, tried, i, zs[Z_CUR], zs[Z_STAY]), zs, sz, lags):
             continue
         placed += _step(
