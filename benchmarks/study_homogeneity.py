@@ -50,72 +50,104 @@ def main() -> None:
     parser.add_argument("--psd", action="store_true", help="also the size classes' errors")
     parser.add_argument("--count", type=int, default=0, help="particles drawn; 0: the scene's")
     args = parser.parse_args()
-    if args.slab < 0 or args.band < 0 or args.margin < 0 or args.size <= 0 or args.height < 0:
-        parser.error("--size must be positive; --slab, --band, --margin, --height 0 or more")
+    if not (
+        args.size > 0
+        and args.ring_width > 0
+        and min(args.slab, args.band, args.margin, args.height) >= 0
+        and np.isfinite([args.slab, args.band, args.margin, args.height]).all()
+    ):
+        parser.error(
+            "--size and --ring-width must be positive; --slab, --band, --margin, --height"
+            " 0 or more (all finite)"
+        )
     if args.count < 0:
         parser.error("--count must be 0 or more")
     if args.columns < 1:
         parser.error("--columns must be 1 or more")
     height = args.height or args.size
+    _check_scene(parser, args, height)
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
     print(f"{args.scene}, {args.size:g} × {height:g} µm, rings {args.ring_width:g} wide")
-    for seed in args.seeds:
-        extra = {"count": args.count} if args.count else {}
-        p = regopack.pack(
-            args.scene, seed=seed, domain__width=args.size, domain__height=height, **extra
-        )
-        h = regopack.analyze(p, "homogeneity", homogeneity__ring_width=args.ring_width)[
-            "homogeneity"
-        ]
-        r = h.scalars
-        rings = h.tables["homogeneity_rings"]
-        dens = np.asarray(rings["number_density"])
-        diam = np.asarray(rings["mean_d"])
-        dens_dev = 100 * (dens / r["number_density"] - 1)
-        dens_err = 100 * np.asarray(rings["number_density_err"]) / dens
-        diam_dev = 100 * (diam / r["mean_d"] - 1)
-        diam_err = 100 * np.asarray(rings["mean_d_err"]) / diam
+    from regopack.errors import RegopackError
+
+    try:
+        for seed in args.seeds:
+            study_seed(args, seed, height)
+    except RegopackError as exc:  # a mistake only the packing finds: one line
+        parser.exit(2, f"{parser.prog}: error: {exc}\n")
+
+
+def study_seed(args: argparse.Namespace, seed: int, height: float) -> None:
+    """Pack one seed and print its rings, and its slabs and size classes when asked."""
+    extra = {"count": args.count} if args.count else {}
+    p = regopack.pack(
+        args.scene, seed=seed, domain__width=args.size, domain__height=height, **extra
+    )
+    h = regopack.analyze(p, "homogeneity", homogeneity__ring_width=args.ring_width)["homogeneity"]
+    r = h.scalars
+    rings = h.tables["homogeneity_rings"]
+    dens = np.asarray(rings["number_density"])
+    diam = np.asarray(rings["mean_d"])
+    dens_dev = 100 * (dens / r["number_density"] - 1)
+    dens_err = 100 * np.asarray(rings["number_density_err"]) / dens
+    diam_dev = 100 * (diam / r["mean_d"] - 1)
+    diam_err = 100 * np.asarray(rings["mean_d_err"]) / diam
+    print(
+        f"seed {seed}: placed {p.n_placed}, insertion {p.stats['insert_time_s']:.1f} s; "
+        f"largest ring deviation: number density {100 * r['density_max_rel_dev']:.2f} %, "
+        f"mean diameter {100 * r['mean_d_max_rel_dev']:.2f} %"
+    )
+    if args.psd:
+        q = regopack.analyze(p, "psd")["psd"].scalars
         print(
-            f"seed {seed}: placed {p.n_placed}, insertion {p.stats['insert_time_s']:.1f} s; "
-            f"largest ring deviation: number density {100 * r['density_max_rel_dev']:.2f} %, "
-            f"mean diameter {100 * r['mean_d_max_rel_dev']:.2f} %"
+            f"  refused {p.stats['refused']}, not offered {p.stats['not_offered']}; "
+            f"worst class by number {100 * q['worst_number_rel_error']:+.2f} %, "
+            f"by mass {100 * q['worst_mass_rel_error']:+.2f} %, KS {q['ks_number']:.4f}"
         )
-        if args.psd:
-            q = regopack.analyze(p, "psd")["psd"].scalars
-            print(
-                f"  refused {p.stats['refused']}, not offered {p.stats['not_offered']}; "
-                f"worst class by number {100 * q['worst_number_rel_error']:+.2f} %, "
-                f"by mass {100 * q['worst_mass_rel_error']:+.2f} %, KS {q['ks_number']:.4f}"
-            )
-        if r["density_slope_per_100"] is None or r["mean_d_slope_per_100"] is None:
-            print("  trends: not defined (too few rings; narrow them)")
-        else:
-            print(
-                f"  trends per 100 µm: number density "
-                f"({1e3 * r['density_slope_per_100']:.4f} ± {1e3 * r['density_slope_err']:.4f})"
-                f" 1e-3 µm^-2 (chi2/dof {r['density_trend_chi2_dof'] or float('nan'):.2f}),"
-                f" mean diameter ({r['mean_d_slope_per_100']:.4f}"
-                f" ± {r['mean_d_slope_err']:.4f}) µm"
-                f" (chi2/dof {r['mean_d_trend_chi2_dof'] or float('nan'):.2f})"
-            )
+    if r["density_slope_per_100"] is None or r["mean_d_slope_per_100"] is None:
+        print("  trends: not defined (too few rings; narrow them)")
+    else:
         print(
-            f"  tiles chi2/dof: number density {r['tile_density_chi2_dof'] or float('nan'):.2f},"
-            f" mean diameter {r['tile_mean_d_chi2_dof'] or float('nan'):.2f}"
+            f"  trends per 100 µm: number density "
+            f"({1e3 * r['density_slope_per_100']:.4f} ± {1e3 * r['density_slope_err']:.4f})"
+            f" 1e-3 µm^-2 (chi2/dof {r['density_trend_chi2_dof'] or float('nan'):.2f}),"
+            f" mean diameter ({r['mean_d_slope_per_100']:.4f}"
+            f" ± {r['mean_d_slope_err']:.4f}) µm"
+            f" (chi2/dof {r['mean_d_trend_chi2_dof'] or float('nan'):.2f})"
         )
-        print("  ring  particles  density dev (err) %  mean d dev (err) %")
-        for k in range(len(dens)):
-            print(
-                f"  {k:4d}  {int(rings['n'][k]):9d}  {dens_dev[k]:+6.2f} ({dens_err[k]:.2f})"
-                f"            {diam_dev[k]:+6.2f} ({diam_err[k]:.2f})"
-            )
-        if args.slab > 0:
-            xmin, xmax = (float(v) for v in p.domain.bounds()[:2])
-            step = (xmax - xmin) / args.columns
-            for c in range(args.columns):
-                left, right = xmin + c * step, xmin + (c + 1) * step
-                if args.columns > 1:
-                    print(f"  column {c} (x from {left:.0f} to {right:.0f})")
-                print_slabs(p, args.slab, args.band, args.margin, left, right)
+    print(
+        f"  tiles chi2/dof: number density {r['tile_density_chi2_dof'] or float('nan'):.2f},"
+        f" mean diameter {r['tile_mean_d_chi2_dof'] or float('nan'):.2f}"
+    )
+    print("  ring  particles  density dev (err) %  mean d dev (err) %")
+    for k in range(len(dens)):
+        print(
+            f"  {k:4d}  {int(rings['n'][k]):9d}  {dens_dev[k]:+6.2f} ({dens_err[k]:.2f})"
+            f"            {diam_dev[k]:+6.2f} ({diam_err[k]:.2f})"
+        )
+    if args.slab > 0:
+        xmin, xmax = (float(v) for v in p.domain.bounds()[:2])
+        step = (xmax - xmin) / args.columns
+        for c in range(args.columns):
+            left, right = xmin + c * step, xmin + (c + 1) * step
+            if args.columns > 1:
+                print(f"  column {c} (x from {left:.0f} to {right:.0f})")
+            print_slabs(p, args.slab, args.band, args.margin, left, right)
+
+
+def _check_scene(parser: argparse.ArgumentParser, args: argparse.Namespace, height: float) -> None:
+    """Stop with regopack's one line unless the scene builds at this size and count."""
+    from regopack.errors import RegopackError
+    from regopack.manager import default_registry
+    from regopack.scene_model import load_scene, resolve_scene
+
+    settings = [f"domain.width={args.size}", f"domain.height={height}"]
+    if args.count:
+        settings.append(f"count={args.count}")
+    try:
+        resolve_scene(load_scene(args.scene, settings), default_registry())
+    except RegopackError as exc:
+        parser.error(str(exc))
 
 
 def print_slabs(
