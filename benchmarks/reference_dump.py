@@ -1,0 +1,176 @@
+"""Fingerprints of packings and analyses, to check that a change leaves them bit for bit.
+
+Packs a fixed list of scenes (the built-in ones, cut to a size that packs in
+seconds, and variants that reach every domain kind, disks, η, the sweep and
+3D), analyses each, and writes one SHA-256 per array::
+
+    python benchmarks/reference_dump.py --out /tmp/before.json
+    # ... change the code ...
+    python benchmarks/reference_dump.py --out /tmp/after.json --compare /tmp/before.json
+
+``--compare`` prints every entry that differs and exits 1 if any does.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import hashlib
+import json
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+import regopack
+
+Edit = dict[str, Any]
+SCENES: dict[str, tuple[str, Edit]] = {
+    "table1_small": ("table1", {"domain": {"width": 200.0, "height": 200.0}}),
+    "small": ("small", {}),
+    "small_eta5": ("small", {"density": {"eta": 5.0}}),
+    "small_seed3": ("small", {"seed": 3}),
+    "small_periodic": ("small", {"domain": {"kind": "periodic"}}),
+    "small_circle": (
+        "small",
+        {"domain": {"kind": "circle", "radius": 90.0, "width": None, "height": None}},
+    ),
+    "small_polygon": (
+        "small",
+        {
+            "domain": {
+                "kind": "polygon",
+                "vertices": [[-90.0, -90.0], [90.0, -90.0], [100.0, 60.0], [-60.0, 90.0]],
+                "width": None,
+                "height": None,
+                "center": None,
+            }
+        },
+    ),
+    "small_disks": ("small", {"phases": {0: {"shape": {"kind": "disk"}}}}),
+    "small_exact": ("small", {"insertion": {"screening": "exact"}}),
+    "dem_small": (
+        "dem",
+        {"domain": {"width": 300.0, "height": 300.0}, "insertion": {"strip": 300.0}},
+    ),
+    "dem_tail": (
+        "dem",
+        {
+            "domain": {"width": 300.0, "height": 300.0},
+            "insertion": {"strip": 300.0, "closing": "tail"},
+        },
+    ),
+    "table1_3d_small": ("table1-3d", {"domain": {"width": 40.0, "height": 40.0, "depth": 40.0}}),
+}
+
+
+def _edit(data: Any, edit: Any) -> Any:
+    """``data`` with ``edit`` merged in (``None`` removes a key; int keys index lists)."""
+    if not isinstance(edit, dict):
+        return edit
+    for key, value in edit.items():
+        if value is None:
+            data.pop(key, None)
+        elif isinstance(value, dict) and isinstance(key, int):
+            data[key] = _edit(data[key], value)
+        elif isinstance(value, dict) and isinstance(data.get(key), dict | list):
+            data[key] = _edit(data[key], value)
+        else:
+            data[key] = value
+    return data
+
+
+def _digest(value: Any) -> str:
+    h = hashlib.sha256()
+    if isinstance(value, np.ndarray):
+        a = np.ascontiguousarray(value)
+        h.update(str(a.dtype).encode())
+        h.update(str(a.shape).encode())
+        if a.dtype.kind == "O":
+            h.update(repr(a.tolist()).encode())
+        else:
+            h.update(a.tobytes())
+    else:
+        h.update(json.dumps(value, sort_keys=True, default=repr).encode())
+    return h.hexdigest()[:16]
+
+
+def _packing_arrays(p: Any) -> dict[str, Any]:
+    names = (
+        "radius",
+        "mineral",
+        "vertices",
+        "offsets",
+        "orientation",
+        "centre",
+        "insertion_index",
+        "rounding",
+        "faces",
+        "face_offsets",
+        "rotation",
+    )
+    out = {}
+    for n in names:
+        v = getattr(p, n, None)
+        if isinstance(v, np.ndarray):
+            out[n] = v
+    return out
+
+
+def _analysis_arrays(results: Any) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for name, result in results.items():
+        for key, value in sorted(vars(result).items()):
+            if isinstance(value, np.ndarray) and value.dtype.kind != "O":
+                out[f"{name}.{key}"] = value
+            elif isinstance(value, dict):
+                out[f"{name}.{key}"] = value
+            elif isinstance(value, float | int | str):
+                out[f"{name}.{key}"] = value
+    return out
+
+
+def dump(names: list[str]) -> dict[str, str]:
+    """Fingerprint every scene of ``names`` and its analyses."""
+    entries: dict[str, str] = {}
+    for label in names:
+        base, edit = SCENES[label]
+        data = _edit(regopack.scene(base).to_dict(), copy.deepcopy(edit))
+        p = regopack.pack(data)
+        for key, value in _packing_arrays(p).items():
+            entries[f"{label}/{key}"] = _digest(value)
+        try:
+            results = regopack.analyze(p)
+        except Exception as exc:  # an analysis that fails is an entry too
+            entries[f"{label}/analyze"] = f"error: {type(exc).__name__}: {exc}"
+        else:
+            for key, value in _analysis_arrays(results).items():
+                entries[f"{label}/analysis/{key}"] = _digest(value)
+        print(f"{label}: {p.n_placed} placed", file=sys.stderr, flush=True)
+    return entries
+
+
+def main() -> int:
+    """Dump the fingerprints; compare with an earlier dump if asked."""
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--out", type=Path, required=True)
+    parser.add_argument("--compare", type=Path)
+    parser.add_argument("--only", nargs="*", choices=sorted(SCENES), default=sorted(SCENES))
+    args = parser.parse_args()
+    entries = dump(args.only)
+    args.out.write_text(json.dumps(entries, indent=1, sort_keys=True) + "\n")
+    if args.compare is None:
+        return 0
+    before = json.loads(args.compare.read_text())
+    keys = sorted(set(before) | set(entries))
+    differ = [k for k in keys if before.get(k) != entries.get(k)]
+    for k in differ:
+        print(f"differs: {k}: {before.get(k)} -> {entries.get(k)}")
+    same = len(keys) - len(differ)
+    print(f"{same}/{len(keys)} identical")
+    return 1 if differ else 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
