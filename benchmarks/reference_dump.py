@@ -66,7 +66,11 @@ SCENES: dict[str, tuple[str, Edit]] = {
 
 
 def _edit(data: Any, edit: Any) -> Any:
-    """``data`` with ``edit`` merged in (``None`` removes a key; int keys index lists)."""
+    """``data`` with ``edit`` merged in.
+
+    ``None`` removes a key, int keys index lists, and a ``shape`` replaces
+    the shape (another plugin has other parameters).
+    """
     if not isinstance(edit, dict):
         return edit
     for key, value in edit.items():
@@ -74,6 +78,8 @@ def _edit(data: Any, edit: Any) -> Any:
             data.pop(key, None)
         elif isinstance(value, dict) and isinstance(key, int):
             data[key] = _edit(data[key], value)
+        elif key == "shape":
+            data[key] = value  # another plugin: its own parameters
         elif isinstance(value, dict) and isinstance(data.get(key), dict | list):
             data[key] = _edit(data[key], value)
         else:

@@ -23,6 +23,7 @@ try:
 except PackageNotFoundError:  # running from a source tree that is not installed
     __version__ = "0.0.0"
 
+import regopack.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
 from regopack.packing import Packing
 from regopack.packing3d import Packing3D
 from regopack.packing3d import load_packing as load

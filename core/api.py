@@ -578,6 +578,7 @@ def export(
     registry: Registry | None = None,
     params: Mapping[str, Any] | None = None,
     params_source: str | None = None,
+    force: bool = False,
     **kwargs: Any,
 ) -> Path:
     """Write a packing in another format, as ``regopack export`` does.
@@ -602,6 +603,10 @@ def export(
     params_source
         What error messages call the parameters (the command line passes
         ``"--set"``); by default the message starts with the exporter.
+    force
+        Overwrite companion files that exist beside a main file that does
+        not (by default such a file is taken for the user's own and refused,
+        see :func:`~regopack.exporting.export_packing`).
 
     Returns
     -------
@@ -623,6 +628,7 @@ def export(
         raise ConfigError(
             f"params: expected a dictionary of {to}'s parameters, not {type(params).__name__}"
         )
+    _flag(force, "force")
     merged = {**(params or {}), **{k: _plain(v) for k, v in kwargs.items()}}
     exporter = build_exporter(reg, to, merged, source=params_source)
     loaded = _packing_any_dimension(packing)
@@ -660,7 +666,9 @@ def export(
             f"not {type(analyses).__name__}"
         )
     try:
-        return export_packing(loaded, to, target, registry=reg, params=merged, analyses=computed)
+        return export_packing(
+            loaded, to, target, registry=reg, params=merged, analyses=computed, force=force
+        )
     except ConfigError as err:  # a parameter that does not fit this packing
         if params_source and str(err).startswith(f"exporter {to!r}: "):
             raise ConfigError(f"{params_source}: {err}") from err

@@ -232,6 +232,14 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="NAME[,NAME...]",
         help="run these analyzers first and pass their results on (vtk adds Z from coordination)",
     )
+    export.add_argument(
+        "--force",
+        action="store_true",
+        help=(
+            "overwrite companion files (e.g. a LAMMPS input script) that exist beside a main "
+            "file that does not"
+        ),
+    )
     export.set_defaults(handler=_cmd_export)
 
     plugins = sub.add_parser(
@@ -483,6 +491,7 @@ def _cmd_export(args: argparse.Namespace, out: Console, err: Console) -> int:
         analyses=names or None,
         params=params,
         params_source="--set",
+        force=args.force,
     )
     out.print(f"wrote {written}", soft_wrap=True, markup=False, highlight=False)
     return EXIT_OK

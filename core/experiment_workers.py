@@ -8,8 +8,10 @@ process is gone; a Dask cluster is reached through ``distributed.Client``.
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
+import sys
 import threading
 import time
 import uuid
@@ -132,7 +134,32 @@ def _init_worker(workers: int = 1) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     parent = os.getppid()
+    _killed_with_parent(parent)
     threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
+
+
+PR_SET_PDEATHSIG = 1
+"""Linux ``prctl`` option: the signal a process gets when its parent ends."""
+
+
+def _killed_with_parent(parent: int) -> None:
+    """Have Linux end this worker (SIGKILL) the moment its parent ``parent`` ends.
+
+    Unlike the watchdog thread (:func:`_exit_with_parent`), this needs no
+    Python thread to run: a worker inside a compiled kernel or the compiler,
+    which hold Python's lock for long, dies too. Elsewhere, and if the call
+    fails, the watchdog alone remains.
+    """
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        if libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0:
+            return
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # the parent ended before the call
+        os._exit(1)
 
 
 PARENT_POLL_S = 0.5

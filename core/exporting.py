@@ -21,6 +21,7 @@ Examples
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -182,8 +183,15 @@ def export_packing(
     params: Mapping[str, Any] | None = None,
     analyses: Mapping[str, Analyzer] | None = None,
     source: str | None = None,
+    force: bool = False,
 ) -> Path:
     """Write ``packing`` to ``path`` with the exporter ``kind``; return the main file.
+
+    The main file is the one the caller names, and is overwritten. Its
+    companions (:meth:`~regopack.interfaces.Exporter.companions`) are
+    overwritten too when the main file exists (an earlier export of the same
+    files); a companion that exists beside a main file that does not is taken
+    for a file of the user's, and refused unless ``force``.
 
     Parameters
     ----------
@@ -202,6 +210,8 @@ def export_packing(
     source
         Where the packing came from (e.g. its file), named when the exporter
         does not write packings of its dimension.
+    force
+        Overwrite companions whatever exists.
 
     Raises
     ------
@@ -212,6 +222,8 @@ def export_packing(
     """
     check_exporter_dimension(registry, kind, 3 if isinstance(packing, Packing3D) else 2, source)
     exporter = build_exporter(registry, kind, params)
+    if not force:
+        _refuse_users_files(exporter, Path(path))
     try:
         if isinstance(packing, Packing3D) and isinstance(exporter, SolidExporter):
             return exporter.export(packing, Path(path), analyses=analyses)
@@ -221,6 +233,19 @@ def export_packing(
     except OSError as err:
         why = err.strerror or type(err).__name__
         raise ExportError(f"cannot write {path}: {why}") from err
+
+
+def _refuse_users_files(exporter: Any, path: Path) -> None:
+    """Refuse to write over a companion that exists beside a main file that does not."""
+    if os.path.lexists(path):
+        return
+    companions = getattr(exporter, "companions", None)
+    for other in companions(path) if callable(companions) else ():
+        if os.path.lexists(other) and Path(other) != path:
+            raise ExportError(
+                f"{other}: exists, and {path} does not, so it is no earlier export's; "
+                "give another path, move it, or pass --force (force=True) to overwrite it"
+            )
 
 
 def run_exports(

@@ -24,6 +24,10 @@ from importlib import metadata
 from pathlib import Path
 from typing import Any
 
+from regopack.threads import configure_threads
+
+__all__ = ["configure_cache", "configure_threads", "kernel_cache_dir", "lock_cache_saves"]
+
 KERNEL_SOURCES_GROUP = "regopack.kernel_sources"
 """Entry-point group whose values name packages holding numba kernels."""
 
@@ -101,19 +105,6 @@ def configure_cache() -> None:
         config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]
 
 
-def configure_threads() -> None:
-    """Let the kernels' OpenMP threads sleep while they wait, unless the user chose.
-
-    A thread that spins while it waits for a thread without a core (another
-    process runs there) holds the core that thread needs: a parallel batch
-    then waits a time slice, and the sweep's threaded exact scans ran 12 times
-    slower than on one thread beside one busy process. Sleeping threads cost a
-    few microseconds per batch instead. Read when OpenMP starts, that is at
-    the first parallel kernel.
-    """
-    os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
-
-
 def lock_cache_saves() -> None:
     """Make numba's cache saves exclusive between processes, on POSIX systems.
 
@@ -153,5 +144,4 @@ def lock_cache_saves() -> None:
 
 
 configure_cache()
-configure_threads()
 lock_cache_saves()

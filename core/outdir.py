@@ -267,12 +267,25 @@ def _leftover_pattern(name: str) -> re.Pattern[str]:
     return re.compile(re.escape(name) + r"\.(?:tmp|old)-" + _TOKEN)
 
 
+def _written_here(folder: str) -> bool:
+    """Whether ``folder`` is one regopack made: it holds a :data:`MARKER`, or is empty."""
+    if folder_kind(folder) is not None:
+        return True
+    try:
+        with os.scandir(folder) as entries:
+            return next(entries, None) is None
+    except OSError:
+        return False
+
+
 def remove_leftovers(target: str | Path) -> list[Path]:
     """Remove the temporary and old folders a killed write left beside ``target``.
 
     These are the folders ``<name>.tmp-<random>`` and ``<name>.old-<random>``
-    (eight letters, digits or ``_``) in ``target``'s parent. Returns the
-    folders removed.
+    (eight letters, digits or ``_``) in ``target``'s parent that regopack
+    made: each holds a :data:`MARKER` (a temporary folder gets one when it is
+    made) or is empty. A folder of the user's that only has such a name is
+    kept. Returns the folders removed.
     """
     real = _real(Path(target))
     pattern = _leftover_pattern(real.name)
@@ -282,7 +295,11 @@ def remove_leftovers(target: str | Path) -> list[Path]:
     except OSError:
         return removed
     for entry in entries:
-        if pattern.fullmatch(entry.name) and entry.is_dir(follow_symlinks=False):
+        if (
+            pattern.fullmatch(entry.name)
+            and entry.is_dir(follow_symlinks=False)
+            and _written_here(entry.path)
+        ):
             shutil.rmtree(entry.path, ignore_errors=True)
             removed.append(Path(entry.path))
     return removed
@@ -436,6 +453,7 @@ def replace_folder(target: str | Path, kind: str) -> Iterator[Path]:
     old: Path | None = None
     try:
         os.chmod(tmp, 0o777 & ~_umask())
+        mark_folder(tmp, kind)  # a leftover of a killed write is known as regopack's
         yield tmp
         mark_folder(tmp, kind)
         _fsync_tree(tmp)

@@ -65,6 +65,23 @@ def test_parameters_and_analyses(packing_file, tmp_path):
     assert ET.parse(svg).getroot().attrib["width"] == "300"
 
 
+def test_a_companion_of_the_users_is_not_overwritten(packing_file, tmp_path, capsys):
+    """mine_vertices.csv is the user's while mine.csv does not exist: one line, unless --force."""
+    mine = tmp_path / "mine_vertices.csv"
+    mine.write_text("the user's own table\n")
+    args = ["export", str(packing_file), "--to", "csv", "--out", str(tmp_path / "mine.csv")]
+    assert main(args) == 2
+    line = one_error_line(capsys)
+    assert "mine_vertices.csv: exists" in line and "--force" in line
+    assert mine.read_text() == "the user's own table\n"
+    assert not (tmp_path / "mine.csv").exists()
+    assert main([*args, "--force"]) == 0
+    capsys.readouterr()
+    assert mine.read_text() != "the user's own table\n"
+    assert main(args) == 0  # the earlier export's own files: written again
+    assert "wrote" in capsys.readouterr().out
+
+
 def test_unknown_format_is_one_line(packing_file, capsys):
     assert main(["export", str(packing_file), "--to", "xyz"]) == 2
     line = one_error_line(capsys)

@@ -143,3 +143,138 @@ def _save_entries(folder: str, k: int) -> None:
     cache = caching.IndexDataCacheFile(folder, "f", ("stamp", 1))
     for j in range(25):
         cache.save(("key", k, j), ("data", k, j))
+
+
+# ---------------------------------------------------------------------------
+# the threading layer
+
+
+def _child_env(**extra: str) -> dict[str, str]:
+    import os
+
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_THREADING_LAYER")}
+    env.update(NUMBA_NUM_THREADS="2", **extra)
+    return env
+
+
+def _python(code: str, env: dict[str, str], timeout: float = 300.0) -> str:
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", code], env=env, capture_output=True, text=True, timeout=timeout
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    return done.stdout
+
+
+def _tbb_loads() -> bool:
+    code = "from numba.np.ufunc import parallel; parallel._check_tbb_version_compatible();"
+    code += "from numba.np.ufunc import tbbpool"
+    try:
+        _python(code, _child_env(), timeout=60.0)
+    except AssertionError:
+        return False
+    return True
+
+
+LAYER = (
+    "import numba, numpy as np\n"
+    "@numba.njit(parallel=True)\n"
+    "def total(a):\n"
+    "    s = 0.0\n"
+    "    for i in numba.prange(a.shape[0]):\n"
+    "        s += a[i]\n"
+    "    return s\n"
+    "total(np.ones(1000))\n"
+    "print(numba.threading_layer())\n"
+)
+
+
+def test_regopack_prefers_openmp_then_the_workqueue_to_tbb() -> None:
+    out = _python("import regopack, os\n" + LAYER, _child_env())
+    assert out.strip() in {"omp", "workqueue"}
+    # numba imported first, regopack after: the order still reaches numba
+    out = _python("import numba, regopack\n" + LAYER, _child_env())
+    assert out.strip() in {"omp", "workqueue"}
+
+
+def test_a_threading_layer_chosen_by_the_user_is_kept() -> None:
+    env = _child_env(NUMBA_THREADING_LAYER="workqueue")
+    assert _python("import regopack\n" + LAYER, env).strip() == "workqueue"
+    env = _child_env(NUMBA_THREADING_LAYER_PRIORITY="workqueue omp tbb")
+    assert _python("import regopack\n" + LAYER, env).strip() == "workqueue"
+
+
+PACK_AND_ANALYSE = """
+import threading, numba, regopack
+from regopack.plugins.available_arc import batches
+from regopack.plugins.available_arc import sweep
+def work(out):
+    # the sweep's exact scans run on two threads (a parallel kernel)
+    p = regopack.pack("dem", domain__width=160, domain__height=160,
+                      insertion__strip=160, seed=SEED)
+    r = regopack.analyze(p, ["contacts", "coordination"])
+    out.append((p.n_placed, sorted(r["contacts"].scalars.items())))
+mine = []
+t = threading.Thread(target=work, args=(mine,))   # as a Dask worker thread does
+t.start(); t.join()
+work(mine)
+assert mine[0] == mine[1], mine
+layer = numba.threading_layer()
+print("last line", layer, flush=True)
+"""
+
+
+@pytest.mark.skipif(not _tbb_loads(), reason="numba finds no TBB here (pip install tbb)")
+def test_ten_processes_with_tbb_present_exit_after_their_last_line(tmp_path: Path) -> None:
+    """With TBB installed, packing and analysing from threads never hangs a process at exit."""
+    import subprocess
+    import sys
+    import time
+
+    def start(seed: int) -> subprocess.Popen[str]:
+        code = PACK_AND_ANALYSE.replace("SEED", str(seed))
+        return subprocess.Popen(
+            [sys.executable, "-c", code],
+            env=_child_env(),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+
+    lags = []
+    for pair in range(5):  # two at a time, one per core
+        procs = [start(2 * pair + k + 1) for k in range(2)]
+        for proc in procs:
+            assert proc.stdout is not None
+            line = proc.stdout.readline()
+            last = time.monotonic()
+            try:
+                code = proc.wait(timeout=60.0)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                pytest.fail(f"a process still ran 60 s after its last line {line!r}")
+            lags.append(time.monotonic() - last)
+            assert code == 0, proc.stderr.read()[-2000:] if proc.stderr else code
+            assert line.split()[:2] == ["last", "line"]
+            assert line.split()[2] in {"omp", "workqueue"}
+    assert max(lags) < 10.0, lags
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="no fork here")
+def test_a_child_forked_after_the_parallel_kernels_ran_packs_the_same() -> None:
+    code = """
+import os, numba, regopack
+def key():
+    p = regopack.pack("dem", domain__width=160, domain__height=160, insertion__strip=160)
+    return p.centre.tobytes()
+first = key()
+pid = os.fork()
+if pid == 0:
+    os._exit(0 if key() == first else 3)
+_, status = os.waitpid(pid, 0)
+print(numba.threading_layer(), os.waitstatus_to_exitcode(status))
+"""
+    out = _python(code, _child_env()).split()
+    assert out[1] == "0", out

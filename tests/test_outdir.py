@@ -8,7 +8,7 @@ import pytest
 
 from regopack import outdir
 from regopack.errors import ConfigError, Terminated
-from regopack.outdir import MARKER, folder_kind, remove_leftovers, replace_folder
+from regopack.outdir import MARKER, folder_kind, mark_folder, remove_leftovers, replace_folder
 
 
 def names(folder: Path) -> list[str]:
@@ -98,3 +98,24 @@ def test_only_leftovers_of_the_same_folder_are_removed(tmp_path: Path) -> None:
     removed = remove_leftovers(tmp_path / "out")
     assert sorted(p.name for p in removed) == ["out.old-12345678", "out.tmp-abcdefgh"]
     assert names(tmp_path) == ["out.old-abcdefgh", "out.tmp-short", "out2.tmp-abcdefgh"]
+
+
+def test_a_users_folder_named_like_a_leftover_is_kept(tmp_path: Path) -> None:
+    """Only folders regopack made (a marker, or empty) go: a user's backup stays."""
+    mine = tmp_path / "x.old-backup01"
+    mine.mkdir()
+    (mine / "thesis.tex").write_text("mine")
+    killed = tmp_path / "x.tmp-abcdefgh"
+    killed.mkdir()
+    (killed / "packing.npz").write_bytes(b"half")
+    mark_folder(killed, "run")
+    assert remove_leftovers(tmp_path / "x") == [killed]
+    assert (mine / "thesis.tex").read_text() == "mine"
+
+
+def test_a_temporary_folder_is_marked_from_the_start(tmp_path: Path) -> None:
+    """A write killed at any moment leaves a folder the next write knows as its own."""
+    with replace_folder(tmp_path / "out", "run") as tmp:
+        assert folder_kind(tmp) == "run"
+        (tmp / "a").write_text("x")
+        assert remove_leftovers(tmp_path / "elsewhere") == []

@@ -39,6 +39,7 @@ writes only the partner's scratch.
 
 from __future__ import annotations
 
+import atexit
 import os
 import threading
 from typing import NamedTuple
@@ -130,13 +131,32 @@ def available() -> bool:
     return os.name == "posix"
 
 
+_RUNNING: set[PartnerThread] = set()
+"""Partners whose thread runs (held until :meth:`PartnerThread.stop`; stopped at exit)."""
+
+
+def stop_all() -> None:
+    """Stop every partner thread still running; called at interpreter exit.
+
+    A partner is a daemon thread, so it never keeps a process alive, but a
+    compiled loop that goes on through the interpreter's shutdown would read
+    arrays being freed; stopping it first lets the process end cleanly.
+    """
+    for partner in list(_RUNNING):
+        partner.stop()
+
+
+atexit.register(stop_all)
+
+
 class PartnerThread:
     """A partner for the searches of one insertion: its shared arrays, scratch and thread.
 
     :meth:`attach` before each chunk of the sweep starts the thread, or keeps the
     running one when the packing's arrays are the same objects as before (the
     neighbour-list pool is replaced when it grows: the thread then restarts with
-    the new arrays); :meth:`stop` when the insertion ends, also after an error.
+    the new arrays); :meth:`stop` when the insertion ends, also after an error,
+    and at interpreter exit for any partner still running (:func:`stop_all`).
     """
 
     def __init__(self, work: K.Work, packed: K.Packed, bounds: bool = False) -> None:
@@ -200,6 +220,7 @@ class PartnerThread:
         p.ctl[C_ON] = 0 if self.bounds else 1
         self._arrays = (g, s)
         self._thread = threading.Thread(target=run, name="regopack-partner", daemon=True)
+        _RUNNING.add(self)
         self._thread.start()
         if self.bounds and s.ipar[K.I_BOUND] != K.BOUND_OFF:
             s.ipar[K.I_BOUND] = K.BOUND_POST
@@ -214,6 +235,7 @@ class PartnerThread:
             p.ctl[C_STOP] = 1
             self._thread.join()
             self._thread = None
+        _RUNNING.discard(self)
         self._arrays = None
         p.ctl[C_ON] = 0
         return self._failure.pop() if self._failure else None

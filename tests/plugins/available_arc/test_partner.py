@@ -337,3 +337,51 @@ def test_partner_in_the_papers_order_gives_the_reference_packing(
         assert isinstance(stats["served"], int)
         if defer:
             assert stats["served"] >= 0.5 * stats["candidate_analyses"]
+
+
+def test_a_partner_left_running_is_stopped_at_exit() -> None:
+    """stop_all (registered with atexit) ends a partner whose insertion never stopped it."""
+    from regopack.plugins.available_arc.state import ArcState
+
+    pop, _ = change5_population(50, 1)
+    st_ = ArcState(pop, Rectangle.centred(40.0, 40.0), t=0.999, tau=None, linear=False)
+    team = partner.PartnerThread(st_.work, st_.packed)
+    team.attach(st_.outlines, st_.packed, st_.rounded)
+    thread = team._thread
+    assert thread is not None and thread.is_alive() and team in partner._RUNNING
+    partner.stop_all()
+    assert not thread.is_alive() and team._thread is None
+    assert team not in partner._RUNNING
+
+
+def test_a_process_that_leaves_a_partner_running_exits(tmp_path: Any) -> None:
+    """A script that never stops its partner still ends at once after its last line."""
+    import subprocess
+    import sys
+    import time
+
+    script = tmp_path / "leave.py"
+    script.write_text(
+        "from arc_helpers import change5_population\n"
+        "from regopack.domain import Rectangle\n"
+        "from regopack.plugins.available_arc import partner\n"
+        "from regopack.plugins.available_arc.state import ArcState\n"
+        "pop, _ = change5_population(50, 1)\n"
+        "st = ArcState(pop, Rectangle.centred(40.0, 40.0), t=0.999, tau=None, linear=False)\n"
+        "team = partner.PartnerThread(st.work, st.packed)\n"
+        "team.attach(st.outlines, st.packed, st.rounded)\n"
+        "assert team._thread.is_alive()\n"
+        "print('last line', flush=True)\n"
+    )
+    import os
+    from pathlib import Path
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parent)}
+    proc = subprocess.Popen(
+        [sys.executable, str(script)], stdout=subprocess.PIPE, text=True, env=env
+    )
+    assert proc.stdout is not None
+    assert proc.stdout.readline() == "last line\n"
+    last = time.monotonic()
+    assert proc.wait(timeout=60) == 0
+    assert time.monotonic() - last < 10.0
