@@ -79,14 +79,19 @@ figure of each kind of run.
 
 PARTICLE_BYTES: dict[str, int] = {
     "2D paper order": BYTES_PER_PARTICLE,
-    "2D sweep": 3_200,
+    "2D sweep": 25_000,
     "3D polyhedra": 32_000,
     "3D spheres": 8_000,
 }
 """Memory a run needs per particle drawn, in bytes, by kind of run (see :func:`particle_bytes`).
 
-Measured peaks of resident memory per particle (``benchmarks`` in
-``docs/benchmarks.md``), rounded up by a quarter or more.
+The growth of the peak resident memory per particle between runs of
+increasing size (``docs/benchmarks.md``, "Memory per particle"), rounded up
+by a quarter or more: 2.6 kB in the paper order, 19.6 kB in the sweep (its
+neighbour-list rows and lags), 14-25 kB at the peak of generating polyhedra.
+Spheres grew by 0.3 kB a particle up to 9,638 (the kernels' fixed memory is
+the peak there); their 8 kB is a cautious bound until a larger run measures
+them.
 """
 
 
