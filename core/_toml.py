@@ -153,6 +153,44 @@ def parse_toml(text: str, source: str) -> dict[str, Any]:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as err:
         raise ConfigError(f"{source}: invalid TOML: {' '.join(str(err).split())}") from err
+    except RecursionError:
+        raise ConfigError(
+            f"{source}: arrays or tables nested too deeply to read (more than Python's "
+            "recursion limit); a scene nests a few levels"
+        ) from None
+
+
+def not_a_file(path: Path, what: str) -> str | None:
+    """Why ``path`` is no regular file to read as a ``what`` file, or ``None`` when it is one.
+
+    A directory, a named pipe (FIFO), a device or a socket is refused without
+    opening it: reading a FIFO would wait for a writer, a device may never end.
+
+    Examples
+    --------
+    >>> not_a_file(Path("/dev/null"), "scene")
+    'is a character device, not a scene file'
+    """
+    import stat
+
+    try:
+        mode = path.stat().st_mode
+    except FileNotFoundError:
+        return f"no such {what} file"
+    except OSError as err:
+        return f"cannot read the {what} file: {err.strerror or err}"
+    if stat.S_ISREG(mode):
+        return None
+    kinds = (
+        (stat.S_ISDIR, "a directory"),
+        (stat.S_ISFIFO, "a named pipe (FIFO)"),
+        (stat.S_ISCHR, "a character device"),
+        (stat.S_ISBLK, "a block device"),
+        (stat.S_ISSOCK, "a socket"),
+    )
+    kind = next((name for test, name in kinds if test(mode)), "not a regular file")
+    article = "an" if what[:1] in "aeiou" else "a"
+    return f"is {kind}, not {article} {what} file"
 
 
 def read_text_file(path: Path, what: str, missing_hint: str = "") -> str:
@@ -164,14 +202,9 @@ def read_text_file(path: Path, what: str, missing_hint: str = "") -> str:
     from regopack.errors import ConfigError
 
     source = str(path)
-    if not path.is_file():
-        article = "an" if what[:1] in "aeiou" else "a"
-        problem = (
-            f"is a directory, not {article} {what} file"
-            if path.is_dir()
-            else f"no such {what} file"
-        )
-        raise ConfigError(f"{source}: {problem}{missing_hint}")
+    problem = not_a_file(path, what)
+    if problem is not None:
+        raise ConfigError(f"{source}: {problem}{missing_hint if not path.exists() else ''}")
     try:
         return path.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:

@@ -277,7 +277,7 @@ def pack_and_summarise(
         written.
     """
     from regopack.outdir import check_replaceable
-    from regopack.run import RUN_FOLDER, check_scene, run_scene
+    from regopack.run import RUN_FOLDER, check_runnable, run_scene
 
     _flag(verify, "verify", allow_none=True)
     _flag(figures, "figures")
@@ -287,13 +287,12 @@ def pack_and_summarise(
         if isinstance(source, str | os.PathLike) and Path(source).is_file():
             refuse_inside(Path(source), folder, "scene file")
         check_replaceable(folder, RUN_FOLDER)
+    check_runnable(resolved)
     if resolved.scene.domain.dimension == 3:
-        from regopack.run3d import check_scene3d, run_scene3d
+        from regopack.run3d import run_scene3d
 
-        check_scene3d(resolved)
         with _progress(progress, f"packing {resolved.name}") as callback:
             return run_scene3d(resolved, folder, progress=callback, verify=verify, figures=figures)
-    check_scene(resolved)
     with _progress(progress, f"packing {resolved.name}") as callback:
         return run_scene(
             resolved,

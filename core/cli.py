@@ -316,10 +316,16 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
             file=sys.stderr,
         )
     status = EXIT_VIOLATED if violated and args.verify else EXIT_OK
-    if tried and not placed:
+    if not placed:
+        why = (
+            f"none of the {tried:,} particles drawn fits into the domain"
+            if tried
+            else 'the scene gives no particle to draw (count = "auto": the domain holds '
+            "less than half a particle of the mean size)"
+        )
         print(
-            f"regopack: warning: no particle was placed: none of the {tried:,} particles drawn "
-            f"fits into the domain; the packing in {outcome.packing_path} is empty",
+            f"regopack: warning: no particle was placed: {why}; the packing in "
+            f"{outcome.packing_path} is empty",
             file=sys.stderr,
         )
     if args.quiet:
@@ -375,7 +381,10 @@ def _cmd_scenes(args: argparse.Namespace, out: Console, err: Console) -> int:
 
 
 def _cmd_config(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.run import check_runnable
+
     resolved = _resolve(args)
+    check_runnable(resolved)  # the checks of `regopack run`, before anything is drawn
     out.file.write(resolved.to_toml())
     return EXIT_OK
 
@@ -693,12 +702,11 @@ def _warnings_as_lines() -> Iterator[None]:
     """Within the block, regopack's own warnings print as one ``regopack: warning:`` line."""
     import warnings
 
-    from regopack.analysis import FigureWarning
-
     previous = warnings.showwarning
 
     def show(message: Any, category: Any, *args: Any, **kwargs: Any) -> None:
-        if isinstance(category, type) and issubclass(category, FigureWarning):
+        own = isinstance(category, type) and category.__module__.split(".")[0] == "regopack"
+        if own:
             print(f"regopack: warning: {' '.join(str(message).split())}", file=sys.stderr)
         else:
             previous(message, category, *args, **kwargs)

@@ -528,10 +528,17 @@ def check_convex_polygon(v: FloatArray) -> None:
     """
     if v.ndim != 2 or v.shape[0] < 3 or not np.all(np.isfinite(v)):
         raise GeometryError("a polygon needs at least 3 finite corners")
-    e = np.roll(v, -1, axis=0) - v
-    f = np.roll(e, -1, axis=0)
-    cross = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
-    scale = float(np.max(np.abs(v - v.mean(axis=0)))) ** 2
+    with np.errstate(over="ignore", invalid="ignore"):
+        e = np.roll(v, -1, axis=0) - v
+        f = np.roll(e, -1, axis=0)
+        cross = e[:, 0] * f[:, 1] - e[:, 1] * f[:, 0]
+    spread = float(np.max(np.abs(v - v.mean(axis=0))))
+    scale = spread * spread
+    if not (math.isfinite(scale) and np.all(np.isfinite(cross))):
+        raise GeometryError(
+            "the corners are so far apart that the polygon's area overflows 64-bit floats; "
+            "give smaller coordinates"
+        )
     if scale <= 0 or not (np.all(cross > 1e-12 * scale) or np.all(cross < -1e-12 * scale)):
         raise GeometryError(
             "the corners must form a strictly convex polygon (no repeated, collinear "

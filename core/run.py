@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import math
-import os
 import time
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
@@ -27,6 +26,7 @@ from regopack.interfaces import (
     ShapeGenerator,
     SizeDistribution,
 )
+from regopack.limits import MAX_EXTENT_RATIO, LimitError, check_memory, format_bytes, memory_limit
 from regopack.outdir import (
     MARKER,
     NAME_RULE,
@@ -44,12 +44,15 @@ from regopack.sieve import unplaced_per_class
 
 __all__ = [
     "BYTES_PER_PARTICLE",
+    "PARTICLE_BYTES",
     "RUN_FOLDER",
     "RunOutcome",
+    "check_runnable",
     "check_scene",
     "default_out_dir",
     "draw_population",
     "memory_limit",
+    "particle_bytes",
     "particle_count",
     "phi_in_window",
     "run_scene",
@@ -62,13 +65,34 @@ RUN_FOLDER = "run"
 SHAPELY_BATCH = 1 << 16
 """Particles turned into shapely polygons at a time when measuring a covered area."""
 
-BYTES_PER_PARTICLE = 256
-"""Memory a run needs at least per particle drawn, in bytes (a lower bound).
+BYTES_PER_PARTICLE = 3_200
+"""Memory a 2D run needs per particle drawn, in bytes (paper order; measured, with a margin).
 
-Every particle is drawn before insertion: its radius, mineral, orientation,
-vertex offset and at least three vertices, some of them twice while they are
-built. A scene whose particle count times this exceeds :func:`memory_limit`
-is refused before anything is allocated.
+Peak resident memory grows by about 2.6 kB a particle in the paper order
+(``small`` scaled to 5,000-52,000 particles; see ``docs/benchmarks.md``):
+the particle's radius, mineral, orientation and vertices, the inserter's
+arrays and outlines and the shapely polygons that measure the covered
+area. A scene whose particle count times this exceeds :func:`memory_limit`
+is refused before anything is allocated. :data:`PARTICLE_BYTES` holds the
+figure of each kind of run.
+"""
+
+PARTICLE_BYTES: dict[str, int] = {
+    "2D paper order": BYTES_PER_PARTICLE,
+    "2D sweep": 1_200,
+    "3D polyhedra": 32_000,
+    "3D spheres": 8_000,
+}
+"""Memory a run needs per particle drawn, in bytes, by kind of run (see :func:`particle_bytes`).
+
+The growth of the peak resident memory per particle between runs of
+increasing size (``docs/benchmarks.md``, "Memory per particle"), rounded up
+by a quarter or more: 2.6 kB in the paper order, 0.81 kB in the sweep
+(`dem` from 16 579 to 1 061 033 particles drawn: 232 MB to 1 077 MB), 14-25
+kB at the peak of generating polyhedra.
+Spheres grew by 0.3 kB a particle up to 9,638 (the kernels' fixed memory is
+the peak there); their 8 kB is a cautious bound until a larger run measures
+them.
 """
 
 
@@ -137,52 +161,137 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
     return int(count)
 
 
-def memory_limit() -> tuple[int, str] | None:
-    """Return the memory this process may use, in bytes, and what sets that limit.
-
-    The smallest of the machine's physical memory, the control group's limit
-    (``memory.max``, in containers and batch jobs) and the address-space limit
-    (``ulimit -v``); ``None`` where none of them is known.
-    """
-    limits: list[tuple[int, str]] = []
-    try:
-        limits.append((os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"), "memory"))
-    except (AttributeError, OSError, ValueError):
-        pass
-    try:
-        text = Path("/sys/fs/cgroup/memory.max").read_text(encoding="ascii").strip()
-        if text.isdigit():
-            limits.append((int(text), "memory limit (cgroup memory.max)"))
-    except (OSError, UnicodeDecodeError):
-        pass
-    try:
-        import resource
-
-        soft = resource.getrlimit(resource.RLIMIT_AS)[0]
-        if soft != resource.RLIM_INFINITY and soft > 0:
-            limits.append((int(soft), "address-space limit (ulimit -v)"))
-    except (ImportError, OSError, ValueError):
-        pass
-    return min(limits) if limits else None
-
-
 def _bytes(n: float) -> str:
-    """``n`` bytes in binary units, e.g. ``7.3 TiB``."""
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"):
-        if unit == "EiB" and n >= 1e6:
-            return f"{n:.3g} {unit}"
-        if n < 1024 or unit == "EiB":
-            return f"{n:,.0f} {unit}" if unit == "B" else f"{n:,.1f} {unit}"
-        n /= 1024
-    raise AssertionError("unreachable")
+    """``n`` bytes in binary units, e.g. ``7.3 TiB`` (see :func:`regopack.limits.format_bytes`)."""
+    return format_bytes(n)
 
 
-def _located(scene: ResolvedScene, loc: str, text: str) -> str:
+def _located(scene: ResolvedScene, loc: str, text: str, value: Any = None) -> str:
     """``<source>: <loc> = <value>: <text>``, the style of the scene's validation errors."""
     where = scene.scene.origin(loc)
-    value = scene.scene.count if loc == "count" else None
+    if value is None and loc == "count":
+        value = scene.scene.count
     shown = f"{loc} = {_toml._value(value)}" if value is not None else loc
     return f"{where}: {shown}: {text}" if where else f"{shown}: {text}"
+
+
+def located_limit(scene: ResolvedScene, err: LimitError) -> ConfigError:
+    """``err`` prefixed with the source of its field (the scene file or ``--set``)."""
+    return ConfigError(err.located(scene.scene.origin(err.field)))
+
+
+def particle_bytes(scene: ResolvedScene) -> tuple[int, str]:
+    """Memory per particle of a run of ``scene`` (:data:`PARTICLE_BYTES`) and its kind."""
+    if scene.scene.domain.dimension == 3:
+        spheres = all(phase.shape.kind == "sphere" for phase in scene.phases)
+        kind = "3D spheres" if spheres else "3D polyhedra"
+    else:
+        sweep = getattr(scene.insertion.config, "order", "paper") == "sweep"
+        kind = "2D sweep" if sweep else "2D paper order"
+    return PARTICLE_BYTES[kind], kind
+
+
+def check_particle_memory(scene: ResolvedScene, n: int, auto: str = "") -> None:
+    """Refuse ``n`` particles whose memory (:func:`particle_bytes`) exceeds :func:`memory_limit`.
+
+    ``auto`` tells how ``count = "auto"`` gave ``n`` (shown in the message).
+    """
+    each, kind = particle_bytes(scene)
+    given = f"gives {_count(n)} particles ({auto}), which" if auto else f"{_count(n)} particles"
+    try:
+        check_memory(
+            float(n) * each,
+            f"{given} ({kind} runs: about {each:,} bytes a particle)",
+            field="count",
+            given=scene.scene.count,
+            limit=memory_limit(),
+        )
+    except LimitError as err:
+        raise located_limit(scene, err) from None
+
+
+def check_extents(scene: ResolvedScene, extents: Mapping[str, float], d_min: float) -> None:
+    """Refuse a domain more than :data:`~regopack.limits.MAX_EXTENT_RATIO` smallest diameters long.
+
+    ``extents`` maps the domain field that sets each extent (``domain.width``)
+    to the extent's length.
+    """
+    for field, length in extents.items():
+        ratio = length / d_min
+        if ratio <= MAX_EXTENT_RATIO:
+            continue
+        size_set = scene.scene.origin("size") != scene.scene.source
+        domain_set = scene.scene.origin(field) != scene.scene.source
+        blame, value = (
+            ("size", None) if size_set and not domain_set else (field, _field_value(scene, field))
+        )
+        raise ConfigError(
+            _located(
+                scene,
+                blame,
+                f"the domain's extent ({length:g}) is {ratio:.3g} times the smallest particle "
+                f"diameter ({d_min:g}); at most {MAX_EXTENT_RATIO:g} times, or 64-bit "
+                "coordinates do not resolve the particles and the neighbour grids grow "
+                "without bound; give a smaller domain or larger particles",
+                value,
+            )
+        )
+
+
+def _field_value(scene: ResolvedScene, field: str) -> Any:
+    """Return the scalar value of a dotted ``domain.<name>`` field, or ``None``."""
+    value = getattr(scene.scene.domain, field.removeprefix("domain."), None)
+    return value if isinstance(value, int | float) else None
+
+
+def domain_extents(scene: ResolvedScene) -> dict[str, float]:
+    """Each extent of the domain by the scene field that sets it (for :func:`check_extents`)."""
+    d = scene.scene.domain
+    if d.dimension == 3:
+        width, depth, height = d.to_box().size
+        return {"domain.width": width, "domain.depth": depth, "domain.height": height}
+    if d.kind == "circle":
+        return {"domain.radius": 2.0 * float(d.radius or 0.0)}
+    bounds = scene.domain.bounds()
+    width, height = float(bounds[1] - bounds[0]), float(bounds[3] - bounds[2])
+    if d.kind == "polygon":
+        return {"domain.vertices": max(width, height)}
+    return {"domain.width": width, "domain.height": height}
+
+
+def check_shapes(scene: ResolvedScene, r_min: float) -> None:
+    """Draw one smallest particle of each phase (on a generator of its own), to refuse early.
+
+    A shape generator's mistake (a template file that is missing or
+    malformed, an outline that overflows) then ends ``regopack config`` and
+    ``regopack run`` alike, naming the phase's shape field.
+    """
+    for p, phase in enumerate(scene.phases):
+        try:
+            generator = phase.shape.build()
+            with np.errstate(over="ignore", invalid="ignore"):
+                generator.generate(np.array([r_min]), np.random.default_rng(0))
+        except ConfigError as err:
+            raise ConfigError(_located(scene, f"phases.{p}.shape", str(err))) from err
+
+
+def check_runnable(scene: ResolvedScene) -> int:
+    """Every check of a scene before a run (2D or 3D); return the particle count.
+
+    ``regopack run`` and ``regopack config`` both call it, so a scene that
+    one accepts the other accepts too.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the source (scene file or ``--set``), the field, the
+        value and what is allowed.
+    """
+    if scene.scene.domain.dimension == 3:
+        from regopack.run3d import check_scene3d
+
+        return check_scene3d(scene)
+    return check_scene(scene)
 
 
 def _count(n: int) -> str:
@@ -213,8 +322,10 @@ def check_scene(scene: ResolvedScene) -> int:
     Refused, before anything is drawn: particles whose area overflows 64-bit
     floats; particles larger than the domain (the smallest particle's area
     exceeds the domain's, so none can be placed); and a particle count (given,
-    or from ``count = "auto"``) whose memory, at least
-    :data:`BYTES_PER_PARTICLE` per particle, exceeds :func:`memory_limit`; and
+    or from ``count = "auto"``) whose memory (:func:`particle_bytes` per
+    particle) exceeds :func:`memory_limit`; a domain more than
+    :data:`~regopack.limits.MAX_EXTENT_RATIO` smallest diameters long; a
+    shape generator that cannot draw a particle (:func:`check_shapes`); and
     what the inserter says it cannot pack (:func:`check_inserter`).
 
     Raises
@@ -249,25 +360,15 @@ def check_scene(scene: ResolvedScene) -> int:
                 "give smaller sizes or a larger domain",
             )
         )
+    check_extents(scene, domain_extents(scene), 2.0 * r_min)
+    check_shapes(scene, r_min)
     n = particle_count(scene, size_dist)
-    limit = memory_limit()
-    needed = n * BYTES_PER_PARTICLE
-    if limit is not None and needed > limit[0]:
-        auto = scene.scene.count == "auto"
-        given = (
-            f"gives {_count(n)} particles (domain area {domain_area:g} / mean particle area "
-            f"{float(size_dist.mean_area):g}), which"
-            if auto
-            else f"{_count(n)} particles"
-        )
-        raise ConfigError(
-            _located(
-                scene,
-                "count",
-                f"{given} need at least {_bytes(needed)} of memory ({BYTES_PER_PARTICLE} bytes "
-                f"per particle); this machine's {limit[1]} is {_bytes(limit[0])}",
-            )
-        )
+    auto = (
+        f"domain area {domain_area:g} / mean particle area {float(size_dist.mean_area):g}"
+        if scene.scene.count == "auto"
+        else ""
+    )
+    check_particle_memory(scene, n, auto)
     return n
 
 
@@ -463,7 +564,10 @@ def _run(
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
     controller: DensityController = _build(resolved.density, DensityController, "density")
     domain = resolved.domain
-    result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
+    try:
+        result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
+    except LimitError as err:  # a size the inserter derived from the scene, refused
+        raise located_limit(resolved, err) from None
     times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
 

@@ -29,6 +29,7 @@ from regopack.interfaces import (
     SizeDistribution,
     SolidGenerator,
 )
+from regopack.limits import LimitError
 from regopack.outdir import check_replaceable, rebase, replace_folder
 from regopack.packing import write_json_atomic
 from regopack.packing3d import Packing3D, save3d
@@ -44,11 +45,6 @@ IntArray = NDArray[np.int64]
 FloatArray = NDArray[np.float64]
 
 __all__ = ["RunOutcome3D", "check_scene3d", "draw_population3d", "phi_in_box", "run_scene3d"]
-
-
-BYTES_PER_SOLID = 32_000
-"""Memory one solid may take while a 3D population is drawn (measured: 14-25 kB at the
-peak of generating polyhedra, 1.7-3.6 kB kept); the count's memory guard uses it."""
 
 
 @dataclass(frozen=True)
@@ -79,9 +75,19 @@ def check_scene3d(scene: ResolvedScene) -> int:
     Refused in one line: particles whose volume overflows, a smallest
     particle larger than the box, ``count = "auto"`` with a size
     distribution that does not know its mean volume, a count whose
-    memory exceeds the machine's, and what the inserter says it cannot pack.
+    memory exceeds the machine's (:func:`regopack.run.particle_bytes`), a box
+    side more than :data:`~regopack.limits.MAX_EXTENT_RATIO` smallest
+    diameters long, a shape that cannot be drawn, and what the inserter says
+    it cannot pack.
     """
-    from regopack.run import _build, _bytes, check_inserter, memory_limit
+    from regopack.run import (
+        _build,
+        check_extents,
+        check_inserter,
+        check_particle_memory,
+        check_shapes,
+        domain_extents,
+    )
 
     check_inserter(scene)
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
@@ -116,6 +122,8 @@ def check_scene3d(scene: ResolvedScene) -> int:
                 f"(volume {box.volume:g}), so no particle can be placed",
             )
         )
+    check_extents(scene, domain_extents(scene), 2.0 * r_min)
+    check_shapes(scene, r_min)
     count = scene.scene.count
     if count == "auto":
         mean = float(size_dist.mean_volume)
@@ -136,17 +144,12 @@ def check_scene3d(scene: ResolvedScene) -> int:
         n = round(auto)
     else:
         n = int(count)
-    limit = memory_limit()
-    if limit is not None and n * BYTES_PER_SOLID > limit[0]:
-        raise ConfigError(
-            _located(
-                scene,
-                "count",
-                f"{n:,} particles need at least {_bytes(n * BYTES_PER_SOLID)} of memory "
-                f"({BYTES_PER_SOLID:,} bytes per solid); "
-                f"this machine's {limit[1]} is {_bytes(limit[0])}",
-            )
-        )
+    how = (
+        f"box volume {box.volume:g} / mean particle volume {float(size_dist.mean_volume):g}"
+        if count == "auto"
+        else ""
+    )
+    check_particle_memory(scene, n, how)
     return n
 
 
@@ -373,7 +376,12 @@ def _run3d(
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
     controller: DensityController = _build(resolved.density, DensityController, "density")
     box = _box(resolved)
-    result: InsertionResult = inserter.pack(population, box, controller, rng, progress)  # type: ignore[arg-type]
+    try:
+        result: InsertionResult = inserter.pack(population, box, controller, rng, progress)  # type: ignore[arg-type]
+    except LimitError as err:  # a size the inserter derived from the scene, refused
+        from regopack.run import located_limit
+
+        raise located_limit(resolved, err) from None
     times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
     packing = Packing3D.from_parts(

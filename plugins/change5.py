@@ -20,6 +20,9 @@ from regopack.hookspecs import hookimpl
 from regopack.interfaces import SizeDistribution
 from regopack.plugin_types import SizeDistributionSpec
 
+MIN_SPREAD = 1e-9
+"""Smallest ``(d_max - d_min) / (d_min + d0)`` (a ratio: the same at every length scale)."""
+
 
 class Change5Config(BaseModel):
     """Parameters of the Chang'e-5 size distribution."""
@@ -53,6 +56,15 @@ class Change5Config(BaseModel):
     def _check_range(self) -> Change5Config:
         if not self.d_max > self.d_min:
             raise ValueError(f"d_max ({self.d_max}) must be greater than d_min ({self.d_min})")
+        # the distribution is computed in x = (d + d0) / (d_min + d0) on [1, x_max]: a shift
+        # d0 so large against d_max - d_min that x_max rounds to 1 leaves nothing to compute
+        spread = (self.d_max - self.d_min) / (self.d_min + self.d0)
+        if not spread >= MIN_SPREAD:
+            raise ValueError(
+                f"d0 ({self.d0:g}) is {1 / spread if spread > 0 else math.inf:.3g} times "
+                f"d_max - d_min over d_min + d0; at most {1 / MIN_SPREAD:g} times, or the "
+                "distribution cannot be computed in 64-bit floats"
+            )
         return self
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack._toml import not_a_file
 from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import ShapeGenerator
@@ -476,15 +477,21 @@ def read_templates(path: str | Path) -> Template:
     if suffix not in (".csv", ".json"):
         hint = "; STL meshes are the 3D shape 'template-3d'" if suffix == ".stl" else ""
         raise TemplateError(f"{name}: unsupported template file type (use .csv or .json{hint})")
-    if not file.is_file():
-        what = "is a directory" if file.is_dir() else "no such template file"
+    what = not_a_file(file, "template")
+    if what is not None:
         where = "" if file.is_absolute() else f" (relative to the current directory {Path.cwd()})"
         raise TemplateError(f"{name}: {what}{where}")
     try:
         text = file.read_text(encoding="utf-8")
     except (OSError, UnicodeDecodeError) as err:
         raise TemplateError(f"{name}: cannot read the template file: {_one_line(err)}") from err
-    raw = _read_csv(name, text) if suffix == ".csv" else _read_json(name, text)
+    try:
+        raw = _read_csv(name, text) if suffix == ".csv" else _read_json(name, text)
+    except RecursionError:
+        raise TemplateError(
+            f"{name}: lists nested too deeply to read; a template file holds outlines of [x, y] "
+            "pairs"
+        ) from None
     if not raw:
         raise TemplateError(f"{name}: the template file holds no outlines")
     ids: list[str] = []

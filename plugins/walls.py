@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.errors import GeometryError
+from regopack.limits import LimitError
 
 FloatArray = NDArray[np.float64]
 
@@ -54,8 +55,12 @@ def wall_arrays(domain: Domain) -> tuple[int, FloatArray]:
     raise GeometryError(f"the built-in inserters do not support domains of kind {domain.kind!r}")
 
 
+class PeriodicSizeError(LimitError, GeometryError):
+    """A periodic domain too small for its particles; names the shorter side's field."""
+
+
 def check_periodic_size(domain: Domain, circumradius: FloatArray) -> None:
-    """Raise :class:`GeometryError` when a periodic domain is too small for its particles.
+    """Raise :class:`PeriodicSizeError` when a periodic domain is too small for its particles.
 
     Both periods must exceed four times the largest circumradius: two
     particles then overlap through one periodic image at most, and the
@@ -66,9 +71,12 @@ def check_periodic_size(domain: Domain, circumradius: FloatArray) -> None:
     need = 4.0 * float(circumradius.max())
     short = min(domain.width, domain.height)
     if not short > need:
-        raise GeometryError(
-            f"domain: a periodic domain must be wider and higher than 4 x the largest "
-            f"particle circumradius ({need:.6g}); its shorter side is {short:.6g}"
+        field = "domain.width" if domain.width <= domain.height else "domain.height"
+        raise PeriodicSizeError(
+            field,
+            short,
+            f"a periodic domain must be wider and higher than 4 x the largest particle "
+            f"circumradius ({need:.6g}); give a larger domain or smaller particles",
         )
 
 

@@ -65,6 +65,8 @@ FILES: dict[str, Callable[[Path], None]] = {
     "grid.toml": lambda p: p.write_text(
         'base = "small"\n[sweep]\nseed = "1..1000000000000"\n"density.eta" = [0, 1]\n'
     ),
+    "deep.toml": lambda p: p.write_text("x = " + "[" * 50_000 + "]" * 50_000 + "\n"),
+    "deep.json": lambda p: p.write_text("[" * 50_000 + "]" * 50_000),
     "packing.npz": lambda p: save(
         packing_from_polygons([SQUARE, [(x + 2, y) for x, y in SQUARE]], domain=(0, 4, 0, 2)),
         p,
@@ -188,8 +190,9 @@ CASES: list[tuple[str, list[str], str]] = [
     (
         "count-beyond-memory",
         ["run", "small", "--set", f"count={10**12}", "--quiet"],
-        "--set: count = 1000000000000: 1,000,000,000,000 particles need at least 232.8 TiB "
-        "of memory (256 bytes per particle); this machine's memory is 16.0 GiB",
+        "--set: count = 1000000000000: 1,000,000,000,000 particles (2D paper order runs: "
+        "about 3,200 bytes a particle) need about 2.8 PiB of memory; this machine's memory "
+        "is 16.0 GiB",
     ),
     # 5. huge domains with count = "auto"
     (
@@ -199,11 +202,112 @@ CASES: list[tuple[str, list[str], str]] = [
         "overflows 64-bit floats (inf); give a smaller domain",
     ),
     (
-        "auto-count-beyond-memory",
+        "domain-beyond-coordinates",
         ["run", "small", "--set", "domain.width=1e100", "--set", "domain.height=1e100"],
-        'small.toml: count = "auto": gives 2.59e+198 particles (domain area 1e+200 / mean '
-        "particle area 38.6039), which need at least 5.75e+182 EiB of memory (256 bytes per "
-        "particle); this machine's memory is 16.0 GiB",
+        "--set: domain.width = 1e+100: the domain's extent (1e+100) is 5e+99 times the "
+        "smallest particle diameter (2); at most 1e+08 times, or 64-bit coordinates do not "
+        "resolve the particles and the neighbour grids grow without bound; give a smaller "
+        "domain or larger particles",
+    ),
+    (
+        "count-beyond-measured-memory",
+        ["run", "small", "--set", "count=50000000", "--quiet"],
+        "--set: count = 50000000: 50,000,000 particles (2D paper order runs: about 3,200 "
+        "bytes a particle) need about 149.0 GiB of memory; this machine's memory is 16.0 GiB",
+    ),
+    (
+        "auto-count-beyond-measured-memory",
+        ["run", "small", "--set", "size.d_min=0.05", "--set", "size.d0=0", "--quiet"],
+        'small.toml: count = "auto": gives 13,466,127 particles (domain area 40000 / mean '
+        "particle area 0.00297042), which (2D paper order runs: about 3,200 bytes a particle) "
+        "need about 40.1 GiB of memory; this machine's memory is 16.0 GiB",
+    ),
+    (
+        "config-checks-as-run-does",
+        ["config", "small", "--set", "count=50000000"],
+        "--set: count = 50000000: 50,000,000 particles (2D paper order runs: about 3,200 "
+        "bytes a particle) need about 149.0 GiB of memory; this machine's memory is 16.0 GiB",
+    ),
+    # 5b. a box far deeper than its particles (once a grid of no finite size: a segfault)
+    (
+        "box-beyond-coordinates",
+        [
+            "run",
+            "table1-3d",
+            "--set",
+            "domain.depth=1e300",
+            "--set",
+            "count=30",
+            "--set",
+            'size={kind="uniform", d_min=2, d_max=4}',
+            "--quiet",
+        ],
+        "--set: domain.depth = 1e+300: the domain's extent (1e+300) is 5e+299 times the "
+        "smallest particle diameter (2); at most 1e+08 times, or 64-bit coordinates do not "
+        "resolve the particles and the neighbour grids grow without bound; give a smaller "
+        "domain or larger particles",
+    ),
+    # 5c. sizes that imply work beyond any bound
+    (
+        "zone-beyond-bins",
+        [
+            "run",
+            "small",
+            "--set",
+            "count=5",
+            "--set",
+            "insertion.order=sweep",
+            "--set",
+            "insertion.zone=1e300",
+            "--quiet",
+        ],
+        "--set: insertion.zone = 1e+300: gives 4e+299 bins of the sweep's zone; at most "
+        "1,048,576; a zone of at most 13,107 times the domain's height (200)",
+    ),
+    (
+        "shift-beyond-floats",
+        ["config", "small", "--set", "size.d0=1e300"],
+        "--set: size: d0 (1e+300) is 2.63e+298 times d_max - d_min over d_min + d0; at most "
+        "1e+09 times, or the distribution cannot be computed in 64-bit floats",
+    ),
+    (
+        "polygon-area-overflows",
+        [
+            "config",
+            "small",
+            "--set",
+            'domain={kind="polygon", vertices=[[0, 0], [1e200, 0], [0, 1e200]]}',
+        ],
+        "--set: domain: vertices: the corners are so far apart that the polygon's area "
+        "overflows 64-bit floats; give smaller coordinates",
+    ),
+    (
+        "periodic-too-small-names-set",
+        [
+            "run",
+            "small",
+            "--set",
+            "count=5",
+            "--set",
+            'domain.kind="periodic"',
+            "--set",
+            "domain.width=10",
+            "--quiet",
+        ],
+        "--set: domain.width = 10.0: a periodic domain must be wider and higher than 4 x the "
+        "largest particle circumradius (36.7839); give a larger domain or smaller particles",
+    ),
+    (
+        "scene-nested-too-deep",
+        ["config", "deep.toml"],
+        "deep.toml: arrays or tables nested too deeply to read (more than Python's recursion "
+        "limit); a scene nests a few levels",
+    ),
+    (
+        "template-nested-too-deep",
+        ["config", "small", "--set", 'phases.0.shape={kind="template", path="deep.json"}'],
+        "--set: phases.0.shape: deep.json: lists nested too deeply to read; a template file "
+        "holds outlines of [x, y] pairs",
     ),
     # 6. sizes whose area (and vertices) overflow
     (
@@ -313,3 +417,45 @@ def test_verify_refuses_a_bad_tolerance(rel_tol: float) -> None:
     packing = packing_from_polygons([SQUARE], (0, 4, 0, 2))
     with pytest.raises(Exception, match=r"^rel_tol = .*: must be a finite number >= 0$"):
         verify(packing, rel_tol=rel_tol)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+@pytest.mark.parametrize(
+    ("argv", "expected"),
+    [
+        (["config", "pipe.toml"], "pipe.toml: is a named pipe (FIFO), not a scene file"),
+        (
+            ["config", "small", "--set", 'phases.0.shape={kind="template", path="pipe.json"}'],
+            "--set: phases.0.shape: pipe.json: is a named pipe (FIFO), not a template file",
+        ),
+    ],
+    ids=["scene", "template"],
+)
+def test_a_named_pipe_is_refused_without_waiting(
+    workdir: Path, capsys: pytest.CaptureFixture[str], argv: list[str], expected: str
+) -> None:
+    os.mkfifo(workdir / "pipe.toml")
+    os.mkfifo(workdir / "pipe.json")
+    assert main(argv) == 2
+    assert one_line(capsys).startswith(expected)
+
+
+def test_a_domain_that_holds_no_particle_warns(
+    workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    argv = ["run", "small", "--set", 'domain={kind="circle", radius=1}', "--set", "size.d_min=2"]
+    assert main([*argv, "--out", "out", "--quiet"]) == 0
+    assert one_line(capsys, "regopack: warning: ").startswith(
+        "no particle was placed: the scene gives no particle to draw"
+    )
+
+
+def test_a_template_warning_is_one_clean_line(
+    workdir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (workdir / "l.json").write_text("[[[0, 0], [2, 0], [2, 2], [1, 0.5], [0, 2]]]")
+    shape = 'phases.0.shape={kind="template", path="l.json"}'
+    assert main(["config", "small", "--set", shape]) == 0
+    assert one_line(capsys, "regopack: warning: ") == (
+        "l.json: 1 of 1 template outlines were not convex; their convex hulls are used"
+    )

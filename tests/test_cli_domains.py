@@ -73,8 +73,8 @@ def test_run_verify_analyze_export(tmp_path, capsys, monkeypatch, domain):
         ),
         (
             '[domain]\nkind = "periodic"\nwidth = 40.0\nheight = 40.0',
-            "regopack: error: domain: a periodic domain must be wider and higher than 4 x the "
-            "largest particle circumradius",
+            "regopack: error: scene.toml: domain.width = 40.0: a periodic domain must be wider "
+            "and higher than 4 x the largest particle circumradius",
         ),
     ],
     ids=["foreign-field", "missing-radius", "not-convex", "negative-radius", "periodic-too-small"],

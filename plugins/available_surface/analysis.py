@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.limits import derived_count
 from regopack.plugins.available_surface.envelope import minkowski_envelope
 from regopack.plugins.available_surface.free_surface import (
     Interferers,
@@ -147,11 +148,37 @@ def arcs_for(solids: Solids) -> Arcs:
     )
 
 
+MAX_GRID_CELLS = 1 << 24
+"""Cells a neighbour grid may have whatever the particle count (128 MiB of lists)."""
+GRID_CELLS_PER_PARTICLE = 8
+"""Cells a neighbour grid may have per particle beyond :data:`MAX_GRID_CELLS`."""
+
+
 def grid_for(lo: FloatArray, hi: FloatArray, cell: float, n: int) -> Grid:
-    """Return an empty grid of cells of side ``cell`` over the box ``[lo, hi]``."""
-    first = np.floor(np.asarray(lo) / cell).astype(np.int64)
-    dims = np.floor(np.asarray(hi) / cell).astype(np.int64) - first + 1
-    cells = int(np.prod(dims))
+    """Return an empty grid of cells of side ``cell`` over the box ``[lo, hi]``.
+
+    Raises
+    ------
+    regopack.limits.LimitError
+        When the box holds more than ``max(MAX_GRID_CELLS,
+        GRID_CELLS_PER_PARTICLE * n)`` cells (or no finite number of them).
+    """
+    lo_cells = np.floor(np.asarray(lo, dtype=np.float64) / cell)
+    hi_cells = np.floor(np.asarray(hi, dtype=np.float64) / cell)
+    spans = hi_cells - lo_cells + 1.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(np.prod(spans))
+    if not np.all(np.isfinite(lo_cells) & np.isfinite(hi_cells)):
+        total = math.inf
+    cells = derived_count(
+        total,
+        "cells of the neighbour grid (box sides / twice the largest circumradius)",
+        max(MAX_GRID_CELLS, GRID_CELLS_PER_PARTICLE * n),
+        field="domain",
+        hint="give a box nearer the particles' size or more particles",
+    )
+    first = lo_cells.astype(np.int64)
+    dims = spans.astype(np.int64)
     return Grid(
         origin=first,
         cell=np.array([cell]),

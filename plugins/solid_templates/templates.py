@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from regopack._toml import not_a_file
 from regopack.plugins.shapes import TemplateError
 from regopack.plugins.solid_templates.hull import ConvexSolid, normalised_hull
 from regopack.plugins.solid_templates.stl import read_stl
@@ -61,6 +62,8 @@ def template_files(path: str) -> list[Path]:
         files = sorted(f for f in given.iterdir() if f.suffix.lower() == SUFFIX and f.is_file())
         if not files:
             raise TemplateError(f"{path}: the folder holds no .stl file{_relative_note(given)}")
+    elif given.exists():  # a named pipe, a device or a socket: never opened
+        raise TemplateError(f"{path}: {not_a_file(given, 'STL')}")
     elif any(c in path for c in "*?["):  # a glob pattern
         files = sorted(
             Path(f) for f in glob.glob(path) if f.lower().endswith(SUFFIX) and os.path.isfile(f)
