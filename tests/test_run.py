@@ -11,6 +11,7 @@ from fakes import RegularPolygon, ShapeConfig, SizeConfig, UniformDiameter
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.errors import ConfigError, PluginError
 from regopack.hookspecs import hookimpl
+from regopack.outdir import mark_folder
 from regopack.packing import load
 from regopack.plugin_types import ShapeSpec
 from regopack.population import ShapeBatch
@@ -285,8 +286,11 @@ def test_leftovers_of_a_killed_run_are_removed_by_the_next_run(registry, tmp_pat
     for name in ("out.tmp-abcd_123", "out.old-0123abcd", "out.tmp-keep", "other.tmp-abcd1234"):
         (tmp_path / name).mkdir()
     (tmp_path / "out.tmp-abcd_123" / "packing.npz").write_bytes(b"half a packing")
+    mark_folder(tmp_path / "out.tmp-abcd_123", "run")  # as a run marks it when it starts
+    (tmp_path / "out.old-users001").mkdir()  # the user's, with files: kept
+    (tmp_path / "out.old-users001" / "notes.txt").write_text("mine")
     run_scene(resolved(registry, "count=20"), tmp_path / "out")
-    assert listing(tmp_path) == ["other.tmp-abcd1234", "out", "out.tmp-keep"]
+    assert listing(tmp_path) == ["other.tmp-abcd1234", "out", "out.old-users001", "out.tmp-keep"]
 
 
 def test_a_folder_that_holds_no_run_is_refused_and_kept(registry, tmp_path):
