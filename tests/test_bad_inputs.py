@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import regopack.analysis
+import regopack.experiment_file
 import regopack.run
 from regopack.cli import main
 from regopack.errors import PackingError
@@ -65,6 +66,12 @@ FILES: dict[str, Callable[[Path], None]] = {
     "grid.toml": lambda p: p.write_text(
         'base = "small"\n[sweep]\nseed = "1..1000000000000"\n"density.eta" = [0, 1]\n'
     ),
+    "huge-max-runs.toml": lambda p: p.write_text(
+        'base = "small"\nmax_runs = 100000000000000000\n[sweep]\nseed = "1..100000000"\n'
+    ),
+    "grid-memory.toml": lambda p: p.write_text(
+        'base = "small"\nmax_runs = 1000000\n[sweep]\nseed = "1..500000"\n'
+    ),
     "deep.toml": lambda p: p.write_text("x = " + "[" * 50_000 + "]" * 50_000 + "\n"),
     "deep.json": lambda p: p.write_text("[" * 50_000 + "]" * 50_000),
     "packing.npz": lambda p: save(
@@ -80,6 +87,9 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """Run in a temporary directory holding the input files, on a machine with 16 GiB."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(regopack.run, "memory_limit", lambda: (16 * GIB, "memory"), raising=False)
+    monkeypatch.setattr(
+        regopack.experiment_file, "memory_limit", lambda: (16 * GIB, "memory"), raising=False
+    )
     for name, write in FILES.items():
         write(tmp_path / name)
     return tmp_path
@@ -330,6 +340,20 @@ CASES: list[tuple[str, list[str], str]] = [
         "grid.toml: the sweep expands to 2,000,000,000,000 runs (sweep.seed has "
         "1,000,000,000,000, sweep.density.eta has 2), more than max_runs = 10,000; set "
         "max_runs in the experiment file to allow more",
+    ),
+    (
+        "max-runs-beyond-bound",
+        ["sweep", "huge-max-runs.toml", "--out", "sweep"],
+        "huge-max-runs.toml: max_runs = 1e+17: at most 1,000,000 runs (every run's scene is "
+        "checked and held before the first run starts); split the sweep into several "
+        "experiments",
+    ),
+    (
+        "sweep-grid-beyond-memory",
+        ["sweep", "grid-memory.toml", "--out", "sweep"],
+        "grid-memory.toml: the sweep expands to 500,000 runs, whose scenes (about 64,000 bytes "
+        "a run, checked before the first run starts) need about 29.8 GiB of memory; this "
+        "machine's memory is 16.0 GiB; split the sweep into several experiments",
     ),
 ]
 
