@@ -609,7 +609,8 @@ def _run(
     analyzers: dict[str, Analyzer] = {}
     if resolved.analyses:
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
-        analyzers = run_analyses(packing, resolved.registry, requests)
+        origin = resolved.scene.origin("outputs.analyses")
+        analyzers = run_analyses(packing, resolved.registry, requests, source=origin)
         summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
     summary["compile_time_s"] = compiling.seconds
     if summary_extras is not None:

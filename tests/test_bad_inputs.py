@@ -319,6 +319,37 @@ CASES: list[tuple[str, list[str], str]] = [
         "--set: phases.0.shape: deep.json: lists nested too deeply to read; a template file "
         "holds outlines of [x, y] pairs",
     ),
+    # 5d. analyzer settings that imply bins or rings beyond any bound
+    (
+        "rdf-bins-from-set",
+        ["analyze", "packing.npz", "--only", "rdf", "--set", "rdf.near_bin=1e-9", "--out", "a"],
+        "--set: rdf.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at most 65,536; "
+        "give a bin width of at least 0.000152588 (the range / 65,536) or a shorter range",
+    ),
+    (
+        "rdf-bins-in-scene",
+        ["config", "small", "--set", 'outputs.analyses=[{kind="rdf", near_bin=1e-9}]'],
+        "--set: outputs.analyses.0.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at "
+        "most 65,536; give a bin width of at least 0.000152588 (the range / 65,536) or a "
+        "shorter range",
+    ),
+    (
+        "homogeneity-rings-from-set",
+        [
+            "analyze",
+            "packing.npz",
+            "--only",
+            "homogeneity",
+            "--set",
+            "homogeneity.ring_width=1e-9",
+            "--set",
+            "homogeneity.margin=0",
+            "--out",
+            "a",
+        ],
+        "--set: homogeneity.ring_width = 1e-09: gives 2.24e+09 rings; at most 1,000; give a "
+        "ring width of at least 0.00223607 or set rings",
+    ),
     # 6. sizes whose area (and vertices) overflow
     (
         "sizes-overflow",
