@@ -357,6 +357,29 @@ CASES: list[tuple[str, list[str], str]] = [
         "uniform.toml: size: the largest particle (diameter 2e+300) has an area of inf: its "
         "size overflows 64-bit floats; give smaller sizes",
     ),
+    (
+        "sizes-underflow",
+        [
+            "run",
+            "small",
+            "--set",
+            'size={kind="uniform", d_min=2e-200, d_max=4e-200}',
+            "--set",
+            "domain.width=1e-198",
+            "--set",
+            "domain.height=1e-198",
+            "--set",
+            "count=5",
+        ],
+        "--set: size: the smallest particle (diameter 2e-200) has an area of 0: its size "
+        "underflows 64-bit floats; give larger sizes",
+    ),
+    (
+        "tiny-sizes-config",
+        ["config", "small", "--set", "size.d_min=1e-300", "--set", "size.d_max=2e-300"],
+        "--set: size: d0 (16) is 1.6e+301 times d_max - d_min over d_min + d0; at most 1e+09 "
+        "times, or the distribution cannot be computed in 64-bit floats",
+    ),
     # 7. no particle fits the domain
     (
         "particles-larger-than-domain",
