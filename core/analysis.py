@@ -40,6 +40,7 @@ from pydantic import ValidationError
 
 from regopack.errors import ConfigError, PluginError
 from regopack.interfaces import Analyzer
+from regopack.limits import LimitError
 from regopack.manager import Registry
 from regopack.outdir import mark_folder, rebase, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
@@ -112,9 +113,16 @@ def _known(registry: Registry) -> str:
 
 
 def _build(
-    registry: Registry, name: str, params: Mapping[str, Any], needed_by: str | None
+    registry: Registry,
+    name: str,
+    params: Mapping[str, Any],
+    needed_by: str | None,
+    params_source: str | None = None,
 ) -> Analyzer:
-    """Validate ``params`` with the analyzer's config model and build it."""
+    """Validate ``params`` with the analyzer's config model and build it.
+
+    ``params_source`` (e.g. ``--set``) starts the message refusing a parameter.
+    """
     from regopack.scene_model import _describe_validation_error
 
     if ("analysis", name) not in registry:
@@ -129,7 +137,9 @@ def _build(
         config = spec.config_model.model_validate(dict(params))
     except ValidationError as err:
         raise ConfigError(
-            _describe_validation_error(err, source=None, prefix=(name,), model=spec.config_model)
+            _describe_validation_error(
+                err, source=params_source, prefix=(name,), model=spec.config_model
+            )
         ) from err
     analyzer = spec.factory(config)
     if not isinstance(analyzer, Analyzer):
@@ -180,6 +190,7 @@ def _plan(
     params: Mapping[str, Mapping[str, Any]],
     dimension: int = 2,
     source: str | None = None,
+    params_source: str | None = None,
 ) -> dict[str, Analyzer]:
     """Build every analyzer to run, requirements before the analyzers needing them."""
     wanted: dict[str, dict[str, Any]] = {}
@@ -200,7 +211,7 @@ def _plan(
             raise PluginError(f"analyzers require each other in a cycle: {cycle}")
         merged = {**wanted.get(name, {}), **params.get(name, {})}
         check_dimension(registry, [name], dimension, source)
-        analyzer = _build(registry, name, merged, chain[-1] if chain else None)
+        analyzer = _build(registry, name, merged, chain[-1] if chain else None, params_source)
         for requirement in analyzer.requires:
             visit(requirement, (*chain, name))
         planned[name] = analyzer
@@ -223,6 +234,7 @@ def run_analyses(
     *,
     params: Mapping[str, Mapping[str, Any]] | None = None,
     source: str | None = None,
+    params_source: str | None = None,
 ) -> dict[str, Analyzer]:
     """Compute the requested analyzers and those they require, requirements first.
 
@@ -245,6 +257,9 @@ def run_analyses(
     source
         Where the requests come from (a scene file and key, an option); it
         starts the message that refuses an analyzer of another dimension.
+    params_source
+        Where ``params`` come from (e.g. ``--set``); it starts the message
+        that refuses a parameter.
 
     Returns
     -------
@@ -257,8 +272,10 @@ def run_analyses(
     ConfigError
         One line: an unknown analyzer (listing the known ones), an analyzer
         of another dimension than the packing's (listing those that fit), a bad parameter
-        (naming the field, e.g. ``contacts.tol = -1: ...``), or parameters
-        for an analyzer that is not run. Every analyzer is validated before
+        (naming the field, e.g. ``contacts.tol = -1: ...``), parameters
+        for an analyzer that is not run, or a parameter that implies more work
+        on this packing than allowed (a :class:`~regopack.limits.LimitError`,
+        prefixed with ``params_source`` or ``source``). Every analyzer is validated before
         any is computed.
     PluginError
         Analyzers that require each other in a cycle, or an unregistered
@@ -278,11 +295,16 @@ def run_analyses(
     """
     packing.validate()  # the arrays may have changed in place since the packing was built
     dimension = int(getattr(packing, "dimension", 2))
-    planned = _plan(registry, requests, params or {}, dimension, source)
+    planned = _plan(registry, requests, params or {}, dimension, source, params_source)
     done: dict[str, Analyzer] = {}
     for name, analyzer in planned.items():
         context = {req: done[req] for req in analyzer.requires}
-        result = analyzer.compute(packing, context)  # type: ignore[arg-type]
+        try:
+            result = analyzer.compute(packing, context)  # type: ignore[arg-type]
+        except LimitError as err:  # a size a parameter implies on this packing
+            field = err.field.removeprefix(f"{name}.")
+            given = params_source if field in (params or {}).get(name, {}) else source
+            raise ConfigError(err.located(given)) from err
         if not isinstance(result, Analyzer):
             raise PluginError(
                 f"analyzer {name!r}: compute() returned {type(result).__name__}, not the analyzer"

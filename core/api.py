@@ -435,6 +435,7 @@ def analyze(
     tables: TableFormat = "csv",
     registry: Registry | None = None,
     params: Mapping[str, Any] | None = None,
+    params_source: str | None = None,
     **kwargs: Any,
 ) -> AnalysisResults:
     """Analyse a packing, as ``regopack analyze`` does.
@@ -459,6 +460,9 @@ def analyze(
         Parameters by analyzer: ``contacts={"tol": 0.1}`` or ``contacts__tol=0.1``
         (keywords win over ``params``). Parameters for an analyzer that does
         not run are refused.
+    params_source
+        Where ``params`` come from (``regopack analyze`` gives ``--set``); it
+        starts the message that refuses a parameter.
 
     Returns
     -------
@@ -515,7 +519,14 @@ def analyze(
     for name, fields in analysis_params(kwargs).items():
         merged.setdefault(name, {}).update(fields)
     source = None if isinstance(packing, Packing | Packing3D) else str(packing)
-    analyzers = run_analyses(loaded, reg, [(n, {}) for n in names], params=merged, source=source)
+    analyzers = run_analyses(
+        loaded,
+        reg,
+        [(n, {}) for n in names],
+        params=merged,
+        source=source,
+        params_source=params_source,
+    )
     results = AnalysisResults(analyzers)
     if folder is not None:
         packing_path = None if isinstance(packing, Packing | Packing3D) else Path(packing)

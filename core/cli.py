@@ -449,6 +449,7 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
             figures=not args.no_figures,
             tables=args.tables,
             params=params,
+            params_source="--set",
         )
     files = results.files
     assert files is not None  # written, since out is given

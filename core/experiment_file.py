@@ -27,9 +27,17 @@ from pydantic import (
 
 from regopack import _toml
 from regopack.errors import ConfigError
+from regopack.limits import format_bytes, memory_limit
 from regopack.scene_model import builtin_scenes
 
-__all__ = ["MAX_RUNS", "Experiment", "experiment_from_dict", "load_experiment"]
+__all__ = [
+    "MAX_RUNS",
+    "MAX_RUNS_BOUND",
+    "RUN_BYTES",
+    "Experiment",
+    "experiment_from_dict",
+    "load_experiment",
+]
 
 MAX_RUNS = 10_000
 """Default of an experiment's ``max_runs``: the largest number of runs a sweep may expand to.
@@ -37,6 +45,23 @@ MAX_RUNS = 10_000
 A grid with more runs is refused before it is expanded (a typo such as
 ``seed = "1..1000000"`` would otherwise list and validate a million scenes);
 set ``max_runs`` in the experiment file to allow more.
+"""
+
+MAX_RUNS_BOUND = 1_000_000
+"""Largest ``max_runs`` an experiment may set: the most runs any sweep may expand to.
+
+Every run's scene is checked and held before the first run starts (about
+12 ms and 41 kB a run for ``small``), so a million runs already take hours
+and tens of gigabytes before any packing; a larger ``max_runs`` (e.g.
+``10**17``) is refused in one line instead of letting a typo in a range
+expand without bound.
+"""
+
+RUN_BYTES = 64_000
+"""Memory the checked scene of one run of a sweep holds, in bytes (measured 41 kB, rounded up).
+
+A grid whose runs times this exceeds :func:`regopack.limits.memory_limit` is
+refused before any range is listed.
 """
 
 _RANGE = re.compile(r"^\s*(-?\d+)\s*\.\.\s*(-?\d+)\s*(?:\.\.\s*(\d+)\s*)?$")
@@ -158,8 +183,8 @@ class Experiment(BaseModel):
         MAX_RUNS,
         ge=1,
         description=(
-            f"Largest number of runs the grid may expand to (default {MAX_RUNS:,}); a larger "
-            "grid is refused before it is expanded."
+            f"Largest number of runs the grid may expand to (default {MAX_RUNS:,}, at most "
+            f"{MAX_RUNS_BOUND:,}); a larger grid is refused before it is expanded."
         ),
     )
     voids: bool = Field(
@@ -257,6 +282,13 @@ def _check_grid_size(data: Any) -> None:
     limit = data.get("max_runs", MAX_RUNS)
     if not isinstance(limit, int) or isinstance(limit, bool) or limit < 1:
         return  # the field's own validation reports it
+    if limit > MAX_RUNS_BOUND:
+        shown_limit = f"{limit}" if limit < 10**15 else f"{limit:.3g}"
+        raise ValueError(
+            f"max_runs = {shown_limit}: at most {MAX_RUNS_BOUND:,} runs (every run's scene "
+            "is checked and held before the first run starts); split the sweep into "
+            "several experiments"
+        )
     axes: list[tuple[str, int]] = []
     sweep = data.get("sweep")
     if isinstance(sweep, Mapping):
@@ -274,6 +306,14 @@ def _check_grid_size(data: Any) -> None:
         raise ValueError(
             f"the sweep expands to {total:,} runs ({shown}), more than max_runs = {limit:,}; "
             "set max_runs in the experiment file to allow more"
+        )
+    limit_memory = memory_limit()
+    if limit_memory is not None and total * RUN_BYTES > limit_memory[0]:
+        raise ValueError(
+            f"the sweep expands to {total:,} runs, whose scenes (about {RUN_BYTES:,} bytes a "
+            f"run, checked before the first run starts) need about "
+            f"{format_bytes(total * RUN_BYTES)} of memory; this machine's {limit_memory[1]} is "
+            f"{format_bytes(limit_memory[0])}; split the sweep into several experiments"
         )
 
 

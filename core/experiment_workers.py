@@ -26,6 +26,7 @@ import numpy as np
 from regopack.errors import ConfigError, RegopackError
 from regopack.experiment_grid import SCENE_JSON
 from regopack.manager import default_registry
+from regopack.messages import install_hint
 from regopack.packing import Packing
 from regopack.run import run_scene
 from regopack.scene_model import load_scene, resolve_scene
@@ -231,7 +232,7 @@ def _dask(scheduler: str) -> Any:
     except ImportError as err:
         raise ConfigError(
             f"--scheduler {scheduler}: Dask is not installed; "
-            "install it with: pip install 'regopack[dask]'"
+            f"install it with: {install_hint('dask')}"
         ) from err
     return distributed
 

@@ -25,11 +25,14 @@ from pathlib import Path
 from regopack.errors import ConfigError
 
 __all__ = [
+    "BIN_BYTES",
     "MAX_EXTENT_RATIO",
+    "MAX_HISTOGRAM_BINS",
     "LimitError",
     "check_memory",
     "derived_count",
     "format_bytes",
+    "histogram_bins",
     "memory_limit",
 ]
 
@@ -39,6 +42,25 @@ MAX_EXTENT_RATIO = 1e8
 Beyond it, 64-bit coordinates across the domain no longer resolve the
 smallest particle finely (their spacing grows to ``1e-8`` of its diameter),
 and a neighbour grid or a sweep's bins over that axis grow without bound.
+"""
+
+
+MAX_HISTOGRAM_BINS = 1 << 16
+"""Most bins an analyzer's histogram may have over its range (range / bin width).
+
+Six hundred times the defaults' hundred-odd bins: finer than any curve a
+packing of a million particles fills, and small enough that the curves of
+every pair of minerals, and a polygon window's covariogram at every bin,
+stay cheap. A bin width of ``1e-9`` over ``r`` in ``[0, 10]`` asked for
+``10**10`` bins (74 GiB).
+"""
+
+
+BIN_BYTES = 64
+"""Memory a histogram needs per bin and per pair of kinds (minerals), in bytes.
+
+The pair counts, their edge-corrected and normalised curves, the merged and
+the fine curve of every pair: about six 8-byte values, rounded up.
 """
 
 
@@ -207,3 +229,49 @@ def check_memory(
         f"{what} need about {need} of memory; this machine's {limit[1]} is "
         f"{format_bytes(limit[0])}",
     )
+
+
+def histogram_bins(lo: float, hi: float, width: float, *, field: str, range_name: str) -> int:
+    """Return the number of bins of ``width`` over ``[lo, hi)``, or refuse it.
+
+    The count is ``(hi - lo) / width``, a ratio of lengths, bounded by
+    :data:`MAX_HISTOGRAM_BINS`; a ``width`` wider than the range gives one bin.
+
+    Parameters
+    ----------
+    lo, hi
+        The range of the histogram.
+    width
+        The bin width.
+    field, range_name
+        The field holding ``width`` and the one holding the range (for the message).
+
+    Raises
+    ------
+    LimitError
+        When the width is not a finite positive number or gives more bins than allowed.
+
+    Examples
+    --------
+    >>> histogram_bins(0.0, 10.0, 0.1, field="near_bin", range_name="near")
+    100
+    >>> histogram_bins(0.0, 10.0, 1e-9, field="near_bin", range_name="near")
+    Traceback (most recent call last):
+    ...
+    regopack.limits.LimitError: near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at most 65,536; give a bin width of at least 0.000152588 (the range / 65,536) or a shorter range
+    """  # noqa: E501
+    if not (math.isfinite(width) and width > 0):
+        raise LimitError(field, width, "must be a finite number > 0")
+    span = hi - lo
+    with_range = f"bins over {range_name} = [{lo:g}, {hi:g}]"
+    least = span / MAX_HISTOGRAM_BINS
+    hint = (
+        f"give a bin width of at least {least:.6g} (the range / {MAX_HISTOGRAM_BINS:,}) "
+        "or a shorter range"
+        if math.isfinite(least)
+        else "give a finite range"
+    )
+    count = derived_count(
+        span / width, with_range, MAX_HISTOGRAM_BINS, field=field, given=width, hint=hint
+    )
+    return max(1, count)

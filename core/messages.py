@@ -21,7 +21,42 @@ from pydantic import BaseModel, ValidationError
 
 from regopack import _toml
 
-__all__ = ["closest", "describe_validation_error", "dotted", "fields_at", "format_value", "where"]
+__all__ = [
+    "closest",
+    "describe_validation_error",
+    "dotted",
+    "fields_at",
+    "format_value",
+    "install_hint",
+    "where",
+]
+
+
+def install_hint(extra: str) -> str:
+    """How to install the optional dependencies of regopack's ``extra``, from a clone too.
+
+    An extra named as ``regopack[gsd]`` installs only from a package index
+    that holds regopack, so a copy installed from its source folder cannot
+    use it. The hint names the
+    extra's own requirements (from regopack's installed metadata, so it
+    follows ``pyproject.toml``), which install anywhere, and the extra as it
+    installs from the source folder.
+
+    Examples
+    --------
+    >>> install_hint("gsd")
+    "pip install 'gsd>=3.0', or pip install '.[gsd]' in regopack's source folder"
+    """
+    from importlib import metadata
+
+    marker = f'extra == "{extra}"'
+    try:
+        requires = metadata.requires("regopack") or []
+    except metadata.PackageNotFoundError:
+        requires = []
+    wanted = [r.split(";")[0].strip() for r in requires if marker in r.replace("'", '"')]
+    packages = " ".join(f"'{r}'" for r in wanted) or extra
+    return f"pip install {packages}, or pip install '.[{extra}]' in regopack's source folder"
 
 
 def format_value(value: Any) -> str | None:

@@ -77,6 +77,15 @@ is refused before anything is allocated. :data:`PARTICLE_BYTES` holds the
 figure of each kind of run.
 """
 
+MIN_AREA = 1e-300
+"""Smallest area of a particle of a 2D scene (as :mod:`regopack.run3d` bounds a volume).
+
+Below it, squared lengths leave 64-bit floats' normal range: they lose their
+precision, then become zero (a scene written with ``d_min = 2e-200`` once
+sized its neighbour grid by a cell of zero and overflowed). Like the largest
+area's overflow, this is where floats end, not a length chosen for particles.
+"""
+
 PARTICLE_BYTES: dict[str, int] = {
     "2D paper order": BYTES_PER_PARTICLE,
     "2D sweep": 1_200,
@@ -320,12 +329,13 @@ def check_scene(scene: ResolvedScene) -> int:
     """Check that ``scene`` can be drawn and packed at all; return its particle count.
 
     Refused, before anything is drawn: particles whose area overflows 64-bit
-    floats; particles larger than the domain (the smallest particle's area
-    exceeds the domain's, so none can be placed); and a particle count (given,
-    or from ``count = "auto"``) whose memory (:func:`particle_bytes` per
-    particle) exceeds :func:`memory_limit`; a domain more than
-    :data:`~regopack.limits.MAX_EXTENT_RATIO` smallest diameters long; a
-    shape generator that cannot draw a particle (:func:`check_shapes`); and
+    floats, or whose smallest area is below :data:`MIN_AREA`; particles larger
+    than the domain (the smallest particle's area exceeds the domain's, so none
+    can be placed); and a particle count (given, or from ``count = "auto"``)
+    whose memory (:func:`particle_bytes` per particle) exceeds
+    :func:`memory_limit`; a domain more than
+    :data:`~regopack.limits.MAX_EXTENT_RATIO` smallest diameters long; a shape
+    generator that cannot draw a particle (:func:`check_shapes`); and
     what the inserter says it cannot pack (:func:`check_inserter`).
 
     Raises
@@ -344,6 +354,15 @@ def check_scene(scene: ResolvedScene) -> int:
                 "size",
                 f"the largest particle (diameter {2 * r_max:g}) has an area of {area_max:g}: "
                 "its size overflows 64-bit floats; give smaller sizes",
+            )
+        )
+    if not area_min >= MIN_AREA:
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the smallest particle (diameter {2 * r_min:g}) has an area of {area_min:g}: "
+                "its size underflows 64-bit floats; give larger sizes",
             )
         )
     domain_area = scene.domain.area
@@ -609,7 +628,8 @@ def _run(
     analyzers: dict[str, Analyzer] = {}
     if resolved.analyses:
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
-        analyzers = run_analyses(packing, resolved.registry, requests)
+        origin = resolved.scene.origin("outputs.analyses")
+        analyzers = run_analyses(packing, resolved.registry, requests, source=origin)
         summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
     summary["compile_time_s"] = compiling.seconds
     if summary_extras is not None:

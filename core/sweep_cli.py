@@ -82,7 +82,7 @@ def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
     sweep.add_argument(
         "--scheduler",
         metavar="ADDR",
-        help="run on a Dask cluster, e.g. tcp://host:8786 (needs regopack[dask])",
+        help="run on a Dask cluster, e.g. tcp://host:8786 (needs Dask: pip install distributed)",
     )
     sweep.add_argument("--quiet", action="store_true", help="print no progress and no table")
     sweep.add_argument(

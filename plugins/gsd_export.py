@@ -22,7 +22,8 @@ vertex ``(0, 0)`` rounded by its radius) integrators.
 - **Mass** = area x ``density``; ``moment_inertia`` = ``[0, 0, Izz]`` about
   the centroid (:func:`shape_moments`).
 
-``gsd`` is an optional dependency (``pip install regopack[gsd]``).
+``gsd`` is an optional dependency (``pip install gsd``, or ``pip install '.[gsd]'``
+in regopack's source folder).
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from regopack.domain import PeriodicRectangle
 from regopack.errors import ExportError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import Analyzer, Exporter
+from regopack.messages import install_hint
 from regopack.packing import Packing, _remove_stale_temporaries
 from regopack.plugin_types import ExporterSpec
 from regopack.plugins.rounded_bodies import rounded_moments
@@ -63,7 +65,7 @@ distance from its reference point are one vertex; a vertex whose two edges
 turn by less than this (the sine of the angle) is collinear.
 """
 
-INSTALL_HINT = "the gsd export needs the gsd package: pip install regopack[gsd]"
+INSTALL_HINT = f"the gsd export needs the gsd package: {install_hint('gsd')}"
 """Message of the error raised when ``gsd`` is not installed."""
 
 

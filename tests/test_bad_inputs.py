@@ -20,6 +20,7 @@ import numpy as np
 import pytest
 
 import regopack.analysis
+import regopack.experiment_file
 import regopack.run
 from regopack.cli import main
 from regopack.errors import PackingError
@@ -65,6 +66,12 @@ FILES: dict[str, Callable[[Path], None]] = {
     "grid.toml": lambda p: p.write_text(
         'base = "small"\n[sweep]\nseed = "1..1000000000000"\n"density.eta" = [0, 1]\n'
     ),
+    "huge-max-runs.toml": lambda p: p.write_text(
+        'base = "small"\nmax_runs = 100000000000000000\n[sweep]\nseed = "1..100000000"\n'
+    ),
+    "grid-memory.toml": lambda p: p.write_text(
+        'base = "small"\nmax_runs = 1000000\n[sweep]\nseed = "1..500000"\n'
+    ),
     "deep.toml": lambda p: p.write_text("x = " + "[" * 50_000 + "]" * 50_000 + "\n"),
     "deep.json": lambda p: p.write_text("[" * 50_000 + "]" * 50_000),
     "packing.npz": lambda p: save(
@@ -80,6 +87,9 @@ def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """Run in a temporary directory holding the input files, on a machine with 16 GiB."""
     monkeypatch.chdir(tmp_path)
     monkeypatch.setattr(regopack.run, "memory_limit", lambda: (16 * GIB, "memory"), raising=False)
+    monkeypatch.setattr(
+        regopack.experiment_file, "memory_limit", lambda: (16 * GIB, "memory"), raising=False
+    )
     for name, write in FILES.items():
         write(tmp_path / name)
     return tmp_path
@@ -309,12 +319,66 @@ CASES: list[tuple[str, list[str], str]] = [
         "--set: phases.0.shape: deep.json: lists nested too deeply to read; a template file "
         "holds outlines of [x, y] pairs",
     ),
+    # 5d. analyzer settings that imply bins or rings beyond any bound
+    (
+        "rdf-bins-from-set",
+        ["analyze", "packing.npz", "--only", "rdf", "--set", "rdf.near_bin=1e-9", "--out", "a"],
+        "--set: rdf.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at most 65,536; "
+        "give a bin width of at least 0.000152588 (the range / 65,536) or a shorter range",
+    ),
+    (
+        "rdf-bins-in-scene",
+        ["config", "small", "--set", 'outputs.analyses=[{kind="rdf", near_bin=1e-9}]'],
+        "--set: outputs.analyses.0.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at "
+        "most 65,536; give a bin width of at least 0.000152588 (the range / 65,536) or a "
+        "shorter range",
+    ),
+    (
+        "homogeneity-rings-from-set",
+        [
+            "analyze",
+            "packing.npz",
+            "--only",
+            "homogeneity",
+            "--set",
+            "homogeneity.ring_width=1e-9",
+            "--set",
+            "homogeneity.margin=0",
+            "--out",
+            "a",
+        ],
+        "--set: homogeneity.ring_width = 1e-09: gives 2.24e+09 rings; at most 1,000; give a "
+        "ring width of at least 0.00223607 or set rings",
+    ),
     # 6. sizes whose area (and vertices) overflow
     (
         "sizes-overflow",
         ["run", "uniform.toml"],
         "uniform.toml: size: the largest particle (diameter 2e+300) has an area of inf: its "
         "size overflows 64-bit floats; give smaller sizes",
+    ),
+    (
+        "sizes-underflow",
+        [
+            "run",
+            "small",
+            "--set",
+            'size={kind="uniform", d_min=2e-200, d_max=4e-200}',
+            "--set",
+            "domain.width=1e-198",
+            "--set",
+            "domain.height=1e-198",
+            "--set",
+            "count=5",
+        ],
+        "--set: size: the smallest particle (diameter 2e-200) has an area of 0: its size "
+        "underflows 64-bit floats; give larger sizes",
+    ),
+    (
+        "tiny-sizes-config",
+        ["config", "small", "--set", "size.d_min=1e-300", "--set", "size.d_max=2e-300"],
+        "--set: size: d0 (16) is 1.6e+301 times d_max - d_min over d_min + d0; at most 1e+09 "
+        "times, or the distribution cannot be computed in 64-bit floats",
     ),
     # 7. no particle fits the domain
     (
@@ -330,6 +394,20 @@ CASES: list[tuple[str, list[str], str]] = [
         "grid.toml: the sweep expands to 2,000,000,000,000 runs (sweep.seed has "
         "1,000,000,000,000, sweep.density.eta has 2), more than max_runs = 10,000; set "
         "max_runs in the experiment file to allow more",
+    ),
+    (
+        "max-runs-beyond-bound",
+        ["sweep", "huge-max-runs.toml", "--out", "sweep"],
+        "huge-max-runs.toml: max_runs = 1e+17: at most 1,000,000 runs (every run's scene is "
+        "checked and held before the first run starts); split the sweep into several "
+        "experiments",
+    ),
+    (
+        "sweep-grid-beyond-memory",
+        ["sweep", "grid-memory.toml", "--out", "sweep"],
+        "grid-memory.toml: the sweep expands to 500,000 runs, whose scenes (about 64,000 bytes "
+        "a run, checked before the first run starts) need about 29.8 GiB of memory; this "
+        "machine's memory is 16.0 GiB; split the sweep into several experiments",
     ),
 ]
 

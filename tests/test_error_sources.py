@@ -104,3 +104,29 @@ def test_a_set_in_the_same_table_is_not_blamed_for_the_file(tmp_path, capsys):
     assert main(["config", str(tmp_path / "bad.toml"), "--set", "size.alpha=6"]) == 2
     line = one_error_line(capsys)
     assert line.startswith(f"regopack: error: {tmp_path / 'bad.toml'}: size: ")
+
+
+@pytest.mark.parametrize("extra", ["gsd", "dask"])
+def test_install_hints_work_from_a_clone(extra):
+    """``pip install regopack[gsd]`` needs regopack on an index; a clone installs '.[gsd]'."""
+    from regopack.messages import install_hint
+
+    hint = install_hint(extra)
+    assert "regopack[" not in hint
+    assert hint.endswith(f"pip install '.[{extra}]' in regopack's source folder")
+    assert hint.startswith("pip install '") and ">=" in hint  # the extra's own requirement
+
+
+def test_no_message_names_an_extra_as_if_regopack_were_on_an_index():
+    from pathlib import Path
+
+    import regopack
+
+    root = Path(regopack.__file__).parent
+    offenders = [
+        str(path.relative_to(root))
+        for path in root.rglob("*.py")
+        if "install regopack[" in path.read_text(encoding="utf-8")
+        or "install 'regopack[" in path.read_text(encoding="utf-8")
+    ]
+    assert offenders == []

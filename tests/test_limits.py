@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from regopack.limits import LimitError, check_memory, derived_count
+from regopack.limits import LimitError, check_memory, derived_count, histogram_bins
 from regopack.plugins.available_surface.analysis import MAX_GRID_CELLS, grid_for
 
 
@@ -40,3 +40,15 @@ def test_a_grid_of_no_finite_size_never_reaches_a_kernel() -> None:
 def test_bounds_are_ratios_of_lengths(scale: float) -> None:
     lo, hi = np.full(3, -75.0) * scale, np.full(3, 75.0) * scale
     assert grid_for(lo, hi, 8.0 * scale, 30).dims.tolist() == [20, 20, 20]
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_histogram_bins_are_a_ratio_of_range_and_width(scale: float) -> None:
+    assert (
+        histogram_bins(0.0, 10.0 * scale, 0.1 * scale, field="near_bin", range_name="near") == 100
+    )
+    assert histogram_bins(0.0, 1.0 * scale, 5.0 * scale, field="near_bin", range_name="near") == 1
+    with pytest.raises(LimitError, match=r"^near_bin = .*: gives 1e\+10 bins over near = "):
+        histogram_bins(0.0, 10.0 * scale, 1e-9 * scale, field="near_bin", range_name="near")
+    with pytest.raises(LimitError, match=r"^near_bin = inf: must be a finite number > 0$"):
+        histogram_bins(0.0, 10.0 * scale, math.inf, field="near_bin", range_name="near")

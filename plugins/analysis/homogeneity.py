@@ -31,6 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from regopack.domain import Domain
 from regopack.interfaces import Analyzer
+from regopack.limits import derived_count
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import eta_of, interior_margin, interior_window
 from regopack.plugins.analysis.regions import (
@@ -61,6 +62,13 @@ PER_LENGTH = 100.0
 """Slopes are given per this many length units (µm)."""
 
 
+MAX_RINGS = 1000
+"""Most rings the window may be cut into (``rings`` or the window's reach / ``ring_width``)."""
+
+RING_FIELD = "homogeneity.ring_width"
+"""The field a refused ring width is reported under."""
+
+
 class HomogeneityConfig(BaseModel):
     """Parameters of the homogeneity analyzer."""
 
@@ -79,7 +87,7 @@ class HomogeneityConfig(BaseModel):
     rings: int | None = Field(
         None,
         ge=1,
-        le=1000,
+        le=MAX_RINGS,
         description=(
             "Number of rings instead of a width: the ring width is the distance from the "
             "centre to the farthest window point over rings."
@@ -267,7 +275,10 @@ class Homogeneity(Analyzer):
         if self.config.rings is not None:
             return far / self.config.rings
         if self.config.ring_width is not None:
-            return self.config.ring_width
+            given = self.config.ring_width
+            hint = f"give a ring width of at least {far / MAX_RINGS:.6g} or set rings"
+            derived_count(far / given, "rings", MAX_RINGS, field=RING_FIELD, given=given, hint=hint)
+            return given
         d_max = interior_margin(packing, None)
         quarter = near / 4 if near > 0 else far / 4
         return min(2.0 * d_max, quarter) if d_max > 0 else quarter

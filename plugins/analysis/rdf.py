@@ -27,10 +27,11 @@ from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle
 from regopack.interfaces import Analyzer
+from regopack.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import (
     eta_of,
@@ -55,11 +56,15 @@ class RdfConfig(BaseModel):
     near: tuple[float, float] = Field(
         (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
     )
-    near_bin: float = Field(0.1, gt=0, description="Bin width in the near field.")
+    near_bin: float = Field(
+        0.1, gt=0, validate_default=True, description="Bin width in the near field."
+    )
     far: tuple[float, float] = Field(
         (100.0, 340.0), strict=False, description="Far-field range of r (length unit)."
     )
-    far_bin: float = Field(2.0, gt=0, description="Bin width in the far field.")
+    far_bin: float = Field(
+        2.0, gt=0, validate_default=True, description="Bin width in the far field."
+    )
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
     min_pairs_per_bin: float = Field(
         100.0,
@@ -73,6 +78,20 @@ class RdfConfig(BaseModel):
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
     )
+
+    @field_validator("near_bin", "far_bin")
+    @classmethod
+    def _bounded_bins(cls, width: float, info: ValidationInfo) -> float:
+        """Refuse a bin width that gives more than ``MAX_HISTOGRAM_BINS`` bins over its range."""
+        name = str(info.field_name).removesuffix("_bin")
+        span = info.data.get(name)
+        if span is not None and 0 <= span[0] < span[1]:
+            try:
+                lo, hi = span
+                histogram_bins(lo, hi, width, field=f"{name}_bin", range_name=name)
+            except LimitError as err:
+                raise ValueError(err.text) from None
+        return width
 
     @model_validator(mode="after")
     def _check(self) -> RdfConfig:
@@ -269,6 +288,13 @@ class Rdf(Analyzer):
             bins = max(1, int(np.floor((hi - lo) / width)))
             names = packing.mineral_names
             n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
+            pairs = n_kinds * n_kinds
+            check_memory(
+                BIN_BYTES * bins * pairs,
+                f"{bins:,} bins x {pairs:,} mineral pairs",
+                field=f"rdf.{field_name}_bin",
+                given=width,
+            )
             total, per = rdf_histogram(
                 np.ascontiguousarray(pts[:, 0]),
                 np.ascontiguousarray(pts[:, 1]),

@@ -23,10 +23,11 @@ from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from regopack.domain3d import Box
 from regopack.interfaces import Analyzer
+from regopack.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
 from regopack.plugins.analysis.common import eta_of
 from regopack.plugins.analysis.common3d import (
     as_packing3d,
@@ -48,11 +49,15 @@ class Rdf3DConfig(BaseModel):
     near: tuple[float, float] = Field(
         (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
     )
-    near_bin: float = Field(0.1, gt=0, description="Bin width in the near field.")
+    near_bin: float = Field(
+        0.1, gt=0, validate_default=True, description="Bin width in the near field."
+    )
     far: tuple[float, float] = Field(
         (10.0, 60.0), strict=False, description="Far-field range of r (length unit)."
     )
-    far_bin: float = Field(0.5, gt=0, description="Bin width in the far field.")
+    far_bin: float = Field(
+        0.5, gt=0, validate_default=True, description="Bin width in the far field."
+    )
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
     min_pairs_per_bin: float = Field(
         100.0,
@@ -66,6 +71,20 @@ class Rdf3DConfig(BaseModel):
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
     )
+
+    @field_validator("near_bin", "far_bin")
+    @classmethod
+    def _bounded_bins(cls, width: float, info: ValidationInfo) -> float:
+        """Refuse a bin width that gives more than ``MAX_HISTOGRAM_BINS`` bins over its range."""
+        name = str(info.field_name).removesuffix("_bin")
+        span = info.data.get(name)
+        if span is not None and 0 <= span[0] < span[1]:
+            try:
+                lo, hi = span
+                histogram_bins(lo, hi, width, field=f"{name}_bin", range_name=name)
+            except LimitError as err:
+                raise ValueError(err.text) from None
+        return width
 
     @model_validator(mode="after")
     def _check(self) -> Rdf3DConfig:
@@ -177,6 +196,13 @@ class Rdf3D(Analyzer):
             if lo >= hi or not volume > 0:
                 continue
             bins = max(1, int(np.floor((hi - lo) / width)))
+            pairs = n_kinds * n_kinds
+            check_memory(
+                BIN_BYTES * bins * pairs,
+                f"{bins:,} bins x {pairs:,} mineral pairs",
+                field=f"rdf3d.{field_name}_bin",
+                given=width,
+            )
             total, per = rdf3d_histogram(
                 pts,
                 kinds if n_kinds > 1 else np.zeros(n_pts, dtype=np.int64),

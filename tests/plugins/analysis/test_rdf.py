@@ -142,3 +142,33 @@ def test_periodic_window_counts_pairs_through_the_sides() -> None:
     rdf.compute(two, {})
     g = rdf.curves["near"]["total"]
     assert g[2] > 0 and np.count_nonzero(g) == 1
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_bins_are_bounded_relative_to_the_range(scale: float) -> None:
+    """A bin width of 1e-9 over [0, 10] once asked for 10^10 bins (74 GiB)."""
+    near = (0.0, 10.0 * scale)
+    with pytest.raises(ValueError, match=r"near_bin\n.*gives 1e\+10 bins over near = .*65,536"):
+        RdfConfig(near=near, near_bin=1e-9 * scale)
+    with pytest.raises(ValueError, match=r"far_bin\n.*gives 5e\+299 bins over far"):
+        RdfConfig(far=(0.0, 1e300))  # the default far_bin is checked too
+    assert RdfConfig(near=near, near_bin=10.0 * scale / 65_536).near_bin > 0
+
+
+def test_the_curves_of_many_minerals_are_bounded_by_the_memory(monkeypatch) -> None:
+    import dataclasses
+
+    import regopack.limits
+    from regopack.limits import LimitError
+
+    squares = [[(x, 0.0), (x + 1.0, 0.0), (x + 1.0, 1.0), (x, 1.0)] for x in (0.0, 3.0, 6.0)]
+    packing = dataclasses.replace(
+        packing_from_polygons(squares, domain=(-1, 10, -4, 5)),
+        mineral=np.arange(3, dtype=np.int64),
+        mineral_names=("a", "b", "c"),
+    )
+    monkeypatch.setattr(regopack.limits, "memory_limit", lambda: (1 << 20, "memory"))
+    config = RdfConfig(near=(0.0, 2.0), near_bin=2.0 / 60_000, far=(2.0, 4.0), margin=0.0)
+    with pytest.raises(LimitError, match=r"^rdf\.near_bin = .*60,000 bins x 9 mineral pairs"):
+        Rdf(config).compute(packing, {})
+    Rdf(RdfConfig(near=(0.0, 2.0), far=(2.0, 4.0), margin=0.0)).compute(packing, {})
