@@ -11,6 +11,7 @@ import json
 import math
 import os
 import re
+import stat as _stat
 import tempfile
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
@@ -784,19 +785,31 @@ def _short(value: Any, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
-def _read_meta(path: Path, npz: Any) -> dict[str, Any]:
+def _read_meta(path: Path, npz: PackingArchive) -> dict[str, Any]:
     """Read the ``meta`` entry and check that it names a packing of a known version."""
     if "meta" not in npz.files:
         raise _bad(path, "no 'meta' entry")
     try:
-        entry = npz["meta"]
-    except ValueError as err:  # an object array, which needs pickle
-        raise _bad(path, "unreadable 'meta' entry") from err
-    if entry.dtype.kind != "U" or entry.ndim != 0:
-        raise _bad(path, f"'meta' is a {entry.dtype} array of shape {entry.shape}, not a string")
+        shape, dtype = npz.header("meta")
+    except PackingFileError as err:
+        raise _bad(path, f"unreadable 'meta' entry: {str(err).split(': ', 1)[-1]}") from None
+    if dtype.kind != "U" or shape != ():
+        raise _bad(path, f"'meta' is a {dtype} array of shape {shape}, not a string")
+    if dtype.itemsize // 4 > MAX_META_CHARS:
+        raise _invalid(
+            path,
+            f"meta is {dtype.itemsize // 4} characters long; at most {MAX_META_CHARS} are "
+            "allowed (a resolved scene and its stats take a few thousand)",
+        )
+    text = str(npz["meta"])
+    depth = _json_depth(text)
+    if depth > MAX_META_DEPTH:
+        raise _invalid(
+            path, f"meta nests objects and lists {depth} deep; at most {MAX_META_DEPTH} is allowed"
+        )
     try:
-        meta = json.loads(str(entry))
-    except json.JSONDecodeError as err:
+        meta = json.loads(text)
+    except (json.JSONDecodeError, RecursionError) as err:
         raise _bad(path, "unreadable 'meta' entry") from err
     if not isinstance(meta, dict) or meta.get("format") != FILE_MAGIC:
         raise _bad(path, "'meta' does not identify a regopack packing")
@@ -823,18 +836,47 @@ def _read_meta(path: Path, npz: Any) -> dict[str, Any]:
     return meta
 
 
-def _read_array(path: Path, npz: Any, name: str, dtype: type[np.generic], ndim: int) -> Any:
-    """Read one array, check its dimensions and convert it to ``dtype`` (where no value changes)."""
+def _read_array(
+    path: Path,
+    npz: PackingArchive,
+    name: str,
+    dtype: type[np.generic],
+    ndim: int,
+    rows: int | None = None,
+) -> Any:
+    """Read one array, check its dimensions and convert it to ``dtype`` (where no value changes).
+
+    Its header is checked first (:meth:`PackingArchive.read`): at most ``rows``
+    rows, when given, and the declared size of its member.
+    """
     try:
-        arr = npz[name]
-    except ValueError as err:  # e.g. an object array, which needs pickle
+        arr = npz.read(name, ndim, rows)
+    except ValueError as err:  # e.g. data that ends before its header's shape
         raise _invalid(path, f"array {name!r} cannot be read ({err})") from err
-    if arr.ndim != ndim:
-        raise _invalid(path, f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array")
     try:
         return _as_array(name, arr, dtype)
     except PackingError as err:
         raise _invalid(path, str(err)) from err
+
+
+def row_limits(n: int, arrays: Mapping[str, tuple[type[np.generic], int]]) -> dict[str, int]:
+    """Most rows each array of a file may declare, given its ``n`` particles.
+
+    One row per particle (``offsets``, ``face_offsets``: ``n + 1``); vertices
+    and faces at most :data:`MAX_VERTICES_PER_PARTICLE` per particle on average
+    (face loops six times that, the vertex uses of a polyhedron's faces).
+    """
+    many = n * MAX_VERTICES_PER_PARTICLE
+    per_item = {
+        "offsets": n + 1,
+        "face_offsets": n + 1,
+        "vertices": many,
+        "normals": many,
+        "support": many,
+        "face_vertex_offsets": many + 1,
+        "face_vertices": 6 * many,
+    }
+    return {name: per_item.get(name, n) for name in (*arrays, "rounding")}
 
 
 def _read_domain(path: Path, data: Any) -> Domain:
@@ -889,21 +931,238 @@ def _read_meta_keys(
 
 
 def open_packing_file(path: str | Path) -> Path:
-    """Check that ``path`` names an NPZ archive; return it as a path.
+    """Check that ``path`` names a regular file; return it as a path.
+
+    Only a regular file (or a link to one) is accepted, decided by
+    :func:`os.stat` before the file is opened: a directory, a FIFO (which
+    would block until a writer comes) or a device (``/dev/zero`` reads without
+    end) is refused.
 
     Raises
     ------
     PackingFileError
-        When it is missing, a directory, or not an NPZ archive.
+        When it is missing or not a regular file.
     """
     path = Path(path)
-    if not path.exists():
-        raise PackingFileError(f"{path}: no such file")
-    if path.is_dir():
-        raise PackingFileError(f"{path}: is a directory, not a packing file")
-    if not zipfile.is_zipfile(path):
-        raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        raise PackingFileError(f"{path}: no such file") from None
+    except OSError as err:
+        raise PackingFileError(f"{path}: cannot be read ({err.strerror})") from None
+    if not _stat.S_ISREG(st.st_mode):
+        kind = next(
+            (
+                what
+                for test, what in (
+                    (_stat.S_ISDIR, "a directory"),
+                    (_stat.S_ISFIFO, "a FIFO (named pipe)"),
+                    (_stat.S_ISCHR, "a character device"),
+                    (_stat.S_ISBLK, "a block device"),
+                    (_stat.S_ISSOCK, "a socket"),
+                )
+                if test(st.st_mode)
+            ),
+            "something other than a regular file",
+        )
+        raise PackingFileError(f"{path}: is {kind}, not a packing file (a regular file)")
     return path
+
+
+# ---------------------------------------------------------------------------
+# the archive: members read only after their declared sizes are checked
+
+MAX_META_CHARS = 4 * 2**20
+"""Longest ``meta`` document read, in characters (a resolved scene and stats take a few KiB)."""
+
+MAX_META_DEPTH = 32
+"""Deepest nesting of objects and lists in ``meta`` (a resolved scene nests about 6 deep)."""
+
+MAX_EXPANSION = 100
+"""Largest ratio of a member's declared size to its compressed size, above 1 MiB.
+
+regopack stores the members uncompressed (ratio 1); numbers compressed by
+``numpy.savez_compressed`` expand a few times. A member that declares more is
+a zip bomb, refused before it is decompressed.
+"""
+
+MAX_VERTICES_PER_PARTICLE = 2**16
+"""Most vertices (2D) or faces and face vertices (3D) a file may give one particle on average."""
+
+_EXPANSION_FLOOR = 2**20
+_NPY_HEADER_LIMIT = 10_000
+_JSON_STRING = re.compile(r'"[^"\\]*(?:\\.[^"\\]*)*"')
+
+
+def _json_depth(text: str) -> int:
+    """Deepest nesting of ``[`` and ``{`` in the JSON ``text`` (strings left out), vectorised."""
+    skeleton = _JSON_STRING.sub("", text).encode("utf-8", "replace")
+    codes = np.frombuffer(skeleton, dtype=np.uint8)
+    if codes.size == 0:
+        return 0
+    step = np.isin(codes, (ord("["), ord("{"))).astype(np.int64)
+    step -= np.isin(codes, (ord("]"), ord("}")))
+    return int(np.cumsum(step).max(initial=0))
+
+
+class PackingArchive:
+    """The ``.npy`` members of a packing file, each read only after its header is checked.
+
+    Before a member's data is read, its NPY header (shape, dtype) is read and
+    checked: no pickled objects, at most ``rows`` rows when the caller gives
+    them, a declared size in the zip directory equal to what the header
+    implies, and no more than :data:`MAX_EXPANSION` times its compressed
+    size (above 1 MiB). So a file cannot make :func:`load` read, decompress
+    or allocate more than its own size allows, whatever it declares.
+    """
+
+    def __init__(self, path: Path, zf: zipfile.ZipFile, disk_size: int) -> None:
+        self.path = path
+        self._zip = zf
+        self._disk_size = disk_size
+        members: dict[str, zipfile.ZipInfo] = {}
+        for info in zf.infolist():
+            if info.filename.endswith(".npy"):
+                members.setdefault(info.filename[:-4], info)
+        self._members = members
+        self.files = list(members)
+
+    def _info(self, name: str) -> zipfile.ZipInfo:
+        info = self._members[name]
+        size, packed = info.file_size, info.compress_size
+        if packed > self._disk_size:
+            raise _bad(
+                self.path,
+                f"member {name!r} declares {packed} compressed bytes in a file of "
+                f"{self._disk_size} bytes",
+            )
+        if size > _EXPANSION_FLOOR and size > MAX_EXPANSION * max(packed, 1):
+            raise _bad(
+                self.path,
+                f"member {name!r} declares {size} bytes compressed into {packed}, more than "
+                f"{MAX_EXPANSION} times (regopack stores members uncompressed)",
+            )
+        return info
+
+    def header(self, name: str) -> tuple[tuple[int, ...], np.dtype[Any]]:
+        """Shape and dtype that member ``name`` declares, checked against its size.
+
+        Raises
+        ------
+        PackingFileError
+            When the member has no valid NPY header, declares a pickled
+            (object) dtype, or a size other than its zip entry's.
+        """
+        info = self._info(name)
+        try:
+            with self._zip.open(info) as fh:
+                version = np.lib.format.read_magic(fh)
+                if version == (1, 0):
+                    header = np.lib.format.read_array_header_1_0(
+                        fh, max_header_size=_NPY_HEADER_LIMIT
+                    )
+                elif version == (2, 0):
+                    header = np.lib.format.read_array_header_2_0(
+                        fh, max_header_size=_NPY_HEADER_LIMIT
+                    )
+                else:
+                    raise ValueError(f"NPY format version {version[0]}.{version[1]}")
+                start = fh.tell()
+        except (ValueError, OSError, EOFError, zipfile.BadZipFile) as err:
+            raise _invalid(
+                self.path, f"member {name!r} has no valid NPY header ({' '.join(str(err).split())})"
+            ) from None
+        shape, _, dtype = header
+        if dtype.hasobject:
+            raise _invalid(
+                self.path,
+                f"array {name!r} cannot be read (Object arrays need pickle, which is not allowed)",
+            )
+        entries = math.prod(shape)
+        if start + entries * dtype.itemsize != info.file_size:
+            raise _invalid(
+                self.path,
+                f"array {name!r} declares shape {shape} of {dtype} ({entries * dtype.itemsize} "
+                f"bytes), but its member holds {info.file_size - start} bytes after the header",
+            )
+        return shape, dtype
+
+    def read(self, name: str, ndim: int | None = None, rows: int | None = None) -> NDArray[Any]:
+        """Read member ``name`` after checking its header (and its rows, if ``rows`` is given).
+
+        Raises
+        ------
+        PackingFileError
+            One line naming the file, the array, what it declares and what is allowed.
+        """
+        shape, _ = self.header(name)
+        if ndim is not None and len(shape) != ndim:
+            raise _invalid(
+                self.path, f"array {name!r} has shape {shape}, expected a {ndim}-D array"
+            )
+        if rows is not None and shape and shape[0] > rows:
+            raise _invalid(
+                self.path, f"array {name!r} declares {shape[0]} rows; at most {rows} are allowed"
+            )
+        with self._zip.open(self._members[name]) as fh:
+            arr: NDArray[Any] = np.lib.format.read_array(
+                fh, allow_pickle=False, max_header_size=_NPY_HEADER_LIMIT
+            )
+        return arr
+
+    def __getitem__(self, name: str) -> NDArray[Any]:
+        return self.read(name)
+
+
+@contextmanager
+def open_archive(path: str | Path) -> Iterator[PackingArchive]:
+    """Open a packing file (a regular file only) as a :class:`PackingArchive`.
+
+    Raises
+    ------
+    PackingFileError
+        When the file is missing, not a regular file (a directory, a FIFO,
+        a device), or not a zip archive.
+    """
+    path = open_packing_file(path)
+    try:
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0))
+    except OSError as err:
+        raise PackingFileError(f"{path}: cannot be read ({err.strerror})") from None
+    with os.fdopen(fd, "rb") as fh:
+        st = os.fstat(fh.fileno())
+        if not _stat.S_ISREG(st.st_mode):  # replaced since it was looked at
+            raise PackingFileError(f"{path}: not a regular file, not a packing file")
+        if not zipfile.is_zipfile(fh):
+            raise _bad(path, "not an NPZ archive (a packing file is written by 'regopack run')")
+        try:
+            zf = zipfile.ZipFile(fh)
+        except (zipfile.BadZipFile, OSError, ValueError, EOFError) as err:
+            raise _bad(path, " ".join(str(err).split()) or type(err).__name__) from None
+        with zf:
+            yield PackingArchive(path, zf, st.st_size)
+
+
+def read_arrays(
+    path: Path, npz: PackingArchive, arrays: Mapping[str, tuple[type[np.generic], int]]
+) -> dict[str, Any]:
+    """Read ``arrays`` (and ``rounding``, if present), each header checked before its data.
+
+    ``radius`` is read first; its length ``n`` bounds the rows of the others
+    (:func:`row_limits`), so no member is read that ``n`` particles cannot fill.
+    """
+    for name in arrays:
+        if name not in npz.files:
+            raise _invalid(path, f"missing array {name!r}")
+    dtype, ndim = arrays["radius"]
+    out: dict[str, Any] = {"radius": _read_array(path, npz, "radius", dtype, ndim)}
+    limits = row_limits(int(out["radius"].shape[0]), arrays)
+    for name, (dtype, ndim) in arrays.items():
+        if name != "radius":
+            out[name] = _read_array(path, npz, name, dtype, ndim, limits[name])
+    if "rounding" in npz.files:
+        out["rounding"] = _read_array(path, npz, "rounding", np.float64, 1, limits["rounding"])
+    return out
 
 
 def load(path: str | Path) -> Packing:
@@ -922,9 +1181,9 @@ def load(path: str | Path) -> Packing:
         (``invalid packing file: array 'mineral' has the value 7 at particle
         3, ...``, naming the array or ``meta`` key and what is wrong).
     """
-    path = open_packing_file(path)
     try:
-        with np.load(path, allow_pickle=False) as npz:
+        with open_archive(path) as npz:
+            path = npz.path
             meta = _read_meta(path, npz)
             if meta["format_version"] == FORMAT_VERSION_3D:
                 raise PackingFileError(
@@ -937,15 +1196,9 @@ def load(path: str | Path) -> Packing:
                     f"meta 'dimension' is {_short(meta.get('dimension'))} in a format "
                     f"version {meta['format_version']} file, which holds 2D packings",
                 )
-            arrays: dict[str, Any] = {}
-            for name, (dtype, ndim) in _ARRAYS.items():
-                if name not in npz.files:
-                    raise _invalid(path, f"missing array {name!r}")
-                arrays[name] = _read_array(path, npz, name, dtype, ndim)
-            if "rounding" in npz.files:
-                arrays["rounding"] = _read_array(path, npz, "rounding", np.float64, 1)
+            arrays = read_arrays(path, npz, _ARRAYS)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
-        raise _bad(path, " ".join(str(err).split()) or type(err).__name__) from err
+        raise _bad(Path(path), " ".join(str(err).split()) or type(err).__name__) from err
     try:
         return Packing(**arrays, **_read_meta_keys(path, meta))
     except PackingError as err:

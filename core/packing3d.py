@@ -31,14 +31,14 @@ from regopack.packing import (
     _first,
     _invalid,
     _json_default,
-    _read_array,
     _read_meta,
     _read_meta_keys,
     _short,
     check_array_types,
     check_particles,
     load,
-    open_packing_file,
+    open_archive,
+    read_arrays,
     save,
 )
 from regopack.solids import SolidBatch
@@ -463,21 +463,15 @@ def load_packing(path: str | Path) -> Packing | Packing3D:
     PackingFileError
         One line naming the file and what is wrong with it.
     """
-    path = open_packing_file(path)
     try:
-        with np.load(path, allow_pickle=False) as npz:
+        with open_archive(path) as npz:
+            path = npz.path
             meta = _read_meta(path, npz)
             if meta["format_version"] != FORMAT_VERSION_3D:
                 return load(path)
             if meta.get("dimension") != 3:
                 raise _invalid(path, f"meta 'dimension' is {_short(meta.get('dimension'))}, not 3")
-            arrays: dict[str, Any] = {}
-            for name, (dtype, ndim) in _ARRAYS3D.items():
-                if name not in npz.files:
-                    raise _invalid(path, f"missing array {name!r}")
-                arrays[name] = _read_array(path, npz, name, dtype, ndim)
-            if "rounding" in npz.files:
-                arrays["rounding"] = _read_array(path, npz, "rounding", np.float64, 1)
+            arrays = read_arrays(path, npz, _ARRAYS3D)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
         raise PackingFileError(
             f"{path}: not a regopack packing file ({' '.join(str(err).split())})"

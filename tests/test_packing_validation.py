@@ -17,9 +17,13 @@ exit status instead of killing pytest.
 
 from __future__ import annotations
 
+import io
 import json
+import os
+import re
 import subprocess
 import sys
+import zipfile
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -27,8 +31,10 @@ from typing import Any
 
 import numpy as np
 import pytest
+from cli_helpers import one_error_line
 
 from regopack.analysis import run_analyses
+from regopack.cli import main
 from regopack.errors import ExportError, PackingError, PackingFileError, RegopackError
 from regopack.interfaces import InsertionResult
 from regopack.packing import Packing, load, save
@@ -610,3 +616,110 @@ def test_rdf_wrapper_checks_what_the_kernel_indexes(kind, n_kinds, x, bins, mess
     y = np.zeros(3)
     with pytest.raises(ValueError, match=message):
         rdf_histogram(x, y, np.asarray(kind), n_kinds, 0.0, 0.5, bins, 10.0, 10.0)
+
+
+# -- special and hostile files: refused before anything is read --------------------------
+
+
+def write_members(
+    target: Path, members: dict[str, bytes | np.ndarray], deflate: bool = False
+) -> Path:
+    """A zip of ``name.npy`` members: arrays written as NPY, bytes as they are."""
+    method = zipfile.ZIP_DEFLATED if deflate else zipfile.ZIP_STORED
+    with zipfile.ZipFile(target, "w", method) as zf:
+        for name, value in members.items():
+            if isinstance(value, np.ndarray):
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, value, allow_pickle=False)
+                value = buf.getvalue()
+            zf.writestr(f"{name}.npy", value)
+    return target
+
+
+def members_of(path: Path) -> dict[str, bytes | np.ndarray]:
+    with np.load(path, allow_pickle=False) as npz:
+        return {k: npz[k] for k in npz.files}
+
+
+def refuse_data_reads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fail the test if the data of a member other than ``meta`` is read from now on."""
+    read_array = np.lib.format.read_array
+
+    def refuse(fh, *args, **kwargs):
+        assert fh.name == "meta.npy", f"the data of {fh.name} was read"
+        return read_array(fh, *args, **kwargs)
+
+    monkeypatch.setattr(np.lib.format, "read_array", refuse)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+def test_only_regular_files_are_opened(tmp_path, kind, capsys):
+    """A FIFO used to block in open(), /dev/zero to read without end."""
+    if kind == "fifo":
+        path = tmp_path / "pipe.npz"
+        os.mkfifo(path)
+        what = "is a FIFO (named pipe)"
+    elif kind == "device":
+        path = Path("/dev/zero")
+        what = "is a character device"
+    else:
+        path = tmp_path
+        what = "is a directory"
+    with pytest.raises(PackingFileError, match=rf"^{re.escape(str(path))}: {re.escape(what)}, "):
+        load(path)
+    assert main(["verify", str(path)]) == 2
+    assert what in one_error_line(capsys)
+
+
+def test_a_zip_bomb_is_refused_before_it_is_decompressed(good, tmp_path, monkeypatch):
+    members = members_of(good)
+    members["radius"] = np.zeros(2**19)  # 4 MiB that deflate to 4 KiB
+    path = write_members(tmp_path / "bomb.npz", members, deflate=True)
+    refuse_data_reads(monkeypatch)
+    with pytest.raises(PackingFileError, match="member 'radius' declares 4194432 bytes compressed"):
+        load(path)
+
+
+def test_a_header_of_a_trillion_entries_is_refused_before_allocation(good, tmp_path, monkeypatch):
+    members = members_of(good)
+    buf = io.BytesIO()
+    header = {"descr": "<f8", "fortran_order": False, "shape": (10**12,)}
+    np.lib.format.write_array_header_1_0(buf, header)
+    members["radius"] = buf.getvalue() + bytes(8 * 49)
+    path = write_members(tmp_path / "huge.npz", members)
+    refuse_data_reads(monkeypatch)
+    with pytest.raises(PackingFileError, match=r"array 'radius' declares shape \(1000000000000,\)"):
+        load(path)
+
+
+def test_rows_beyond_the_particle_count_are_refused_before_reading(good, tmp_path):
+    members = members_of(good)
+    members["mineral"] = np.zeros(10**4, dtype=np.int64)
+    path = write_members(tmp_path / "rows.npz", members)
+    with pytest.raises(PackingFileError, match="array 'mineral' declares 10000 rows; at most 49"):
+        load(path)
+
+
+def test_a_member_without_an_npy_header_is_one_line(good, tmp_path):
+    members = members_of(good)
+    members["mineral"] = b"not an array at all"
+    path = write_members(tmp_path / "junk.npz", members)
+    with pytest.raises(PackingFileError, match="member 'mineral' has no valid NPY header"):
+        load(path)
+
+
+@pytest.mark.parametrize(
+    ("meta", "message"),
+    [
+        ("[" * 100_000 + "]" * 100_000, "meta nests objects and lists 100000 deep; at most 32"),
+        (json.dumps({"format": "x", "pad": "[" * 10**5}), "not a regopack packing file"),
+        ("x" * (2**22 + 1), "meta is 4194305 characters long; at most 4194304"),
+    ],
+    ids=["deep", "brackets in a string", "long"],
+)
+def test_meta_is_bounded_in_depth_and_size(good, tmp_path, meta, message):
+    members = members_of(good)
+    members["meta"] = np.array(meta)
+    path = write_members(tmp_path / "meta.npz", members)
+    with pytest.raises(PackingFileError, match=message):
+        load(path)
