@@ -43,6 +43,7 @@ from regopack.plugins.analysis.rdf import rdf_histogram
 from regopack.plugins.exporters import JsonExporter, read_json
 from regopack.population import Population, ShapeBatch
 from regopack.testing import make_registry, packing_from_polygons
+from regopack.verification import verify
 
 NAMES = ("pyroxene", "glass", "ilmenite")
 SIDE = 7
@@ -61,8 +62,10 @@ def valid_packing(rounding: bool = False) -> Packing:
         mineral_names=NAMES,
         stats={"interior_margin": 0.5, "tries": 49.0},
     )
-    if rounding:
-        p = replace(p, rounding=np.full(p.n_particles, 0.01))
+    if rounding:  # the radius of the rounded square's area
+        rho = 0.01
+        radius = np.full(p.n_particles, np.sqrt((1 + 4 * rho + np.pi * rho**2) / np.pi))
+        p = replace(p, rounding=np.full(p.n_particles, rho), radius=radius)
     return p
 
 
@@ -723,3 +726,222 @@ def test_meta_is_bounded_in_depth_and_size(good, tmp_path, meta, message):
     path = write_members(tmp_path / "meta.npz", members)
     with pytest.raises(PackingFileError, match=message):
         load(path)
+
+
+# -- what the numbers mean: outlines, radii, positions ------------------------------------
+
+
+def set_outline(j: int, outline: list[tuple[float, float]]) -> Change:
+    """Give particle ``j`` the outline ``outline`` (relative to its centre)."""
+
+    def change(c: dict[str, Any]) -> None:
+        o = c["offsets"]
+        v = c["vertices"]
+        new = np.asarray(outline, dtype=np.float64)
+        c["vertices"] = np.concatenate([v[: o[j]], new, v[o[j + 1] :]])
+        c["offsets"] = np.concatenate([o[: j + 1], o[j + 1 :] + len(new) - (o[j + 1] - o[j])])
+
+    return change
+
+
+def scale_file(factor: float) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        for name in ("vertices", "centre", "radius"):
+            c[name] = c[name] * factor
+        c["meta"]["domain"]["bounds"] = [b * factor for b in c["meta"]["domain"]["bounds"]]
+
+    return change
+
+
+def periodic(c: dict[str, Any]) -> None:
+    c["meta"].update(format_version=2, domain={"kind": "periodic", "bounds": [0, 7, 0, 7]})
+
+
+PENTAGRAM = [(np.cos(a), np.sin(a)) for a in np.radians([0, 144, 288, 72, 216])]
+DENTED = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (0.0, 0.2), (-0.5, 0.5)]
+
+MEANING: dict[str, tuple[Change, str]] = {
+    "zero area": (
+        set_outline(INTERIOR, [(-0.5, 0.0), (0.5, 0.0), (0.5, 0.0), (-0.5, 0.0)]),
+        "gives particle 24 2 distinct vertices and no rounding: its outline has no area",
+    ),
+    "collinear": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (0.0, 0.0), (0.5, 0.5), (0.25, 0.25)]),
+        "gives particle 24 an outline whose edge (-0.5, -0.5) -> (0, 0) does not pass "
+        "counter-clockwise around its centre",
+    ),
+    "bow tie": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (0.5, 0.5), (0.5, -0.5), (-0.5, 0.5)]),
+        "particle 24 an outline whose edge",
+    ),
+    "clockwise": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)]),
+        "particle 24 an outline whose edge",
+    ),
+    "pentagram": (
+        set_outline(INTERIOR, PENTAGRAM),
+        "gives particle 24 an outline that winds 2 times around its centre (it crosses itself)",
+    ),
+    "not convex": (
+        set_outline(INTERIOR, DENTED),
+        "gives particle 24 an outline that turns clockwise at its vertex (0, 0.20000000000000001)",
+    ),
+    "radius off": (
+        set_value("radius", INTERIOR, 0.57),
+        "array 'radius' has the value 0.57 at particle 24, but its outline's area 1 has "
+        "the equivalent radius 0.56418958354775628",
+    ),
+    "radius 1e-320": (set_value("radius", INTERIOR, 1e-320), "array 'radius' has the value"),
+    "rounding 1e300": (
+        lambda c: (
+            c.update(rounding=np.r_[np.zeros(24), 1e300, np.zeros(24)])
+            or c["meta"].update(format_version=2)
+        ),
+        "array 'radius' has the value 0.5641895835477563 at particle 24, but its outline's "
+        "area inf",
+    ),
+    "tiny particle": (
+        lambda c: scale_file(1e-13)(c) or c["meta"].update(domain=DOMAIN_7),
+        "array 'radius' has the value 5.641895835477563e-14 at placed particle 0, less than "
+        "1e-12 of the domain's larger side 7",
+    ),
+    "particle at 1e17": (
+        set_value("centre", INTERIOR, [1e17, 3.5]),
+        "array 'centre' places particle 24 at [1.0e+17 3.5e+00] (reaching 0.5 from it), "
+        "more than the domain's larger side (7) beyond the domain's bounds [0.0, 7.0, 0.0, 7.0]",
+    ),
+    "periodic centre outside": (
+        lambda c: periodic(c) or set_value("centre", INTERIOR, [10.5, 3.5])(c),
+        "array 'centre' places particle 24 at [10.5 3.5], outside the periodic cell [0, 7) x "
+        "[0, 7)",
+    ),
+    "periodic in version 1": (
+        set_meta("domain", {"kind": "periodic", "bounds": [0, 7, 0, 7]}),
+        "meta 'format_version' is 1 with a periodic domain; version 1 holds sharp polygons in a "
+        "walled rectangle only",
+    ),
+    "rounded in version 1": (
+        lambda c: c.update(rounding=np.zeros(49)) or set_value("rounding", 0, 0.1)(c),
+        "meta 'format_version' is 1 with rounded particles",
+    ),
+}
+DOMAIN_7 = {"kind": "rectangle", "bounds": [0, 7, 0, 7]}
+
+
+@pytest.mark.parametrize("defect", list(MEANING))
+def test_load_refuses_what_the_numbers_cannot_mean(good, tmp_path, defect):
+    change, message = MEANING[defect]
+    path = craft(good, tmp_path / "bad.npz", change)
+    with pytest.raises(PackingFileError) as info:
+        load(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: invalid packing file: ")
+    assert message in text
+    assert "\n" not in text
+
+
+@pytest.mark.parametrize("factor", [1e-6, 1e6])
+def test_a_scaled_file_loads_and_verifies_the_same(good, tmp_path, factor):
+    path = craft(good, tmp_path / "scaled.npz", scale_file(factor))
+    p = load(path)
+    assert p.n_placed == 46 and verify(p).ok
+    np.testing.assert_allclose(p.area(), factor**2)
+
+
+def test_a_periodic_file_with_centres_in_the_cell_loads(good, tmp_path):
+    assert load(craft(good, tmp_path / "periodic.npz", periodic)).domain.periodic
+
+
+def test_verify_refuses_a_self_intersecting_outline_in_one_line(good, tmp_path, capsys):
+    """The bow tie reached GEOS (an error with a traceback) in 'regopack verify'."""
+    path = craft(good, tmp_path / "bowtie.npz", MEANING["bow tie"][0])
+    assert main(["verify", str(path)]) == 2
+    assert "particle 24 an outline whose edge" in one_error_line(capsys)
+
+
+# -- the scene a file holds ------------------------------------------------------------
+
+SCENE_7 = {
+    "name": "squares",
+    "seed": 1,
+    "count": "auto",
+    "domain": {"kind": "rectangle", "width": 7.0, "height": 7.0, "center": [3.5, 3.5]},
+    "size": {"kind": "change5", "d_min": 1.0, "d_max": 2.0, "d0": 1.5, "alpha": 6.9},
+    "phases": [
+        {"name": name, "fraction": 1 / 3, "shape": {"kind": "regular", "m": 4}} for name in NAMES
+    ],
+    "insertion": {"kind": "available-arc"},
+    "density": {"kind": "eta", "eta": 0.0},
+}
+
+
+def with_scene(**changes: Any) -> Change:
+    """The good file with :data:`SCENE_7`, its ``size`` (or another section) changed."""
+
+    def change(c: dict[str, Any]) -> None:
+        scene = json.loads(json.dumps(SCENE_7))
+        for key, value in changes.items():
+            section, _, field = key.partition("__")
+            if field:
+                scene[section][field] = value
+            else:
+                scene[section] = value
+        c["meta"]["scene"] = scene
+
+    return change
+
+
+SCENE_DEFECTS: dict[str, tuple[Change, str]] = {
+    "d_max negative": (
+        with_scene(size__d_max=-40),
+        "meta 'scene': size.d_max = -40: Input should be greater than 0",
+    ),
+    "d_max a string": (
+        with_scene(size__d_max="x"),
+        "meta 'scene': size.d_max = \"x\": Input should be a valid number",
+    ),
+    "unknown field": (with_scene(size__dmax=2.0), "meta 'scene': size.dmax"),
+    "d_max below the radii": (
+        with_scene(size__d_max=1.1),
+        "array 'radius' has the value 0.5641895835477563 at particle 0, outside the range "
+        "[0.5, 0.55000000000000004] of meta 'scene' size",
+    ),
+    "domain kind": (
+        with_scene(domain={"kind": "circle", "radius": 3.5, "center": [3.5, 3.5]}),
+        "meta 'scene' has domain.kind = 'circle', but meta 'domain' is a 'rectangle'",
+    ),
+    "phase names": (
+        lambda c: with_scene()(c) or c["meta"]["scene"]["phases"].reverse(),
+        "meta 'scene' names the phases ['ilmenite', 'glass', 'pyroxene'], but meta "
+        "'mineral_names' is ['pyroxene', 'glass', 'ilmenite']",
+    ),
+    "interior margin": (
+        set_meta("stats", {"interior_margin": -40.0}),
+        "meta 'stats' has 'interior_margin' = -40.0; it is finite and >= 0",
+    ),
+}
+
+
+@pytest.mark.parametrize("defect", list(SCENE_DEFECTS))
+def test_the_scene_a_file_holds_is_checked_as_a_scene_file(good, tmp_path, defect):
+    """A tampered d_max = -40 changed phi_interior from 0.85 to 0.42 without a word."""
+    change, message = SCENE_DEFECTS[defect]
+    path = craft(good, tmp_path / "bad.npz", change)
+    with pytest.raises(PackingFileError) as info:
+        load(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: invalid packing file: ")
+    assert message in text
+    assert "\n" not in text
+
+
+def test_a_file_with_a_valid_scene_loads(good, tmp_path):
+    p = load(craft(good, tmp_path / "scene.npz", with_scene()))
+    assert p.scene["size"]["d_max"] == 2.0
+
+
+def test_analyze_refuses_a_tampered_scene_in_one_line(good, tmp_path, capsys):
+    path = craft(good, tmp_path / "tampered.npz", SCENE_DEFECTS["d_max negative"][0])
+    assert main(["analyze", str(path), "--no-figures", "--out", str(tmp_path / "out")]) == 2
+    assert "size.d_max = -40" in one_error_line(capsys)
+    assert not (tmp_path / "out").exists()
