@@ -710,7 +710,7 @@ def _check_outlines(
         One line naming the particle and what is wrong with its outline.
     """
     n = offsets.shape[0] - 1
-    m = _OutlineTerms(v[:, 0], v[:, 1], offsets)
+    m = _OutlineTerms(np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1]), offsets)
     if m.repeated.any():  # drop the repeated consecutive vertices (rare: whole arrays copied)
         owner = np.repeat(np.arange(n), np.diff(offsets))
         keep = ~m.repeated
