@@ -691,6 +691,14 @@ def _half_sums(cross: FloatArray, offsets: IntArray) -> FloatArray:
     return out
 
 
+MERGE_RTOL = 1e-9
+"""Consecutive vertices closer than this fraction of an outline's extent are merged on loading.
+
+regopack's own outlines of many vertices (octagons of ``m = 256``, or ``a = 1``
+and a small ``psi``) hold pairs of vertices about 1e-10 of the outline apart
+whose edge, by rounding, runs slightly backwards.
+"""
+
 _CHUNK = 2**16
 """Vertices checked at a time by :func:`check_file_values` (whole particles)."""
 
@@ -711,9 +719,16 @@ def _check_outlines(
     """
     n = offsets.shape[0] - 1
     m = _OutlineTerms(np.ascontiguousarray(v[:, 0]), np.ascontiguousarray(v[:, 1]), offsets)
-    if m.repeated.any():  # drop the repeated consecutive vertices (rare: whole arrays copied)
+    # vertices closer to the next than MERGE_RTOL of the outline's extent are one
+    # vertex (exact repeats, and the pairs a rounding error puts a hair apart)
+    far = np.maximum(np.abs(m.x), np.abs(m.y))
+    tol = MERGE_RTOL * np.maximum.reduceat(far, offsets[:-1])
+    tol_v = np.repeat(tol, np.diff(offsets))
+    near = (np.abs(m.ex) <= tol_v) & (np.abs(m.ey) <= tol_v)
+    near |= m.repeated
+    if near.any():  # drop them (rare: whole arrays copied, or outlines of many vertices)
         owner = np.repeat(np.arange(n), np.diff(offsets))
-        keep = ~m.repeated
+        keep = ~near
         counts = np.bincount(owner[keep], minlength=n)
         single = counts == 0  # every vertex the same point
         keep[offsets[:-1][single]] = True

@@ -848,6 +848,32 @@ def test_a_scaled_file_loads_and_verifies_the_same(good, tmp_path, factor):
     np.testing.assert_allclose(p.area(), factor**2)
 
 
+def test_octagons_of_many_vertices_load_at_any_scale(tmp_path):
+    # a = 1, psi = 0.01, m = 256: pairs of vertices about 1e-10 of the outline
+    # apart whose edge runs slightly backwards, merged on loading
+    import regopack
+
+    shape = {"kind": "octagon", "psi": 0.01, "a": 1.0, "m": 256}
+    p = regopack.pack(
+        "small",
+        domain__width=100,
+        domain__height=100,
+        phases=[{"name": "a", "fraction": 1.0, "shape": shape}],
+    )
+    path = tmp_path / "octagons.npz"
+    save(p, path)
+    assert load(path).n_placed == p.n_placed
+
+    def unscened(c: dict[str, Any]) -> None:
+        c["meta"]["scene"] = {"name": "octagons"}
+
+    for factor in (1e-6, 1e6):
+        scaled = tmp_path / f"octagons-{factor:g}.npz"
+        craft(path, scaled, lambda c, f=factor: (unscened(c), scale_file(f)(c)))
+        q = load(scaled)
+        np.testing.assert_allclose(q.radius, p.radius * factor)
+
+
 def test_a_periodic_file_with_centres_in_the_cell_loads(good, tmp_path):
     assert load(craft(good, tmp_path / "periodic.npz", periodic)).domain.periodic
 
