@@ -898,42 +898,68 @@ def check_file_values(packing: Packing, version: int | None = None) -> None:
 SIZE_RTOL = 1e-9
 """Relative tolerance of the radii against the size range of a file's scene."""
 
-RUN_SECTIONS = ("domain", "size", "phases", "insertion", "density", "count", "outputs")
-"""Sections of a run's scene: a file's scene with any of them is checked as a scene file."""
+RUN_SECTIONS = ("size", "domain")
+"""Sections every run writes to its scene: a file's scene with all of them is checked.
+
+A scene with fewer (a name only, or a name and a domain, as packings built in
+Python carry) is not a run's scene and is left as it is.
+"""
 
 
-def _scene_registry() -> Any:
-    """Return the registry that checks the scenes in packing files, as ``regopack run``'s.
+def _scene_size_range(path: Path, size: Any) -> tuple[float, float] | None:
+    """Return the range ``(d_min / 2, d_max / 2)`` given by the numbers of a scene's ``size``.
 
-    Built afresh each time (about 30 ms once the plugins are imported), so
-    that a registry changed since (a plugin installed, a test's fakes) is the
-    one used.
+    Read from the numbers alone: no plugin is resolved and no file the scene
+    names is read, so a packing loads wherever it was made and whatever it
+    names. None when ``d_min`` or ``d_max`` is absent, zero, or above the
+    other (a size plugin of other parameters). A given ``d_min`` or ``d_max``
+    that is not a number, not finite or negative is refused: the analyses
+    take their margins from it.
     """
-    import regopack.manager
-
-    return regopack.manager.default_registry()
+    if not isinstance(size, dict):
+        return None
+    values: dict[str, float] = {}
+    for key in ("d_min", "d_max"):
+        if key not in size:
+            continue
+        value = size[key]
+        shown = json.dumps(value, default=str)
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise _invalid(
+                path, f"meta 'scene': size.{key} = {shown}: Input should be a valid number"
+            )
+        if not math.isfinite(value):
+            raise _invalid(
+                path, f"meta 'scene': size.{key} = {shown}: Input should be a finite number"
+            )
+        if value < 0:
+            raise _invalid(
+                path, f"meta 'scene': size.{key} = {shown}: Input should be greater than 0"
+            )
+        values[key] = float(value)
+    if len(values) < 2 or not 0 < values["d_min"] <= values["d_max"]:
+        return None
+    return values["d_min"] / 2, values["d_max"] / 2
 
 
 def check_file_scene(path: Path, packing: Packing | Packing3D) -> None:
-    """Check the scene a packing file holds as ``regopack run`` checks a scene file.
+    """Check the scene a packing file holds against the file, without resolving a plugin.
 
-    The scene (``meta["scene"]``) is validated by
-    :func:`regopack.scene_model.scene_from_dict` (every field of the scene,
-    the domain's values) and its ``size`` and ``density`` sections by their
-    plugins' parameter models, as ``regopack run`` validates them: these are
-    what the analyses read. The shapes, the inserter and the outputs describe
-    how the packing was made, not how to read it, and are not resolved again,
-    so a packing made with a plugin that is not installed here (or a test's
-    fake inserter) still loads. Its domain kind and phase names must be the
-    file's, and every radius must lie in the size distribution's range
-    ``[d_min / 2, d_max / 2]`` (within :data:`SIZE_RTOL`), since the analyses
-    take their margins from it. A
-    scene with none of the :data:`RUN_SECTIONS` (a name only, as packings
-    built in Python carry) and the scene of a 2D section of a 3D packing
-    (with a ``slice`` table, see the ``slice`` exporter) are not a run's
-    scene and are left as they are; the analyses then take their margins
-    from the stats or the radii. A stat ``interior_margin``, which
-    the analyses prefer to the scene's ``d_max``, must be finite and ``>= 0``.
+    A run's scene (one with every section of :data:`RUN_SECTIONS`) is
+    validated by :func:`regopack.scene_model.scene_from_dict` (its structure
+    and the domain's values); its domain kind and (when it gives them) its
+    phase names must be the file's, and every radius must lie in the size
+    range ``[d_min / 2, d_max / 2]`` (within :data:`SIZE_RTOL`) that the
+    plain numbers ``size.d_min`` and ``size.d_max`` give, since the analyses
+    take their margins from it. The plugins the scene names are not resolved
+    and no file it names is read (a sieve table moved, a FIFO, a plugin not
+    installed here): loading reads the packing file only. A scene without
+    every run section (a name only, as packings built in Python carry) and
+    the scene of a 2D section of a 3D packing (with a ``slice`` table, see
+    the ``slice`` exporter) are left as they are; the analyses then take
+    their margins from the stats or the radii. A stat ``interior_margin``,
+    which the analyses prefer to the scene's ``d_max``, must be finite and
+    ``>= 0``.
 
     Raises
     ------
@@ -946,18 +972,13 @@ def check_file_scene(path: Path, packing: Packing | Packing3D) -> None:
             path, f"meta 'stats' has 'interior_margin' = {margin!r}; it is finite and >= 0"
         )
     scene = packing.scene
-    if "slice" in scene or not any(key in scene for key in RUN_SECTIONS):
+    if "slice" in scene or not all(key in scene for key in RUN_SECTIONS):
         return
     from regopack.errors import ConfigError
-    from regopack.scene_model import _resolve_ref, scene_from_dict
+    from regopack.scene_model import scene_from_dict
 
     try:
         structural = scene_from_dict(scene, source="meta 'scene'")
-        registry = _scene_registry()
-        size_ref = _resolve_ref(structural, registry, "size", structural.size, ("size",))
-        _resolve_ref(structural, registry, "density", structural.density, ("density",))
-        size = size_ref.build()
-        r_min, r_max = float(size.r_min), float(size.r_max)
     except ConfigError as err:
         raise _invalid(
             path, f"{err} (the scene of a packing file is checked as 'regopack run' checks one)"
@@ -969,13 +990,18 @@ def check_file_scene(path: Path, packing: Packing | Packing3D) -> None:
             f"meta 'scene' has domain.kind = {kind!r}, but meta 'domain' is a "
             f"{packing.domain.kind!r}; they are the same",
         )
-    phases = tuple(phase.name for phase in structural.phases)
-    if phases != packing.mineral_names:
-        raise _invalid(
-            path,
-            f"meta 'scene' names the phases {list(phases)}, but meta 'mineral_names' is "
-            f"{list(packing.mineral_names)}; they are the same, in the same order",
-        )
+    if "phases" in scene:
+        phases = tuple(phase.name for phase in structural.phases)
+        if phases != packing.mineral_names:
+            raise _invalid(
+                path,
+                f"meta 'scene' names the phases {list(phases)}, but meta 'mineral_names' is "
+                f"{list(packing.mineral_names)}; they are the same, in the same order",
+            )
+    limits = _scene_size_range(path, scene.get("size"))
+    if limits is None:
+        return
+    r_min, r_max = limits
     radius = packing.radius
     bad = ~((radius >= r_min * (1 - SIZE_RTOL)) & (radius <= r_max * (1 + SIZE_RTOL)))
     if bad.any():
