@@ -1376,8 +1376,28 @@ MAX_EXPANSION = 100
 
 regopack stores the members uncompressed (ratio 1); numbers compressed by
 ``numpy.savez_compressed`` expand a few times. A member that declares more is
-a zip bomb, refused before it is decompressed.
+a zip bomb, refused before it is decompressed. Only the members that bound
+the others are held to it (:data:`EXPANSION_CAPPED`): a per-particle array
+(``mineral`` of a one-phase packing, all zeros, deflates a thousand times)
+has at most one row per particle and :data:`MAX_ROW_ENTRIES` entries a row.
 """
+
+EXPANSION_CAPPED = frozenset(
+    {
+        "radius",
+        "vertices",
+        "meta",
+        "face_vertices",
+        "face_vertex_offsets",
+        "face_offsets",
+        "normals",
+        "support",
+    }
+)
+"""Members held to :data:`MAX_EXPANSION`: ``meta``, the particle count, vertices and faces."""
+
+MAX_ROW_ENTRIES = 16
+"""Most entries a row of a per-particle array may declare (a rotation matrix has 9)."""
 
 MAX_VERTICES_PER_PARTICLE = 2**16
 """Most vertices (2D) or faces and face vertices (3D) a file may give one particle on average."""
@@ -1420,7 +1440,7 @@ class PackingArchive:
         self._members = members
         self.files = list(members)
 
-    def _info(self, name: str) -> zipfile.ZipInfo:
+    def _info(self, name: str, capped: bool = True) -> zipfile.ZipInfo:
         info = self._members[name]
         size, packed = info.file_size, info.compress_size
         if packed > self._disk_size:
@@ -1429,7 +1449,7 @@ class PackingArchive:
                 f"member {name!r} declares {packed} compressed bytes in a file of "
                 f"{self._disk_size} bytes",
             )
-        if size > _EXPANSION_FLOOR and size > MAX_EXPANSION * max(packed, 1):
+        if capped and size > _EXPANSION_FLOOR and size > MAX_EXPANSION * max(packed, 1):
             raise _bad(
                 self.path,
                 f"member {name!r} declares {size} bytes compressed into {packed}, more than "
@@ -1437,7 +1457,7 @@ class PackingArchive:
             )
         return info
 
-    def header(self, name: str) -> tuple[tuple[int, ...], np.dtype[Any]]:
+    def header(self, name: str, capped: bool = True) -> tuple[tuple[int, ...], np.dtype[Any]]:
         """Shape and dtype that member ``name`` declares, checked against its size.
 
         Raises
@@ -1446,7 +1466,7 @@ class PackingArchive:
             When the member has no valid NPY header, declares a pickled
             (object) dtype, or a size other than its zip entry's.
         """
-        info = self._info(name)
+        info = self._info(name, capped)
         try:
             with self._zip.open(info) as fh:
                 version = np.lib.format.read_magic(fh)
@@ -1488,7 +1508,10 @@ class PackingArchive:
         PackingFileError
             One line naming the file, the array, what it declares and what is allowed.
         """
-        shape, _ = self.header(name)
+        # a per-particle array, its rows bounded by the particle count, is not held
+        # to the expansion cap; its rows' width is bounded below, before it is read
+        capped = rows is None or name in EXPANSION_CAPPED
+        shape, _ = self.header(name, capped)
         if ndim is not None and len(shape) != ndim:
             raise _invalid(
                 self.path, f"array {name!r} has shape {shape}, expected a {ndim}-D array"
@@ -1496,6 +1519,12 @@ class PackingArchive:
         if rows is not None and shape and shape[0] > rows:
             raise _invalid(
                 self.path, f"array {name!r} declares {shape[0]} rows; at most {rows} are allowed"
+            )
+        if not capped and math.prod(shape[1:]) > MAX_ROW_ENTRIES:
+            raise _invalid(
+                self.path,
+                f"array {name!r} has shape {shape}; at most {MAX_ROW_ENTRIES} entries a row "
+                "are allowed",
             )
         with self._zip.open(self._members[name]) as fh:
             arr: NDArray[Any] = np.lib.format.read_array(

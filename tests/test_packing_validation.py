@@ -35,6 +35,7 @@ from cli_helpers import one_error_line
 
 from regopack.analysis import run_analyses
 from regopack.cli import main
+from regopack.domain import Rectangle
 from regopack.errors import ExportError, PackingError, PackingFileError, RegopackError
 from regopack.interfaces import InsertionResult
 from regopack.packing import Packing, load, save
@@ -681,6 +682,33 @@ def test_a_zip_bomb_is_refused_before_it_is_decompressed(good, tmp_path, monkeyp
     refuse_data_reads(monkeypatch)
     with pytest.raises(PackingFileError, match="member 'radius' declares 4194432 bytes compressed"):
         load(path)
+
+
+def test_a_recompressed_one_phase_packing_loads(tmp_path):
+    """A one-phase packing's 'mineral' (all zeros) deflates far more than 100 times."""
+    n = 2**17 + 1000  # 'mineral' above 1 MiB
+    side = 1e-3 * (1 + 1e-6 * np.arange(n))  # every square a little larger: no repeats
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    p = Packing(
+        radius=side / np.sqrt(np.pi),
+        mineral=np.zeros(n, np.int64),
+        mineral_names=("a",),
+        vertices=(side[:, None, None] * unit).reshape(-1, 2),
+        offsets=np.arange(0, 4 * n + 1, 4),
+        orientation=np.zeros(n),
+        centre=np.full((n, 2), np.nan),
+        insertion_index=np.full(n, -1),
+        domain=Rectangle(0, 7, 0, 7),
+    )
+    plain = tmp_path / "plain.npz"
+    save(p, plain)
+    packed = tmp_path / "compressed.npz"
+    np.savez_compressed(packed, **members_of(plain))
+    with zipfile.ZipFile(packed) as zf:
+        info = zf.getinfo("mineral.npy")
+        assert info.file_size > 100 * info.compress_size
+    q = load(packed)
+    assert q.n_particles == n and not q.mineral.any()
 
 
 def test_a_header_of_a_trillion_entries_is_refused_before_allocation(good, tmp_path, monkeypatch):
