@@ -1436,9 +1436,20 @@ class PackingArchive:
         members: dict[str, zipfile.ZipInfo] = {}
         for info in zf.infolist():
             if info.filename.endswith(".npy"):
-                members.setdefault(info.filename[:-4], info)
+                name = info.filename[:-4]
+                if name in members:  # zipfile reads one copy, numpy.load the other
+                    raise _bad(path, f"member {info.filename!r} appears more than once")
+                members[name] = info
         self._members = members
         self.files = list(members)
+
+    def _unreadable(self, name: str, err: Exception) -> PackingFileError:
+        """Return the error for a member zipfile cannot open: encrypted, or of an unknown method."""
+        if isinstance(err, NotImplementedError):  # a RuntimeError too
+            why = " ".join(str(err).split())
+        else:
+            why = "it is encrypted; regopack writes members in the clear"
+        return _bad(self.path, f"member {name!r} cannot be read ({why})")
 
     def _info(self, name: str, capped: bool = True) -> zipfile.ZipInfo:
         info = self._members[name]
@@ -1481,6 +1492,8 @@ class PackingArchive:
                 else:
                     raise ValueError(f"NPY format version {version[0]}.{version[1]}")
                 start = fh.tell()
+        except (NotImplementedError, RuntimeError) as err:  # compression method, encryption
+            raise self._unreadable(name, err) from None
         except (ValueError, OSError, EOFError, zipfile.BadZipFile) as err:
             raise _invalid(
                 self.path, f"member {name!r} has no valid NPY header ({' '.join(str(err).split())})"
@@ -1526,10 +1539,13 @@ class PackingArchive:
                 f"array {name!r} has shape {shape}; at most {MAX_ROW_ENTRIES} entries a row "
                 "are allowed",
             )
-        with self._zip.open(self._members[name]) as fh:
-            arr: NDArray[Any] = np.lib.format.read_array(
-                fh, allow_pickle=False, max_header_size=_NPY_HEADER_LIMIT
-            )
+        try:
+            with self._zip.open(self._members[name]) as fh:
+                arr: NDArray[Any] = np.lib.format.read_array(
+                    fh, allow_pickle=False, max_header_size=_NPY_HEADER_LIMIT
+                )
+        except (NotImplementedError, RuntimeError) as err:  # compression method, encryption
+            raise self._unreadable(name, err) from None
         return arr
 
     def __getitem__(self, name: str) -> NDArray[Any]:

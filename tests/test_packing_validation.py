@@ -711,6 +711,51 @@ def test_a_recompressed_one_phase_packing_loads(tmp_path):
     assert q.n_particles == n and not q.mineral.any()
 
 
+def _patch_member_field(path: Path, member: str, field: str, value: int) -> None:
+    """Set a field of ``member``'s local and central headers: ``method``, or or-ed ``flags``."""
+    data = bytearray(path.read_bytes())
+    name = member.encode()
+    for sig, method, flags, nlen_at, hdr in (
+        (b"PK\x01\x02", 10, 8, 28, 46),
+        (b"PK\x03\x04", 8, 6, 26, 30),
+    ):
+        i = data.find(sig)
+        while i >= 0:
+            nlen = int.from_bytes(data[i + nlen_at : i + nlen_at + 2], "little")
+            if data[i + hdr : i + hdr + nlen] == name:
+                at = i + (method if field == "method" else flags)
+                old = int.from_bytes(data[at : at + 2], "little")
+                new = value if field == "method" else old | value
+                data[at : at + 2] = new.to_bytes(2, "little")
+            i = data.find(sig, i + 4)
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "why"),
+    [
+        ("method", 99, "That compression method is not supported"),
+        ("flags", 1, "it is encrypted"),
+    ],
+)
+def test_a_member_zipfile_cannot_open_is_one_line(good, tmp_path, capsys, field, value, why):
+    path = write_members(tmp_path / "odd.npz", members_of(good))
+    _patch_member_field(path, "radius.npy", field, value)
+    with pytest.raises(PackingFileError, match=f"member 'radius' cannot be read \\({why}"):
+        load(path)
+    assert main(["verify", str(path)]) == 2
+    assert why in one_error_line(capsys)
+
+
+def test_a_member_given_twice_is_refused(good, tmp_path):
+    """zipfile would read one copy and numpy.load the other."""
+    path = write_members(tmp_path / "twice.npz", members_of(good))
+    with pytest.warns(UserWarning, match="Duplicate name"), zipfile.ZipFile(path, "a") as zf:
+        zf.writestr("radius.npy", b"\x93NUMPY garbage")
+    with pytest.raises(PackingFileError, match=r"member 'radius\.npy' appears more than once"):
+        load(path)
+
+
 def test_a_header_of_a_trillion_entries_is_refused_before_allocation(good, tmp_path, monkeypatch):
     members = members_of(good)
     buf = io.BytesIO()
