@@ -825,6 +825,11 @@ def check_file_values(packing: Packing, version: int | None = None) -> None:
     PackingError
         One line naming the particle, the array and the value, and what is allowed.
     """
+    with np.errstate(all="ignore"):  # outlines of 1e200 overflow: refused, without warnings
+        _check_values(packing, version)
+
+
+def _check_values(packing: Packing, version: int | None) -> None:
     dom = packing.domain
     if version == 1 and (type(dom) is not Rectangle or packing.rounded):
         what = f"a {dom.kind} domain" if type(dom) is not Rectangle else "rounded particles"

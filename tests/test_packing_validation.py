@@ -947,6 +947,13 @@ def test_octagons_of_many_vertices_load_at_any_scale(tmp_path):
         np.testing.assert_allclose(q.radius, p.radius * factor)
 
 
+def test_outlines_that_overflow_are_refused_without_warnings(good, tmp_path, recwarn):
+    path = craft(good, tmp_path / "huge.npz", set_array("vertices", lambda v: v * 1e200))
+    with pytest.raises(PackingFileError, match="array 'radius' has the value"):
+        load(path)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
 def test_a_periodic_file_with_centres_in_the_cell_loads(good, tmp_path):
     assert load(craft(good, tmp_path / "periodic.npz", periodic)).domain.periodic
 
