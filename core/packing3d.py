@@ -24,6 +24,9 @@ from regopack.errors import GeometryError, PackingError, PackingFileError
 from regopack.packing import (
     FILE_MAGIC,
     FORMAT_VERSION_3D,
+    MIN_RADIUS,
+    RADIUS_RTOL,
+    REACH,
     Packing,
     PlacedParticles,
     _as_array,
@@ -31,14 +34,15 @@ from regopack.packing import (
     _first,
     _invalid,
     _json_default,
-    _read_array,
     _read_meta,
     _read_meta_keys,
     _short,
     check_array_types,
+    check_file_scene,
     check_particles,
     load,
-    open_packing_file,
+    open_archive,
+    read_arrays,
     save,
 )
 from regopack.solids import SolidBatch
@@ -451,6 +455,93 @@ def _read_box(path: Path, data: Any) -> Box:
         raise _invalid(path, f"meta 'domain' (kind {_short(data.get('kind'))}): {why}") from err
 
 
+def check_file_values3d(packing: Packing3D) -> None:
+    """Check what a 3D file's numbers mean, beyond :meth:`Packing3D.validate`.
+
+    Every radius is the volume-equivalent radius of its solid within
+    :data:`~regopack.packing.RADIUS_RTOL` (the volume as the cones from the
+    centre over the faces, plus a sphere's; a flat or empty solid has none);
+    every placed particle lies within :data:`~regopack.packing.REACH` box
+    sizes of the box and its radius is at least
+    :data:`~regopack.packing.MIN_RADIUS` of the box's largest side; in a
+    periodic box every centre lies in the cell. Relative tolerances only;
+    vectorised.
+
+    Raises
+    ------
+    PackingError
+        One line naming the particle, the array and the value, and what is allowed.
+    """
+    n = packing.n_particles
+    if n == 0:
+        return
+    rho = (
+        np.zeros(n) if packing.rounding is None else np.asarray(packing.rounding, dtype=np.float64)
+    )
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below
+        volume = (4.0 / 3.0) * np.pi * rho**3
+    faces = packing.normals.shape[0]
+    if faces:
+        sizes = np.diff(packing.face_vertex_offsets)
+        owner = np.repeat(np.repeat(np.arange(n), np.diff(packing.face_offsets)), sizes)
+        v = packing.vertices[packing.offsets[owner] + packing.face_vertices]
+        nxt = np.arange(v.shape[0]) + 1
+        nxt[packing.face_vertex_offsets[1:] - 1] = packing.face_vertex_offsets[:-1]
+        twice_area = np.add.reduceat(np.cross(v, v[nxt]), packing.face_vertex_offsets[:-1])
+        cone = np.einsum("ij,ij->i", twice_area, packing.normals) * packing.support / 6.0
+        face_owner = np.repeat(np.arange(n), np.diff(packing.face_offsets))
+        volume = volume + np.bincount(face_owner, weights=cone, minlength=n)
+    with np.errstate(over="ignore", invalid="ignore"):
+        eq = np.cbrt(np.maximum(volume, 0.0) * 3.0 / (4.0 * np.pi))
+    bad = ~(np.abs(eq - packing.radius) <= RADIUS_RTOL * packing.radius)
+    if bad.any():
+        j = _first(bad)
+        raise PackingError(
+            f"array 'radius' has the value {packing.radius[j]} at particle {j}, but its solid's "
+            f"volume {volume[j]:.17g} has the equivalent radius {eq[j]:.17g}; a radius is "
+            f"(3 volume / 4 pi)^(1/3) within a relative {RADIUS_RTOL:g}"
+        )
+    placed = packing.placed
+    b = packing.domain.bounds()
+    low, high = b[0::2], b[1::2]
+    size = float(np.max(high - low))
+    small = placed & (packing.radius < MIN_RADIUS * size)
+    if small.any():
+        j = _first(small)
+        raise PackingError(
+            f"array 'radius' has the value {packing.radius[j]} at placed particle {j}, less "
+            f"than {MIN_RADIUS:g} of the box's largest side {size:g}"
+        )
+    offsets = packing.offsets
+    far = np.abs(packing.vertices[:, 0])
+    for axis in (1, 2):
+        far = np.maximum(far, np.abs(packing.vertices[:, axis]))
+    reach = np.maximum.reduceat(far, offsets[:-1]) + rho
+    centre = np.where(placed[:, None], packing.centre, 0.5 * (low + high))
+    bad = placed & ~np.all(
+        (centre - reach[:, None] >= low - REACH * size)
+        & (centre + reach[:, None] <= high + REACH * size),
+        axis=1,
+    )
+    if bad.any():
+        j = _first(bad)
+        raise PackingError(
+            f"array 'centre' places particle {j} at {packing.centre[j]} (reaching "
+            f"{reach[j]:.6g} from it), more than the box's largest side ({size:g}) beyond "
+            f"its bounds {b.tolist()}"
+        )
+    if packing.domain.periodic:
+        c = packing.centre
+        top = np.maximum(high, low + (high - low))
+        bad = placed & ~np.all((c >= low) & (c < top), axis=1)
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"array 'centre' places particle {j} at {c[j]}, outside the periodic cell "
+                f"{b.tolist()} (each centre lies in [min, max) along every axis)"
+            )
+
+
 def load_packing(path: str | Path) -> Packing | Packing3D:
     """Read a 2D or 3D packing file, checking it against its format.
 
@@ -463,27 +554,24 @@ def load_packing(path: str | Path) -> Packing | Packing3D:
     PackingFileError
         One line naming the file and what is wrong with it.
     """
-    path = open_packing_file(path)
     try:
-        with np.load(path, allow_pickle=False) as npz:
+        with open_archive(path) as npz:
+            path = npz.path
             meta = _read_meta(path, npz)
             if meta["format_version"] != FORMAT_VERSION_3D:
                 return load(path)
             if meta.get("dimension") != 3:
                 raise _invalid(path, f"meta 'dimension' is {_short(meta.get('dimension'))}, not 3")
-            arrays: dict[str, Any] = {}
-            for name, (dtype, ndim) in _ARRAYS3D.items():
-                if name not in npz.files:
-                    raise _invalid(path, f"missing array {name!r}")
-                arrays[name] = _read_array(path, npz, name, dtype, ndim)
-            if "rounding" in npz.files:
-                arrays["rounding"] = _read_array(path, npz, "rounding", np.float64, 1)
+            arrays = read_arrays(path, npz, _ARRAYS3D)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
         raise PackingFileError(
             f"{path}: not a regopack packing file ({' '.join(str(err).split())})"
         ) from err
     keys = _read_meta_keys(path, meta, _read_box)
     try:
-        return Packing3D(**arrays, **keys)
+        packing = Packing3D(**arrays, **keys)
+        check_file_values3d(packing)
     except PackingError as err:
         raise _invalid(path, str(err)) from err
+    check_file_scene(path, packing)
+    return packing

@@ -325,20 +325,24 @@ def _outside(
     dom = packing.domain
     if isinstance(dom, PeriodicRectangle):
         return 0, None
-    cx, cy = dom.center
-    if isinstance(dom, Circle | ConvexPolygon):
-        crossing = np.flatnonzero(~_vertices_inside(packing, idx))
-        outside_fast = None
-    else:
-        crossing, outside_fast = _crossing_box(dom, geoms, areas, cx, cy, scale)
+    # decided on coordinates: a particle far away has no area left in the frame of
+    # ``geoms`` (its outline rounds to a point there), so neither the fast pass nor
+    # that frame's areas may vouch for it; the confirming overlay is in its own frame
+    crossing = np.flatnonzero(~_vertices_inside(packing, idx))
     worst_outside: tuple[int, float] | None = None
     n_outside = 0
     if len(crossing):
+        far = np.flatnonzero(~(areas[crossing] > 0))
+        if isinstance(dom, Circle | ConvexPolygon) or len(far):
+            outside_fast = None
+        else:
+            cx, cy = dom.center
+            outside_fast = _crossing_box(dom, geoms[crossing], areas[crossing], cx, cy, scale)
         if outside_fast is not None:
             flagged = ~(outside_fast <= rel_tol * areas[crossing])  # NaN counts as flagged
             crossing = crossing[flagged]
         if len(crossing):
-            size = np.sqrt(areas[crossing]) * scale
+            size = np.sqrt(packing.area()[idx[crossing]])
             frac = _confirm_outside(packing, idx[crossing], size)
             bad = ~(frac <= rel_tol)
             n_outside = int(np.count_nonzero(bad))
@@ -352,6 +356,7 @@ def _vertices_inside(packing: Packing, idx: NDArray[np.int64]) -> NDArray[np.boo
     """Whether every vertex of each particle lies inside (or on) a convex container's wall.
 
     A convex particle lies inside a convex container exactly when its vertices do.
+    The coordinates are compared as they are, at any distance from the domain.
     """
     dom = packing.domain
     counts = packing.offsets[idx + 1] - packing.offsets[idx]
@@ -360,10 +365,12 @@ def _vertices_inside(packing: Packing, idx: NDArray[np.int64]) -> NDArray[np.boo
     pts = packing.vertices[starts + within] + np.repeat(packing.centre[idx], counts, axis=0)
     if isinstance(dom, Circle):
         ok = np.hypot(pts[:, 0] - dom.cx, pts[:, 1] - dom.cy) <= dom.radius
-    else:
-        assert isinstance(dom, ConvexPolygon)
+    elif isinstance(dom, ConvexPolygon):
         normal, offset = dom.halfplanes()
         ok = np.all(pts @ normal.T <= offset, axis=1)
+    else:
+        b = dom.bounds()
+        ok = (pts[:, 0] >= b[0]) & (pts[:, 0] <= b[1]) & (pts[:, 1] >= b[2]) & (pts[:, 1] <= b[3])
     owner = np.repeat(np.arange(len(idx)), counts)
     bad = np.bincount(owner[~ok], minlength=len(idx))
     out: NDArray[np.bool_] = bad == 0
@@ -377,24 +384,14 @@ def _crossing_box(
     cx: float,
     cy: float,
     scale: float,
-) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
-    """Particles whose box crosses a rectangle's walls, and their area outside (fast pass)."""
+) -> NDArray[np.float64]:
+    """Area outside a rectangle's walls of particles that cross them (fast pass)."""
     lo_x, hi_x = (dom.xmin - cx) / scale, (dom.xmax - cx) / scale
     lo_y, hi_y = (dom.ymin - cy) / scale, (dom.ymax - cy) / scale
-    bounds = shapely.bounds(geoms)
-    crossing = np.flatnonzero(
-        ~(
-            (bounds[:, 0] >= lo_x)
-            & (bounds[:, 2] <= hi_x)
-            & (bounds[:, 1] >= lo_y)
-            & (bounds[:, 3] <= hi_y)
-        )
-    )
-    if not len(crossing):
-        return crossing, np.zeros(0)
     box = shapely.box(lo_x, lo_y, hi_x, hi_y)
-    inside = shapely.area(shapely.intersection(geoms[crossing], box))
-    return crossing, areas[crossing] - inside
+    inside = shapely.area(shapely.intersection(geoms, box))
+    out: NDArray[np.float64] = areas - inside
+    return out
 
 
 def _cores(packing: Packing, idx: NDArray[np.int64], scale: float) -> NDArray[np.object_]:

@@ -24,22 +24,31 @@ from regopack.testing import packing_from_polygons
 
 
 def random_packing(n: int = 50, seed: int = 0) -> Packing:
-    """Random (overlapping, it does not matter here) particles with 3 to 8 vertices."""
+    """Random (overlapping, it does not matter here) particles with 3 to 8 vertices.
+
+    Each is a convex polygon inscribed in a circle around its centre (the
+    gaps between its corners' angles below pi), its radius the equivalent
+    radius of its area, as a file requires.
+    """
     rng = np.random.default_rng(seed)
     counts = rng.integers(3, 9, size=n)
     offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     verts = []
-    for k in counts:
-        ang = np.sort(rng.uniform(0, 2 * np.pi, size=k))
+    radius = np.empty(n)
+    for j, k in enumerate(counts):
+        ang = (np.arange(k) + rng.uniform(0, 0.4, size=k)) * (2 * np.pi / k)
         r = rng.uniform(0.5, 1.5)
-        verts.append(np.c_[r * np.cos(ang), r * np.sin(ang)])
+        v = np.c_[r * np.cos(ang), r * np.sin(ang)]
+        verts.append(v)
+        area = 0.5 * np.sum(v[:, 0] * np.roll(v[:, 1], -1) - np.roll(v[:, 0], -1) * v[:, 1])
+        radius[j] = np.sqrt(area / np.pi)
     placed = rng.random(n) < 0.8
     centre = np.where(placed[:, None], rng.uniform(-10, 10, size=(n, 2)), np.nan)
     order = np.full(n, -1, dtype=np.int64)
     order[placed] = rng.permutation(int(placed.sum()))
     return Packing(
-        radius=rng.uniform(0.5, 1.5, size=n),
+        radius=radius,
         mineral=rng.integers(0, 3, size=n).astype(np.int64),
         mineral_names=("a", "b", "c"),
         vertices=np.concatenate(verts),
@@ -48,7 +57,7 @@ def random_packing(n: int = 50, seed: int = 0) -> Packing:
         centre=centre,
         insertion_index=order,
         domain=Rectangle(-12.0, 12.0, -11.0, 11.0),
-        scene={"name": "random", "phases": [{"name": "a", "shape": {"kind": "x"}}], "x": 0.1},
+        scene={"name": "random", "notes": [{"name": "a", "shape": {"kind": "x"}}], "x": 0.1},
         seed=seed,
         version="9.9.9",
         stats={"tries": 12.0, "nan": float("nan")},

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import zipfile
 
 import numpy as np
 import pytest
+from packings3d import cube_and_sphere
 
 import regopack
 from regopack.domain import Rectangle
@@ -169,3 +171,67 @@ def test_a_damaged_3d_file_is_refused_naming_the_file(tmp_path) -> None:
     assert not zipfile.is_zipfile(path)
     with pytest.raises(PackingFileError, match="not an NPZ archive"):
         load_packing(path)
+
+
+def _set(name: str, value: object):  # type: ignore[no-untyped-def]
+    def edit(contents: dict[str, np.ndarray]) -> None:
+        contents[name] = np.asarray(value)
+
+    return edit
+
+
+def _periodic_box(contents: dict[str, np.ndarray]) -> None:
+    meta = json.loads(str(contents["meta"]))
+    meta["domain"] = {"kind": "periodic-box", "bounds": [0, 10, 0, 10, 0, 10]}
+    contents["meta"] = np.array(json.dumps(meta))
+
+
+@pytest.mark.parametrize(
+    ("edit", "message"),
+    [
+        (
+            _set("radius", [1.3, 1.0]),
+            r"array 'radius' has the value 1\.3 at particle 0, but its solid's volume "
+            r"(8|7\.9999\d*) has "
+            r"the equivalent radius 1\.2407009817988\d*",
+        ),
+        (
+            _set("rounding", [0.0, 1e300]),
+            r"array 'radius' has the value 1\.0 at particle 1, but its solid's volume inf",
+        ),
+        (
+            _set("centre", [[1e17, 3, 3], [7, 3, 3]]),
+            r"array 'centre' places particle 0 at \[1\.e\+17 3\.e\+00 3\.e\+00\] .* more "
+            r"than the box's largest side \(10\) beyond",
+        ),
+        (
+            lambda c: _periodic_box(c) or _set("centre", [[11, 3, 3], [7, 3, 3]])(c),
+            r"array 'centre' places particle 0 at \[11\. 3\. 3\.\], outside the periodic cell",
+        ),
+    ],
+    ids=["radius", "rounding 1e300", "at 1e17", "periodic centre outside"],
+)
+def test_a_3d_file_whose_numbers_cannot_mean_a_packing_is_refused(tmp_path, edit, message) -> None:
+    path = tmp_path / "p.npz"
+    save3d(cube_and_sphere(), path)
+    assert load_packing(path).n_placed == 2
+    _rewrite(path, edit)
+    with pytest.raises(PackingFileError, match=rf"p\.npz: invalid packing file: {message}"):
+        load_packing(path)
+
+
+@pytest.mark.parametrize("factor", [1e-6, 1e6])
+def test_a_scaled_3d_file_loads(tmp_path, factor) -> None:
+    path = tmp_path / "p.npz"
+    p = cube_and_sphere()
+    side = 10 * factor
+    scaled = {
+        "radius": p.radius * factor,
+        "vertices": p.vertices * factor,
+        "support": p.support * factor,
+        "centre": p.centre * factor,
+        "rounding": p.rounding * factor,
+        "domain": Box(0, side, 0, side, 0, side),
+    }
+    save3d(dataclasses.replace(p, **scaled), path)
+    assert load_packing(path).n_placed == 2

@@ -17,9 +17,13 @@ exit status instead of killing pytest.
 
 from __future__ import annotations
 
+import io
 import json
+import os
+import re
 import subprocess
 import sys
+import zipfile
 from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
@@ -27,8 +31,11 @@ from typing import Any
 
 import numpy as np
 import pytest
+from cli_helpers import one_error_line
 
 from regopack.analysis import run_analyses
+from regopack.cli import main
+from regopack.domain import Rectangle
 from regopack.errors import ExportError, PackingError, PackingFileError, RegopackError
 from regopack.interfaces import InsertionResult
 from regopack.packing import Packing, load, save
@@ -37,6 +44,7 @@ from regopack.plugins.analysis.rdf import rdf_histogram
 from regopack.plugins.exporters import JsonExporter, read_json
 from regopack.population import Population, ShapeBatch
 from regopack.testing import make_registry, packing_from_polygons
+from regopack.verification import verify
 
 NAMES = ("pyroxene", "glass", "ilmenite")
 SIDE = 7
@@ -55,8 +63,10 @@ def valid_packing(rounding: bool = False) -> Packing:
         mineral_names=NAMES,
         stats={"interior_margin": 0.5, "tries": 49.0},
     )
-    if rounding:
-        p = replace(p, rounding=np.full(p.n_particles, 0.01))
+    if rounding:  # the radius of the rounded square's area
+        rho = 0.01
+        radius = np.full(p.n_particles, np.sqrt((1 + 4 * rho + np.pi * rho**2) / np.pi))
+        p = replace(p, rounding=np.full(p.n_particles, rho), radius=radius)
     return p
 
 
@@ -610,3 +620,479 @@ def test_rdf_wrapper_checks_what_the_kernel_indexes(kind, n_kinds, x, bins, mess
     y = np.zeros(3)
     with pytest.raises(ValueError, match=message):
         rdf_histogram(x, y, np.asarray(kind), n_kinds, 0.0, 0.5, bins, 10.0, 10.0)
+
+
+# -- special and hostile files: refused before anything is read --------------------------
+
+
+def write_members(
+    target: Path, members: dict[str, bytes | np.ndarray], deflate: bool = False
+) -> Path:
+    """A zip of ``name.npy`` members: arrays written as NPY, bytes as they are."""
+    method = zipfile.ZIP_DEFLATED if deflate else zipfile.ZIP_STORED
+    with zipfile.ZipFile(target, "w", method) as zf:
+        for name, value in members.items():
+            if isinstance(value, np.ndarray):
+                buf = io.BytesIO()
+                np.lib.format.write_array(buf, value, allow_pickle=False)
+                value = buf.getvalue()
+            zf.writestr(f"{name}.npy", value)
+    return target
+
+
+def members_of(path: Path) -> dict[str, bytes | np.ndarray]:
+    with np.load(path, allow_pickle=False) as npz:
+        return {k: npz[k] for k in npz.files}
+
+
+def refuse_data_reads(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Fail the test if the data of a member other than ``meta`` is read from now on."""
+    read_array = np.lib.format.read_array
+
+    def refuse(fh, *args, **kwargs):
+        assert fh.name == "meta.npy", f"the data of {fh.name} was read"
+        return read_array(fh, *args, **kwargs)
+
+    monkeypatch.setattr(np.lib.format, "read_array", refuse)
+
+
+@pytest.mark.parametrize("kind", ["fifo", "device", "directory"])
+def test_only_regular_files_are_opened(tmp_path, kind, capsys):
+    """A FIFO used to block in open(), /dev/zero to read without end."""
+    if kind == "fifo":
+        path = tmp_path / "pipe.npz"
+        os.mkfifo(path)
+        what = "is a FIFO (named pipe)"
+    elif kind == "device":
+        path = Path("/dev/zero")
+        what = "is a character device"
+    else:
+        path = tmp_path
+        what = "is a directory"
+    with pytest.raises(PackingFileError, match=rf"^{re.escape(str(path))}: {re.escape(what)}, "):
+        load(path)
+    assert main(["verify", str(path)]) == 2
+    assert what in one_error_line(capsys)
+
+
+def test_a_zip_bomb_is_refused_before_it_is_decompressed(good, tmp_path, monkeypatch):
+    members = members_of(good)
+    members["radius"] = np.zeros(2**19)  # 4 MiB that deflate to 4 KiB
+    path = write_members(tmp_path / "bomb.npz", members, deflate=True)
+    refuse_data_reads(monkeypatch)
+    with pytest.raises(PackingFileError, match="member 'radius' declares 4194432 bytes compressed"):
+        load(path)
+
+
+def test_a_recompressed_one_phase_packing_loads(tmp_path):
+    """A one-phase packing's 'mineral' (all zeros) deflates far more than 100 times."""
+    n = 2**17 + 1000  # 'mineral' above 1 MiB
+    side = 1e-3 * (1 + 1e-6 * np.arange(n))  # every square a little larger: no repeats
+    unit = np.array([[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]])
+    p = Packing(
+        radius=side / np.sqrt(np.pi),
+        mineral=np.zeros(n, np.int64),
+        mineral_names=("a",),
+        vertices=(side[:, None, None] * unit).reshape(-1, 2),
+        offsets=np.arange(0, 4 * n + 1, 4),
+        orientation=np.zeros(n),
+        centre=np.full((n, 2), np.nan),
+        insertion_index=np.full(n, -1),
+        domain=Rectangle(0, 7, 0, 7),
+    )
+    plain = tmp_path / "plain.npz"
+    save(p, plain)
+    packed = tmp_path / "compressed.npz"
+    np.savez_compressed(packed, **members_of(plain))
+    with zipfile.ZipFile(packed) as zf:
+        info = zf.getinfo("mineral.npy")
+        assert info.file_size > 100 * info.compress_size
+    q = load(packed)
+    assert q.n_particles == n and not q.mineral.any()
+
+
+def _patch_member_field(path: Path, member: str, field: str, value: int) -> None:
+    """Set a field of ``member``'s local and central headers: ``method``, or or-ed ``flags``."""
+    data = bytearray(path.read_bytes())
+    name = member.encode()
+    for sig, method, flags, nlen_at, hdr in (
+        (b"PK\x01\x02", 10, 8, 28, 46),
+        (b"PK\x03\x04", 8, 6, 26, 30),
+    ):
+        i = data.find(sig)
+        while i >= 0:
+            nlen = int.from_bytes(data[i + nlen_at : i + nlen_at + 2], "little")
+            if data[i + hdr : i + hdr + nlen] == name:
+                at = i + (method if field == "method" else flags)
+                old = int.from_bytes(data[at : at + 2], "little")
+                new = value if field == "method" else old | value
+                data[at : at + 2] = new.to_bytes(2, "little")
+            i = data.find(sig, i + 4)
+    path.write_bytes(bytes(data))
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "why"),
+    [
+        ("method", 99, "That compression method is not supported"),
+        ("flags", 1, "it is encrypted"),
+    ],
+)
+def test_a_member_zipfile_cannot_open_is_one_line(good, tmp_path, capsys, field, value, why):
+    path = write_members(tmp_path / "odd.npz", members_of(good))
+    _patch_member_field(path, "radius.npy", field, value)
+    with pytest.raises(PackingFileError, match=f"member 'radius' cannot be read \\({why}"):
+        load(path)
+    assert main(["verify", str(path)]) == 2
+    assert why in one_error_line(capsys)
+
+
+def test_a_member_given_twice_is_refused(good, tmp_path):
+    """zipfile would read one copy and numpy.load the other."""
+    path = write_members(tmp_path / "twice.npz", members_of(good))
+    with pytest.warns(UserWarning, match="Duplicate name"), zipfile.ZipFile(path, "a") as zf:
+        zf.writestr("radius.npy", b"\x93NUMPY garbage")
+    with pytest.raises(PackingFileError, match=r"member 'radius\.npy' appears more than once"):
+        load(path)
+
+
+def test_a_header_of_a_trillion_entries_is_refused_before_allocation(good, tmp_path, monkeypatch):
+    members = members_of(good)
+    buf = io.BytesIO()
+    header = {"descr": "<f8", "fortran_order": False, "shape": (10**12,)}
+    np.lib.format.write_array_header_1_0(buf, header)
+    members["radius"] = buf.getvalue() + bytes(8 * 49)
+    path = write_members(tmp_path / "huge.npz", members)
+    refuse_data_reads(monkeypatch)
+    with pytest.raises(PackingFileError, match=r"array 'radius' declares shape \(1000000000000,\)"):
+        load(path)
+
+
+def test_rows_beyond_the_particle_count_are_refused_before_reading(good, tmp_path):
+    members = members_of(good)
+    members["mineral"] = np.zeros(10**4, dtype=np.int64)
+    path = write_members(tmp_path / "rows.npz", members)
+    with pytest.raises(PackingFileError, match="array 'mineral' declares 10000 rows; at most 49"):
+        load(path)
+
+
+def test_a_member_without_an_npy_header_is_one_line(good, tmp_path):
+    members = members_of(good)
+    members["mineral"] = b"not an array at all"
+    path = write_members(tmp_path / "junk.npz", members)
+    with pytest.raises(PackingFileError, match="member 'mineral' has no valid NPY header"):
+        load(path)
+
+
+@pytest.mark.parametrize(
+    ("meta", "message"),
+    [
+        ("[" * 100_000 + "]" * 100_000, "meta nests objects and lists 100000 deep; at most 32"),
+        (json.dumps({"format": "x", "pad": "[" * 10**5}), "not a regopack packing file"),
+        ("x" * (2**22 + 1), "meta is 4194305 characters long; at most 4194304"),
+    ],
+    ids=["deep", "brackets in a string", "long"],
+)
+def test_meta_is_bounded_in_depth_and_size(good, tmp_path, meta, message):
+    members = members_of(good)
+    members["meta"] = np.array(meta)
+    path = write_members(tmp_path / "meta.npz", members)
+    with pytest.raises(PackingFileError, match=message):
+        load(path)
+
+
+# -- what the numbers mean: outlines, radii, positions ------------------------------------
+
+
+def set_outline(j: int, outline: list[tuple[float, float]]) -> Change:
+    """Give particle ``j`` the outline ``outline`` (relative to its centre)."""
+
+    def change(c: dict[str, Any]) -> None:
+        o = c["offsets"]
+        v = c["vertices"]
+        new = np.asarray(outline, dtype=np.float64)
+        c["vertices"] = np.concatenate([v[: o[j]], new, v[o[j + 1] :]])
+        c["offsets"] = np.concatenate([o[: j + 1], o[j + 1 :] + len(new) - (o[j + 1] - o[j])])
+
+    return change
+
+
+def scale_file(factor: float) -> Change:
+    def change(c: dict[str, Any]) -> None:
+        for name in ("vertices", "centre", "radius"):
+            c[name] = c[name] * factor
+        c["meta"]["domain"]["bounds"] = [b * factor for b in c["meta"]["domain"]["bounds"]]
+
+    return change
+
+
+def periodic(c: dict[str, Any]) -> None:
+    c["meta"].update(format_version=2, domain={"kind": "periodic", "bounds": [0, 7, 0, 7]})
+
+
+PENTAGRAM = [(np.cos(a), np.sin(a)) for a in np.radians([0, 144, 288, 72, 216])]
+DENTED = [(-0.5, -0.5), (0.5, -0.5), (0.5, 0.5), (0.0, 0.2), (-0.5, 0.5)]
+
+MEANING: dict[str, tuple[Change, str]] = {
+    "zero area": (
+        set_outline(INTERIOR, [(-0.5, 0.0), (0.5, 0.0), (0.5, 0.0), (-0.5, 0.0)]),
+        "gives particle 24 2 distinct vertices and no rounding: its outline has no area",
+    ),
+    "collinear": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (0.0, 0.0), (0.5, 0.5), (0.25, 0.25)]),
+        "gives particle 24 an outline whose edge (-0.5, -0.5) -> (0, 0) does not pass "
+        "counter-clockwise around its centre",
+    ),
+    "bow tie": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (0.5, 0.5), (0.5, -0.5), (-0.5, 0.5)]),
+        "particle 24 an outline whose edge",
+    ),
+    "clockwise": (
+        set_outline(INTERIOR, [(-0.5, -0.5), (-0.5, 0.5), (0.5, 0.5), (0.5, -0.5)]),
+        "particle 24 an outline whose edge",
+    ),
+    "pentagram": (
+        set_outline(INTERIOR, PENTAGRAM),
+        "gives particle 24 an outline that winds 2 times around its centre (it crosses itself)",
+    ),
+    "not convex": (
+        set_outline(INTERIOR, DENTED),
+        "gives particle 24 an outline that turns clockwise at its vertex (0, 0.20000000000000001)",
+    ),
+    "radius off": (
+        set_value("radius", INTERIOR, 0.57),
+        "array 'radius' has the value 0.57 at particle 24, but its outline's area 1 has "
+        "the equivalent radius 0.56418958354775628",
+    ),
+    "radius 1e-320": (set_value("radius", INTERIOR, 1e-320), "array 'radius' has the value"),
+    "rounding 1e300": (
+        lambda c: (
+            c.update(rounding=np.r_[np.zeros(24), 1e300, np.zeros(24)])
+            or c["meta"].update(format_version=2)
+        ),
+        "array 'radius' has the value 0.5641895835477563 at particle 24, but its outline's "
+        "area inf",
+    ),
+    "tiny particle": (
+        lambda c: scale_file(1e-13)(c) or c["meta"].update(domain=DOMAIN_7),
+        "array 'radius' has the value 5.641895835477563e-14 at placed particle 0, less than "
+        "1e-12 of the domain's larger side 7",
+    ),
+    "particle at 1e17": (
+        set_value("centre", INTERIOR, [1e17, 3.5]),
+        "array 'centre' places particle 24 at [1.0e+17 3.5e+00] (reaching 0.5 from it), "
+        "more than the domain's larger side (7) beyond the domain's bounds [0.0, 7.0, 0.0, 7.0]",
+    ),
+    "periodic centre outside": (
+        lambda c: periodic(c) or set_value("centre", INTERIOR, [10.5, 3.5])(c),
+        "array 'centre' places particle 24 at [10.5 3.5], outside the periodic cell [0, 7) x "
+        "[0, 7)",
+    ),
+    "periodic in version 1": (
+        set_meta("domain", {"kind": "periodic", "bounds": [0, 7, 0, 7]}),
+        "meta 'format_version' is 1 with a periodic domain; version 1 holds sharp polygons in a "
+        "walled rectangle only",
+    ),
+    "rounded in version 1": (
+        lambda c: c.update(rounding=np.zeros(49)) or set_value("rounding", 0, 0.1)(c),
+        "meta 'format_version' is 1 with rounded particles",
+    ),
+}
+DOMAIN_7 = {"kind": "rectangle", "bounds": [0, 7, 0, 7]}
+
+
+@pytest.mark.parametrize("defect", list(MEANING))
+def test_load_refuses_what_the_numbers_cannot_mean(good, tmp_path, defect):
+    change, message = MEANING[defect]
+    path = craft(good, tmp_path / "bad.npz", change)
+    with pytest.raises(PackingFileError) as info:
+        load(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: invalid packing file: ")
+    assert message in text
+    assert "\n" not in text
+
+
+@pytest.mark.parametrize("factor", [1e-6, 1e6])
+def test_a_scaled_file_loads_and_verifies_the_same(good, tmp_path, factor):
+    path = craft(good, tmp_path / "scaled.npz", scale_file(factor))
+    p = load(path)
+    assert p.n_placed == 46 and verify(p).ok
+    np.testing.assert_allclose(p.area(), factor**2)
+
+
+def test_octagons_of_many_vertices_load_at_any_scale(tmp_path):
+    # a = 1, psi = 0.01, m = 256: pairs of vertices about 1e-10 of the outline
+    # apart whose edge runs slightly backwards, merged on loading
+    import regopack
+
+    shape = {"kind": "octagon", "psi": 0.01, "a": 1.0, "m": 256}
+    p = regopack.pack(
+        "small",
+        domain__width=100,
+        domain__height=100,
+        phases=[{"name": "a", "fraction": 1.0, "shape": shape}],
+    )
+    path = tmp_path / "octagons.npz"
+    save(p, path)
+    assert load(path).n_placed == p.n_placed
+
+    def unscened(c: dict[str, Any]) -> None:
+        c["meta"]["scene"] = {"name": "octagons"}
+
+    for factor in (1e-6, 1e6):
+        scaled = tmp_path / f"octagons-{factor:g}.npz"
+        craft(path, scaled, lambda c, f=factor: (unscened(c), scale_file(f)(c)))
+        q = load(scaled)
+        np.testing.assert_allclose(q.radius, p.radius * factor)
+
+
+def test_outlines_that_overflow_are_refused_without_warnings(good, tmp_path, recwarn):
+    path = craft(good, tmp_path / "huge.npz", set_array("vertices", lambda v: v * 1e200))
+    with pytest.raises(PackingFileError, match="array 'radius' has the value"):
+        load(path)
+    assert not [w for w in recwarn if issubclass(w.category, RuntimeWarning)]
+
+
+def test_a_periodic_file_with_centres_in_the_cell_loads(good, tmp_path):
+    assert load(craft(good, tmp_path / "periodic.npz", periodic)).domain.periodic
+
+
+def test_verify_refuses_a_self_intersecting_outline_in_one_line(good, tmp_path, capsys):
+    """The bow tie reached GEOS (an error with a traceback) in 'regopack verify'."""
+    path = craft(good, tmp_path / "bowtie.npz", MEANING["bow tie"][0])
+    assert main(["verify", str(path)]) == 2
+    assert "particle 24 an outline whose edge" in one_error_line(capsys)
+
+
+# -- the scene a file holds ------------------------------------------------------------
+
+SCENE_7 = {
+    "name": "squares",
+    "seed": 1,
+    "count": "auto",
+    "domain": {"kind": "rectangle", "width": 7.0, "height": 7.0, "center": [3.5, 3.5]},
+    "size": {"kind": "change5", "d_min": 1.0, "d_max": 2.0, "d0": 1.5, "alpha": 6.9},
+    "phases": [
+        {"name": name, "fraction": 1 / 3, "shape": {"kind": "regular", "m": 4}} for name in NAMES
+    ],
+    "insertion": {"kind": "available-arc"},
+    "density": {"kind": "eta", "eta": 0.0},
+}
+
+
+def with_scene(**changes: Any) -> Change:
+    """The good file with :data:`SCENE_7`, its ``size`` (or another section) changed."""
+
+    def change(c: dict[str, Any]) -> None:
+        scene = json.loads(json.dumps(SCENE_7))
+        for key, value in changes.items():
+            section, _, field = key.partition("__")
+            if field:
+                scene[section][field] = value
+            else:
+                scene[section] = value
+        c["meta"]["scene"] = scene
+
+    return change
+
+
+SCENE_DEFECTS: dict[str, tuple[Change, str]] = {
+    "d_max negative": (
+        with_scene(size__d_max=-40),
+        "meta 'scene': size.d_max = -40: Input should be greater than 0",
+    ),
+    "d_max a string": (
+        with_scene(size__d_max="x"),
+        "meta 'scene': size.d_max = \"x\": Input should be a valid number",
+    ),
+    "d_max below the radii": (
+        with_scene(size__d_max=1.1),
+        "array 'radius' has the value 0.5641895835477563 at particle 0, outside the range "
+        "[0.5, 0.55000000000000004] of meta 'scene' size",
+    ),
+    "domain kind": (
+        with_scene(domain={"kind": "circle", "radius": 3.5, "center": [3.5, 3.5]}),
+        "meta 'scene' has domain.kind = 'circle', but meta 'domain' is a 'rectangle'",
+    ),
+    "phase names": (
+        lambda c: with_scene()(c) or c["meta"]["scene"]["phases"].reverse(),
+        "meta 'scene' names the phases ['ilmenite', 'glass', 'pyroxene'], but meta "
+        "'mineral_names' is ['pyroxene', 'glass', 'ilmenite']",
+    ),
+    "interior margin": (
+        set_meta("stats", {"interior_margin": -40.0}),
+        "meta 'stats' has 'interior_margin' = -40.0; it is finite and >= 0",
+    ),
+}
+
+
+@pytest.mark.parametrize("defect", list(SCENE_DEFECTS))
+def test_the_scene_a_file_holds_is_checked_as_a_scene_file(good, tmp_path, defect):
+    """A tampered d_max = -40 changed phi_interior from 0.85 to 0.42 without a word."""
+    change, message = SCENE_DEFECTS[defect]
+    path = craft(good, tmp_path / "bad.npz", change)
+    with pytest.raises(PackingFileError) as info:
+        load(path)
+    text = str(info.value)
+    assert text.startswith(f"{path}: invalid packing file: ")
+    assert message in text
+    assert "\n" not in text
+
+
+def test_a_file_with_a_valid_scene_loads(good, tmp_path):
+    p = load(craft(good, tmp_path / "scene.npz", with_scene()))
+    assert p.scene["size"]["d_max"] == 2.0
+
+
+def test_a_scene_naming_a_missing_sieve_table_loads(good, tmp_path):
+    """The scene's plugins are not resolved: a sieve table moved away does not matter."""
+    size = {"kind": "tabulated", "path": str(tmp_path / "gone.csv"), "basis": "number"}
+    p = load(craft(good, tmp_path / "moved.npz", with_scene(size=size)))
+    assert p.scene["size"]["path"] == size["path"]
+
+
+def test_a_scene_naming_a_fifo_loads_without_opening_it(good, tmp_path):
+    import threading
+
+    fifo = tmp_path / "fifo"
+    os.mkfifo(fifo)
+    size = {"kind": "tabulated", "path": str(fifo), "basis": "number"}
+    path = craft(good, tmp_path / "fifo.npz", with_scene(size=size))
+    done: list[Any] = []
+    thread = threading.Thread(target=lambda: done.append(load(path)), daemon=True)
+    thread.start()
+    thread.join(timeout=10)
+    if not done:  # unblock the reader, so that the thread ends
+        fd = os.open(fifo, os.O_WRONLY | os.O_NONBLOCK)
+        os.close(fd)
+    assert done and done[0].n_particles == 49
+
+
+def test_a_scene_of_an_unknown_size_kind_loads(good, tmp_path):
+    size = {"kind": "no-such-plugin", "spread": "wide"}
+    assert load(craft(good, tmp_path / "unknown.npz", with_scene(size=size))).n_particles == 49
+
+
+@pytest.mark.parametrize(
+    "scene",
+    [
+        {"name": "mine"},
+        {"name": "mine", "count": 4},
+        {"name": "mine", "domain": SCENE_7["domain"]},
+        {"name": "mine", "size": {"kind": "change5", "d_min": 9.0, "d_max": 10.0}},
+    ],
+)
+def test_a_partial_scene_is_not_checked_as_a_run_s(good, tmp_path, scene):
+    """Packings built in Python carry what scene they like; save writes them, load reads them."""
+    p = load(craft(good, tmp_path / "partial.npz", set_meta("scene", scene)))
+    q = tmp_path / "resaved.npz"
+    save(p, q)
+    assert load(q).scene == scene
+
+
+def test_analyze_refuses_a_tampered_scene_in_one_line(good, tmp_path, capsys):
+    path = craft(good, tmp_path / "tampered.npz", SCENE_DEFECTS["d_max negative"][0])
+    assert main(["analyze", str(path), "--no-figures", "--out", str(tmp_path / "out")]) == 2
+    assert "size.d_max = -40" in one_error_line(capsys)
+    assert not (tmp_path / "out").exists()

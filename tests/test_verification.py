@@ -1,5 +1,7 @@
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -201,3 +203,26 @@ def test_touching_squares_refuses_a_bad_grid(k, scale) -> None:
 def test_touching_squares_touch_and_do_not_overlap() -> None:
     report = verify(regopack.testing.touching_squares(3, scale=1e-6))
     assert report.ok and report.n_checked == 9
+
+
+@pytest.mark.parametrize("far", [1e17, 1e6, 12.0])
+@pytest.mark.parametrize(
+    "domain",
+    [
+        (0, 10, 0, 10),
+        regopack.domain.Circle(5.0, 5.0, 5.0),
+        regopack.domain.ConvexPolygon(
+            np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
+        ),
+    ],
+    ids=["rectangle", "circle", "polygon"],
+)
+def test_a_particle_far_outside_is_outside(far, domain):
+    """Containment is decided on coordinates: beyond ~1e17 an outline rounds to a point
+    in the frame of the domain, and a particle there used to pass."""
+    p = packing_from_polygons(squares((4, 4), (6, 4)), domain=domain)
+    p = dataclasses.replace(p, centre=p.centre + [[0.0, 0.0], [far, 0.0]])
+    report = verify(p)
+    assert not report.ok
+    assert report.n_outside == 1
+    assert report.worst_outside == (1, pytest.approx(1.0))
