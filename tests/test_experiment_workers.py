@@ -73,3 +73,27 @@ def _alive(pid: int) -> bool:
     except OSError:
         return True
     return state != "Z"
+
+
+def test_a_worker_loads_a_scenes_kernels_before_its_first_timed_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The first run's insertion time holds no loading of kernels: an untimed run of a few
+    particles loads them, once per kind of scene in a process."""
+    from regopack import experiment_workers as ew
+    from regopack.manager import default_registry
+    from regopack.scene_model import load_scene, resolve_scene
+
+    counts: list[object] = []
+    monkeypatch.setattr(ew, "_WARMED", set())
+    monkeypatch.setattr(ew, "run_scene", lambda s, *a, **k: counts.append(s.scene.count))
+    registry = default_registry()
+    small = resolve_scene(load_scene("small"), registry)
+    ew._warm_up(small)
+    ew._warm_up(resolve_scene(load_scene("small", ["domain.width=300", "seed=4"]), registry))
+    assert counts == [ew.WARM_COUNT]  # sizes and seeds load no other kernel
+    ew._warm_up(resolve_scene(load_scene("small", ["insertion.order=sweep"]), registry))
+    ew._warm_up(resolve_scene(load_scene("small", ["count=5"]), registry))
+    assert counts == [ew.WARM_COUNT, ew.WARM_COUNT]
+    ew._warm_up(resolve_scene(load_scene("dem", ["count=5"]), registry))
+    assert counts[-1] == 5
