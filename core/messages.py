@@ -99,13 +99,18 @@ def where(
     'small.toml'
     >>> where("density.eta", "small.toml", {"size.d_min": "--set"})
     'small.toml'
+    >>> where("phases", "small.toml", {"phases.2.fraction": "--set"}, "fractions sum to 4")
+    '--set'
     """
     for key, label in overridden.items():
         if loc == key or loc.startswith(key + "."):
             return label
         if key.startswith(loc + "."):
-            field = key[len(loc) + 1 :].split(".")[0]
-            if message is None or re.search(rf"\b{re.escape(field)}\b", message):
+            # the field inside loc: past a list index (phases.2.fraction: "fraction"),
+            # also in the plural ("phase fractions sum to 0.9")
+            parts = key[len(loc) + 1 :].split(".")
+            field = next((p for p in parts if not p.isdigit()), parts[0])
+            if message is None or re.search(rf"\b{re.escape(field)}s?\b", message):
                 return label
     return source
 

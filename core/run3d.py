@@ -114,10 +114,12 @@ def check_scene3d(scene: ResolvedScene) -> int:
         )
     box = _box(scene)
     if vol_min > box.volume:
+        domain_set = scene.scene.origin("domain") != scene.scene.source
+        size_given = scene.scene.origin("size") == scene.scene.source
         raise ConfigError(
             _located(
                 scene,
-                "size",
+                "domain" if domain_set and size_given else "size",
                 f"the smallest particle (diameter {2 * r_min:g}) is larger than the box "
                 f"(volume {box.volume:g}), so no particle can be placed",
             )

@@ -130,3 +130,50 @@ def test_no_message_names_an_extra_as_if_regopack_were_on_an_index():
         or "install 'regopack[" in path.read_text(encoding="utf-8")
     ]
     assert offenders == []
+
+
+SAMPLED_FIELDS = [
+    "seed", "count", "domain.width", "domain.center", "size.d_min", "size.d0", "size.alpha",
+    "phases.0.name", "phases.2.fraction", "phases.1.shape.psi", "phases.3.shape.m",
+    "insertion.t", "insertion.tau", "insertion.zone", "insertion.first", "density.eta",
+    "outputs.analyses",
+]  # fmt: skip
+SAMPLED_VALUES = ["-1", "1e300", '"x"', "3.5", "[]"]
+
+
+def test_every_sampled_scene_error_names_its_source(tmp_path, monkeypatch, capsys):
+    """Bad values over the scene's fields, by --set and in a file: each error names where."""
+    import tomllib
+
+    from regopack import _toml
+
+    monkeypatch.chdir(tmp_path)
+    text = main_scene_text()
+    unnamed = []
+    for field in SAMPLED_FIELDS:
+        for value in SAMPLED_VALUES:
+            if main(["config", "small", "--set", f"{field}={value}"]) != 0:
+                line = one_error_line(capsys)
+                if not line.startswith("regopack: error: --set"):
+                    unnamed.append(line)
+            capsys.readouterr()
+            data = tomllib.loads(text)
+            *head, last = field.split(".")
+            table = data
+            for part in head:
+                table = table[int(part)] if isinstance(table, list) else table[part]
+            table[last] = tomllib.loads(f"v = {value}")["v"]
+            (tmp_path / "s.toml").write_text(_toml.dumps(data), encoding="utf-8")
+            if main(["config", "s.toml"]) != 0:
+                line = one_error_line(capsys)
+                if not line.startswith("regopack: error: s.toml: "):
+                    unnamed.append(line)
+            capsys.readouterr()
+    assert unnamed == []
+
+
+def test_a_box_set_too_small_names_set_not_the_scene(capsys):
+    assert main(["config", "table1-3d", "--set", "domain.width=1e-300"]) == 2
+    assert one_error_line(capsys).startswith(
+        "regopack: error: --set: domain: the smallest particle (diameter 2) is larger than the box"
+    )
