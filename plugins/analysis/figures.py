@@ -166,6 +166,20 @@ def axis_unit(power: int, unit: str, scale: float) -> tuple[str, float]:
     return f"10{str(-exponent).translate(_SUPERSCRIPT)} {text}", float(10.0**exponent)
 
 
+def length_ticks(ax: Axes, unit: str, scale: float) -> str:
+    """Write the x and y ticks of a map in the decade of ``unit`` of :func:`axis_unit`.
+
+    Returns the unit text of the axis labels (``unit`` itself at the built-in
+    scale, where the ticks are left as matplotlib writes them).
+    """
+    text, factor = axis_unit(1, unit, scale)
+    if factor != 1.0:
+        ticks = FuncFormatter(lambda v, _: f"{v * factor:.6g}".replace("-", "\N{MINUS SIGN}"))
+        ax.xaxis.set_major_formatter(ticks)
+        ax.yaxis.set_major_formatter(ticks)
+    return text
+
+
 def _frame(ax: Axes, bounds: Sequence[float], unit: str = "µm", scale: float = 1.0) -> None:
     """Set the limits, equal aspect and labels of a map of the packing.
 
@@ -176,11 +190,7 @@ def _frame(ax: Axes, bounds: Sequence[float], unit: str = "µm", scale: float = 
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
-    text, factor = axis_unit(1, unit, scale)
-    if factor != 1.0:
-        ticks = FuncFormatter(lambda v, _: f"{v * factor:.6g}".replace("-", "\N{MINUS SIGN}"))
-        ax.xaxis.set_major_formatter(ticks)
-        ax.yaxis.set_major_formatter(ticks)
+    text = length_ticks(ax, unit, scale)
     ax.set_xlabel(f"x ({text})")
     ax.set_ylabel(f"y ({text})")
 

@@ -15,7 +15,7 @@ from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
 from regopack.packing import Packing
-from regopack.plugins.analysis.figures import WIDTH, _note, axis_unit
+from regopack.plugins.analysis.figures import WIDTH, _note, axis_unit, length_ticks
 from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.units import length_scale, length_unit
 
@@ -87,7 +87,15 @@ def _outline(ax: Axes, xy: NDArray[np.float64], **kwargs: Any) -> None:
     ax.add_patch(PolygonPatch(xy, closed=True, fill=False, **kwargs))
 
 
-def _tile_map(ax: Axes, fig: Figure, h: Homogeneity, column: str, scale: float, unit: str) -> None:
+def _tile_map(
+    ax: Axes,
+    fig: Figure,
+    h: Homogeneity,
+    column: str,
+    scale: float,
+    unit: str,
+    scale_of_lengths: float = 1.0,
+) -> None:
     tiles = h.tiles_table
     values = scale * np.asarray(tiles[column], dtype=np.float64)
     overall = scale * h.overall[column]
@@ -126,8 +134,9 @@ def _tile_map(ax: Axes, fig: Figure, h: Homogeneity, column: str, scale: float, 
     ax.set_xlim(float(b[0]) - pad, float(b[1]) + pad)
     ax.set_ylim(float(b[2]) - pad, float(b[3]) + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel(f"x ({unit})")
-    ax.set_ylabel(f"y ({unit})")
+    text = length_ticks(ax, unit, scale_of_lengths)
+    ax.set_xlabel(f"x ({text})")
+    ax.set_ylabel(f"y ({text})")
     bar = fig.colorbar(
         ScalarMappable(norm=norm, cmap=cmap), ax=ax, location="bottom", shrink=0.8, aspect=25
     )
@@ -148,7 +157,7 @@ def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
         if len(h.tiles_table.get("tile", [])) == 0:
             _note(ax, "no tiles (empty window)")
             continue
-        _tile_map(ax, fig, h, column, scale, unit)
+        _tile_map(ax, fig, h, column, scale, unit, length_scale(packing))
         ax.set_title(f"{short}, {nx} × {ny} tiles")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     if handles:
