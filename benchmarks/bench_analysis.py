@@ -37,6 +37,7 @@ from regopack.plugins.analysis import (
     Network,
     Rdf,
 )
+from regopack.plugins.analysis.coordination import default_sweep
 from regopack.run import run_scene
 from regopack.scene_model import load_scene, resolve_scene
 
@@ -114,7 +115,7 @@ def main() -> None:
 
     # Z(tol): one tolerance against a sweep of 20 (the default 0.02-0.5)
     tol = 0.05
-    sweep = CoordinationConfig().tols
+    sweep = default_sweep()
 
     def z_of(tols: list[float], tol_max: float) -> None:
         c = Contacts(ContactsConfig(tol=tol, tol_max=tol_max)).compute(packing, {})

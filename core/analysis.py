@@ -45,6 +45,7 @@ from regopack.manager import Registry
 from regopack.outdir import mark_folder, rebase, replace_folder
 from regopack.packing import Packing, _atomic_file, write_json_atomic
 from regopack.plugin_types import AnalyzerSpec, FigureSpec
+from regopack.units import DEFAULT_LENGTH_UNIT, length_unit
 
 if TYPE_CHECKING:
     from regopack.packing3d import Packing3D
@@ -394,7 +395,7 @@ def analysis_summary(
         "n_particles": packing.n_particles,
         "n_placed": packing.n_placed,
         "mineral_names": list(packing.mineral_names),
-        "length_unit": "µm",
+        "length_unit": length_unit(packing),
         "tol": _first(results, "tol"),
         "eta": eta,
         "interior_margin": _first(results, "interior_margin"),
@@ -673,11 +674,12 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     from the analyzers whose names end in ``3d``).
     """
     rows: list[tuple[str, str]] = []
+    u = str(summary.get("length_unit") or DEFAULT_LENGTH_UNIT)
     margin = summary.get("interior_margin")
-    interior = f"interior (margin {_fmt(margin, 'g')} µm)" if margin is not None else "interior"
+    interior = f"interior (margin {_fmt(margin, 'g')} {u})" if margin is not None else "interior"
     tol = summary.get("tol")
     if tol is not None:
-        rows.append(("contact tolerance tol", f"{_fmt(tol, 'g')} µm"))
+        rows.append(("contact tolerance tol", f"{_fmt(tol, 'g')} {u}"))
     if summary.get("eta") is not None:
         rows.append(("η", _fmt(summary["eta"], "g")))
     density = _either(summary, "density")
@@ -687,10 +689,10 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     contacts = _either(summary, "contacts")
     if isinstance(contacts, dict):
         rows.append(("contacts", _fmt(contacts.get("n_contacts"))))
-        rows.append(("median contact area A_c", f"{_fmt(contacts.get('median_area'))} µm²"))
+        rows.append(("median contact area A_c", f"{_fmt(contacts.get('median_area'))} {u}²"))
         if contacts.get("median_volume") is not None:
-            rows.append(("median contact volume V_c", f"{_fmt(contacts['median_volume'])} µm³"))
-        rows.append(("median contact width b_c", f"{_fmt(contacts.get('median_width'))} µm"))
+            rows.append(("median contact volume V_c", f"{_fmt(contacts['median_volume'])} {u}³"))
+        rows.append(("median contact width b_c", f"{_fmt(contacts.get('median_width'))} {u}"))
     coordination = _either(summary, "coordination")
     if isinstance(coordination, dict):
         rows.append(("Z domain", _fmt(coordination.get("z_domain"))))
@@ -703,9 +705,9 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
         peak, err = rdf.get("first_peak_r"), rdf.get("first_peak_r_err")
         if isinstance(peak, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
             digits = max(0, 1 - math.floor(math.log10(err)))  # two significant digits of err
-            rows.append(("first g(r) peak", f"{peak:.{digits}f} ± {err:.{digits}f} µm"))
+            rows.append(("first g(r) peak", f"{peak:.{digits}f} ± {err:.{digits}f} {u}"))
         else:
-            rows.append(("first g(r) peak", f"{_fmt(peak)} µm"))
+            rows.append(("first g(r) peak", f"{_fmt(peak)} {u}"))
         rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
     network = _either(summary, "network")
     if isinstance(network, dict):
@@ -752,14 +754,15 @@ def _report(
     out: Path,
 ) -> str:
     scene = summary.get("scene") or "packing"
+    u = str(summary.get("length_unit") or DEFAULT_LENGTH_UNIT)
     lines = [f"# Structure analysis: {scene}, seed {summary.get('seed')}", ""]
     source = summary.get("packing")
     lines.append(
         f"Packing {'`' + str(source) + '`' if source else '(in memory)'}: "
         f"{summary['n_placed']:,} of {summary['n_particles']:,} particles placed. "
-        f"Analysed with regopack {summary['regopack_version']}; lengths in µm. "
+        f"Analysed with regopack {summary['regopack_version']}; lengths in {u}. "
         f"Statistics marked *interior* exclude particles whose centre lies within "
-        f"{_fmt(summary.get('interior_margin'), 'g')} µm of a wall."
+        f"{_fmt(summary.get('interior_margin'), 'g')} {u} of a wall."
     )
     lines += ["", "## Main numbers", ""]
     lines += _md_table(("quantity", "value"), main_numbers(summary))

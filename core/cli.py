@@ -167,8 +167,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tol",
         type=float,
         metavar="X",
-        help="contact tolerance in micrometres (sets contacts.tol, or contacts3d.tol for a "
-        "3D packing; default 0.05)",
+        help="contact tolerance in the packing's length unit (sets contacts.tol, or "
+        "contacts3d.tol for a 3D packing; default d_min / 40, 0.05 for the built-in scenes)",
     )
     analyze.add_argument(
         "--set",

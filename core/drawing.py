@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from regopack.colours import mineral_colours
 from regopack.errors import ConfigError
+from regopack.units import length_unit
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -25,8 +26,8 @@ __all__ = ["COLOR_BY", "PackingArtists", "draw_packing", "packing_png", "summary
 
 COLOR_BY: dict[str, str] = {
     "mineral": "mineral of each particle (fixed colour per mineral name)",
-    "diameter": "equivalent diameter 2r (µm)",
-    "radius": "equivalent radius r (µm)",
+    "diameter": "equivalent diameter 2r (in the packing's length unit)",
+    "radius": "equivalent radius r (in the packing's length unit)",
     "order": "insertion order (0 = placed first)",
     "Z": "contacts per particle at the coordination analyzer's default tolerance",
 }
@@ -101,9 +102,9 @@ def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int6
     """Return ``(label, per placed particle values)`` of a numeric ``color_by``."""
     if isinstance(color_by, str):
         if color_by == "diameter":
-            return "equivalent diameter (µm)", 2.0 * packing.radius[placed]
+            return f"equivalent diameter ({length_unit(packing)})", 2.0 * packing.radius[placed]
         if color_by == "radius":
-            return "equivalent radius (µm)", packing.radius[placed]
+            return f"equivalent radius ({length_unit(packing)})", packing.radius[placed]
         if color_by == "order":
             return "insertion order", packing.insertion_index[placed].astype(np.float64)
         if color_by == "Z":
@@ -113,7 +114,8 @@ def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int6
             done = run_analyses(packing, default_registry(), [("coordination", {})])
             z = np.asarray(done["coordination"].per_particle)  # type: ignore[attr-defined]
             tol = done["contacts"].results().get("tol")
-            return f"contacts per particle Z (tol = {tol:g} µm)", z[placed].astype(np.float64)
+            label = f"contacts per particle Z (tol = {tol:g} {length_unit(packing)})"
+            return label, z[placed].astype(np.float64)
         raise ConfigError(
             f"color_by = {color_by!r}: expected one of {', '.join(COLOR_BY)}, "
             "or one value per particle"
@@ -193,8 +195,8 @@ def draw_packing(
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (µm)")
-    ax.set_ylabel("y (µm)")
+    ax.set_xlabel(f"x ({length_unit(packing)})")
+    ax.set_ylabel(f"y ({length_unit(packing)})")
     return PackingArtists(ax, coll, boundary, drawn_legend, drawn_bar)
 
 
@@ -209,15 +211,16 @@ def summary_line(packing: Packing) -> str:
     'test, seed 0: 1 of 1 particles placed, φ = 0.250 in a 2 × 2 µm rectangle'
     """
     dom = packing.domain
+    u = length_unit(packing)
     kind = str(dom.to_dict().get("kind", type(dom).__name__.lower()))
     if kind == "circle":
-        where = f"a circle {dom.width:g} µm across"
+        where = f"a circle {dom.width:g} {u} across"
     elif kind == "polygon":
-        where = f"a polygon {dom.width:g} × {dom.height:g} µm"
+        where = f"a polygon {dom.width:g} × {dom.height:g} {u}"
     elif kind == "periodic":
-        where = f"a periodic {dom.width:g} × {dom.height:g} µm rectangle"
+        where = f"a periodic {dom.width:g} × {dom.height:g} {u} rectangle"
     else:
-        where = f"a {dom.width:g} × {dom.height:g} µm {kind}"
+        where = f"a {dom.width:g} × {dom.height:g} {u} {kind}"
     area = float(packing.area()[packing.placed].sum())
     phi = area / dom.area if dom.area > 0 else float("nan")
     name = packing.scene.get("name", "packing")

@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from regopack.colours import mineral_colours
 from regopack.packing3d import Packing3D
+from regopack.units import length_unit
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -147,8 +148,9 @@ def draw_section(
     ax.set_xlim(*b[keep[0]])
     ax.set_ylim(*b[keep[1]])
     ax.set_aspect("equal")
-    ax.set_xlabel(f"{AXES[keep[0]]} (µm)")
-    ax.set_ylabel(f"{AXES[keep[1]]} (µm)")
+    unit = length_unit(packing)
+    ax.set_xlabel(f"{AXES[keep[0]]} ({unit})")
+    ax.set_ylabel(f"{AXES[keep[1]]} ({unit})")
     present = sorted({int(packing.mineral[j]) for j in owners})
     ax.legend(
         handles=[Patch(color=colours[m], label=packing.mineral_names[m]) for m in present],
@@ -202,9 +204,10 @@ def draw_view(packing: Packing3D, ax: Any, depth: float | None = None) -> int:
     ax.set_zlim(*b[2])
     ax.set_box_aspect(tuple(float(hi - lo) for lo, hi in b))
     ax.view_init(elev=22, azim=-60)
-    ax.set_xlabel("x (µm)")
-    ax.set_ylabel("y (µm)")
-    ax.set_zlabel("z (µm)")
+    unit = length_unit(packing)
+    ax.set_xlabel(f"x ({unit})")
+    ax.set_ylabel(f"y ({unit})")
+    ax.set_zlabel(f"z ({unit})")
     return shown
 
 

@@ -44,6 +44,7 @@ from regopack.manager import Registry
 from regopack.messages import describe_validation_error, dotted, format_value, where
 from regopack.outdir import MARKER, NAME_RULE, name_key, name_problem
 from regopack.plugin_types import PluginSpec
+from regopack.units import _ALIASES, LENGTH_UNITS, _allowed
 
 __all__ = [
     "ANALYSIS_FOLDER",
@@ -341,6 +342,15 @@ class Scene(BaseModel):
             "Number of particles to draw; 'auto' gives round(domain area / mean particle area)."
         ),
     )
+    length_unit: str = Field(
+        "µm",
+        description=(
+            "Unit of every length of the scene, its packing and analyses: 'm', 'cm', 'mm', "
+            "'µm' (or 'um') or 'nm'. It names the unit in figures, tables and exports; "
+            "it does not convert anything."
+        ),
+        json_schema_extra={"enum": [*LENGTH_UNITS, *_ALIASES]},
+    )
     domain: Domain = Field(default_factory=Domain, description="The container.")
     size: PluginRef = Field(description="Size distribution of the equivalent radii.")
     phases: list[Phase] = Field(
@@ -363,6 +373,14 @@ class Scene(BaseModel):
                 f"runs/<name>-seed<seed>, so it must be a plain folder name ({NAME_RULE})"
             )
         return name
+
+    @field_validator("length_unit", mode="before")
+    @classmethod
+    def _check_length_unit(cls, value: Any) -> Any:
+        unit = _ALIASES.get(value, value) if isinstance(value, str) else value
+        if isinstance(unit, str) and unit in LENGTH_UNITS:
+            return unit
+        raise ValueError(f"not a length unit; allowed: {_allowed()}")
 
     @field_validator("count", mode="before")
     @classmethod
@@ -737,6 +755,7 @@ class ResolvedScene:
             "name": s.name,
             "seed": s.seed,
             "count": s.count,
+            "length_unit": s.length_unit,
             "domain": s.domain.resolved_dict(),
             "size": self.size.to_dict(),
             "phases": [

@@ -97,7 +97,7 @@ def unplaced_per_class(
     Returns
     -------
     list of dict
-        One record per class, finest first: ``d_lo``, ``d_hi`` (µm),
+        One record per class, finest first: ``d_lo``, ``d_hi`` (length unit),
         ``drawn``, ``placed``, ``not_placed``. Empty without particles.
 
     Examples

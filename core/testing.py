@@ -54,6 +54,8 @@ __all__ = [
     "extreme_radii",
     "make_registry",
     "packing_from_polygons",
+    "scaled_packing",
+    "scaled_scene",
     "touching_squares",
     "verify",
 ]
@@ -726,3 +728,85 @@ def check_density_controller(
                 f"r_candidate={r_cand:.3g}) gave different arcs with generators seeded {seed}; "
                 "draw random numbers only from the generator passed in"
             )
+
+
+# ---------------------------------------------------------------------------
+# scaling
+
+SCENE_LENGTHS: dict[str, tuple[str, ...]] = {
+    "domain": ("width", "height", "depth", "center", "radius", "vertices"),
+    "size": ("d_min", "d_max", "d0", "median", "mean", "d63", "d"),
+    "insertion": ("zone", "strip"),
+}
+"""Keys of the scene's sections that hold lengths (numbers or lists of them)."""
+
+STAT_LENGTHS: tuple[str, ...] = ("interior_margin",)
+"""Keys of a packing's ``stats`` that hold lengths."""
+
+
+def _times(value: Any, s: float) -> Any:
+    if isinstance(value, bool) or value is None:
+        return value
+    if isinstance(value, int | float):
+        return float(value) * s
+    if isinstance(value, list | tuple):
+        return [_times(v, s) for v in value]
+    return value
+
+
+def scaled_scene(scene: Any, s: float) -> dict[str, Any]:
+    """Return a copy of the scene dictionary with every length multiplied by ``s``.
+
+    The lengths are those of :data:`SCENE_LENGTHS`; counts, fractions,
+    exponents and shape coefficients stay.
+
+    Examples
+    --------
+    >>> scaled_scene({"domain": {"width": 200.0}, "size": {"d_min": 2.0, "alpha": 6.9}}, 1e-3)
+    {'domain': {'width': 0.2}, 'size': {'d_min': 0.002, 'alpha': 6.9}}
+    """
+    import copy
+
+    out: dict[str, Any] = copy.deepcopy(dict(scene)) if isinstance(scene, dict) else {}
+    for section, keys in SCENE_LENGTHS.items():
+        part = out.get(section)
+        if isinstance(part, dict):
+            for key in keys:
+                if key in part:
+                    part[key] = _times(part[key], s)
+    return out
+
+
+def scaled_packing(packing: Any, s: float) -> Any:
+    """Return a copy of a 2D or 3D packing with every length multiplied by ``s``.
+
+    Centres, vertices, support values, radii, rounding radii, the domain,
+    the length statistics and the embedded scene's lengths
+    (:func:`scaled_scene`) are scaled; orientations, normals and counts stay.
+    A packing and its scaled copy must analyse alike, lengths times ``s``.
+    """
+    from dataclasses import replace
+
+    stats = {k: (float(v) * s if k in STAT_LENGTHS else v) for k, v in packing.stats.items()}
+    common: dict[str, Any] = {
+        "radius": packing.radius * s,
+        "vertices": packing.vertices * s,
+        "centre": packing.centre * s,
+        "scene": scaled_scene(packing.scene, s),
+        "stats": stats,
+        "rounding": None if packing.rounding is None else packing.rounding * s,
+    }
+    record = packing.domain.to_dict()
+    if getattr(packing, "dimension", 2) == 3:
+        from regopack.domain3d import domain3d_from_dict
+
+        record["bounds"] = _times(record["bounds"], s)
+        return replace(
+            packing, domain=domain3d_from_dict(record), support=packing.support * s, **common
+        )
+    from regopack.domain import domain_from_dict
+
+    for key in ("bounds", "vertices", "center", "radius"):
+        if key in record:
+            record[key] = _times(record[key], s)
+    return replace(packing, domain=domain_from_dict(record), **common)

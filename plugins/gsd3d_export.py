@@ -15,6 +15,9 @@ HOOMD-blue writes the shapes of its ``ConvexPolyhedron`` integrator.
   centroid in that body frame, and ``moment_inertia`` holds the principal
   moments, as HOOMD-blue's rigid-body integrators expect. The packing's own
   rotation quaternion is logged as ``particles/regopack/rotation``.
+- **Units**: lengths in the scene's ``length_unit`` (GSD has no unit field);
+  the log entry ``regopack/length_unit_m`` holds that unit in metres
+  (``1e-6`` for micrometres).
 - **Mass** = volume × ``density``.
 
 A sphere (of a scene of spheres) is ``{"type": "Sphere", "diameter": d}``
@@ -35,6 +38,7 @@ from regopack.interfaces import Analyzer, SolidExporter
 from regopack.packing3d import Packing3D
 from regopack.plugins.gsd_export import _gsd_hoomd, _write_frame
 from regopack.plugins.solid_export_common import mass_properties, placed_solids
+from regopack.units import METRES, length_unit
 
 __all__ = ["Gsd3dConfig", "Gsd3dExporter", "principal_frame", "quaternion_from_matrix"]
 
@@ -193,6 +197,7 @@ class Gsd3dExporter(SolidExporter):
         frame.log["particles/regopack/rotation"] = packing.rotation[idx].reshape(n, 4)
         frame.log["regopack/origin"] = origin.astype(np.float64)
         frame.log["regopack/density"] = np.array([density])
+        frame.log["regopack/length_unit_m"] = np.array([METRES[length_unit(packing)]])
         frame.log["regopack/periodic"] = np.array([int(periodic)], dtype=np.uint8)
         _write_frame(path, frame, hoomd)
         return path

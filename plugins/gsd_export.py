@@ -19,6 +19,9 @@ vertex ``(0, 0)`` rounded by its radius) integrators.
   the centroid rotated by ``-t`` (the particle's body frame).
 - **Vertices**: counter-clockwise, distinct, without collinear vertices
   (:func:`convex_outline`), as HOOMD-blue requires.
+- **Units**: lengths in the scene's ``length_unit`` (GSD has no unit field);
+  the log entry ``regopack/length_unit_m`` holds that unit in metres
+  (``1e-6`` for micrometres).
 - **Mass** = area x ``density``; ``moment_inertia`` = ``[0, 0, Izz]`` about
   the centroid (:func:`shape_moments`).
 
@@ -46,6 +49,7 @@ from regopack.messages import install_hint
 from regopack.packing import Packing, _remove_stale_temporaries
 from regopack.plugin_types import ExporterSpec
 from regopack.plugins.rounded_bodies import rounded_moments
+from regopack.units import METRES, length_unit
 
 __all__ = [
     "OUTLINE_TOL",
@@ -320,6 +324,7 @@ class GsdExporter(Exporter):
         )
         frame.log["regopack/origin"] = np.array([origin[0], origin[1], 0.0])
         frame.log["regopack/density"] = np.array([density])
+        frame.log["regopack/length_unit_m"] = np.array([METRES[length_unit(packing)]])
         frame.log["regopack/periodic"] = np.array([int(periodic)], dtype=np.uint8)
         _write_frame(path, frame, hoomd)
         return path

@@ -41,8 +41,10 @@ from regopack.errors import ExportError
 from regopack.interfaces import Analyzer, SolidExporter
 from regopack.packing3d import Packing3D
 from regopack.plugins.export_common import _num, _write_text
+from regopack.plugins.lammps_export import default_length_scale
 from regopack.plugins.rounded_polyhedra import Core, erode_polyhedron
 from regopack.plugins.solid_export_common import mass_properties, placed_solids
+from regopack.units import length_unit
 
 __all__ = [
     "Lammps3dBodies",
@@ -74,9 +76,10 @@ class Lammps3dConfig(BaseModel):
     """Parameters of the ``lammps3d`` exporter.
 
     Lengths of the packing are multiplied by ``length_scale`` and written in
-    the length unit of ``units``; with the default ``units = "micro"`` and
-    lengths in micrometres, masses are in picograms, times in microseconds
-    and forces in nanonewtons.
+    the length unit of ``units``; by default ``length_scale`` converts the
+    scene's ``length_unit`` to that unit (1 for micrometres and ``units =
+    "micro"``). With the default ``units = "micro"``, masses are in
+    picograms, times in microseconds and forces in nanonewtons.
     """
 
     model_config = ConfigDict(extra="forbid", strict=True)
@@ -84,11 +87,14 @@ class Lammps3dConfig(BaseModel):
     units: Literal["micro", "si", "cgs", "nano", "lj"] = Field(
         "micro", description="LAMMPS unit style named in the input script."
     )
-    length_scale: float = Field(
-        1.0,
+    length_scale: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
-        description="Factor from the packing's length unit to the length unit of `units`.",
+        description=(
+            "Factor from the packing's length unit to the length unit of `units`; default: "
+            "from the scene's length_unit (1 for 'µm' and units 'micro'; 1 for units 'lj')."
+        ),
     )
     density: float = Field(
         3.1,
@@ -296,7 +302,11 @@ class Lammps3dExporter(SolidExporter):
         cfg = self.config
         path = Path(path)
         bodies = lammps3d_bodies(packing, cfg)
-        s = cfg.length_scale
+        s = (
+            default_length_scale(packing, cfg.units)
+            if cfg.length_scale is None
+            else cfg.length_scale
+        )
         with np.errstate(over="ignore", under="ignore"):  # checked below
             mass = bodies.volume * (np.float64(s) ** 3 * cfg.density)
             inertia = bodies.inertia * (np.float64(s) ** 5 * cfg.density)
@@ -358,7 +368,8 @@ class Lammps3dExporter(SolidExporter):
             "ends each body with its rounding diameter",
             f"# rounding radii from {_num(r_all.min() if n else 0.0)} to "
             f"{_num(r_all.max() if n else 0.0)}; {bodies.reduced} bodies with a halved radius",
-            f"# lengths = packing lengths x {_num(s)}; mass = particle volume x "
+            f"# lengths = packing lengths ({length_unit(packing)}) x {_num(s)}; "
+            "mass = particle volume x "
             f"{_num(cfg.density)}; {walls}",
             "",
             f"{n} atoms",

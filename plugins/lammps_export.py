@@ -23,7 +23,7 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,6 +40,7 @@ from regopack.plugins.rounded_bodies import (
     rounded_moments,
 )
 from regopack.plugins.rounded_bodies_kernel import rounded_bodies
+from regopack.units import conversion, length_scale, length_unit
 
 __all__ = [
     "LammpsBodies",
@@ -62,14 +63,41 @@ ROUNDING_TRIES = 8
 """Times the rounding radius of one body is halved when its eroded core vanishes."""
 
 
+UNIT_STYLE_LENGTH: dict[str, str | None] = {
+    "micro": "µm",
+    "si": "m",
+    "cgs": "cm",
+    "nano": "nm",
+    "lj": None,
+}
+"""Length unit of each LAMMPS unit style (``lj``: none, lengths written as they are)."""
+
+
+def default_length_scale(packing: Any, units: str) -> float:
+    """Return the factor from the packing's ``length_unit`` to the length unit of ``units``.
+
+    1 for ``lj`` (reduced units: lengths as they are) and for a scene in
+    micrometres written with ``units = "micro"``.
+
+    Examples
+    --------
+    >>> default_length_scale({"length_unit": "mm"}, "micro"), default_length_scale({}, "si")
+    (1000.0, 1e-06)
+    """
+    target = UNIT_STYLE_LENGTH[units]
+    return 1.0 if target is None else conversion(length_unit(packing), target)
+
+
 class LammpsConfig(BaseModel):
     """Parameters of the LAMMPS exporter.
 
     Lengths of the packing are multiplied by ``length_scale`` and written in
     the length unit of ``units``; every other quantity is in that unit system.
-    With the default ``units = "micro"`` and lengths in micrometres, masses are
-    in picograms, times in microseconds and forces in nanonewtons, and a
-    ``density`` of 3.1 pg/µm³ is 3.1 g/cm³.
+    By default ``length_scale`` converts the scene's ``length_unit`` to the
+    length unit of ``units`` (1 for micrometres and ``units = "micro"``).
+    With the default ``units = "micro"``, masses are in picograms, times in
+    microseconds and forces in nanonewtons, and a ``density`` of 3.1 pg/µm³
+    is 3.1 g/cm³.
     """
 
     model_config = ConfigDict(extra="forbid", strict=True)
@@ -77,11 +105,14 @@ class LammpsConfig(BaseModel):
     units: Literal["micro", "si", "cgs", "nano", "lj"] = Field(
         "micro", description="LAMMPS unit style named in the input script."
     )
-    length_scale: float = Field(
-        1.0,
+    length_scale: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
-        description="Factor from the packing's length unit to the length unit of `units`.",
+        description=(
+            "Factor from the packing's length unit to the length unit of `units`; default: "
+            "from the scene's length_unit (1 for 'µm' and units 'micro'; 1 for units 'lj')."
+        ),
     )
     density: float = Field(
         3.1,
@@ -89,13 +120,14 @@ class LammpsConfig(BaseModel):
         allow_inf_nan=False,
         description="Mass per unit volume of the grains (3.1 g/cm³ = 3.1 pg/µm³ in units micro).",
     )
-    thickness: float = Field(
-        1.0,
+    thickness: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
         description=(
             "Out-of-plane thickness of every body in the packing's length unit; "
-            "a body's mass is its area × thickness × density."
+            "a body's mass is its area × thickness × density. Default: d_min / 2 "
+            "(1 at the built-in scenes' d_min = 2)."
         ),
     )
     rounding_fraction: float = Field(
@@ -332,9 +364,14 @@ class LammpsExporter(Exporter):
         cfg = self.config
         path = Path(path)
         bodies = lammps_bodies(packing, cfg)
-        s = cfg.length_scale
+        s = (
+            default_length_scale(packing, cfg.units)
+            if cfg.length_scale is None
+            else cfg.length_scale
+        )
+        thickness = length_scale(packing) if cfg.thickness is None else cfg.thickness
         frame = _frame(packing, s)
-        lamina = cfg.density * cfg.thickness * s  # mass per unit area (LAMMPS lengths)
+        lamina = cfg.density * thickness * s  # mass per unit area (LAMMPS lengths)
         with np.errstate(over="ignore", under="ignore"):  # checked below
             mass = bodies.area * (np.float64(s) ** 2 * lamina)
             per_area = np.float64(lamina) * np.float64(s) ** 4
@@ -352,11 +389,12 @@ class LammpsExporter(Exporter):
             tiny = np.finfo(np.float64).tiny  # subnormal numbers lose their precision
             if n and not (np.isfinite(values).all() and (values >= tiny).all()):
                 raise ExportError(
-                    f"length_scale = {s}, thickness = {cfg.thickness}, density = {cfg.density}: "
+                    f"length_scale = {s}, thickness = {thickness}, density = {cfg.density}: "
                     f"a body's {what} is not a positive finite number; give values nearer 1"
                 )
         reach = np.array([np.hypot(*c.T).max() for c in bodies.core]) + bodies.rounding
-        half_z = max(0.5 * s, 2.0 * float(reach.max(initial=0.0)) * s)  # bins need room in z
+        # bins need room in z; at least d_min / 4 (0.5 at the built-in scenes' d_min = 2)
+        half_z = max(0.5 * length_scale(packing) * s, 2.0 * float(reach.max(initial=0.0)) * s)
         per_line = max(1, math.ceil(n_max / (MAX_BODY_LINES - 4)))  # + count, inertia, rounding
         atoms: list[str] = []
         blocks: list[str] = []
@@ -392,7 +430,8 @@ class LammpsExporter(Exporter):
             f"# rounding radii from {_num(r_all.min() if n else 0.0)} to "
             f"{_num(r_all.max() if n else 0.0)}; {bodies.reduced} bodies with a halved radius; "
             f"the smallest body fills {_num(round(fill, 4))} of its particle",
-            f"# lengths = packing lengths x {_num(s)}; mass = area x {_num(cfg.thickness * s)} "
+            f"# lengths = packing lengths ({length_unit(packing)}) x {_num(s)}; "
+            f"mass = area x {_num(thickness * s)} "
             f"x {_num(cfg.density)}; {frame.note}",
             "",
             f"{n} atoms",

@@ -40,6 +40,7 @@ from regopack.interfaces import Analyzer, SolidExporter
 from regopack.packing import Packing, save
 from regopack.packing3d import Packing3D
 from regopack.plugins.solid_export_common import write_bytes
+from regopack.units import reference_diameter
 
 __all__ = ["SliceConfig", "SliceExporter", "image_path", "slice_packing"]
 
@@ -156,6 +157,8 @@ def slice_packing(packing: Packing3D, config: SliceConfig | None = None) -> Pack
     }
     if isinstance(scene3d.get("density"), dict):
         scene["density"] = dict(scene3d["density"])
+    if "length_unit" in scene3d:
+        scene["length_unit"] = scene3d["length_unit"]
     return Packing(
         radius=np.sqrt(area / np.pi),
         mineral=packing.mineral[[row[1] for row in rows]].astype(np.int64).reshape(n),
@@ -171,6 +174,8 @@ def slice_packing(packing: Packing3D, config: SliceConfig | None = None) -> Pack
         version=packing.version,
         stats={
             "interior_margin": float(d_max),
+            # the 3D d_min, not the smallest cut, scales the section's default lengths
+            "reference_diameter": reference_diameter(packing),
             "slice_axis": float(axis),
             "slice_at": at,
             "slice_phi": float(area.sum() / domain.area),

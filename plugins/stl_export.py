@@ -6,19 +6,29 @@ particle, in draw order, each face split into a fan from its first vertex,
 counter-clockwise seen from outside (the outward normal by the right-hand
 rule, which is also the normal written with each triangle). Coordinates are
 single precision, as the format stores them.
+
+STL has no unit field, and most tools that read it (slicers, CAD, many mesh
+viewers) take its numbers for millimetres. By default the coordinates are
+written in the scene's ``length_unit`` (micrometres unless the scene names
+another), and the unit is named in the 80-byte header (``unit um``). The
+option ``unit`` converts them instead: ``unit = "mm"`` writes millimetres,
+so that a 40 µm grain opens as 0.04 mm and not as 40 mm.
 """
 
 from __future__ import annotations
 
 from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
+from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer, SolidExporter
 from regopack.packing3d import Packing3D
 from regopack.plugins.solid_export_common import fan_triangles, placed_solids, write_bytes
+from regopack.units import check_length_unit, conversion, length_unit
 
 __all__ = ["STL_RECORD", "StlConfig", "StlExporter", "stl_triangles"]
 
@@ -27,9 +37,28 @@ STL_RECORD = np.dtype([("normal", "<f4", (3,)), ("vertices", "<f4", (3, 3)), ("a
 
 
 class StlConfig(BaseModel):
-    """Parameters of the ``stl`` exporter (it has none)."""
+    """Parameters of the ``stl`` exporter."""
 
     model_config = ConfigDict(extra="forbid", strict=True)
+
+    unit: str | None = Field(
+        None,
+        description=(
+            "Length unit of the coordinates written: 'm', 'cm', 'mm', 'µm' (or 'um') or 'nm', "
+            "converted from the scene's length_unit; default: the scene's own unit, unconverted. "
+            "Tools that assume millimetres need 'mm'."
+        ),
+    )
+
+    @field_validator("unit", mode="before")
+    @classmethod
+    def _check_unit(cls, value: Any) -> Any:
+        if value is None:
+            return None
+        try:
+            return check_length_unit(value)
+        except ConfigError as err:
+            raise ValueError(str(err).partition(": ")[2]) from err
 
 
 def stl_triangles(packing: Packing3D) -> tuple[np.ndarray, np.ndarray]:
@@ -65,6 +94,10 @@ class StlExporter(SolidExporter):
         """Write the mesh; return ``path``."""
         path = Path(path)
         tris, _ = stl_triangles(packing)
+        own = length_unit(packing)
+        unit = self.config.unit or own
+        if unit != own:
+            tris = tris * conversion(own, unit)
         normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
         length = np.linalg.norm(normal, axis=1, keepdims=True)
         normal = np.divide(normal, length, out=np.zeros_like(normal), where=length > 0)
@@ -72,8 +105,9 @@ class StlExporter(SolidExporter):
         records["normal"] = normal
         records["vertices"] = tris
         text = (
-            f"regopack {packing.version} 3D packing, scene {packing.scene.get('name', '?')}, "
-            f"seed {packing.seed}, {packing.n_placed} particles"
+            f"regopack {packing.version} 3D packing, unit {unit.replace('µ', 'u')}, "
+            f"scene {packing.scene.get('name', '?')}, seed {packing.seed}, "
+            f"{packing.n_placed} particles"
         )
         header = text.encode("ascii", "replace")[:80].ljust(80, b" ")
         count = np.array([tris.shape[0]], dtype="<u4").tobytes()

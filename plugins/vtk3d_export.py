@@ -20,6 +20,7 @@ from regopack.interfaces import Analyzer, SolidExporter
 from regopack.packing3d import Packing3D
 from regopack.plugins.export_common import _num, _write_text
 from regopack.plugins.solid_export_common import mass_properties, placed_solids
+from regopack.units import length_unit
 
 __all__ = ["VTK_POLYHEDRON", "Vtk3dConfig", "Vtk3dExporter"]
 
@@ -55,7 +56,9 @@ class Vtk3dExporter(SolidExporter):
     """VTK XML unstructured grid (``.vtu``, ASCII) with one polyhedron cell per placed particle.
 
     Points are each particle's own vertices in the packing's frame (none is
-    shared between particles). Cell data: ``index`` (draw index), ``mineral``
+    shared between particles), in the scene's length unit, which the
+    field-data string array ``length_unit`` and the comment at the top name.
+    Cell data: ``index`` (draw index), ``mineral``
     (index into the field-data string array ``mineral_names``, also listed in
     a comment), ``equivalent_diameter``, ``volume`` (exact, of the polyhedron)
     and ``insertion_index``.
@@ -86,6 +89,7 @@ class Vtk3dExporter(SolidExporter):
             face_ends.append(len(faces))
         volume = [mass_properties(s.local, s.loops)[0] for s in solids]
         names = ", ".join(f"{k} = {name}" for k, name in enumerate(packing.mineral_names))
+        unit = length_unit(packing)
         cell = [
             _array("index", "Int64", (str(j) for j in idx.tolist())),
             _array("mineral", "Int32", (str(m) for m in packing.mineral[idx].tolist())),
@@ -105,12 +109,13 @@ class Vtk3dExporter(SolidExporter):
             '<?xml version="1.0"?>',
             f"<!-- regopack {packing.version} 3D packing: scene "
             f"{escape(str(packing.scene.get('name', '?')))}, seed {packing.seed}; "
-            f"minerals: {escape(names)} -->",
+            f"lengths in {unit}; minerals: {escape(names)} -->",
             '<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" '
             'header_type="UInt64">',
             "<UnstructuredGrid>",
             "<FieldData>",
             _strings("mineral_names", packing.mineral_names),
+            _strings("length_unit", [unit]),
             "</FieldData>",
             f'<Piece NumberOfPoints="{points.shape[0]}" NumberOfCells="{n}">',
             "<Points>",

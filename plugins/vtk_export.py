@@ -13,6 +13,8 @@ from regopack.errors import ExportError
 from regopack.interfaces import Analyzer, Exporter
 from regopack.packing import Packing
 from regopack.plugins.export_common import IntArray, _num, _write_text
+from regopack.plugins.vtk3d_export import _strings
+from regopack.units import length_unit
 
 __all__ = ["VtkConfig", "VtkExporter"]
 
@@ -50,7 +52,9 @@ def _data_array(name: str, vtk_type: str, values: Iterable[str], components: int
 class VtkExporter(Exporter):
     """VTK XML PolyData (``.vtp``, ASCII) with one polygon per placed particle.
 
-    Points are the absolute outline vertices (z = 0). Cell data: ``index``
+    Points are the absolute outline vertices (z = 0), in the scene's length
+    unit, which the field data array ``length_unit`` (a string) and the
+    comment at the top name. Cell data: ``index``
     (the particle's draw index), ``mineral`` (index into the mineral names,
     listed in a comment), ``radius``, ``orientation``, ``insertion_index`` and,
     when a computed ``coordination`` analyzer is passed in ``analyses``, ``Z``.
@@ -73,6 +77,7 @@ class VtkExporter(Exporter):
         counts = np.array([len(p) for p in polygons], dtype=np.int64)
         offsets = np.cumsum(counts)
         names = ", ".join(f"{k} = {name}" for k, name in enumerate(packing.mineral_names))
+        unit = length_unit(packing)
         cell = [
             _data_array("index", "Int64", (str(j) for j in idx.tolist())),
             _data_array("mineral", "Int32", (str(m) for m in packing.mineral[idx].tolist())),
@@ -91,10 +96,13 @@ class VtkExporter(Exporter):
             '<?xml version="1.0"?>',
             f"<!-- regopack {packing.version} packing: scene "
             f"{escape(str(packing.scene.get('name', '?')))}, seed {packing.seed}; "
-            f"minerals: {escape(names)} -->",
+            f"lengths in {unit}; minerals: {escape(names)} -->",
             '<VTKFile type="PolyData" version="1.0" byte_order="LittleEndian" '
             'header_type="UInt64">',
             "<PolyData>",
+            "<FieldData>",
+            _strings("length_unit", [unit]),
+            "</FieldData>",
             f'<Piece NumberOfPoints="{points.shape[0]}" NumberOfVerts="0" NumberOfLines="0" '
             f'NumberOfStrips="0" NumberOfPolys="{len(idx)}">',
             "<Points>",

@@ -121,7 +121,10 @@ def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
     [
         ({"tol": -1}, "contacts.tol = -1: Input should be greater than 0"),
         ({"bogus": 1}, "contacts.bogus = 1: unknown field; allowed: tol, tol_max, margin"),
-        ({"tol": 1.0}, "contacts: tol_max (0.5) must be at least tol (1.0)"),
+        (
+            {"tol": 1.0, "tol_max": 0.5},
+            "contacts: tol_max (0.5) must be at least tol (1.0)",
+        ),
     ],
 )
 def test_bad_parameters_name_the_field(packing, registry, params, message):

@@ -38,7 +38,8 @@ def test_a_3d_run_reports_its_analyses_as_a_2d_run(run3d) -> None:
     summary = json.loads(run3d.summary_path.read_text(encoding="utf-8"))
     assert list(summary["analyses"]) == ["density3d", "coordination3d"]
     coordination = summary["analyses"]["coordination3d"]
-    assert coordination["tol_sweep"] == [0.05, 0.2]
+    # the sweep asked for, and the contact tolerance d_min / 40 (d_min = 3)
+    assert coordination["tol_sweep"] == pytest.approx([0.05, 0.075, 0.2], rel=1e-12)
     assert coordination["rattler_min_contacts"] == 4
     assert summary["analyses"]["density3d"]["phi_domain"] == pytest.approx(summary["phi_domain"])
     files = run3d.analysis
@@ -70,7 +71,8 @@ def test_regopack_analyze_takes_a_3d_packing(run3d, tmp_path, capsys) -> None:
     [
         (["--only", "contacts"], "analyzer 'contacts' analyses 2D packings, not 3D ones; "),
         (["--set", "contacts3d.tol=-1"], "contacts3d.tol = -1"),
-        (["--set", "coordination3d.tols=[0.1, 0.9]"], "0.9 exceeds contacts3d.tol_max = 0.5"),
+        # tol_max defaults to d_min / 4 = 0.75 (d_min = 3)
+        (["--set", "coordination3d.tols=[0.1, 0.9]"], "0.9 exceeds contacts3d.tol_max = 0.75"),
         (["--only", "rdf3d", "--set", "rdf3d.near=[5, 1]"], "rdf3d: near must be a range"),
         (["--set", "contacts3d"], "expected NAME.FIELD=VALUE"),
     ],

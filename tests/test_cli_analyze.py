@@ -86,7 +86,10 @@ def test_rdf_only_with_figures(packing_file, tmp_path, capsys):
         (["{p}", "--only", "rdf,"], "--only 'rdf,': empty analyzer name"),
         (["{p}", "--tol", "-1"], "contacts.tol = -1.0: Input should be greater than 0"),
         (["{p}", "--tol", "abc"], "analyze: argument --tol: invalid float value: 'abc'"),
-        (["{p}", "--tol", "1"], "contacts: tol_max (0.5) must be at least tol (1.0)"),
+        (
+            ["{p}", "--tol", "1", "--set", "contacts.tol_max=0.5"],
+            "contacts: tol_max (0.5) must be at least tol (1.0)",
+        ),
         (["{p}", "--set", "tol=1"], "--set 'tol=1': expected NAME.FIELD=VALUE"),
         (
             ["{p}", "--set", "contacts.bogus=1"],

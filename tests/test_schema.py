@@ -240,6 +240,7 @@ def test_builtin_scenes_validate(schema, name):
         (lambda d: d["density"].update(eta="high"), ["density", "eta"]),
         (lambda d: d["domain"].update(width=0), ["domain", "width"]),
         (lambda d: d.update(count=0), ["count"]),
+        (lambda d: d.update(length_unit="ft"), ["length_unit"]),
         (lambda d: d.pop("size"), []),
         (lambda d: d["outputs"].update(analyses=["nosuch"]), ["outputs", "analyses", 0]),
         (
@@ -247,7 +248,18 @@ def test_builtin_scenes_validate(schema, name):
             ["outputs", "analyses", 0],
         ),
     ],
-    ids=["psi", "kind", "unknown-key", "type", "width", "count", "missing", "analysis", "tol"],
+    ids=[
+        "psi",
+        "kind",
+        "unknown-key",
+        "type",
+        "width",
+        "count",
+        "length_unit",
+        "missing",
+        "analysis",
+        "tol",
+    ],
 )
 def test_bad_scenes_fail_validation(schema, change, path):
     data = copy.deepcopy(builtin_scene_data()["small"])

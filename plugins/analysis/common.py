@@ -3,14 +3,48 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel
 
 from regopack.domain import Domain
+from regopack.errors import ConfigError
 from regopack.packing import Packing
+from regopack.units import length_scale
+
+DEFAULT_TOL = 0.05
+"""Default contact tolerance at the built-in scale (``d_min = 2``): ``tol = d_min / 40``."""
+
+DEFAULT_TOL_MAX = 0.5
+"""Default largest tolerance kept at the built-in scale: ``tol_max = d_min / 4``."""
+
+
+def contact_tolerances(
+    tol: float | None, tol_max: float | None, packing: Any, name: str = "contacts"
+) -> tuple[float, float]:
+    """``(tol, tol_max)`` of a contact analysis of ``packing``: as given, or the scaled defaults.
+
+    An omitted ``tol`` is ``d_min / 40`` and an omitted ``tol_max`` is
+    ``max(d_min / 4, tol)``, ``d_min`` the packing's reference diameter
+    (:func:`regopack.units.reference_diameter`); computed as ``0.05 * d_min / 2``
+    and ``0.5 * d_min / 2``, they are exactly 0.05 and 0.5 at the built-in
+    scenes' ``d_min = 2``.
+
+    Raises
+    ------
+    ConfigError
+        When ``tol_max`` is below ``tol``.
+    """
+    scale = length_scale(packing)
+    t = DEFAULT_TOL * scale if tol is None else float(tol)
+    t_max = max(DEFAULT_TOL_MAX * scale, t) if tol_max is None else float(tol_max)
+    if t_max < t:
+        raise ConfigError(f"{name}: tol_max ({t_max:g}) must be at least tol ({t:g})")
+    return t, t_max
 
 
 def interior_margin(packing: Packing, margin: float | None = None) -> float:
@@ -146,3 +180,27 @@ def rounded_as_polygons(packing: Packing, error: float) -> Packing:
         offsets=offsets,
         rounding=None,
     )
+
+
+_Config = TypeVar("_Config", bound=BaseModel)
+
+
+def scaled_defaults(config: _Config, packing: Any, defaults: Mapping[str, Any]) -> _Config:
+    """Return ``config`` with its omitted lengths set to ``defaults`` scaled to ``packing``.
+
+    ``defaults`` maps a field of ``config`` to its default at the built-in
+    scale (``d_min = 2``): a length or a tuple of lengths. A field left
+    ``None`` becomes that value times :func:`~regopack.units.length_scale`
+    (``d_min / 2``), which is exactly the value at ``d_min = 2``; a field the
+    user set is kept as given.
+    """
+    scale = length_scale(packing)
+    update: dict[str, Any] = {}
+    for key, value in defaults.items():
+        if getattr(config, key) is not None:
+            continue
+        if isinstance(value, tuple):
+            update[key] = tuple(float(v) * scale for v in value)
+        else:
+            update[key] = float(value) * scale
+    return config.model_copy(update=update)

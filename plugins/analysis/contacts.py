@@ -13,6 +13,7 @@ from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import (
     ROUNDED_CONTACT_ERROR,
+    contact_tolerances,
     eta_of,
     interior_margin,
     interior_mask,
@@ -30,19 +31,23 @@ class ContactsConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    tol: float = Field(
-        0.05,
+    tol: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
         description=(
-            "Contact tolerance tol (length unit): each outline grows by tol/2 along its normals."
+            "Contact tolerance tol (length unit): each outline grows by tol/2 along its normals; "
+            "default: d_min / 40 (0.05 at the built-in scenes' d_min = 2)."
         ),
     )
-    tol_max: float = Field(
-        0.5,
+    tol_max: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
-        description="Largest tolerance of later sweeps: pairs that touch up to tol_max are kept.",
+        description=(
+            "Largest tolerance of later sweeps: pairs that touch up to tol_max are kept; "
+            "default: the larger of d_min / 4 (0.5 at d_min = 2) and tol."
+        ),
     )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
@@ -50,7 +55,7 @@ class ContactsConfig(BaseModel):
 
     @model_validator(mode="after")
     def _check(self) -> ContactsConfig:
-        if self.tol_max < self.tol:
+        if self.tol is not None and self.tol_max is not None and self.tol_max < self.tol:
             raise ValueError(f"tol_max ({self.tol_max}) must be at least tol ({self.tol})")
         return self
 
@@ -114,21 +119,38 @@ class Contacts(Analyzer):
 
     def __init__(self, config: ContactsConfig | None = None) -> None:
         self.config = config or ContactsConfig()
+        self._asked = self.config
         self._done = False
+
+    @property
+    def tol(self) -> float:
+        """The contact tolerance used: ``config.tol``, or its default for the packing."""
+        self._need()
+        assert self.config.tol is not None
+        return float(self.config.tol)
+
+    @property
+    def tol_max(self) -> float:
+        """The largest tolerance kept: ``config.tol_max``, or its default for the packing."""
+        self._need()
+        assert self.config.tol_max is not None
+        return float(self.config.tol_max)
 
     # -- computation -------------------------------------------------------
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Find candidate pairs, their thresholds, and the regions at ``tol``."""
         from regopack.plugins.analysis import contact_kernel as ck
 
-        cfg = self.config
+        tol, tol_max = contact_tolerances(self._asked.tol, self._asked.tol_max, packing)
+        # after compute, the config holds the tolerances used
+        self.config = cfg = self._asked.model_copy(update={"tol": tol, "tol_max": tol_max})
         self.packing = packing
-        s_max = 0.5 * cfg.tol_max
+        s_max = 0.5 * tol_max
         # in a periodic domain the particles near a side get ghost copies one
         # period away; ``origin`` maps every (ghost) particle to its original
         # rounded outlines (disks) are measured on circumscribed polygons within
         # ROUNDED_CONTACT_ERROR * tol of the true outline
-        sharp = rounded_as_polygons(packing, ROUNDED_CONTACT_ERROR * cfg.tol)
+        sharp = rounded_as_polygons(packing, ROUNDED_CONTACT_ERROR * tol)
         work, origin = sharp, np.arange(packing.n_particles, dtype=np.int64)
         if packing.domain.periodic and packing.n_placed:
             pad = 2.0 * float(np.max(sharp.circumradius[packing.placed]) + 2.0 * s_max)
@@ -160,19 +182,19 @@ class Contacts(Analyzer):
         pi, pj = pi[keep], pj[keep]
         self.pairs = np.column_stack([origin[pi], origin[pj]]).astype(np.int64)
         self.threshold = 2.0 * thr[keep]  # as a tolerance
-        at_tol = self.threshold < cfg.tol
+        at_tol = self.threshold < tol
         ci = pi[at_tol].copy()
         cj = pj[at_tol].copy()
         area, width, px, py, unx, uny = ck.contact_regions(
-            ci, cj, 0.5 * cfg.tol, centre, vertices, offsets, nx, ny, mx, my
+            ci, cj, 0.5 * tol, centre, vertices, offsets, nx, ny, mx, my
         )
         lens = disk[origin[ci]] & disk[origin[cj]]
         if lens.any():
             area[lens], width[lens], px[lens], py[lens], unx[lens], uny[lens] = _lens(
                 centre[ci[lens]],
                 centre[cj[lens]],
-                rho[origin[ci[lens]]] + 0.5 * cfg.tol,
-                rho[origin[cj[lens]]] + 0.5 * cfg.tol,
+                rho[origin[ci[lens]]] + 0.5 * tol,
+                rho[origin[cj[lens]]] + 0.5 * tol,
             )
         ci, cj = origin[ci], origin[cj]
         if work is not sharp:
@@ -258,8 +280,8 @@ class Contacts(Analyzer):
         if tol is None:
             i, j = self._i, self._j
         else:
-            if tol > self.config.tol_max:
-                raise ValueError(f"tol = {tol} exceeds tol_max = {self.config.tol_max}")
+            if tol > self.tol_max:
+                raise ValueError(f"tol = {tol} exceeds tol_max = {self.tol_max}")
             sel = self.threshold < tol
             i, j = self.pairs[sel, 0], self.pairs[sel, 1]
         n = self.packing.n_particles
@@ -274,8 +296,8 @@ class Contacts(Analyzer):
             return float(np.median(a)) if a.shape[0] else None
 
         return {
-            "tol": self.config.tol,
-            "tol_max": self.config.tol_max,
+            "tol": self.tol,
+            "tol_max": self.tol_max,
             "eta": eta_of(self.packing),
             "interior_margin": self.margin,
             "n_contacts": n,
@@ -285,7 +307,7 @@ class Contacts(Analyzer):
             "median_radius": med(self._radius),
             "median_depth": med(self._depth),
             "mean_depth_over_width": float(np.mean(self._depth / self._width)) if n else None,
-            "share_depth_below_tol": float(np.mean(self._depth < self.config.tol)) if n else None,
+            "share_depth_below_tol": float(np.mean(self._depth < self.tol)) if n else None,
         }
 
     def tables(self) -> dict[str, dict[str, Any]]:

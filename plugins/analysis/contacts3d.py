@@ -29,7 +29,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
-from regopack.plugins.analysis.common import eta_of
+from regopack.plugins.analysis.common import contact_tolerances, eta_of
 from regopack.plugins.analysis.common3d import (
     as_packing3d,
     equivalent_cap,
@@ -46,19 +46,23 @@ class Contacts3DConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    tol: float = Field(
-        0.05,
+    tol: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
         description=(
-            "Contact tolerance tol (length unit): each solid grows by tol/2 along its face normals."
+            "Contact tolerance tol (length unit): each solid grows by tol/2 along its face "
+            "normals; default: d_min / 40 (0.05 at the built-in scenes' d_min = 2)."
         ),
     )
-    tol_max: float = Field(
-        0.5,
+    tol_max: float | None = Field(
+        None,
         gt=0,
         allow_inf_nan=False,
-        description="Largest tolerance of later sweeps: pairs that touch up to tol_max are kept.",
+        description=(
+            "Largest tolerance of later sweeps: pairs that touch up to tol_max are kept; "
+            "default: the larger of d_min / 4 (0.5 at d_min = 2) and tol."
+        ),
     )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
@@ -66,7 +70,7 @@ class Contacts3DConfig(BaseModel):
 
     @model_validator(mode="after")
     def _check(self) -> Contacts3DConfig:
-        if self.tol_max < self.tol:
+        if self.tol is not None and self.tol_max is not None and self.tol_max < self.tol:
             raise ValueError(f"tol_max ({self.tol_max}) must be at least tol ({self.tol})")
         return self
 
@@ -254,13 +258,37 @@ class Contacts3D(Analyzer):
 
     def __init__(self, config: Contacts3DConfig | None = None) -> None:
         self.config = config or Contacts3DConfig()
+        self._asked = self.config
         self._done = False
+
+    @property
+    def tol(self) -> float:
+        """The contact tolerance used: ``config.tol``, or its default for the packing."""
+        self._need()
+        assert self.config.tol is not None
+        return float(self.config.tol)
+
+    @property
+    def tol_max(self) -> float:
+        """The largest tolerance kept: ``config.tol_max``, or its default for the packing."""
+        self._need()
+        assert self.config.tol_max is not None
+        return float(self.config.tol_max)
+
+    def _resolve(self, packing: Any) -> tuple[float, float]:
+        """Fill in the default tolerances for ``packing``; the config then holds those used."""
+        tol, tol_max = contact_tolerances(
+            self._asked.tol, self._asked.tol_max, packing, "contacts3d"
+        )
+        self.config = self._asked.model_copy(update={"tol": tol, "tol_max": tol_max})
+        return tol, tol_max
 
     def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
         """Find the candidate pairs, their thresholds and normals, and the regions at ``tol``."""
         from regopack.plugins.analysis import contact3d_kernel as ck
 
         p3 = as_packing3d(packing, self)
+        tol, tol_max = self._resolve(p3)
         if p3.rounded:
             if p3.solids.normals.shape[0] != 0:
                 raise ConfigError(
@@ -270,7 +298,7 @@ class Contacts3D(Analyzer):
             return self._compute_spheres(p3)
         cfg = self.config
         self.packing = p3
-        s_max = 0.5 * cfg.tol_max
+        s_max = 0.5 * tol_max
         if p3.domain.periodic:
             # each pair through the image of j nearest to i: a moved copy of j
             pi, pj, shift = periodic_pairs3d(p3, s_max)
@@ -283,16 +311,16 @@ class Contacts3D(Analyzer):
         thr, nrm = ck.pair_thresholds(pi, qj, sol.centre, *faces, sol.size)
         for k in np.flatnonzero(np.isnan(thr)).tolist():
             thr[k], nrm[k] = _fallback_threshold(p3, int(pi[k]), int(pj[k]), shift[k])
-        keep = 2.0 * thr < cfg.tol_max
+        keep = 2.0 * thr < tol_max
         self.pairs = np.column_stack([pi[keep], pj[keep]]).astype(np.int64)
         self.threshold = 2.0 * thr[keep]
         self.pair_normal = nrm[keep]
-        at = self.threshold < cfg.tol
+        at = self.threshold < tol
         ci, cj = self.pairs[at, 0].copy(), self.pairs[at, 1].copy()
         qcj = qj[keep][at].copy()
         normal = np.ascontiguousarray(self.pair_normal[at])
         volume, area, width, point = ck.contact_regions(
-            ci, qcj, 0.5 * cfg.tol, normal, sol.centre, sol.vertices, sol.offsets, *faces, sol.size
+            ci, qcj, 0.5 * tol, normal, sol.centre, sol.vertices, sol.offsets, *faces, sol.size
         )
         ok = (volume > 0) & (area > 0)
         depth, radius = equivalent_cap(volume[ok], area[ok])
@@ -320,18 +348,19 @@ class Contacts3D(Analyzer):
         from regopack.verification3d import lens_volume
 
         cfg = self.config
+        tol, tol_max = self._resolve(p3)
         self.packing = p3
         placed = np.flatnonzero(p3.placed)
         solids = p3.solids
         r_all = solids.rounding_radius
         c_all = np.nan_to_num(p3.centre) + solids.vertices[solids.offsets[:-1]]
         c, r = c_all[placed], r_all[placed]
-        reach = 2.0 * float(r.max()) + cfg.tol_max if len(placed) else 0.0
+        reach = 2.0 * float(r.max()) + tol_max if len(placed) else 0.0
         found = np.array(sorted(cKDTree(c).query_pairs(reach)), dtype=np.int64).reshape(-1, 2)
         delta = c[found[:, 1]] - c[found[:, 0]]
         dist = np.linalg.norm(delta, axis=1)
         gap = dist - r[found[:, 0]] - r[found[:, 1]]
-        keep = gap < cfg.tol_max
+        keep = gap < tol_max
         found, delta, dist, gap = found[keep], delta[keep], dist[keep], gap[keep]
         pairs = placed[found]
         order = np.lexsort((pairs[:, 1], pairs[:, 0]))
@@ -339,10 +368,10 @@ class Contacts3D(Analyzer):
         self.pairs = np.ascontiguousarray(pairs, dtype=np.int64)
         self.threshold = gap
         self.pair_normal = delta / dist[:, None]
-        at = gap < cfg.tol
+        at = gap < tol
         ci, cj = pairs[at, 0].copy(), pairs[at, 1].copy()
-        r1 = r_all[ci] + 0.5 * cfg.tol
-        r2 = r_all[cj] + 0.5 * cfg.tol
+        r1 = r_all[ci] + 0.5 * tol
+        r2 = r_all[cj] + 0.5 * tol
         d = dist[at]
         volume = np.array([lens_volume(a, b, e) for a, b, e in zip(r1, r2, d, strict=True)])
         x = (d * d + r1 * r1 - r2 * r2) / (2.0 * d)  # from centre i to the lens's disk
@@ -433,8 +462,8 @@ class Contacts3D(Analyzer):
         if tol is None:
             i, j = self._i, self._j
         else:
-            if tol > self.config.tol_max:
-                raise ValueError(f"tol = {tol} exceeds tol_max = {self.config.tol_max}")
+            if tol > self.tol_max:
+                raise ValueError(f"tol = {tol} exceeds tol_max = {self.tol_max}")
             sel = self.threshold < tol
             i, j = self.pairs[sel, 0], self.pairs[sel, 1]
         n = self.packing.n_particles
@@ -449,8 +478,8 @@ class Contacts3D(Analyzer):
             return float(np.median(a)) if a.shape[0] else None
 
         return {
-            "tol": self.config.tol,
-            "tol_max": self.config.tol_max,
+            "tol": self.tol,
+            "tol_max": self.tol_max,
             "eta": eta_of(self.packing),  # type: ignore[arg-type]
             "interior_margin": self.margin,
             "n_contacts": n,

@@ -13,6 +13,7 @@ from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import eta_of
+from regopack.units import length_scale
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -43,8 +44,14 @@ class ContactCounts(Protocol):
         """Contacts of every particle at ``tol``."""
 
 
-def _default_sweep() -> list[float]:
-    return [round(float(v), 6) for v in np.linspace(0.02, 0.5, 20)]
+def default_sweep(scale: float = 1.0) -> list[float]:
+    """Return the default tolerances of the Z(tol) sweep: 20 from d_min / 100 to d_min / 4.
+
+    ``scale`` is the packing's :func:`~regopack.units.length_scale` (``d_min / 2``):
+    the values are 0.02 to 0.5, rounded to 6 decimals, times ``scale``, which
+    at the built-in scenes' ``d_min = 2`` are exactly the rounded values.
+    """
+    return [round(float(v), 6) * scale for v in np.linspace(0.02, 0.5, 20)]
 
 
 class CoordinationConfig(BaseModel):
@@ -52,11 +59,13 @@ class CoordinationConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    tols: list[float] = Field(
-        default_factory=_default_sweep,
+    tols: list[float] | None = Field(
+        None,
         min_length=1,
         description=(
-            "Tolerances of the Z(tol) sweep (each at most the contacts analyzer's tol_max)."
+            "Tolerances of the Z(tol) sweep (each at most the contacts analyzer's tol_max); "
+            "default: 20 from d_min / 100 to d_min / 4 (0.02 to 0.5 at the built-in scenes' "
+            "d_min = 2), those above tol_max left out."
         ),
     )
     rattler_min_contacts: int = Field(
@@ -187,9 +196,10 @@ class Coordination(Analyzer):
             per_mineral[name] = float(z[sel].mean()) if sel.any() else None
             dist[name] = np.bincount(z[sel], minlength=1).tolist() if sel.any() else []
         tol_max = contacts.config.tol_max
-        sweep = set(self.config.tols)
+        asked = self.config.tols
+        sweep = set(default_sweep(length_scale(packing)) if asked is None else asked)
         above = sorted(t for t in sweep if t > tol_max)
-        if above and "tols" in self.config.model_fields_set:
+        if above and asked is not None:
             source = self.requires[0]
             raise ConfigError(
                 f"{self.name}.tols: {above[0]:g} exceeds {source}.tol_max = {tol_max:g}; "

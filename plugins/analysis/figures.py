@@ -20,12 +20,14 @@ file stem                 needs                   shows (figure of the paper)
 Figures are sized for a journal page (7 in wide, 8 pt text) and colour the
 minerals by name from one colour-blind-safe palette (Okabe and Ito; see
 :mod:`regopack.colours`), so a mineral keeps its colour in every scene.
-Lengths are in the scene's unit, micrometres. Collections with many items are
-rasterised inside the SVG files to keep them small; axes and text stay vector.
+Lengths are labelled in the scene's ``length_unit`` (micrometres by default).
+Collections with many items are rasterised inside the SVG files to keep them
+small; axes and text stay vector.
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -38,7 +40,7 @@ from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import ConnectionPatch, Patch, Rectangle
-from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter
+from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
 from numpy.typing import NDArray
 
 from regopack.colours import PALETTE, mineral_colours
@@ -52,6 +54,7 @@ from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
 from regopack.plugins.analysis.rdf_peak import count_bins, merge_bins
+from regopack.units import decimals, length_scale, length_unit
 
 __all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
 
@@ -69,6 +72,10 @@ MAX_LINE_PT = 2.5
 
 RASTERISE_ABOVE = 2000
 """Collections with more items than this are rasterised inside the SVG files."""
+
+ZOOM_TOL = (0.02, 0.1)
+"""Range of tol of the zoom of ``z-vs-tol`` at the built-in scale (``d_min = 2``): ``d_min / 100``
+to ``d_min / 20``, times :func:`~regopack.units.length_scale` for other packings."""
 
 _STYLE: dict[str, Any] = {
     "font.size": 8,
@@ -127,13 +134,65 @@ def _polygons(
     return coll
 
 
-def _frame(ax: Axes, bounds: Sequence[float]) -> None:
+DENSITY_DECADES = 3
+"""A number density is drawn in 10⁻³ length unit⁻² at the built-in scale."""
+
+_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+
+def axis_unit(power: int, unit: str, scale: float) -> tuple[str, float]:
+    """Return the axis unit of a quantity of length dimension ``power``, and its factor.
+
+    The values are drawn in decades of ``unit`` chosen so that they read as at
+    the built-in scale (``scale``, :func:`~regopack.units.length_scale`, is 1):
+    a packing in millimetres draws its coordinates and mean diameter in
+    10⁻³ mm and its number density in 10³ mm⁻², the same numbers as µm and
+    10⁻³ µm⁻².
+
+    Examples
+    --------
+    >>> axis_unit(-2, "µm", 1.0), axis_unit(-2, "mm", 1e-3), axis_unit(1, "mm", 1e-3)
+    (('10⁻³ µm⁻²', 1000.0), ('10³ mm⁻²', 0.001), ('10⁻³ mm', 1000.0))
+    >>> axis_unit(1, "µm", 1.0), axis_unit(0, "µm", 1.0)
+    (('µm', 1.0), ('', 1.0))
+    """
+    if power == 0:
+        return "", 1.0
+    decade = round(-math.log10(scale)) if math.isfinite(scale) and scale > 0 else 0
+    exponent = decade * power + (DENSITY_DECADES if power == -2 else 0)
+    text = unit if power == 1 else f"{unit}{str(power).translate(_SUPERSCRIPT)}"
+    if exponent == 0:
+        return text, 1.0
+    return f"10{str(-exponent).translate(_SUPERSCRIPT)} {text}", float(10.0**exponent)
+
+
+def length_ticks(ax: Axes, unit: str, scale: float) -> str:
+    """Write the x and y ticks of a map in the decade of ``unit`` of :func:`axis_unit`.
+
+    Returns the unit text of the axis labels (``unit`` itself at the built-in
+    scale, where the ticks are left as matplotlib writes them).
+    """
+    text, factor = axis_unit(1, unit, scale)
+    if factor != 1.0:
+        ticks = FuncFormatter(lambda v, _: f"{v * factor:.6g}".replace("-", "\N{MINUS SIGN}"))
+        ax.xaxis.set_major_formatter(ticks)
+        ax.yaxis.set_major_formatter(ticks)
+    return text
+
+
+def _frame(ax: Axes, bounds: Sequence[float], unit: str = "µm", scale: float = 1.0) -> None:
+    """Set the limits, equal aspect and labels of a map of the packing.
+
+    Lengths are in ``unit`` at the ``scale`` of the packing (:func:`axis_unit`:
+    coordinates of a packing in mm are labelled in 10⁻³ mm).
+    """
     xmin, xmax, ymin, ymax = (float(b) for b in bounds)
     ax.set_xlim(xmin, xmax)
     ax.set_ylim(ymin, ymax)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (µm)")
-    ax.set_ylabel("y (µm)")
+    text = length_ticks(ax, unit, scale)
+    ax.set_xlabel(f"x ({text})")
+    ax.set_ylabel(f"y ({text})")
 
 
 NICE_STEPS = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0)
@@ -193,10 +252,10 @@ def _zoom_window(packing: Packing) -> tuple[float, float, float, float]:
     return cx - side / 2, cx + side / 2, cy - side / 2, cy + side / 2
 
 
-def _zoom_size(window: Sequence[float]) -> str:
-    """``"120 × 120 µm"`` for a window ``(x0, x1, y0, y1)``."""
+def _zoom_size(window: Sequence[float], unit: str = "µm") -> str:
+    """``"120 × 120 µm"`` for a window ``(x0, x1, y0, y1)`` (lengths in ``unit``)."""
     x0, x1, y0, y1 = window
-    return f"{length_text(x1 - x0)} × {length_text(y1 - y0)} µm"
+    return f"{length_text(x1 - x0)} × {length_text(y1 - y0)} {unit}"
 
 
 def _in_window(packing: Packing, window: Sequence[float]) -> NDArray[np.int64]:
@@ -250,7 +309,7 @@ def _title(packing: Packing) -> str:
     name = packing.scene.get("name", "packing")
     return (
         f"{name}, seed {packing.seed}: {packing.n_placed:,} particles, "
-        f"{length_text(dom.width)} × {length_text(dom.height)} µm"
+        f"{length_text(dom.width)} × {length_text(dom.height)} {length_unit(packing)}"
     )
 
 
@@ -261,18 +320,19 @@ def _title(packing: Packing) -> str:
 def draw_packing(packing: Packing) -> Figure:
     """Fig. 10: the packing coloured by mineral, and a zoomed view of its centre."""
     colours = mineral_colours(packing.mineral_names)
+    unit = length_unit(packing)
     dom = packing.domain
     fig = Figure(figsize=(WIDTH, 4.0))
     ax, zoom = fig.subplots(1, 2)
     placed = np.flatnonzero(packing.placed).astype(np.int64)
     ax.add_collection(_polygons(packing, placed, colours, linewidths=0.0))
-    _frame(ax, dom.bounds().tolist())
+    _frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
     ax.set_title(_title(packing))
     window = _zoom_window(packing)
     near = _in_window(packing, window)
     zoom.add_collection(_polygons(packing, near, colours, edgecolors="#222222", linewidths=0.3))
-    _frame(zoom, window)
-    zoom.set_title(f"zoom: {_zoom_size(window)} at the centre")
+    _frame(zoom, window, unit, length_scale(packing))
+    zoom.set_title(f"zoom: {_zoom_size(window, unit)} at the centre")
     _link_zoom(fig, ax, zoom, window, "black")
     _mineral_legend(fig, packing, colours)
     return fig
@@ -286,6 +346,7 @@ def _edge_widths(area: FloatArray) -> FloatArray:
 def draw_network(packing: Packing, contacts: Contacts) -> Figure:
     """Fig. 12: contacts as centre-to-centre lines of width ∝ A_c, full domain and zoom."""
     dom = packing.domain
+    unit = length_unit(packing)
     fig = Figure(figsize=(WIDTH, 3.9))
     ax, zoom = fig.subplots(1, 2)
     i, j, area = contacts.i, contacts.j, contacts.area
@@ -320,11 +381,11 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
         )
         lines.set_rasterized(int(sel.sum()) > RASTERISE_ABOVE)
         target.add_collection(lines)
-    _frame(ax, dom.bounds().tolist())
-    _frame(zoom, window)
-    ax.set_title(f"{len(area):,} contacts at tol = {contacts.config.tol:g} µm")
+    _frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
+    _frame(zoom, window, unit, length_scale(packing))
+    ax.set_title(f"{len(area):,} contacts at tol = {contacts.tol:g} {unit}")
     widths_note = f" (widths × {factor:.2g})" if factor > 1.05 else ""
-    zoom.set_title(f"zoom, {_zoom_size(window)} at the centre{widths_note}")
+    zoom.set_title(f"zoom, {_zoom_size(window, unit)} at the centre{widths_note}")
     _link_zoom(fig, ax, zoom, window, "#D55E00")
     if len(area):
         top = float(area.max())
@@ -334,7 +395,7 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
                 [],
                 color="#08306b",
                 linewidth=MAX_LINE_PT * f,
-                label=f"{_AC} = {f * top:.2g} µm²",
+                label=f"{_AC} = {f * top:.2g} {unit}²",
             )
             for f in (1.0, 0.5, 0.1)
         ]
@@ -381,25 +442,26 @@ def draw_contact_histograms(contacts: Contacts) -> Figure:
     """Fig. 13: histograms of A_c, b_c, R_c and δ with log-spaced bins on log axes."""
     fig = Figure(figsize=(WIDTH, 4.6))
     axes = fig.subplots(2, 2)
-    tol = contacts.config.tol
+    tol = contacts.tol
+    u = length_unit(contacts.packing)
     panels = (
-        (contacts.area, f"contact area {_AC} (µm²)", "µm²"),
-        (contacts.width, r"contact width $b_\mathrm{c}$ (µm)", "µm"),
-        (contacts.radius, r"segment radius $R_\mathrm{c}$ (µm)", "µm"),
-        (contacts.depth, r"segment depth $\delta$ (µm)", "µm"),
+        (contacts.area, f"contact area {_AC} ({u}²)", f"{u}²"),
+        (contacts.width, rf"contact width $b_\mathrm{{c}}$ ({u})", u),
+        (contacts.radius, rf"segment radius $R_\mathrm{{c}}$ ({u})", u),
+        (contacts.depth, rf"segment depth $\delta$ ({u})", u),
     )
     for ax, (values, label, unit) in zip(axes.ravel(), panels, strict=True):
         _log_hist(ax, values, label, unit)
     ax_d = axes[1, 1]
     if contacts.depth.size:
-        ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} µm")
+        ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} {u}")
         ax_d.axvline(
             1.5 * tol, color="#D55E00", linestyle=":", linewidth=0.9, label="1.5 tol (face to face)"
         )
     for ax in axes.ravel():
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper left")
-    fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} µm", fontsize=8)
+    fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} {u}", fontsize=8)
     return fig
 
 
@@ -429,7 +491,10 @@ def _exact_z_of_tol(
 def draw_z_vs_tol(
     packing: Packing, coordination: Coordination, contacts: Contacts | None
 ) -> Figure:
-    """Fig. 14: Z against the contact tolerance, over the whole sweep and on 0.02–0.1 µm.
+    """Fig. 14: Z against the contact tolerance, over the whole sweep and a zoom on small tol.
+
+    The zoom spans ``d_min / 100`` to ``d_min / 20`` (0.02 to 0.1 at the built-in
+    scenes' ``d_min = 2``; see :func:`regopack.units.length_scale`).
 
     Lines are the exact step curves from the contact thresholds (when the
     contacts analyzer is at hand); markers are the sweep of the coordination
@@ -438,12 +503,18 @@ def draw_z_vs_tol(
     fig = Figure(figsize=(WIDTH, 2.9))
     axes = fig.subplots(1, 2)
     tols = coordination.tols
-    lo_full = float(min(tols.min(), 0.02))
+    unit = length_unit(packing)
+    scale = length_scale(packing)
+    zoom_lo, zoom_hi = ZOOM_TOL[0] * scale, ZOOM_TOL[1] * scale
+    lo_full = float(min(tols.min(), zoom_lo))
     hi_full = float(tols.max())
     if contacts is not None:
-        hi_full = max(hi_full, float(contacts.config.tol_max))
+        hi_full = max(hi_full, contacts.tol_max)
     tol = coordination.results()["tol"]
-    ranges = ((lo_full, hi_full, "full range"), (0.02, 0.1, "zoom on 0.02–0.1 µm"))
+    ranges = (
+        (lo_full, hi_full, "full range"),
+        (zoom_lo, zoom_hi, f"zoom on {zoom_lo:g}–{zoom_hi:g} {unit}"),
+    )
     series = (
         ("domain", "#0072B2", "o", coordination.z_tol_domain),
         ("interior", "#D55E00", "s", coordination.z_tol_interior),
@@ -467,9 +538,13 @@ def draw_z_vs_tol(
                 zorder=3,
                 label=None if curves else label,
             )
-        ax.axvline(tol, color="#555555", linestyle=":", linewidth=0.8, label=f"tol = {tol:g} µm")
+        ax.axvline(
+            tol, color="#555555", linestyle=":", linewidth=0.8, label=f"tol = {tol:g} {unit}"
+        )
         ax.set_xlim(lo, hi)
-        ax.set_xlabel("contact tolerance tol (µm)")
+        # small tolerances (a packing in mm or m) as multiples of a power of ten
+        ax.ticklabel_format(axis="x", style="sci", scilimits=(-3, 4))
+        ax.set_xlabel(f"contact tolerance tol ({unit})")
         ax.set_ylabel("coordination number Z")
         ax.set_title(title)
     handles, labels = axes[0].get_legend_handles_labels()
@@ -515,7 +590,7 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.legend(loc="upper right")
     tol = coordination.results()["tol"]
-    ax.set_title(f"distribution of Z, interior particles, tol = {tol:g} µm")
+    ax.set_title(f"distribution of Z, interior particles, tol = {tol:g} {length_unit(packing)}")
     x = np.arange(len(names))
     bar_ax.bar(
         x,
@@ -578,6 +653,8 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
 
     names = packing.mineral_names
     colours = mineral_colours(names)
+    unit = length_unit(packing)
+    places = decimals(length_scale(packing), 2)
     res = rdf.results()
     sel = interior_mask(packing, float(res["interior_margin"]))
     counts = np.bincount(packing.mineral[sel], minlength=len(names)).tolist()
@@ -616,14 +693,14 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             ax.text(
                 peak.r,
                 0.04,
-                f" first peak {peak.r:.2f} ± {peak.r_err:.2f} µm",
+                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
                 transform=ax.get_xaxis_transform(),
                 fontsize=6.5,
             )
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
-        ax.set_xlabel("centre distance r (µm)")
+        ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
-        ax.set_title(f"{title}, bins of {step:g} µm")
+        ax.set_title(f"{title}, bins of {step:g} {unit}")
     handles, labels = axes[0].get_legend_handles_labels()
     if handles:
         fig.legend(
@@ -698,7 +775,7 @@ def figures_for(
     if isinstance(psd, Psd):
         from regopack.plugins.analysis.psd_figure import draw_psd
 
-        jobs.append(("psd", lambda: draw_psd(psd)))
+        jobs.append(("psd", lambda: draw_psd(psd, length_unit(packing))))
     local_fraction = analyzers.get("local_fraction")
     if isinstance(local_fraction, LocalFraction):
         from regopack.plugins.analysis.local_fraction_figure import draw_local_fraction

@@ -36,6 +36,7 @@ from regopack.plugins.analysis.figures import (
 from regopack.plugins.analysis.homogeneity3d import Homogeneity3D
 from regopack.plugins.analysis.psd3d import Psd3D
 from regopack.plugins.analysis.rdf3d import Rdf3D
+from regopack.units import decimals, length_scale, length_unit
 
 __all__ = ["draw_contact_histograms3d", "draw_homogeneity3d", "draw_rdf3d", "figures3d_for"]
 
@@ -44,44 +45,46 @@ def draw_contact_histograms3d(contacts: Contacts3D) -> Figure:
     """Histograms of A_c, V_c, b_c and the cap height δ, log-spaced bins on log axes."""
     fig = Figure(figsize=(WIDTH, 4.6))
     axes = fig.subplots(2, 2)
-    tol = contacts.config.tol
+    tol = contacts.tol
+    u = length_unit(contacts.packing)
     panels = (
-        (contacts.area, r"contact area $A_\mathrm{c}$ (µm², projected)", "µm²"),
-        (contacts.volume, r"contact volume $V_\mathrm{c}$ (µm³)", "µm³"),
-        (contacts.width, r"contact width $b_\mathrm{c}$ (µm)", "µm"),
-        (contacts.depth, r"cap height $\delta$ (µm)", "µm"),
+        (contacts.area, rf"contact area $A_\mathrm{{c}}$ ({u}², projected)", f"{u}²"),
+        (contacts.volume, rf"contact volume $V_\mathrm{{c}}$ ({u}³)", f"{u}³"),
+        (contacts.width, rf"contact width $b_\mathrm{{c}}$ ({u})", u),
+        (contacts.depth, rf"cap height $\delta$ ({u})", u),
     )
     for ax, (values, label, unit) in zip(axes.ravel(), panels, strict=True):
         _log_hist(ax, values, label, unit)
     if contacts.depth.size:
         ax_d = axes[1, 1]
-        ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} µm")
+        ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} {u}")
         ax_d.axvline(
             2 * tol, color="#D55E00", linestyle=":", linewidth=0.9, label="2 tol (face to face)"
         )
     for ax in axes.ravel():
         if ax.get_legend_handles_labels()[0]:
             ax.legend(loc="upper left")
-    fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} µm", fontsize=8)
+    fig.suptitle(f"{len(contacts.area):,} contacts at tol = {tol:g} {u}", fontsize=8)
     return fig
 
 
-def draw_homogeneity3d(homogeneity: Homogeneity3D) -> Figure:
+def draw_homogeneity3d(homogeneity: Homogeneity3D, unit: str = "µm") -> Figure:
     """Draw number density, φ and mean diameter over the layers (top) and shells (bottom).
 
     Each region is drawn at its middle (the layer's height, the shell's mean
-    half width), with a dashed line at the mean over the regions.
+    half width), with a dashed line at the mean over the regions; lengths are
+    labelled in ``unit``.
     """
     fig = Figure(figsize=(WIDTH, 4.4))
     axes = fig.subplots(2, 3)
     rows = (
-        (homogeneity.layers, "z_lo", "z_hi", "height z of the layer (µm)"),
-        (homogeneity.shells, "half_lo", "half_hi", "half width of the shell (µm)"),
+        (homogeneity.layers, "z_lo", "z_hi", f"height z of the layer ({unit})"),
+        (homogeneity.shells, "half_lo", "half_hi", f"half width of the shell ({unit})"),
     )
     columns = (
-        ("density", "number density (1/µm³)"),
+        ("density", f"number density (1/{unit}³)"),
         ("phi", "volume fraction φ"),
-        ("mean_diameter", "mean diameter (µm)"),
+        ("mean_diameter", f"mean diameter ({unit})"),
     )
     for row, (table, lo, hi, xlabel) in enumerate(rows):
         x = 0.5 * (np.asarray(table[lo]) + np.asarray(table[hi]))
@@ -110,6 +113,8 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
     """g(r) of all interior centres and of each mineral with itself, near and far field."""
     names = packing.mineral_names
     colours = mineral_colours(names)
+    unit = length_unit(packing)
+    places = decimals(length_scale(packing), 2)
     res = rdf.results()
     fig = Figure(figsize=(WIDTH, 3.0))
     axes = fig.subplots(1, 2)
@@ -133,14 +138,14 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
             ax.text(
                 peak.r,
                 0.04,
-                f" first peak {peak.r:.2f} ± {peak.r_err:.2f} µm",
+                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
                 transform=ax.get_xaxis_transform(),
                 fontsize=6.5,
             )
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
-        ax.set_xlabel("centre distance r (µm)")
+        ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
-        ax.set_title(f"{title}, bins of {step:g} µm")
+        ax.set_title(f"{title}, bins of {step:g} {unit}")
     handles, labels = axes[0].get_legend_handles_labels()
     if handles:
         fig.legend(
@@ -150,7 +155,7 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
             ncol=min(len(handles), 4),
             title=f"{res['n_points']:,} interior centres; window "
             + " × ".join(f"{s:g}" for s in res["window"])
-            + " µm (a rare mineral's bins merged)",
+            + f" {unit} (a rare mineral's bins merged)",
             title_fontsize=7,
         )
     return fig
@@ -200,10 +205,11 @@ def figures3d_for(
     if isinstance(psd, Psd3D):
         from regopack.plugins.analysis.psd_figure import draw_psd
 
-        jobs.append(("psd-3d", lambda: draw_psd(psd)))
+        jobs.append(("psd-3d", lambda: draw_psd(psd, length_unit(packing))))
     homogeneity = analyzers.get("homogeneity3d")
     if isinstance(homogeneity, Homogeneity3D):
-        jobs.append(("homogeneity-3d", lambda: draw_homogeneity3d(homogeneity)))
+        unit = length_unit(packing)
+        jobs.append(("homogeneity-3d", lambda: draw_homogeneity3d(homogeneity, unit)))
     if of is not None:
         jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS3D.get(of, ())]
     if not jobs:

@@ -45,6 +45,7 @@ from regopack.plugins.analysis.regions import (
     window_pieces,
     window_reach,
 )
+from regopack.units import length_scale
 
 __all__ = ["QUANTITIES", "Homogeneity", "HomogeneityConfig", "Trend", "region_stats", "trend"]
 
@@ -59,7 +60,11 @@ QUANTITIES: tuple[tuple[str, str], ...] = (
 """Result prefix and table column of the three quantities whose trends are reported."""
 
 PER_LENGTH = 100.0
-"""Slopes are given per this many length units (µm)."""
+"""Slopes are given per this length at the built-in scale (``d_min = 2``): ``50 d_min``.
+
+For another packing the length is ``PER_LENGTH`` times
+:func:`~regopack.units.length_scale` (``d_min / 2``), reported as ``slope_length``
+in the results; the ``*_slope_per_100`` keys keep their names."""
 
 
 MAX_RINGS = 1000
@@ -357,6 +362,7 @@ class Homogeneity(Analyzer):
             names,
         )
         self.overall = {key: float(v[0]) for key, v in whole.items()}
+        per_length = PER_LENGTH * length_scale(packing)
         res: dict[str, Any] = {
             "interior_margin": margin,
             "eta": eta_of(packing),
@@ -368,6 +374,7 @@ class Homogeneity(Analyzer):
             "tiles": [nx, ny],
             "n_tiles": len(tiles.area),
             "n_interior": int(inside.sum()),
+            "slope_length": per_length,
         }
         for key in ("number_density", "phi", "mean_d"):
             res[key] = _none(self.overall[key])
@@ -375,8 +382,8 @@ class Homogeneity(Analyzer):
         for prefix, column in QUANTITIES:
             fit = trend(r_mean, self.rings[column], self.rings[f"{column}_err"])
             self.trends[prefix] = fit
-            res[f"{prefix}_slope_per_100"] = _none(fit.slope * PER_LENGTH)
-            res[f"{prefix}_slope_err"] = _none(fit.slope_err * PER_LENGTH)
+            res[f"{prefix}_slope_per_100"] = _none(fit.slope * per_length)
+            res[f"{prefix}_slope_err"] = _none(fit.slope_err * per_length)
             res[f"{prefix}_trend_chi2_dof"] = _none(fit.chi2_dof)
             res[f"{prefix}_max_rel_dev"] = _max_rel_dev(self.rings[column], self.overall[column])
         for prefix, column in QUANTITIES:
@@ -395,8 +402,8 @@ class Homogeneity(Analyzer):
             with np.errstate(divide="ignore", invalid="ignore"):
                 err = np.sqrt(p * (1.0 - p) / n_ring)
             fit = trend(r_mean, self.rings[f"frac_{name}"], err)
-            slopes[name] = _none(fit.slope * PER_LENGTH)
-            errs[name] = _none(fit.slope_err * PER_LENGTH)
+            slopes[name] = _none(fit.slope * per_length)
+            errs[name] = _none(fit.slope_err * per_length)
         res["fraction_slope_per_100"] = slopes
         res["fraction_slope_err"] = errs
         if not window.area > 0:

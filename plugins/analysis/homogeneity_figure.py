@@ -15,17 +15,20 @@ from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
 from regopack.packing import Packing
-from regopack.plugins.analysis.figures import WIDTH, _note
-from regopack.plugins.analysis.homogeneity import PER_LENGTH, Homogeneity
+from regopack.plugins.analysis.figures import WIDTH, _note, axis_unit, length_ticks
+from regopack.plugins.analysis.homogeneity import Homogeneity
+from regopack.units import length_scale, length_unit
 
 __all__ = ["draw_homogeneity"]
 
-PANELS: tuple[tuple[str, str, str, str, float], ...] = (
-    ("density", "number_density", "number density (10⁻³ µm⁻²)", "number density", 1e3),
-    ("phi", "phi", "area fraction φ", "area fraction φ", 1.0),
-    ("mean_d", "mean_d", "mean equivalent diameter (µm)", "mean diameter", 1.0),
+PANELS: tuple[tuple[str, str, str, str, int], ...] = (
+    ("density", "number_density", "number density ({unit})", "number density", -2),
+    ("phi", "phi", "area fraction φ", "area fraction φ", 0),
+    ("mean_d", "mean_d", "mean equivalent diameter ({unit})", "mean diameter", 1),
 )
-"""Result prefix, column, axis label, short name and factor to the axis unit of each quantity."""
+"""Result prefix, column, axis label (``{unit}``: the axis unit), short name and the power
+of length of each quantity."""
+
 
 POINTS = "#0072B2"
 FIT = "#D55E00"
@@ -33,7 +36,9 @@ MAX_LABELLED_TILES = 36
 """Tile maps with more tiles than this carry no value labels."""
 
 
-def _profile(ax: Axes, h: Homogeneity, prefix: str, column: str, label: str, scale: float) -> None:
+def _profile(
+    ax: Axes, h: Homogeneity, prefix: str, column: str, label: str, scale: float, unit: str
+) -> None:
     rings = h.rings
     r = np.asarray(rings["r_mean"])
     y = scale * np.asarray(rings[column])
@@ -67,13 +72,14 @@ def _profile(ax: Axes, h: Homogeneity, prefix: str, column: str, label: str, sca
             linewidth=1.0,
             label="weighted least-squares trend",
         )
+        per = float(h.results()["slope_length"])
         ax.set_title(
-            f"trend {scale * fit.slope * PER_LENGTH:+.3g} ± "
-            f"{scale * fit.slope_err * PER_LENGTH:.2g} per 100 µm",
+            f"trend {scale * fit.slope * per:+.3g} ± "
+            f"{scale * fit.slope_err * per:.2g} per {per:g} {unit}",
             fontsize=7,
         )
     ax.set_xlim(0.0, float(hi[-1]))
-    ax.set_xlabel("distance from the centre (µm)")
+    ax.set_xlabel(f"distance from the centre ({unit})")
     ax.set_ylabel(label)
 
 
@@ -81,7 +87,15 @@ def _outline(ax: Axes, xy: NDArray[np.float64], **kwargs: Any) -> None:
     ax.add_patch(PolygonPatch(xy, closed=True, fill=False, **kwargs))
 
 
-def _tile_map(ax: Axes, fig: Figure, h: Homogeneity, column: str, scale: float) -> None:
+def _tile_map(
+    ax: Axes,
+    fig: Figure,
+    h: Homogeneity,
+    column: str,
+    scale: float,
+    unit: str,
+    scale_of_lengths: float = 1.0,
+) -> None:
     tiles = h.tiles_table
     values = scale * np.asarray(tiles[column], dtype=np.float64)
     overall = scale * h.overall[column]
@@ -120,8 +134,9 @@ def _tile_map(ax: Axes, fig: Figure, h: Homogeneity, column: str, scale: float) 
     ax.set_xlim(float(b[0]) - pad, float(b[1]) + pad)
     ax.set_ylim(float(b[2]) - pad, float(b[3]) + pad)
     ax.set_aspect("equal")
-    ax.set_xlabel("x (µm)")
-    ax.set_ylabel("y (µm)")
+    text = length_ticks(ax, unit, scale_of_lengths)
+    ax.set_xlabel(f"x ({text})")
+    ax.set_ylabel(f"y ({text})")
     bar = fig.colorbar(
         ScalarMappable(norm=norm, cmap=cmap), ax=ax, location="bottom", shrink=0.8, aspect=25
     )
@@ -131,16 +146,18 @@ def _tile_map(ax: Axes, fig: Figure, h: Homogeneity, column: str, scale: float) 
 def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
     """Ring profiles of number density, φ and mean diameter with their trends; tile maps."""
     res = h.results()
+    unit = length_unit(packing)
+    shown = [axis_unit(power, unit, length_scale(packing)) for *_, power in PANELS]
     fig = Figure(figsize=(WIDTH, 5.6))
     axes = fig.subplots(2, 3, height_ratios=(1.0, 1.25))
-    for ax, (prefix, column, label, _, scale) in zip(axes[0], PANELS, strict=True):
-        _profile(ax, h, prefix, column, label, scale)
+    for ax, (prefix, column, label, *_), (text, scale) in zip(axes[0], PANELS, shown, strict=True):
+        _profile(ax, h, prefix, column, label.format(unit=text), scale, unit)
     nx, ny = res["tiles"]
-    for ax, (_, column, _, short, scale) in zip(axes[1], PANELS, strict=True):
+    for ax, (_, column, _, short, _), (_, scale) in zip(axes[1], PANELS, shown, strict=True):
         if len(h.tiles_table.get("tile", [])) == 0:
             _note(ax, "no tiles (empty window)")
             continue
-        _tile_map(ax, fig, h, column, scale)
+        _tile_map(ax, fig, h, column, scale, unit, length_scale(packing))
         ax.set_title(f"{short}, {nx} × {ny} tiles")
     handles, labels = axes[0, 0].get_legend_handles_labels()
     if handles:
@@ -150,7 +167,7 @@ def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
         fig.legend(handles, labels, loc="outside lower center", ncol=len(handles))
     fig.suptitle(
         f"{res['n_interior']:,} particles in the interior window "
-        f"(margin {res['interior_margin']:g} µm); rings of {res['ring_width']:.3g} µm "
+        f"(margin {res['interior_margin']:g} {unit}); rings of {res['ring_width']:.3g} {unit} "
         f"about the centre; tile values labelled",
         fontsize=8,
     )

@@ -24,6 +24,7 @@ from regopack.plugins.analysis.figures import (
     _zoom_window,
 )
 from regopack.plugins.analysis.local_fraction import LocalFraction
+from regopack.units import length_scale, length_unit
 
 __all__ = ["draw_local_fraction"]
 
@@ -95,6 +96,7 @@ def _histogram(ax: Axes, lf: LocalFraction) -> None:
 def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
     """Particles coloured by φᵢ, a zoom on the centre with the cells, and the histogram of φᵢ."""
     res = lf.results()
+    unit = length_unit(packing)
     fig = Figure(figsize=(WIDTH, 3.3))
     ax, zoom, hist = fig.subplots(1, 3)
     idx = lf.idx
@@ -105,7 +107,7 @@ def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
         _note(ax, "no placed particles")
     else:
         _colour(_particles(ax, packing, idx, phi, linewidths=0.0), phi, norm)
-    _frame(ax, packing.domain.bounds().tolist())
+    _frame(ax, packing.domain.bounds().tolist(), unit, length_scale(packing))
     ax.set_title(f"{packing.n_placed:,} particles, {kind} cells")
     window = _zoom_window(packing)
     near = _in_window(packing, window)
@@ -117,8 +119,8 @@ def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
     edges = PolyCollection(rings, closed=True, facecolors="none", edgecolors="white")
     edges.set_linewidth(0.5)
     zoom.add_collection(edges)
-    _frame(zoom, window)
-    zoom.set_title(f"zoom {_zoom_size(window)}; cells white")
+    _frame(zoom, window, unit, length_scale(packing))
+    zoom.set_title(f"zoom {_zoom_size(window, unit)}; cells white")
     _link_zoom(fig, ax, zoom, window, "black")
     _histogram(hist, lf)
     hist.set_title(f"σ(φᵢ) = {res['phi_std_interior'] or float('nan'):.3f} (interior)")

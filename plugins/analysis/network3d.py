@@ -74,7 +74,7 @@ class Network3D(Analyzer):
         vals = np.linalg.eigvalsh(fabric) if both.any() else np.full(3, np.nan)
         degree = np.bincount(self.edges.ravel(), minlength=p3.n_particles)[p3.placed]
         self._results = {
-            "tol": contacts.config.tol,
+            "tol": contacts.tol,
             "n_edges": int(self.edges.shape[0]),
             "n_nodes": p3.n_placed,
             "n_fabric_contacts": int(both.sum()),

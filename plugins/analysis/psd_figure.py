@@ -17,13 +17,13 @@ PLACED = "#D55E00"
 ANALYTIC = "#0072B2"
 
 
-def _log_d_axis(ax: Axes, lo: float, hi: float) -> None:
+def _log_d_axis(ax: Axes, lo: float, hi: float, unit: str = "µm") -> None:
     ax.set_xscale("log")
     ax.set_xlim(lo, hi)
     ax.xaxis.set_major_locator(LogLocator(base=10, subs=(1.0, 2.0, 5.0)))
     ax.xaxis.set_major_formatter(ScalarFormatter())
     ax.xaxis.set_minor_formatter(NullFormatter())
-    ax.set_xlabel("equivalent diameter d (µm)")
+    ax.set_xlabel(f"equivalent diameter d ({unit})")
 
 
 def _passing(ax: Axes, psd: Psd) -> None:
@@ -75,8 +75,11 @@ def _shares(ax: Axes, psd: Psd, basis: str) -> None:
     ax.set_title(f"√2 classes by {basis}" + (measure if basis == "mass" else ""))
 
 
-def draw_psd(psd: Psd) -> Figure:
-    """Percent passing by number and mass, and the class shares, placed against requested."""
+def draw_psd(psd: Psd, unit: str = "µm") -> Figure:
+    """Percent passing by number and mass, and the class shares, placed against requested.
+
+    Diameters are labelled in ``unit``, the packing's length unit.
+    """
     fig = Figure(figsize=(WIDTH, 2.9))
     axes = fig.subplots(1, 3)
     c = psd.classes
@@ -89,7 +92,7 @@ def draw_psd(psd: Psd) -> Figure:
     _shares(axes[1], psd, "number")
     _shares(axes[2], psd, "mass")
     for ax in axes:
-        _log_d_axis(ax, lo, hi)
+        _log_d_axis(ax, lo, hi, unit)
     handles = [
         Line2D([], [], color=TOTAL, label="requested (all drawn)"),
         Line2D([], [], color=PLACED, label="placed"),

@@ -39,6 +39,7 @@ from regopack.plugins.analysis.common import (
     interior_mask,
     interior_window,
     periodic_images,
+    scaled_defaults,
 )
 from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
 
@@ -48,22 +49,46 @@ COVARIOGRAM_DIRECTIONS = 90
 """Directions over which a polygon window's covariogram is averaged."""
 
 
+RDF_DEFAULTS: dict[str, Any] = {
+    "near": (0.0, 10.0),
+    "near_bin": 0.1,
+    "far": (100.0, 340.0),
+    "far_bin": 2.0,
+}
+"""Default ranges and bin widths of r at the built-in scale (``d_min = 2``); for
+another packing each is times :func:`~regopack.units.length_scale` (``d_min / 2``)."""
+
+
 class RdfConfig(BaseModel):
     """Parameters of the radial distribution function."""
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    near: tuple[float, float] = Field(
-        (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
+    near: tuple[float, float] | None = Field(
+        None,
+        strict=False,
+        description=(
+            "Near-field range of r (length unit); default: [0, 5 d_min] ([0, 10] at the "
+            "built-in scenes' d_min = 2)."
+        ),
     )
-    near_bin: float = Field(
-        0.1, gt=0, validate_default=True, description="Bin width in the near field."
+    near_bin: float | None = Field(
+        None,
+        gt=0,
+        description="Bin width in the near field; default: d_min / 20 (0.1 at d_min = 2).",
     )
-    far: tuple[float, float] = Field(
-        (100.0, 340.0), strict=False, description="Far-field range of r (length unit)."
+    far: tuple[float, float] | None = Field(
+        None,
+        strict=False,
+        description=(
+            "Far-field range of r (length unit); default: [50, 170] d_min "
+            "([100, 340] at d_min = 2)."
+        ),
     )
-    far_bin: float = Field(
-        2.0, gt=0, validate_default=True, description="Bin width in the far field."
+    far_bin: float | None = Field(
+        None,
+        gt=0,
+        description="Bin width in the far field; default: d_min (2.0 at d_min = 2).",
     )
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
     min_pairs_per_bin: float = Field(
@@ -81,11 +106,11 @@ class RdfConfig(BaseModel):
 
     @field_validator("near_bin", "far_bin")
     @classmethod
-    def _bounded_bins(cls, width: float, info: ValidationInfo) -> float:
+    def _bounded_bins(cls, width: float | None, info: ValidationInfo) -> float | None:
         """Refuse a bin width that gives more than ``MAX_HISTOGRAM_BINS`` bins over its range."""
         name = str(info.field_name).removesuffix("_bin")
         span = info.data.get(name)
-        if span is not None and 0 <= span[0] < span[1]:
+        if width is not None and span is not None and 0 <= span[0] < span[1]:
             try:
                 lo, hi = span
                 histogram_bins(lo, hi, width, field=f"{name}_bin", range_name=name)
@@ -96,12 +121,28 @@ class RdfConfig(BaseModel):
     @model_validator(mode="after")
     def _check(self) -> RdfConfig:
         for name in ("near", "far"):
-            lo, hi = getattr(self, name)
+            given = getattr(self, name)
+            if given is None:
+                continue
+            lo, hi = given
             if not 0 <= lo < hi:
                 raise ValueError(
                     f"{name} must be a range [lo, hi] with 0 <= lo < hi, got [{lo}, {hi}]"
                 )
         return self
+
+
+def _bins(span: float, width: float, cut: bool) -> int:
+    """Return the number of whole bins of ``width`` in ``span`` (at least 1).
+
+    A range the user gave (or a scaled default) whose span is a whole number of
+    bins up to rounding (``10 s / (0.1 s)`` is 99.99999999999999 for some ``s``)
+    keeps that number; a range cut at the window keeps only the bins inside it.
+    """
+    ratio = span / width
+    if not cut:
+        ratio *= 1.0 + 4.0 * np.finfo(np.float64).eps
+    return max(1, int(np.floor(ratio)))
 
 
 def rdf_histogram(
@@ -246,12 +287,16 @@ class Rdf(Analyzer):
     name = "rdf"
 
     def __init__(self, config: RdfConfig | None = None) -> None:
-        self.config = config or RdfConfig()
+        self._asked = config or RdfConfig()
+        self.config = self._asked
         self._results: dict[str, Any] | None = None
 
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Histogram the centre pairs inside the interior window."""
-        cfg = self.config
+        # after compute, the config holds the ranges and bin widths used
+        self.config = cfg = scaled_defaults(self._asked, packing, RDF_DEFAULTS)
+        assert cfg.near is not None and cfg.far is not None
+        assert cfg.near_bin is not None and cfg.far_bin is not None
         margin = interior_margin(packing, cfg.margin)
         w = interior_window(packing, margin)
         a, b = w.width, w.height
@@ -280,12 +325,13 @@ class Rdf(Analyzer):
             ("near", cfg.near, cfg.near_bin),
             ("far", cfg.far, cfg.far_bin),
         ):
+            cut_from = hi
             if hi >= limit:
                 notes.append(f"{field_name} field cut at {limit:g}: the window is {a:g} x {b:g}")
                 hi = np.nextafter(limit, 0.0)
             if lo >= hi:
                 continue
-            bins = max(1, int(np.floor((hi - lo) / width)))
+            bins = _bins(hi - lo, width, cut=hi < cut_from)
             names = packing.mineral_names
             n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
             pairs = n_kinds * n_kinds

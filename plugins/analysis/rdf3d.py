@@ -28,17 +28,28 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 from regopack.domain3d import Box
 from regopack.interfaces import Analyzer
 from regopack.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
-from regopack.plugins.analysis.common import eta_of
+from regopack.plugins.analysis.common import eta_of, scaled_defaults
 from regopack.plugins.analysis.common3d import (
     as_packing3d,
     interior_margin3d,
     interior_mask3d,
     interior_window3d,
 )
+from regopack.plugins.analysis.rdf import _bins
 from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+
+
+RDF3D_DEFAULTS: dict[str, Any] = {
+    "near": (0.0, 10.0),
+    "near_bin": 0.1,
+    "far": (10.0, 60.0),
+    "far_bin": 0.5,
+}
+"""Default ranges and bin widths of r at the built-in scale (``d_min = 2``); for
+another packing each is times :func:`~regopack.units.length_scale` (``d_min / 2``)."""
 
 
 class Rdf3DConfig(BaseModel):
@@ -46,17 +57,30 @@ class Rdf3DConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    near: tuple[float, float] = Field(
-        (0.0, 10.0), strict=False, description="Near-field range of r (length unit)."
+    near: tuple[float, float] | None = Field(
+        None,
+        strict=False,
+        description=(
+            "Near-field range of r (length unit); default: [0, 5 d_min] ([0, 10] at the "
+            "built-in scenes' d_min = 2)."
+        ),
     )
-    near_bin: float = Field(
-        0.1, gt=0, validate_default=True, description="Bin width in the near field."
+    near_bin: float | None = Field(
+        None,
+        gt=0,
+        description="Bin width in the near field; default: d_min / 20 (0.1 at d_min = 2).",
     )
-    far: tuple[float, float] = Field(
-        (10.0, 60.0), strict=False, description="Far-field range of r (length unit)."
+    far: tuple[float, float] | None = Field(
+        None,
+        strict=False,
+        description=(
+            "Far-field range of r (length unit); default: [5, 30] d_min ([10, 60] at d_min = 2)."
+        ),
     )
-    far_bin: float = Field(
-        0.5, gt=0, validate_default=True, description="Bin width in the far field."
+    far_bin: float | None = Field(
+        None,
+        gt=0,
+        description="Bin width in the far field; default: d_min / 4 (0.5 at d_min = 2).",
     )
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
     min_pairs_per_bin: float = Field(
@@ -74,11 +98,11 @@ class Rdf3DConfig(BaseModel):
 
     @field_validator("near_bin", "far_bin")
     @classmethod
-    def _bounded_bins(cls, width: float, info: ValidationInfo) -> float:
+    def _bounded_bins(cls, width: float | None, info: ValidationInfo) -> float | None:
         """Refuse a bin width that gives more than ``MAX_HISTOGRAM_BINS`` bins over its range."""
         name = str(info.field_name).removesuffix("_bin")
         span = info.data.get(name)
-        if span is not None and 0 <= span[0] < span[1]:
+        if width is not None and span is not None and 0 <= span[0] < span[1]:
             try:
                 lo, hi = span
                 histogram_bins(lo, hi, width, field=f"{name}_bin", range_name=name)
@@ -89,7 +113,10 @@ class Rdf3DConfig(BaseModel):
     @model_validator(mode="after")
     def _check(self) -> Rdf3DConfig:
         for name in ("near", "far"):
-            lo, hi = getattr(self, name)
+            given = getattr(self, name)
+            if given is None:
+                continue
+            lo, hi = given
             if not 0 <= lo < hi:
                 raise ValueError(
                     f"{name} must be a range [lo, hi] with 0 <= lo < hi, got [{lo}, {hi}]"
@@ -162,13 +189,17 @@ class Rdf3D(Analyzer):
     name = "rdf3d"
 
     def __init__(self, config: Rdf3DConfig | None = None) -> None:
-        self.config = config or Rdf3DConfig()
+        self._asked = config or Rdf3DConfig()
+        self.config = self._asked
         self._results: dict[str, Any] | None = None
 
     def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
         """Histogram the centre pairs inside the interior window."""
         p3 = as_packing3d(packing, self)
-        cfg = self.config
+        # after compute, the config holds the ranges and bin widths used
+        self.config = cfg = scaled_defaults(self._asked, p3, RDF3D_DEFAULTS)
+        assert cfg.near is not None and cfg.far is not None
+        assert cfg.near_bin is not None and cfg.far_bin is not None
         margin = interior_margin3d(p3, cfg.margin)
         w = interior_window3d(p3, margin)
         size = w.size
@@ -189,13 +220,14 @@ class Rdf3D(Analyzer):
             ("near", cfg.near, cfg.near_bin),
             ("far", cfg.far, cfg.far_bin),
         ):
+            cut_from = hi
             if hi >= limit:
                 dims = " x ".join(f"{s:g}" for s in size)
                 notes.append(f"{field_name} field cut at {limit:g}: the window is {dims}")
                 hi = float(np.nextafter(limit, 0.0))
             if lo >= hi or not volume > 0:
                 continue
-            bins = max(1, int(np.floor((hi - lo) / width)))
+            bins = _bins(hi - lo, width, cut=hi < cut_from)
             pairs = n_kinds * n_kinds
             check_memory(
                 BIN_BYTES * bins * pairs,

@@ -285,3 +285,17 @@ def test_the_plugin_registers_each_format_module_under_its_name():
         ("vtk", vtk_export.VtkConfig, vtk_export.VtkExporter),
         ("lammps", lammps_export.LammpsConfig, lammps_export.LammpsExporter),
     ]
+
+
+def test_vtk_records_the_length_unit_as_field_data(packing, tmp_path):
+    from dataclasses import replace
+
+    path = VtkExporter().export(packing, tmp_path / "p.vtp")
+    assert "lengths in µm" in path.read_text()
+    in_nm = replace(packing, scene={**packing.scene, "length_unit": "nm"})
+    text = VtkExporter().export(in_nm, tmp_path / "q.vtp").read_text()
+    assert "lengths in nm" in text
+    assert (
+        '<Array type="String" Name="length_unit" NumberOfTuples="1" format="ascii">\n110 109 0'
+        in text
+    )

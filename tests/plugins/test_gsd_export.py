@@ -400,3 +400,12 @@ def test_command_line_export(walled, tmp_path, monkeypatch, capsys):
     assert frame.particles.N == walled.n_placed
     shapes = [json.dumps(s) for s in frame.particles.type_shapes]
     assert len(set(shapes)) == walled.n_placed
+
+
+def test_the_length_unit_is_logged_in_metres(walled, registry, tmp_path):
+    from dataclasses import replace
+
+    for unit, metres in (("µm", 1e-6), ("mm", 1e-3)):
+        p = replace(walled, scene={**walled.scene, "length_unit": unit})
+        path = export_packing(p, "gsd", tmp_path / f"{metres}.gsd", registry=registry)
+        assert read(path).log["regopack/length_unit_m"][0] == metres

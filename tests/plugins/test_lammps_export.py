@@ -337,3 +337,19 @@ def test_lammps_runs_a_periodic_packing(periodic, tmp_path):
     assert report["natoms"] == periodic.n_placed and report["finite"]
     d_min = 2.0 * float(periodic.radius[periodic.placed].min())
     assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_the_default_length_scale_follows_the_scenes_unit(small, tmp_path):
+    from dataclasses import replace
+
+    from regopack.plugins.lammps_export import default_length_scale
+
+    one = LammpsExporter().export(small, tmp_path / "a.data").read_text()
+    assert "# lengths = packing lengths (µm) x 1.0;" in one
+    in_mm = replace(small, scene={**small.scene, "length_unit": "mm"})
+    assert default_length_scale(in_mm, "micro") == 1000.0
+    assert default_length_scale(in_mm, "si") == 1e-3 and default_length_scale(in_mm, "lj") == 1.0
+    text = LammpsExporter().export(in_mm, tmp_path / "b.data").read_text()
+    assert "# lengths = packing lengths (mm) x 1000.0;" in text
+    a, b = body_blocks(one)[0][1], body_blocks(text)[0][1]
+    np.testing.assert_allclose(np.array(b[1:-1]), 1e3 * np.array(a[1:-1]), rtol=1e-12)

@@ -17,6 +17,7 @@ from regopack.errors import ConfigError
 from regopack.packing import load
 from regopack.packing3d import Packing3D, save3d
 from regopack.plugins.slice_export import SliceConfig, slice_packing
+from regopack.units import reference_diameter
 from regopack.verification import verify
 
 
@@ -71,6 +72,9 @@ def test_the_section_is_a_valid_2d_packing_of_the_cuts(packing) -> None:  # type
     assert set(solids) == cut
     assert section.stats["slice_phi"] == pytest.approx(areas.sum() / section.domain.area)
     assert section.stats["interior_margin"] == 12.0 and "size" not in section.scene
+    # the 3D d_min, not the smallest cut, scales the section's default lengths
+    assert section.stats["reference_diameter"] == reference_diameter(packing)
+    assert reference_diameter(section) == reference_diameter(packing)
 
 
 @pytest.mark.parametrize(("axis", "keep"), [("x", (1, 2)), ("y", (0, 2)), ("z", (0, 1))])

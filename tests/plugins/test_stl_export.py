@@ -7,7 +7,7 @@ import pytest
 from packings3d import packing3d
 
 from regopack.packing3d import Packing3D
-from regopack.plugins.stl_export import StlExporter, stl_triangles
+from regopack.plugins.stl_export import STL_RECORD, StlExporter, stl_triangles
 
 trimesh = pytest.importorskip("trimesh", reason="trimesh is not installed")
 
@@ -58,3 +58,28 @@ def test_triangles_follow_the_particles_in_draw_order(packing) -> None:  # type:
     centre = packing.centre[owner]
     normal = np.cross(tris[:, 1] - tris[:, 0], tris[:, 2] - tris[:, 0])
     assert np.all(np.einsum("ij,ij->i", normal, tris.mean(axis=1) - centre) > 0)
+
+
+def test_the_header_names_the_unit_and_unit_mm_converts(packing, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from regopack.plugins.stl_export import StlConfig
+
+    plain = StlExporter().export(packing, tmp_path / "a.stl").read_bytes()
+    assert b", unit um, " in plain[:80]
+    mm = StlExporter(StlConfig(unit="mm")).export(packing, tmp_path / "b.stl").read_bytes()
+    assert b", unit mm, " in mm[:80]
+    a = np.frombuffer(plain[84:], dtype=STL_RECORD)["vertices"]
+    b = np.frombuffer(mm[84:], dtype=STL_RECORD)["vertices"]
+    np.testing.assert_allclose(b, a.astype(np.float64) * 1e-3, rtol=1e-6)  # 40 µm is 0.04 mm
+
+
+def test_a_scene_in_millimetres_is_written_in_millimetres(packing, tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from dataclasses import replace
+
+    from regopack.plugins.stl_export import StlConfig
+
+    in_mm = replace(packing, scene={**packing.scene, "length_unit": "mm"})
+    own = StlExporter().export(in_mm, tmp_path / "a.stl").read_bytes()
+    same = StlExporter(StlConfig(unit="mm")).export(in_mm, tmp_path / "b.stl").read_bytes()
+    assert b", unit mm, " in own[:80] and own == same
+    with pytest.raises(ValueError, match="not a length unit"):
+        StlConfig(unit="inch")

@@ -177,3 +177,21 @@ def test_a_mineral_has_its_colour_whatever_the_phase_order(packing):
 
     for name, colour in zip(names, mineral_colours(names), strict=True):
         assert legend[name] == pytest.approx(to_rgba(colour))
+
+
+def test_lengths_are_labelled_in_the_scenes_unit_at_its_scale(packing):
+    from regopack.plugins.analysis.figures import draw_packing, draw_rdf
+    from regopack.testing import scaled_packing
+
+    in_mm = scaled_packing(packing, 1e-3)
+    in_mm.scene["length_unit"] = "mm"
+    ax, zoom = draw_packing(in_mm).axes[:2]
+    assert ax.get_xlabel() == "x (10⁻³ mm)" and zoom.get_ylabel() == "y (10⁻³ mm)"
+    assert "mm" in ax.get_title() and "µm" not in ax.get_title()
+    done = run_analyses(in_mm, default_registry(), [("rdf", {})])
+    near = draw_rdf(in_mm, done["rdf"]).axes[0]  # type: ignore[arg-type]
+    assert near.get_xlabel() == "centre distance r (mm)"
+    assert near.get_title() == "near field, bins of 0.0001 mm"  # d_min / 20
+    peak = [t.get_text() for t in near.texts if "first peak" in t.get_text()]
+    assert peak and peak[0].endswith(" mm") and "0.00" in peak[0]  # 5 decimals in mm
+    assert draw_packing(packing).axes[0].get_xlabel() == "x (µm)"

@@ -50,8 +50,11 @@ def test_the_packing_rdf_is_zero_below_contact_and_knows_its_expected_pairs(anal
     assert np.all(near["total"][near["r"] < 1.0] == 0)  # no two centres closer than 1 µm
     assert rdf["n_points"] > 10 and rdf["window"] == [12.0, 12.0, 12.0]
     assert rdf["first_peak_r"] is not None and 2.0 < rdf["first_peak_r"] < 6.0
-    assert "far field cut at 12" in rdf["notes"][0]
+    # d_min = 3: the near field reaches 5 d_min = 15, beyond the 12 µm window, as the far one
+    cut = [n.split(":")[0] for n in rdf["notes"]]
+    assert cut == ["near field cut at 12", "far field cut at 12"]
     # the pairs an uncorrelated pattern puts into the near field (they weigh the peak's fit)
     n = rdf["n_points"]
-    expected = n * (n - 1) / 2 * 4 / 3 * np.pi * 10.0**3 / 12.0**3
+    r_max = near["r"][-1] + 0.5 * (near["r"][1] - near["r"][0])  # the near field's last edge
+    expected = n * (n - 1) / 2 * 4 / 3 * np.pi * r_max**3 / 12.0**3
     assert rdf.analyzer.expected["near"].sum() == pytest.approx(expected)
