@@ -322,13 +322,29 @@ CASES: list[tuple[str, list[str], str]] = [
     # 5d. analyzer settings that imply bins or rings beyond any bound
     (
         "rdf-bins-from-set",
-        ["analyze", "packing.npz", "--only", "rdf", "--set", "rdf.near_bin=1e-9", "--out", "a"],
+        [
+            "analyze",
+            "packing.npz",
+            "--only",
+            "rdf",
+            "--set",
+            "rdf.near=[0, 10]",
+            "--set",
+            "rdf.near_bin=1e-9",
+            "--out",
+            "a",
+        ],
         "--set: rdf.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at most 65,536; "
         "give a bin width of at least 0.000152588 (the range / 65,536) or a shorter range",
     ),
     (
         "rdf-bins-in-scene",
-        ["config", "small", "--set", 'outputs.analyses=[{kind="rdf", near_bin=1e-9}]'],
+        [
+            "config",
+            "small",
+            "--set",
+            'outputs.analyses=[{kind="rdf", near=[0, 10], near_bin=1e-9}]',
+        ],
         "--set: outputs.analyses.0.near_bin = 1e-09: gives 1e+10 bins over near = [0, 10]; at "
         "most 65,536; give a bin width of at least 0.000152588 (the range / 65,536) or a "
         "shorter range",

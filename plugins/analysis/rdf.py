@@ -331,6 +331,15 @@ class Rdf(Analyzer):
                 hi = np.nextafter(limit, 0.0)
             if lo >= hi:
                 continue
+            # the range as set (or by default), before the window cuts it: the same bound
+            # as the settings' own check, which cannot see a default range
+            histogram_bins(
+                float(lo),
+                float(cut_from),
+                width,
+                field=f"rdf.{field_name}_bin",
+                range_name=field_name,
+            )
             bins = _bins(hi - lo, width, cut=hi < cut_from)
             names = packing.mineral_names
             n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1

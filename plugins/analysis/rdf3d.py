@@ -227,6 +227,15 @@ class Rdf3D(Analyzer):
                 hi = float(np.nextafter(limit, 0.0))
             if lo >= hi or not volume > 0:
                 continue
+            # the range as set (or by default), before the window cuts it: the same bound
+            # as the settings' own check, which cannot see a default range
+            histogram_bins(
+                float(lo),
+                float(cut_from),
+                width,
+                field=f"rdf3d.{field_name}_bin",
+                range_name=field_name,
+            )
             bins = _bins(hi - lo, width, cut=hi < cut_from)
             pairs = n_kinds * n_kinds
             check_memory(

@@ -150,8 +150,10 @@ def test_bins_are_bounded_relative_to_the_range(scale: float) -> None:
     near = (0.0, 10.0 * scale)
     with pytest.raises(ValueError, match=r"near_bin\n.*gives 1e\+10 bins over near = .*65,536"):
         RdfConfig(near=near, near_bin=1e-9 * scale)
-    with pytest.raises(ValueError, match=r"far_bin\n.*gives 5e\+299 bins over far"):
-        RdfConfig(far=(0.0, 1e300))  # the default far_bin is checked too
+    with pytest.raises(ValueError, match=r"far_bin\n.*gives 5e\+\d+ bins over far"):
+        RdfConfig(far=(0.0, 1e300), far_bin=2.0 * scale)
+    # the default bin scales with the packing's d_min; the window bounds the range
+    assert RdfConfig(far=(0.0, 1e300)).far_bin is None
     assert RdfConfig(near=near, near_bin=10.0 * scale / 65_536).near_bin > 0
 
 
@@ -172,3 +174,14 @@ def test_the_curves_of_many_minerals_are_bounded_by_the_memory(monkeypatch) -> N
     with pytest.raises(LimitError, match=r"^rdf\.near_bin = .*60,000 bins x 9 mineral pairs"):
         Rdf(config).compute(packing, {})
     Rdf(RdfConfig(near=(0.0, 2.0), far=(2.0, 4.0), margin=0.0)).compute(packing, {})
+
+
+def test_a_bin_width_over_the_default_range_is_bounded_when_analysed() -> None:
+    """The default range scales with the packing's d_min, so the settings cannot check it:
+    the analysis does, before it allocates."""
+    import regopack
+    from regopack.errors import ConfigError
+
+    packing = regopack.pack("small", count=300)
+    with pytest.raises(ConfigError, match=r"rdf.near_bin = 1e-09: gives 1e\+10 bins over near"):
+        regopack.analyze(packing, ["rdf"], params={"rdf": {"near_bin": 1e-9}})
