@@ -31,6 +31,7 @@ from regopack.messages import install_hint
 from regopack.packing import Packing
 from regopack.run import run_scene
 from regopack.scene_model import ResolvedScene, load_scene, resolve_scene
+from regopack.threads import kernel_threads
 from regopack.verification import verify
 from regopack.voids import void_metrics
 
@@ -178,7 +179,7 @@ def _init_worker(workers: int = 1) -> None:
     """
     import numba
 
-    numba.set_num_threads(min(numba.get_num_threads(), threads_per_worker(workers, os.cpu_count())))
+    numba.set_num_threads(min(kernel_threads(), threads_per_worker(workers, os.cpu_count())))
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     parent = os.getppid()

@@ -57,6 +57,7 @@ __all__ = [
     "name_problem",
     "raise_or_defer",
     "rebase",
+    "remove_folder",
     "remove_leftovers",
     "replace_folder",
 ]
@@ -278,6 +279,40 @@ def _written_here(folder: str) -> bool:
         return False
 
 
+def remove_folder(folder: str | Path) -> None:
+    """Delete a folder regopack made, its :data:`MARKER` last (best effort).
+
+    A deletion cut short (a kill, a file that cannot go) leaves a folder that
+    still holds its marker, which the next write into its output folder
+    removes (:func:`remove_leftovers`).
+    """
+    marker = os.path.join(folder, MARKER)
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return
+    for entry in entries:
+        if entry.name == MARKER:
+            continue
+        if entry.is_dir(follow_symlinks=False):
+            shutil.rmtree(entry.path, ignore_errors=True)
+        else:
+            try:
+                os.unlink(entry.path)
+            except OSError:
+                pass
+    try:
+        if any(e.name != MARKER for e in os.scandir(folder)):
+            return  # something could not go: the marker stays for the next write
+        os.unlink(marker)
+    except OSError:
+        pass
+    try:
+        os.rmdir(folder)
+    except OSError:
+        pass
+
+
 def remove_leftovers(target: str | Path) -> list[Path]:
     """Remove the temporary and old folders a killed write left beside ``target``.
 
@@ -300,7 +335,7 @@ def remove_leftovers(target: str | Path) -> list[Path]:
             and entry.is_dir(follow_symlinks=False)
             and _written_here(entry.path)
         ):
-            shutil.rmtree(entry.path, ignore_errors=True)
+            remove_folder(entry.path)
             removed.append(Path(entry.path))
     return removed
 
@@ -465,14 +500,14 @@ def replace_folder(target: str | Path, kind: str) -> Iterator[Path]:
             raise ConfigError(f"cannot move the new output into {target}: {_why(err)}") from err
         _raise_pending()
     except OSError as err:  # e.g. the disk is full: one line, and nothing half-written
-        shutil.rmtree(tmp, ignore_errors=True)
+        remove_folder(tmp)
         raise ConfigError(f"cannot write the output folder {target}: {_why(err)}") from err
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
+        remove_folder(tmp)
         raise
     finally:
         if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+            remove_folder(old)
 
 
 def rebase(path: Any, old: Path, new: Path) -> Any:

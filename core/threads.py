@@ -1,15 +1,14 @@
 """How numba runs regopack's parallel kernels: the threading layer and its threads.
 
-Imported with the package root (it imports nothing heavy), so that its
-settings reach numba before numba starts its threads, whoever's kernel runs
-first. What it sets goes through environment variables, as numba reads
-them; each one the user set already is kept:
+Imported with the package root (it imports nothing heavy); a setting the
+user made is kept:
 
 - ``OMP_WAIT_POLICY=PASSIVE`` (:func:`configure_threads`);
-- ``NUMBA_THREADING_LAYER_PRIORITY``: OpenMP, then numba's workqueue, then
-  TBB (:func:`configure_threading_layer`);
+- numba's order of threading layers: OpenMP, then its workqueue, then TBB,
+  set in this process's numba configuration before numba starts its threads
+  (:func:`prefer_layers`, :func:`kernel_threads`);
 - a child forked after the parent ran a GNU OpenMP kernel runs its kernels on
-  one thread (:func:`_one_thread_after_fork`).
+  one thread (:func:`kernel_threads`).
 """
 
 from __future__ import annotations
@@ -17,7 +16,13 @@ from __future__ import annotations
 import os
 import sys
 
-__all__ = ["THREADING_LAYERS", "configure", "configure_threading_layer", "configure_threads"]
+__all__ = [
+    "THREADING_LAYERS",
+    "configure",
+    "configure_threads",
+    "kernel_threads",
+    "prefer_layers",
+]
 
 
 def configure_threads() -> None:
@@ -34,12 +39,20 @@ def configure_threads() -> None:
 
 
 THREADING_LAYERS: tuple[str, ...] = ("omp", "workqueue", "tbb")
-"""numba's threading layers in regopack's order of preference (see
-:func:`configure_threading_layer`)."""
+"""numba's threading layers in regopack's order of preference (see :func:`prefer_layers`)."""
+
+NUMBA_DEFAULT_ORDER: tuple[str, ...] = ("tbb", "omp", "workqueue")
+"""numba's own order of preference, which :func:`prefer_layers` replaces."""
+
+_ONE_THREAD = False
+"""Set in a child forked after its parent started GNU OpenMP threads (:func:`kernel_threads`)."""
+
+_PARENT_ON_GNU_OPENMP = False
+"""Whether this process ran a GNU OpenMP kernel when it last forked (set just before the fork)."""
 
 
-def configure_threading_layer() -> None:
-    """Prefer OpenMP, then numba's own workqueue, to TBB, unless the user chose a layer.
+def prefer_layers() -> None:
+    """Put TBB last in numba's order of threading layers, unless the user chose.
 
     numba takes TBB first when it finds it (``pip install tbb``, Debian's
     ``libtbb12``, which YADE brings, many conda environments). With TBB, a
@@ -48,55 +61,74 @@ def configure_threading_layer() -> None:
     blocking finalisation. regopack's one parallel kernel (the sweep's exact
     scans) runs from any thread but one at a time, so it needs no thread-safe
     layer: OpenMP (what numba takes without TBB) or else the workqueue serve
-    it, and neither has that exit. The order goes to numba through
-    ``NUMBA_THREADING_LAYER_PRIORITY`` (child processes inherit it); setting
-    ``NUMBA_THREADING_LAYER`` or that variable yourself keeps your choice.
-    Nothing changes once numba has started its threads.
+    it, and neither has that exit.
+
+    Called just before numba starts its threads (:func:`kernel_threads`); the
+    order is set in numba's configuration of this process only, never in the
+    environment, so the programs this process starts keep numba's own. A
+    choice of the user's is kept: ``NUMBA_THREADING_LAYER`` or
+    ``NUMBA_THREADING_LAYER_PRIORITY`` in the environment or numba's
+    configuration file, or ``numba.config`` set in code; so is a layer
+    already running.
     """
     if os.environ.get("NUMBA_THREADING_LAYER") or os.environ.get("NUMBA_THREADING_LAYER_PRIORITY"):
         return
-    os.environ["NUMBA_THREADING_LAYER_PRIORITY"] = " ".join(THREADING_LAYERS)
-    if "numba" in sys.modules:
-        from numba.core import config
+    from numba.core import config
+    from numba.np.ufunc import parallel
 
-        # read when the first parallel kernel starts numba's threads
-        config.THREADING_LAYER_PRIORITY = list(THREADING_LAYERS)  # type: ignore[attr-defined]
+    if getattr(parallel, "_is_initialized", False):
+        return
+    config.reload_config()  # type: ignore[no-untyped-call]  # pending NUMBA_* changes first
+    if str(config.THREADING_LAYER).lower() != "default":  # type: ignore[attr-defined]
+        return
+    if tuple(config.THREADING_LAYER_PRIORITY) != NUMBA_DEFAULT_ORDER:  # type: ignore[attr-defined]
+        return
+    config.THREADING_LAYER_PRIORITY = list(THREADING_LAYERS)  # type: ignore[attr-defined]
+
+
+def kernel_threads() -> int:
+    """Threads regopack's parallel kernels may use here; numba's threads start now.
+
+    ``numba.get_num_threads()``, after :func:`prefer_layers`; 1 in a child
+    forked after its parent ran a GNU OpenMP kernel, which cannot start
+    OpenMP threads (numba would end it): its kernels give the same packings
+    on one thread.
+    """
+    prefer_layers()
+    if _ONE_THREAD:
+        return 1
+    import numba
+
+    return int(numba.get_num_threads())
 
 
 def _gnu_openmp_started() -> bool:
-    """Whether this process started numba's threads on GNU OpenMP."""
+    """Whether this process started numba's threads on GNU OpenMP (takes no lock)."""
     parallel = sys.modules.get("numba.np.ufunc.parallel")
     if parallel is None or not getattr(parallel, "_is_initialized", False):
         return False
-    try:
-        import importlib
-
-        omppool = importlib.import_module("numba.np.ufunc.omppool")
-        layer = parallel.threading_layer()
-    except (ImportError, ValueError):
+    omppool = sys.modules.get("numba.np.ufunc.omppool")
+    if omppool is None or getattr(omppool, "openmp_vendor", "") != "GNU":
         return False
-    return bool(layer == "omp" and getattr(omppool, "openmp_vendor", "") == "GNU")
+    return getattr(parallel, "_threading_layer", None) == "omp"
 
 
-def _one_thread_after_fork() -> None:
-    """Keep a forked child's kernels on one thread when its parent used GNU OpenMP.
+def _before_fork() -> None:
+    global _PARENT_ON_GNU_OPENMP
+    _PARENT_ON_GNU_OPENMP = _gnu_openmp_started()
 
-    GNU OpenMP cannot start a parallel region in a child forked after the
-    parent ran one (numba ends such a child). The kernels give the same
-    packings on one thread, so the child runs them there instead.
-    """
-    if _gnu_openmp_started():
-        import numba
 
-        numba.set_num_threads(1)
+def _after_fork_in_child() -> None:
+    """Mark a child of a GNU OpenMP parent (a flag only: no lock is taken in a fork hook)."""
+    global _ONE_THREAD
+    _ONE_THREAD = _ONE_THREAD or _PARENT_ON_GNU_OPENMP
 
 
 def configure() -> None:
-    """Apply every setting of this module (once per process; called on import)."""
+    """Apply the settings read from the environment (once per process; called on import)."""
     configure_threads()
-    configure_threading_layer()
 
 
 configure()
 if hasattr(os, "register_at_fork"):
-    os.register_at_fork(after_in_child=_one_thread_after_fork)
+    os.register_at_fork(before=_before_fork, after_in_child=_after_fork_in_child)

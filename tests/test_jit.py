@@ -191,19 +191,28 @@ LAYER = (
 )
 
 
+TINY = "regopack.pack('dem', domain__width=120, domain__height=120, insertion__strip=120)\n"
+
+
 def test_regopack_prefers_openmp_then_the_workqueue_to_tbb() -> None:
-    out = _python("import regopack, os\n" + LAYER, _child_env())
-    assert out.strip() in {"omp", "workqueue"}
-    # numba imported first, regopack after: the order still reaches numba
-    out = _python("import numba, regopack\n" + LAYER, _child_env())
-    assert out.strip() in {"omp", "workqueue"}
+    code = "import regopack, numba, os\n" + TINY
+    code += "print(numba.threading_layer(), os.environ.get('NUMBA_THREADING_LAYER_PRIORITY'))\n"
+    layer, env = _python(code, _child_env()).split()
+    assert layer in {"omp", "workqueue"}
+    assert env == "None"  # set in this process's numba only: its children keep numba's order
 
 
 def test_a_threading_layer_chosen_by_the_user_is_kept() -> None:
+    check = TINY + "import numba; print(numba.threading_layer())\n"
     env = _child_env(NUMBA_THREADING_LAYER="workqueue")
-    assert _python("import regopack\n" + LAYER, env).strip() == "workqueue"
+    assert _python("import regopack\n" + check, env).strip() == "workqueue"
     env = _child_env(NUMBA_THREADING_LAYER_PRIORITY="workqueue omp tbb")
-    assert _python("import regopack\n" + LAYER, env).strip() == "workqueue"
+    assert _python("import regopack\n" + check, env).strip() == "workqueue"
+    # numba's documented way in code, before or after importing regopack
+    code = "import numba\nnumba.config.THREADING_LAYER = 'workqueue'\nimport regopack\n" + check
+    assert _python(code, _child_env()).strip() == "workqueue"
+    code = "import regopack, numba\nnumba.config.THREADING_LAYER = 'workqueue'\n" + check
+    assert _python(code, _child_env()).strip() == "workqueue"
 
 
 PACK_AND_ANALYSE = """
@@ -264,15 +273,19 @@ def test_ten_processes_with_tbb_present_exit_after_their_last_line(tmp_path: Pat
 
 @pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="no fork here")
 def test_a_child_forked_after_the_parallel_kernels_ran_packs_the_same() -> None:
+    """In the child, from the forking thread and from a new one (as a thread pool would)."""
     code = """
-import os, numba, regopack
+import os, threading, numba, regopack
 def key():
     p = regopack.pack("dem", domain__width=160, domain__height=160, insertion__strip=160)
     return p.centre.tobytes()
 first = key()
 pid = os.fork()
 if pid == 0:
-    os._exit(0 if key() == first else 3)
+    out = []
+    t = threading.Thread(target=lambda: out.append(key()))
+    t.start(); t.join()
+    os._exit(0 if key() == first and out == [first] else 3)
 _, status = os.waitpid(pid, 0)
 print(numba.threading_layer(), os.waitstatus_to_exitcode(status))
 """

@@ -119,3 +119,25 @@ def test_a_temporary_folder_is_marked_from_the_start(tmp_path: Path) -> None:
         assert folder_kind(tmp) == "run"
         (tmp / "a").write_text("x")
         assert remove_leftovers(tmp_path / "elsewhere") == []
+
+
+def test_a_deletion_cut_short_leaves_a_folder_the_next_write_removes(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The marker goes last: a folder whose deletion stopped half-way is still regopack's."""
+    import shutil
+
+    from regopack.outdir import remove_folder
+
+    left = tmp_path / "out.old-abcdefgh"
+    left.mkdir()
+    (left / "big").mkdir()
+    (left / "big" / "f").write_text("x")
+    (left / "packing.npz").write_text("x")
+    mark_folder(left, "run")
+    with monkeypatch.context() as m:
+        m.setattr(shutil, "rmtree", lambda *a, **k: None)  # killed while deleting "big"
+        remove_folder(left)
+    assert folder_kind(left) == "run" and (left / "big" / "f").exists()
+    assert remove_leftovers(tmp_path / "out") == [left]
+    assert not left.exists()

@@ -29,6 +29,7 @@ from regopack.interfaces import (
 )
 from regopack.plugin_types import InserterSpec
 from regopack.population import Population
+from regopack.threads import kernel_threads
 
 if TYPE_CHECKING:
     from regopack.plugins.available_arc.batches import Helpers
@@ -287,8 +288,6 @@ def _pack_sweep(
     prepared: float,
 ) -> InsertionResult:
     """Insert in the sweep order (see :mod:`regopack.plugins.available_arc.sweep`)."""
-    import numba
-
     from regopack.plugins.available_arc import batches, kernel, sweep
     from regopack.plugins.available_arc.lag import pilot_lags
 
@@ -323,7 +322,7 @@ def _pack_sweep(
 
         lags, lag_info = pilot_lags(population, domain, zone, sw.delta, run_pilot)
         sw.set_lags(lags)
-    threads = min(numba.get_num_threads(), batches.MAX_THREADS) if n else 1
+    threads = min(kernel_threads(), batches.MAX_THREADS) if n else 1
     helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
     team = _partner_for(st)
     piloted = time.perf_counter()
@@ -367,11 +366,9 @@ def _partner_for(st: ArcState) -> PartnerThread | None:
     :mod:`~regopack.plugins.available_arc.bound_queue`). The packing is the
     same with it or without it.
     """
-    import numba
-
     from regopack.plugins.available_arc import kernel, partner
 
-    if numba.get_num_threads() < 2 or not partner.available():
+    if kernel_threads() < 2 or not partner.available():
         return None
     if st.packed.ipar[kernel.I_DISKS] == 1:
         if st.packed.ipar[kernel.I_BOUND] == kernel.BOUND_OFF:

@@ -219,9 +219,10 @@ class PartnerThread:
         # the search posts its candidates only to a partner that analyses them
         p.ctl[C_ON] = 0 if self.bounds else 1
         self._arrays = (g, s)
-        self._thread = threading.Thread(target=run, name="regopack-partner", daemon=True)
+        thread = threading.Thread(target=run, name="regopack-partner", daemon=True)
+        thread.start()
+        self._thread = thread
         _RUNNING.add(self)
-        self._thread.start()
         if self.bounds and s.ipar[K.I_BOUND] != K.BOUND_OFF:
             s.ipar[K.I_BOUND] = K.BOUND_POST
         return p
@@ -231,11 +232,13 @@ class PartnerThread:
         p = self.shared
         if self._arrays is not None and self._arrays[1].ipar[K.I_BOUND] == K.BOUND_POST:
             self._arrays[1].ipar[K.I_BOUND] = K.BOUND_PROVE  # no one left to prove them
-        if self._thread is not None:
-            p.ctl[C_STOP] = 1
-            self._thread.join()
-            self._thread = None
-        _RUNNING.discard(self)
+        thread, self._thread = self._thread, None
+        try:
+            if thread is not None:
+                p.ctl[C_STOP] = 1
+                thread.join()
+        finally:
+            _RUNNING.discard(self)
         self._arrays = None
         p.ctl[C_ON] = 0
         return self._failure.pop() if self._failure else None
