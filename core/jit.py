@@ -103,6 +103,11 @@ def configure_cache() -> None:
 
         # read when a cached function is decorated
         config.CACHE_DIR = str(folder)  # type: ignore[attr-defined]
+        # numba re-reads every NUMBA_* variable when one changes, undoing what the user set
+        # in numba.config (a threading layer, say): this change is known to it already
+        seen = getattr(getattr(config, "_env_reloader", None), "old_environ", None)
+        if isinstance(seen, dict):
+            seen["NUMBA_CACHE_DIR"] = str(folder)
 
 
 def lock_cache_saves() -> None:

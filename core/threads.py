@@ -78,7 +78,6 @@ def prefer_layers() -> None:
 
     if getattr(parallel, "_is_initialized", False):
         return
-    config.reload_config()  # type: ignore[no-untyped-call]  # pending NUMBA_* changes first
     if str(config.THREADING_LAYER).lower() != "default":  # type: ignore[attr-defined]
         return
     if tuple(config.THREADING_LAYER_PRIORITY) != NUMBA_DEFAULT_ORDER:  # type: ignore[attr-defined]
