@@ -34,6 +34,7 @@ __all__ = [
     "format_bytes",
     "histogram_bins",
     "memory_limit",
+    "zone_bins",
 ]
 
 MAX_EXTENT_RATIO = 1e8
@@ -275,3 +276,32 @@ def histogram_bins(lo: float, hi: float, width: float, *, field: str, range_name
         span / width, with_range, MAX_HISTOGRAM_BINS, field=field, given=width, hint=hint
     )
     return max(1, count)
+
+
+MAX_ZONE_BINS = 1 << 20
+"""Most bins of a sweep's zone over the domain's height (both sweeps, 2D and 3D)."""
+
+
+def zone_bins(zone: float, delta: float, height: float, per_zone: int) -> int:
+    """Bins of ``delta`` in a sweep's zone of height ``zone``: at most :data:`MAX_ZONE_BINS`.
+
+    ``per_zone`` is the sweep's bins per zone height (for the message).
+
+    Raises
+    ------
+    LimitError
+        When the zone is more than :data:`MAX_ZONE_BINS` bins high (a zone of
+        more than ``MAX_ZONE_BINS / per_zone`` times the domain's height).
+    """
+    derived_count(
+        zone / delta,
+        "bins of the sweep's zone",
+        MAX_ZONE_BINS,
+        field="insertion.zone",
+        given=zone,
+        hint=(
+            f"a zone of at most {MAX_ZONE_BINS // per_zone:,} times the domain's height "
+            f"({height:g})"
+        ),
+    )
+    return round(zone / delta)

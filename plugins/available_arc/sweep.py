@@ -42,7 +42,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-from regopack.limits import derived_count
+from regopack.limits import MAX_ZONE_BINS as MAX_BINS
+from regopack.limits import zone_bins
 from regopack.plugins import strips
 from regopack.plugins.atomics import store_release
 from regopack.plugins.available_arc import kernel as K
@@ -70,30 +71,6 @@ STAY_SHARE = 10
 most ``ZONE_BINS`` bins) above the lowest top before particles go to another strip
 (``zs[Z_STAY]`` bins): a change of strip hides one zone's candidates and shows
 another's, so the strips take turns in runs rather than after every few dozen particles."""
-MAX_BINS = 1 << 20
-"""Most bins over the domain's height (a zone under ``height * ZONE_BINS / MAX_BINS``
-has fewer than ``ZONE_BINS`` bins)."""
-
-
-def zone_bins(zone: float, delta: float, height: float) -> int:
-    """Bins of ``delta`` in a zone of height ``zone``: at most ``MAX_BINS``.
-
-    Raises
-    ------
-    regopack.limits.LimitError
-        When the zone is more than ``MAX_BINS`` bins high (a zone of more than
-        ``MAX_BINS / ZONE_BINS`` times the domain's height).
-    """
-    most = MAX_BINS
-    derived_count(
-        zone / delta,
-        "bins of the sweep's zone",
-        most,
-        field="insertion.zone",
-        given=zone,
-        hint=f"a zone of at most {most // ZONE_BINS:,} times the domain's height ({height:g})",
-    )
-    return round(zone / delta)
 
 
 # zs: integer state of the whole sweep
@@ -199,7 +176,7 @@ class Sweep:
         self.flag = np.full(max(n, 1), FROZEN, dtype=np.int64)
         self.status = np.zeros(max(n, 1), dtype=np.int64)
         self.zs = np.zeros(N_ZS, dtype=np.int64)
-        self.zs[Z_NZONE] = max(1, zone_bins(zone, self.delta, height))
+        self.zs[Z_NZONE] = max(1, zone_bins(zone, self.delta, height, ZONE_BINS))
         # a zone taller than the domain has more than ZONE_BINS bins: the band stays a
         # tenth of ZONE_BINS, or a strip would keep the turn up to the top
         self.zs[Z_STAY] = min(int(self.zs[Z_NZONE]), ZONE_BINS) // STAY_SHARE

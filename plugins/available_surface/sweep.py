@@ -26,7 +26,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.limits import derived_count
+from regopack.limits import MAX_ZONE_BINS as MAX_BINS
+from regopack.limits import zone_bins
 from regopack.plugins.available_surface.state import SurfaceState
 from regopack.plugins.strips import strip_count
 
@@ -34,29 +35,6 @@ FloatArray = NDArray[np.float64]
 
 ZONE_BINS = 80
 """Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
-MAX_BINS = 1 << 20
-"""Most bins over the box's height."""
-
-
-def zone_bins(zone: float, delta: float, height: float) -> int:
-    """Bins of ``delta`` in a zone of height ``zone``: at most ``MAX_BINS``.
-
-    Raises
-    ------
-    regopack.limits.LimitError
-        When the zone is more than ``MAX_BINS`` bins high (a zone of more than
-        ``MAX_BINS / ZONE_BINS`` times the domain's height).
-    """
-    most = MAX_BINS
-    derived_count(
-        zone / delta,
-        "bins of the sweep's zone",
-        most,
-        field="insertion.zone",
-        given=zone,
-        hint=f"a zone of at most {most // ZONE_BINS:,} times the domain's height ({height:g})",
-    )
-    return round(zone / delta)
 
 
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
@@ -131,7 +109,7 @@ class SurfaceSweep:
         self.tile = np.zeros(n, dtype=np.int64)
         self.tried = np.full(n, -1, dtype=np.int64)  # particle last analysed at each candidate
         self.status = np.zeros(n, dtype=np.int8)
-        self.nzone = max(1, zone_bins(zone, self.delta, height))
+        self.nzone = max(1, zone_bins(zone, self.delta, height, ZONE_BINS))
         self.closing = closing
         self.cur = -1
         self.done = self.started = False
