@@ -18,6 +18,7 @@ import copy
 import hashlib
 import json
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -62,7 +63,27 @@ SCENES: dict[str, tuple[str, Edit]] = {
         },
     ),
     "table1_3d_small": ("table1-3d", {"domain": {"width": 40.0, "height": 40.0, "depth": 40.0}}),
+    "table1_3d_seed2": (
+        "table1-3d",
+        {"seed": 2, "domain": {"width": 40.0, "height": 40.0, "depth": 40.0}},
+    ),
+    "table1_3d_periodic": (
+        "table1-3d",
+        {"domain": {"kind": "periodic-box", "width": 40.0, "height": 40.0, "depth": 40.0}},
+    ),
+    "table1_3d_spheres": (
+        "table1-3d",
+        {
+            "domain": {"width": 40.0, "height": 40.0, "depth": 40.0},
+            "phases": {k: {"shape": {"kind": "sphere"}} for k in range(6)},
+        },
+    ),
 }
+
+EXPORTS_2D = ("csv", "json", "lammps", "gsd", "vtk", "svg")
+"""Exporters whose files are fingerprinted for every 2D scene (3D: :data:`EXPORTS_3D`)."""
+
+EXPORTS_3D = ("gsd3d", "lammps3d", "slice", "stl", "vtk3d")
 
 
 def _edit(data: Any, edit: Any) -> Any:
@@ -137,6 +158,41 @@ def _analysis_arrays(results: Any) -> dict[str, Any]:
     return out
 
 
+def _export_digests(p: Any) -> dict[str, str]:
+    """One SHA-256 per file that each exporter writes for ``p``."""
+    out: dict[str, str] = {}
+    kinds = EXPORTS_3D if getattr(p, "dimension", 2) == 3 else EXPORTS_2D
+    for kind in kinds:
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                regopack.export(p, kind, Path(tmp) / "packing")
+            except Exception as exc:  # an export that fails is an entry too
+                out[kind] = f"error: {type(exc).__name__}: {exc}"
+                continue
+            for f in sorted(Path(tmp).rglob("*")):
+                if f.is_file():
+                    rel = f.relative_to(tmp).as_posix()
+                    out[f"{kind}/{rel}"] = _file_digest(f.read_bytes())
+    return out
+
+
+def _without_stats(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _without_stats(v) for k, v in value.items() if k != "stats"}
+    if isinstance(value, list):
+        return [_without_stats(v) for v in value]
+    return value
+
+
+def _file_digest(data: bytes) -> str:
+    """SHA-256 of a file; JSON without the run's ``stats`` (timings differ between runs)."""
+    try:
+        value = json.loads(data)
+    except (UnicodeDecodeError, ValueError):
+        return hashlib.sha256(data).hexdigest()[:16]
+    return _digest(_without_stats(value))
+
+
 def dump(names: list[str]) -> dict[str, str]:
     """Fingerprint every scene of ``names`` and its analyses."""
     entries: dict[str, str] = {}
@@ -153,6 +209,8 @@ def dump(names: list[str]) -> dict[str, str]:
         else:
             for key, value in _analysis_arrays(results).items():
                 entries[f"{label}/analysis/{key}"] = _digest(value)
+        for key, value in _export_digests(p).items():
+            entries[f"{label}/export/{key}"] = value
         print(f"{label}: {p.n_placed} placed", file=sys.stderr, flush=True)
     return entries
 

@@ -15,15 +15,10 @@ The package root stays light to import: the functions are loaded on first use.
 
 from __future__ import annotations
 
-from importlib.metadata import PackageNotFoundError, version
 from typing import TYPE_CHECKING, Any
 
-try:
-    __version__: str = version("regopack")
-except PackageNotFoundError:  # running from a source tree that is not installed
-    __version__ = "0.0.0"
-
 import regopack.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
+from regopack._version import __version__
 from regopack.packing import Packing
 from regopack.packing3d import Packing3D
 from regopack.packing3d import load_packing as load

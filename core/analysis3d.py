@@ -13,12 +13,8 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from regopack.analysis import (
-    AnalysisFiles,
-    check_dimension,
-    run_analyses,
-    write_analysis_files,
-)
+from regopack.analysis import AnalysisFiles, write_analysis_files
+from regopack.analysis_plan import check_dimension, run_analyses
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
 from regopack.scene_model import ANALYSIS_FOLDER, ResolvedScene

@@ -23,20 +23,18 @@ name the argument at fault.
 
 from __future__ import annotations
 
-import copy
 import os
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-import numpy as np
-
 from regopack.errors import ConfigError
 from regopack.interfaces import ProgressCallback
 from regopack.packing import Packing, load
 from regopack.packing3d import Packing3D
 from regopack.results import AnalysisResults
+from regopack.scene_model import dotted_name, make_scene, plain_value, registry_or_default
 
 if TYPE_CHECKING:
     from regopack.analysis import TableFormat
@@ -59,47 +57,6 @@ __all__ = [
 ]
 
 Progress = bool | ProgressCallback
-
-
-def _registry(registry: Registry | None) -> Registry:
-    from regopack.manager import Registry, default_registry
-
-    if registry is None:
-        return default_registry()
-    if not isinstance(registry, Registry):
-        raise ConfigError(
-            f"registry: expected a regopack.manager.Registry, not {type(registry).__name__}"
-        )
-    return registry
-
-
-def _dotted(name: str) -> str:
-    """``domain__width`` → ``domain.width``; dotted names pass unchanged.
-
-    Raises
-    ------
-    ConfigError
-        When a part of the name is empty (``__x``, ``a____b``, ``a__``).
-    """
-    key = name.replace("__", ".")
-    if any(not part for part in key.split(".")):
-        raise ConfigError(
-            f"{name}: empty part in the dotted name {key!r}; write e.g. domain__width=400"
-        )
-    return key
-
-
-def _plain(value: Any) -> Any:
-    """NumPy scalars and arrays as the Python values a scene file would hold."""
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, Mapping):
-        return {k: _plain(v) for k, v in value.items()}
-    if isinstance(value, list | tuple):
-        return [_plain(v) for v in value]
-    return value
 
 
 def _out_path(value: Any, what: str) -> Path:
@@ -167,39 +124,7 @@ def scene(
     >>> s.with_(seed=4).seed
     4
     """
-    from regopack.scene_model import (
-        ResolvedScene,
-        read_scene_data,
-        resolve_scene,
-        scene_from_dict,
-        set_value,
-    )
-
-    if isinstance(source, ResolvedScene):
-        data = source.to_dict()
-        origin = source.scene.source or f"scene {source.name!r}"
-        registry = registry if registry is not None else source.registry
-    elif isinstance(source, Mapping):
-        data = copy.deepcopy(dict(source))
-        origin = "scene dictionary"
-    elif source is None or isinstance(source, str | os.PathLike):
-        data, origin = read_scene_data(source if isinstance(source, str | None) else Path(source))
-    else:
-        raise ConfigError(
-            f"scene: expected a built-in scene name, a TOML file, a dictionary or a scene, "
-            f"not {type(source).__name__}"
-        )
-    overridden: dict[str, str] = {}
-    for name, value in overrides.items():
-        key = _dotted(name)
-        label = f"scene({name}=...)"
-        set_value(data, key, _plain(value), label)
-        overridden[key] = label
-    if seed is not None:
-        data["seed"] = _plain(seed)
-        overridden["seed"] = "scene(seed=...)"
-    structural = scene_from_dict(data, source=origin, overridden=overridden)
-    return resolve_scene(structural, _registry(registry))
+    return make_scene(source, seed=seed, registry=registry, overrides=overrides)
 
 
 def _as_scene(
@@ -410,7 +335,7 @@ def analysis_params(
     """
     out: dict[str, dict[str, Any]] = {}
     for name, value in params.items():
-        key = _dotted(name)
+        key = dotted_name(name)
         analyzer, dot, field = key.partition(".")
         if dot:
             if not field or "." in field:
@@ -479,7 +404,8 @@ def analyze(
     >>> list(res), round(res["density"]["phi_domain"], 6) == round(p.phi, 6)
     (['density'], True)
     """
-    from regopack.analysis import ANALYSIS_KIND, default_analyses, run_analyses, write_analysis
+    from regopack.analysis import ANALYSIS_KIND, write_analysis
+    from regopack.analysis_plan import default_analyses, run_analyses
     from regopack.outdir import check_replaceable
 
     _flag(figures, "figures")
@@ -510,7 +436,7 @@ def analyze(
                     raise ConfigError(f"only: empty analyzer name in {part!r}")
                 if name not in names:
                     names.append(name)
-    reg = _registry(registry)
+    reg = registry_or_default(registry)
     if params is not None and not isinstance(params, Mapping):
         raise ConfigError(
             f"params: expected a dictionary of parameters by analyzer, not {type(params).__name__}"
@@ -623,7 +549,7 @@ def export(
     pathlib.Path
         The main file written; companions (e.g. LAMMPS' input script) sit beside it.
     """
-    from regopack.analysis import run_analyses
+    from regopack.analysis_plan import run_analyses
     from regopack.exporting import (
         build_exporter,
         check_exporter_dimension,
@@ -631,7 +557,7 @@ def export(
         output_path,
     )
 
-    reg = _registry(registry)
+    reg = registry_or_default(registry)
     if not isinstance(to, str):
         raise ConfigError(f"to: expected the name of an exporter, not {type(to).__name__}")
     if params is not None and not isinstance(params, Mapping):
@@ -639,7 +565,7 @@ def export(
             f"params: expected a dictionary of {to}'s parameters, not {type(params).__name__}"
         )
     _flag(force, "force")
-    merged = {**(params or {}), **{k: _plain(v) for k, v in kwargs.items()}}
+    merged = {**(params or {}), **{k: plain_value(v) for k, v in kwargs.items()}}
     exporter = build_exporter(reg, to, merged, source=params_source)
     loaded = _packing_any_dimension(packing)
     file = None if isinstance(packing, Packing | Packing3D) else Path(packing)

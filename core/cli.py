@@ -30,7 +30,8 @@ from rich.console import Console
 from rich.table import Table
 from rich.text import Text
 
-from regopack import __version__
+from regopack._version import __version__
+from regopack.cli_args import output_path
 from regopack.errors import ConfigError, RegopackError, Terminated
 from regopack.plugin_types import KINDS
 
@@ -50,15 +51,6 @@ class _ArgumentParser(argparse.ArgumentParser):
         command = self.prog.removeprefix("regopack").strip()
         where = f"{command}: " if command else ""
         self.exit(EXIT_USAGE, f"regopack: error: {where}{message} (see '{self.prog} --help')\n")
-
-
-def output_path(text: str) -> Path:
-    """Argument type of ``--out``: a path, never the empty string (which would mean ``.``)."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError(
-            f"{text!r} is an empty path; give a folder or file name, e.g. runs/mine"
-        )
-    return Path(text)
 
 
 def _rel_tol(text: str) -> float:
@@ -348,8 +340,8 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
 def _cmd_compile(args: argparse.Namespace, out: Console, err: Console) -> int:
     import os
 
-    from regopack.compilation import compile_kernels
     from regopack.jit import kernel_cache_dir
+    from regopack.warmup import compile_kernels
 
     def report(step: str, seconds: float) -> None:
         if not args.quiet:
@@ -540,7 +532,6 @@ def _format_default(field: dict[str, Any]) -> str:
 
 
 def _cmd_plugins(args: argparse.Namespace, out: Console, err: Console) -> int:
-    from regopack import __version__
     from regopack.manager import default_registry
     from regopack.schema import describe_plugins
 

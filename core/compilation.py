@@ -1,82 +1,22 @@
-"""Compiled kernels: how long compiling took, and compiling them ahead of time.
+"""How long compiling the kernels took.
 
 regopack's kernels are compiled by numba on first use and cached on disk
 (see :mod:`regopack.jit`). :func:`compile_timer` measures the compilation that
 happens inside a block, from numba's own compile events, so that a run can
-report its insertion time without it. :func:`compile_kernels` (the command
-``regopack compile``) packs, analyses and exports a few tiny scenes that use
-every built-in kernel, which fills the cache, e.g. when building a cluster
-image.
+report its insertion time without it. Compiling every kernel ahead of time is
+:func:`regopack.warmup.compile_kernels`.
 """
 
 from __future__ import annotations
 
-import tempfile
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-__all__ = ["CompileTime", "compile_kernels", "compile_timer"]
-
-TINY: dict[str, Any] = {"domain.width": 60.0, "domain.height": 60.0, "count": 60}
-"""Overrides that make the ``small`` scene tiny (a fraction of a second once compiled)."""
-
-VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
-    ("polygons in a walled rectangle", {}),
-    ("a circle", {"domain": {"kind": "circle", "radius": 30.0}}),
-    (
-        "a convex polygon",
-        {"domain": {"kind": "polygon", "vertices": [[-30, -30], [30, -30], [30, 30], [-30, 20]]}},
-    ),
-    (
-        "a periodic rectangle",
-        {"domain.kind": "periodic", "domain.width": 80.0, "domain.height": 80.0},
-    ),
-    ("disks among polygons", {"phases.0.shape": {"kind": "disk"}}),
-    (
-        "disks in a periodic rectangle",
-        {
-            "phases.0.shape": {"kind": "disk"},
-            "domain.kind": "periodic",
-            "domain.width": 80.0,
-            "domain.height": 80.0,
-        },
-    ),
-    (
-        "disks in a circle",
-        {"phases.0.shape": {"kind": "disk"}, "domain": {"kind": "circle", "radius": 30.0}},
-    ),
-    (
-        "disks in a convex polygon",
-        {
-            "phases.0.shape": {"kind": "disk"},
-            "domain": {"kind": "polygon", "vertices": [[-30, -30], [30, -30], [30, 30], [-30, 20]]},
-        },
-    ),
-    ("the sweep order", {"insertion.order": "sweep"}),
-    (
-        "disks among polygons, the sweep order",
-        {"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}},
-    ),
-    (
-        "polyhedra in a box (3D)",
-        {
-            "domain.kind": "box",
-            "domain.depth": 60.0,
-            "domain.center": [0.0, 0.0, 0.0],
-            "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "polyhedron"}}],
-            "insertion": {"kind": "available-surface"},
-            "count": 12,
-        },
-    ),
-    ("exact refusals", {"insertion.screening": "exact"}),
-    ("random sequential addition", {"insertion": {"kind": "rsa"}}),
-)
-"""Scenes :func:`compile_kernels` packs: ``small`` made tiny, then changed by these fields."""
+__all__ = ["CompileTime", "compile_timer"]
 
 
 @dataclass
@@ -181,64 +121,3 @@ def compile_timer() -> Iterator[CompileTime]:
 
     with event.install_listener("numba:compile", _Listener()):
         yield timer
-
-
-def compile_kernels(report: Callable[[str, float], None] | None = None) -> CompileTime:
-    """Compile (or load from the cache) every built-in kernel by using it once.
-
-    Packs the tiny variants of :data:`VARIANTS` whose plugins are registered,
-    runs every registered analyzer of its dimension on each and writes each
-    2D one with every registered exporter into a temporary folder, which is
-    then removed.
-
-    Parameters
-    ----------
-    report
-        Called as ``report(step, seconds)`` after each step.
-
-    Returns
-    -------
-    CompileTime
-        The compilation time of the whole call (zero when everything was cached).
-    """
-    from regopack.analysis import dimensions_of
-    from regopack.api import analyze, export, pack, scene
-    from regopack.errors import RegopackError
-    from regopack.manager import default_registry
-    from regopack.packing import Packing
-
-    registry = default_registry()
-    by_dimension = {
-        d: [n for n in sorted(registry.names("analysis")) if d in dimensions_of(registry, n)]
-        for d in (2, 3)
-    }
-    analyzers = by_dimension[2]
-    from regopack.exporting import exporter_dimensions
-
-    # the 3D exporters compile nothing (plain numpy); 3D variants are only packed and analysed
-    exporters = [
-        n for n in sorted(registry.names("export")) if 2 in exporter_dimensions(registry, n)
-    ]
-    with compile_timer() as total, tempfile.TemporaryDirectory(prefix="regopack-") as folder:
-        for k, (label, changes) in enumerate(VARIANTS):
-            start = time.perf_counter()
-            try:
-                resolved = scene("small", registry=registry, **{**TINY, **changes})
-            except RegopackError:
-                continue  # a plugin of this variant is not installed
-            packing = pack(resolved)
-            if not isinstance(packing, Packing):  # 3D packings have no exports yet
-                analyze(packing, by_dimension[3], registry=registry)
-                if report is not None:
-                    report(f"{label}: packed, analysed", time.perf_counter() - start)
-                continue
-            # the analyses and exports of every variant: some kernels have a
-            # signature per domain kind (periodic images) or per particle kind
-            results = analyze(packing, analyzers, registry=registry)
-            for name in exporters:
-                target = Path(folder) / f"{k}-{name}"
-                target.mkdir()
-                export(packing, name, target, analyses=results, registry=registry)
-            if report is not None:
-                report(f"{label}: packed, analysed, exported", time.perf_counter() - start)
-    return total

@@ -108,7 +108,7 @@ def _values(packing: Packing, color_by: str | ArrayLike, placed: NDArray[np.int6
         if color_by == "order":
             return "insertion order", packing.insertion_index[placed].astype(np.float64)
         if color_by == "Z":
-            from regopack.analysis import run_analyses
+            from regopack.analysis_plan import run_analyses
             from regopack.manager import default_registry
 
             done = run_analyses(packing, default_registry(), [("coordination", {})])

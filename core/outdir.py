@@ -201,7 +201,7 @@ def folder_kind(folder: str | Path) -> str | None:
 
 def mark_folder(folder: str | Path, kind: str) -> None:
     """Write the :data:`MARKER` file of ``kind`` into ``folder``."""
-    from regopack import __version__
+    from regopack._version import __version__
 
     text = json.dumps({"format": "regopack-folder", "kind": kind, "regopack": __version__})
     (Path(folder) / MARKER).write_text(text + "\n", encoding="utf-8")

@@ -417,7 +417,7 @@ class Packing(PlacedParticles):
 
         ``stats`` defaults to ``result.stats``.
         """
-        from regopack import __version__
+        from regopack._version import __version__
 
         n = len(population)
         centre = np.asarray(result.centre, dtype=np.float64).reshape(n, 2)

@@ -322,7 +322,7 @@ class Packing3D(PlacedParticles):
         stats: Mapping[str, float] | None = None,
     ) -> Packing3D:
         """Combine a 3D population and an insertion result into a packing."""
-        from regopack import __version__
+        from regopack._version import __version__
 
         shapes = population.shapes
         if not isinstance(shapes, SolidBatch):

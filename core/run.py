@@ -12,9 +12,9 @@ from typing import Any
 import numpy as np
 
 from regopack import _toml
-from regopack.analysis import AnalysisFiles, run_analyses, write_analysis_files
+from regopack.analysis import AnalysisFiles, write_analysis_files
+from regopack.analysis_plan import run_analyses
 from regopack.compilation import CompileTime, compile_timer
-from regopack.domain import Domain, Rectangle
 from regopack.errors import ConfigError, ExportError, GeometryError, PluginError
 from regopack.interfaces import (
     Analyzer,
@@ -41,6 +41,7 @@ from regopack.packing import Packing, save, write_json_atomic
 from regopack.population import FloatArray, IntArray, Population, ShapeBatch, concat_shapes
 from regopack.scene_model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.sieve import unplaced_per_class
+from regopack.solid_fraction import phi_in_window
 
 __all__ = [
     "BYTES_PER_PARTICLE",
@@ -61,9 +62,6 @@ __all__ = [
 
 RUN_FOLDER = "run"
 """Kind of the folder a run writes (in its :data:`regopack.outdir.MARKER` file)."""
-
-SHAPELY_BATCH = 1 << 16
-"""Particles turned into shapely polygons at a time when measuring a covered area."""
 
 BYTES_PER_PARTICLE = 3_200
 """Memory a 2D run needs per particle drawn, in bytes (paper order; measured, with a margin).
@@ -450,42 +448,6 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     return Population(
         radius=radii, mineral=minerals, mineral_names=scene.phase_names, shapes=shapes
     )
-
-
-def _covered_by_parts(kind: type[Domain]) -> bool:
-    """Whether ``kind.covered_area`` is the sum of ``kind.covered_parts``."""
-
-    def owner(name: str) -> type:
-        return next(c for c in kind.__mro__ if name in c.__dict__)
-
-    return owner("covered_area") is Domain or issubclass(
-        owner("covered_parts"), owner("covered_area")
-    )
-
-
-def phi_in_window(packing: Packing, window: Domain | tuple[float, float, float, float]) -> float:
-    """Area fraction of ``window`` covered by placed particles.
-
-    ``window`` is a domain (e.g. ``packing.domain.interior(margin)``) or the
-    bounds ``(xmin, xmax, ymin, ymax)`` of a rectangle. Particles are clipped
-    exactly to the window. Returns NaN for an empty window.
-    """
-    if not isinstance(window, Domain):
-        window = Rectangle(*(float(v) for v in window))
-    if not window.area > 0:
-        return math.nan
-    if not _covered_by_parts(type(window)):
-        # a domain that redefines its covered area alone gets every polygon at once
-        return window.covered_area(packing.to_shapely()) / window.area
-    # polygons a batch at a time, so that a large packing never holds them all
-    placed = np.flatnonzero(packing.placed)
-    groups: list[list[FloatArray]] = []
-    for start in range(0, max(len(placed), 1), SHAPELY_BATCH):
-        parts = window.covered_parts(packing.to_shapely(placed[start : start + SHAPELY_BATCH]))
-        groups = groups or [[] for _ in parts]
-        for group, part in zip(groups, parts, strict=True):
-            group.append(part)
-    return window.add_parts([np.concatenate(group) for group in groups]) / window.area
 
 
 def default_out_dir(scene: ResolvedScene) -> Path:

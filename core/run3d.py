@@ -35,6 +35,7 @@ from regopack.packing import write_json_atomic
 from regopack.packing3d import Packing3D, save3d
 from regopack.population import Population
 from regopack.scene_model import ResolvedScene
+from regopack.solid_fraction import phi_in_box
 from regopack.solids import SolidBatch, concat_solids
 
 if TYPE_CHECKING:
@@ -188,86 +189,6 @@ def draw_population3d(scene: ResolvedScene, rng: np.random.Generator) -> Populat
         mineral_names=scene.phase_names,
         shapes=shapes,  # type: ignore[arg-type]
     )
-
-
-def _clip(points: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
-    """Points whose hull is the part of ``points``' hull with ``normal . x <= offset``.
-
-    The points on that side, and where the segments from them to the points
-    on the other side cross the plane (the edges' crossings among them).
-    """
-    side = points @ normal - offset
-    inside = points[side <= 0]
-    outside = points[side > 0]
-    if outside.shape[0] == 0 or inside.shape[0] == 0:
-        return inside
-    si = side[side <= 0][:, None]
-    so = side[side > 0][None, :]
-    t = si / (si - so)  # (n_in, n_out) in [0, 1)
-    cross = inside[:, None, :] + t[:, :, None] * (outside[None, :, :] - inside[:, None, :])
-    return np.vstack([inside, cross.reshape(-1, 3)])
-
-
-def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None) -> float:
-    """Volume fraction of ``window`` covered by the placed solids, clipped exactly.
-
-    A sharp polyhedron that crosses the window's faces is clipped by their
-    planes (the hull of its vertices inside and of the crossings of the
-    segments between its vertices, which holds its edges); a sphere is
-    clipped by :func:`regopack.sphere_volume.sphere_in_box`; a rounded
-    polyhedron that crosses a face raises ``NotImplementedError``.
-    NaN for an empty window. ``volume`` gives the solids' volumes when they
-    are known already (default: :attr:`regopack.solids.SolidBatch.volume`).
-    """
-    from scipy.spatial import ConvexHull
-
-    from regopack.sphere_volume import sphere_in_box
-
-    if not window.volume > 0:
-        return math.nan
-    solids = packing.solids
-    if volume is None:
-        volume = solids.volume
-    lo = np.array([window.xmin, window.ymin, window.zmin])
-    hi = np.array([window.xmax, window.ymax, window.zmax])
-    rho = solids.rounding_radius
-    # bounding boxes of all solids at once (rounding is monotone: min(v + c) = min(v) + c)
-    starts = packing.offsets[:-1]
-    box_lo = np.minimum.reduceat(packing.vertices, starts) + packing.centre - rho[:, None]
-    box_hi = np.maximum.reduceat(packing.vertices, starts) + packing.centre + rho[:, None]
-    whole = np.all(box_lo >= lo, axis=1) & np.all(box_hi <= hi, axis=1)
-    apart = np.any(box_hi <= lo, axis=1) | np.any(box_lo >= hi, axis=1)
-    total = 0.0
-    for j in np.flatnonzero(packing.placed).tolist():
-        if whole[j]:
-            total += float(volume[j])
-            continue
-        if apart[j]:
-            continue
-        pts = packing.world_vertices(int(j))
-        if rho[j] > 0:
-            if pts.shape[0] != 1:
-                raise NotImplementedError("clipping a rounded polyhedron to a window")
-            total += sphere_in_box(pts[0], float(rho[j]), lo, hi)
-            continue
-        for axis in range(3):
-            for sign, bound in ((-1.0, -lo[axis]), (1.0, hi[axis])):
-                if pts.shape[0] < 4:
-                    break
-                normal = np.zeros(3)
-                normal[axis] = sign
-                pts = _clip(pts, normal, bound)
-                if pts.shape[0] >= 4:
-                    try:
-                        pts = pts[ConvexHull(pts).vertices]
-                    except Exception:  # a flat remainder: no volume
-                        pts = pts[:0]
-        if pts.shape[0] >= 4:
-            try:
-                total += float(ConvexHull(pts).volume)
-            except Exception:  # a flat remainder: no volume
-                pass
-    return total / window.volume
 
 
 def verify_packing3d(packing: Packing3D, rel_tol: float = 1e-9) -> Report3D:

@@ -15,7 +15,9 @@ Phase fractions must sum to 1 within ``1e-3``; they are divided by their sum
 
 from __future__ import annotations
 
+import copy
 import math
+import os
 import tomllib
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -796,9 +798,7 @@ class ResolvedScene:
         >>> regopack.scene("small").with_(density__eta=5, seed=3).seed
         3
         """
-        from regopack.api import scene
-
-        return scene(self, **overrides)
+        return make_scene(self, overrides=overrides)
 
     def __repr__(self) -> str:
         d = self.scene.domain
@@ -1085,3 +1085,89 @@ def output_files(resolved: ResolvedScene) -> dict[str, list[str]]:
     for entry in _output_entries(resolved.scene, resolved.analyses, resolved.exports):
         out.setdefault(entry.loc, []).append(entry.name)
     return out
+
+
+def registry_or_default(registry: Registry | None) -> Registry:
+    """Return ``registry``, or the default registry (built-in and installed plugins) for ``None``.
+
+    Raises
+    ------
+    ConfigError
+        When ``registry`` is not a :class:`~regopack.manager.Registry`.
+    """
+    if registry is None:
+        from regopack.manager import default_registry  # looked up when called (tests patch it)
+
+        return default_registry()
+    if not isinstance(registry, Registry):
+        raise ConfigError(
+            f"registry: expected a regopack.manager.Registry, not {type(registry).__name__}"
+        )
+    return registry
+
+
+def dotted_name(name: str) -> str:
+    """``domain__width`` → ``domain.width``; dotted names pass unchanged.
+
+    Raises
+    ------
+    ConfigError
+        When a part of the name is empty (``__x``, ``a____b``, ``a__``).
+    """
+    key = name.replace("__", ".")
+    if any(not part for part in key.split(".")):
+        raise ConfigError(
+            f"{name}: empty part in the dotted name {key!r}; write e.g. domain__width=400"
+        )
+    return key
+
+
+def plain_value(value: Any) -> Any:
+    """NumPy scalars and arrays as the Python values a scene file would hold."""
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Mapping):
+        return {k: plain_value(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [plain_value(v) for v in value]
+    return value
+
+
+def make_scene(
+    source: str | os.PathLike[str] | Mapping[str, Any] | ResolvedScene | None,
+    *,
+    seed: int | None = None,
+    registry: Registry | None = None,
+    overrides: Mapping[str, Any] | None = None,
+) -> ResolvedScene:
+    """Read, change and validate a scene (the work of :func:`regopack.scene`).
+
+    ``overrides`` maps dotted names (``__`` for the dot) to Python values.
+    """
+    if isinstance(source, ResolvedScene):
+        data = source.to_dict()
+        origin = source.scene.source or f"scene {source.name!r}"
+        registry = registry if registry is not None else source.registry
+    elif isinstance(source, Mapping):
+        data = copy.deepcopy(dict(source))
+        origin = "scene dictionary"
+    elif source is None or isinstance(source, str | os.PathLike):
+        data, origin = read_scene_data(source if isinstance(source, str | None) else Path(source))
+    else:
+        raise ConfigError(
+            f"scene: expected a built-in scene name, a TOML file, a dictionary or a scene, "
+            f"not {type(source).__name__}"
+        )
+    overridden: dict[str, str] = {}
+    for name, value in (overrides or {}).items():
+        key = dotted_name(name)
+        label = f"scene({name}=...)"
+        set_value(data, key, plain_value(value), label)
+        overridden[key] = label
+    if seed is not None:
+        data["seed"] = plain_value(seed)
+        overridden["seed"] = "scene(seed=...)"
+    structural = scene_from_dict(data, source=origin, overridden=overridden)
+    return resolve_scene(structural, registry_or_default(registry))

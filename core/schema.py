@@ -26,7 +26,7 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from regopack import __version__
+from regopack._version import __version__
 from regopack.manager import Registry
 from regopack.plugin_types import KINDS
 from regopack.scene_model import Scene

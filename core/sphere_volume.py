@@ -99,3 +99,22 @@ def sphere_in_box(centre: ArrayLike, r: float, lo: ArrayLike, hi: ArrayLike) -> 
     breaks = sorted({p for z in points for p in (z, -z) if z0 < p < z1})
     value, _ = quad(area, z0, z1, points=breaks or None, epsabs=0.0, epsrel=1e-11, limit=200)
     return float(value)
+
+
+def lens_volume(r1: float, r2: float, d: float) -> float:
+    """Volume shared by two balls of radii ``r1``, ``r2`` whose centres are ``d`` apart.
+
+    Examples
+    --------
+    >>> lens_volume(1.0, 1.0, 2.0)
+    0.0
+    >>> abs(lens_volume(1.0, 1.0, 0.0) - 4 / 3 * math.pi) < 1e-12
+    True
+    """
+    if d >= r1 + r2:
+        return 0.0
+    small = min(r1, r2)
+    if d <= abs(r1 - r2):
+        return 4.0 / 3.0 * math.pi * small**3
+    s = r1 + r2 - d
+    return math.pi * s * s * (d * d + 2.0 * d * (r1 + r2) - 3.0 * (r1 - r2) ** 2) / (12.0 * d)

@@ -65,7 +65,7 @@ def add_sweep_parser(subparsers: argparse._SubParsersAction[Any]) -> None:
         action="store_true",
         help="list the built-in experiments and exit",
     )
-    from regopack.cli import output_path
+    from regopack.cli_args import output_path
 
     sweep.add_argument(
         "--out",

@@ -52,6 +52,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError, cKDTree
 
 from regopack.errors import ConfigError, GeometryError, PackingError
+from regopack.sphere_volume import lens_volume
 
 __all__ = [
     "FLAT_TOL",
@@ -728,25 +729,6 @@ def verify_polyhedra(
 
 
 # ---------------------------------------------------------------- spheres
-
-
-def lens_volume(r1: float, r2: float, d: float) -> float:
-    """Volume shared by two balls of radii ``r1``, ``r2`` whose centres are ``d`` apart.
-
-    Examples
-    --------
-    >>> lens_volume(1.0, 1.0, 2.0)
-    0.0
-    >>> abs(lens_volume(1.0, 1.0, 0.0) - 4 / 3 * math.pi) < 1e-12
-    True
-    """
-    if d >= r1 + r2:
-        return 0.0
-    small = min(r1, r2)
-    if d <= abs(r1 - r2):
-        return 4.0 / 3.0 * math.pi * small**3
-    s = r1 + r2 - d
-    return math.pi * s * s * (d * d + 2.0 * d * (r1 + r2) - 3.0 * (r1 - r2) ** 2) / (12.0 * d)
 
 
 def verify_spheres(

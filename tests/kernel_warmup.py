@@ -23,7 +23,7 @@ from typing import Any
 import numba
 
 import regopack
-from regopack.compilation import TINY, VARIANTS
+from regopack.warmup import TINY, VARIANTS
 
 DISKS: dict[str, Any] = {"phases.0.shape": {"kind": "disk"}}
 

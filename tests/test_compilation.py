@@ -10,7 +10,8 @@ import pytest
 
 import regopack
 from regopack.cli import main
-from regopack.compilation import VARIANTS, compile_kernels, compile_timer
+from regopack.compilation import compile_timer
+from regopack.warmup import VARIANTS, compile_kernels
 
 
 def test_the_timer_counts_a_compilation_once_and_not_a_second_call():

@@ -169,13 +169,13 @@ def _scattered_triangles(n: int, seed: int) -> list[np.ndarray]:
 def test_phi_in_window_batch_by_batch_is_the_whole_at_once_exactly(
     window: Domain, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import regopack.run as run_module
+    import regopack.solid_fraction as fraction_module
 
     p = packing_from_polygons(_scattered_triangles(300, 4), domain=(-15, 15, -15, 15))
     whole = window.covered_area(p.to_shapely()) / window.area
     assert 0.05 < whole < 1.0
     for batch in (1, 7, 299, 10**6):
-        monkeypatch.setattr(run_module, "SHAPELY_BATCH", batch)
+        monkeypatch.setattr(fraction_module, "SHAPELY_BATCH", batch)
         assert phi_in_window(p, window) == whole
 
 

@@ -18,7 +18,7 @@ from regopack.hookspecs import hookimpl
 from regopack.interfaces import InsertionResult, InsertionStrategy
 from regopack.packing3d import Packing3D, load_packing
 from regopack.plugin_types import InserterSpec
-from regopack.run3d import phi_in_box
+from regopack.solid_fraction import phi_in_box
 from regopack.testing import make_registry
 
 SCENE = {

@@ -340,12 +340,12 @@ class Contacts3D(Analyzer):
         Two spheres grown by ``s`` each meet when their gap ``g = d - r_i - r_j``
         is below ``2 s``: the threshold is ``g``, the normal the unit vector
         between the centres. At ``tol`` the grown spheres share a lens
-        (:func:`regopack.verification3d.lens_volume`) whose projection on the
+        (:func:`regopack.sphere_volume.lens_volume`) whose projection on the
         contact plane is the disk where their surfaces cross.
         """
         from scipy.spatial import cKDTree
 
-        from regopack.verification3d import lens_volume
+        from regopack.sphere_volume import lens_volume
 
         cfg = self.config
         tol, tol_max = self._resolve(p3)

@@ -50,7 +50,7 @@ class Density(Analyzer):
 
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Measure the area fractions; particles are clipped exactly to the window."""
-        from regopack.run import phi_in_window
+        from regopack.solid_fraction import phi_in_window
 
         margin = interior_margin(packing, self.config.margin)
         window = interior_window(packing, margin)

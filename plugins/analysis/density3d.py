@@ -33,7 +33,7 @@ class Density3D(Analyzer):
     """Volume fraction of the solids over the box and the interior window, and void ratios.
 
     Solids that cross the window's faces are clipped exactly by their planes
-    (:func:`regopack.run3d.phi_in_box`). A periodic box has no walls: its
+    (:func:`regopack.solid_fraction.phi_in_box`). A periodic box has no walls: its
     interior is the whole cell.
     """
 
@@ -45,7 +45,7 @@ class Density3D(Analyzer):
 
     def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
         """Measure the volume fractions."""
-        from regopack.run3d import phi_in_box
+        from regopack.solid_fraction import phi_in_box
 
         p3 = as_packing3d(packing, self)
         margin = interior_margin3d(p3, self.config.margin)

@@ -7,7 +7,7 @@ differences of nested boxes about the window's centre, whose half-sides grow
 in equal steps to the window's. Each region gets the number density of the
 centres in it, the mean volume-equivalent diameter of those particles, and
 the volume fraction of the solids clipped exactly to it
-(:func:`regopack.run3d.phi_in_box`; a shell's is the difference of its two
+(:func:`regopack.solid_fraction.phi_in_box`; a shell's is the difference of its two
 boxes'). A homogeneous packing has the same values in every region, up to the
 noise of its particle count.
 """
@@ -93,7 +93,7 @@ class Homogeneity3D(Analyzer):
 
     def compute(self, packing: Any, context: Mapping[str, Analyzer]) -> Self:
         """Measure every layer and shell of the interior window."""
-        from regopack.run3d import phi_in_box as clip
+        from regopack.solid_fraction import phi_in_box as clip
 
         p3 = as_packing3d(packing, self)
         cfg = self.config

@@ -232,7 +232,7 @@ def test_the_highs_fallback_gives_the_simplex_threshold_and_normal(packing3d, co
 def test_a_lattice_of_touching_spheres_has_the_known_contacts() -> None:
     from lattices3d import sphere_lattice
 
-    from regopack.verification3d import lens_volume
+    from regopack.sphere_volume import lens_volume
 
     tol = 0.05
     p = sphere_lattice((3, 3, 3), 1.0, 0.0)

@@ -10,7 +10,7 @@ from regopack.plugins.analysis.homogeneity3d import Homogeneity3D, Homogeneity3D
 
 
 def test_layers_and_shells_add_up_to_the_window(packing3d) -> None:
-    from regopack.run3d import phi_in_box
+    from regopack.solid_fraction import phi_in_box
 
     h = Homogeneity3D(Homogeneity3DConfig(layers=4, shells=3)).compute(packing3d, {})
     window = packing3d.domain.interior(6.0)  # the scene's d_max
