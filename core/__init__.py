@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING, Any
 
 import regopack.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
+from regopack import _compat
 from regopack._version import __version__
 from regopack.packing import Packing
 from regopack.packing3d import Packing3D
@@ -41,6 +42,8 @@ __all__ = [
     "sweep",
     "verify",
 ]
+
+_compat.install()  # old module names (regopack.domain3d, ...) as deprecated aliases
 
 _API = frozenset({"analyze", "export", "pack", "pack_and_summarise", "scene", "sweep", "verify"})
 

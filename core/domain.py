@@ -1,12 +1,20 @@
-"""Packing domains: walled rectangles, convex polygons and circles, and periodic rectangles.
+"""Packing domains in two and three dimensions: one family.
 
-Every domain answers the same questions: its area and bounding box, the
-window of its interior at a given distance from the walls, which points lie
-inside, how much of a set of particles lies inside, and how it is written to a
-packing file (:meth:`Domain.to_dict`, :func:`domain_from_dict`).
+Every :class:`Domain` answers the same questions whatever its dimension: its
+measure (area or volume) and bounding box, the window of its interior at a
+given distance from the walls, which points lie inside, and how it is written
+to a packing file (:meth:`Domain.to_dict`, :func:`domain_from_dict`).
 
-A :class:`PeriodicRectangle` has no walls: particles may cross its sides and
-continue on the opposite side. Its interior window is the whole domain.
+In the plane (:class:`PlaneDomain`): walled rectangles, convex polygons and
+circles, and periodic rectangles; they also give their outline and the area
+of polygons that lies inside them. In space: the walled :class:`Box` and the
+:class:`PeriodicBox`. A cylinder is not offered: the available-surface
+inserter clips centres by boxes, and a curved wall would need its own exact
+clipping.
+
+A periodic domain (:class:`PeriodicDomain`) has no walls: particles may cross
+its sides and continue on the opposite side. Its interior window is the whole
+domain.
 """
 
 from __future__ import annotations
@@ -16,19 +24,24 @@ import math
 from abc import ABC, abstractmethod
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar, Self
+from typing import Any, ClassVar, Literal, Self, overload
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from regopack._compat import warn_moved
 from regopack.errors import GeometryError
 
 __all__ = [
     "DOMAIN_KINDS",
+    "Box",
     "Circle",
     "ConvexPolygon",
     "Domain",
+    "PeriodicBox",
+    "PeriodicDomain",
     "PeriodicRectangle",
+    "PlaneDomain",
     "Rectangle",
     "domain_from_dict",
     "polygon_disk_area",
@@ -39,26 +52,71 @@ BoolArray = NDArray[np.bool_]
 
 
 class Domain(ABC):
-    """A container for a packing."""
+    """A container for a packing, in the plane or in space."""
 
+    dimension: ClassVar[int]
+    """2 for a domain in the plane, 3 for one in space."""
     kind: ClassVar[str] = ""
+    """Name of the domain in scenes and packing files (a key of :data:`DOMAIN_KINDS`)."""
     periodic: ClassVar[bool] = False
     """True when particles wrap around the sides instead of meeting walls."""
+
+    @property
+    @abstractmethod
+    def measure(self) -> float:
+        """Area (in the plane) or volume (in space) of the domain."""
+
+    @abstractmethod
+    def bounds(self) -> FloatArray:
+        """Bounding box ``[xmin, xmax, ymin, ymax]`` (and ``zmin, zmax`` in 3D) as a float array."""
+
+    @property
+    def center(self) -> tuple[float, ...]:
+        """Centre point of the domain (the bounding box's, unless the kind says otherwise)."""
+        b = self.bounds()
+        return tuple(0.5 * float(b[2 * a] + b[2 * a + 1]) for a in range(self.dimension))
+
+    @abstractmethod
+    def interior(self, margin: float) -> Domain:
+        """Return the window of points farther than ``margin`` from every wall.
+
+        An empty window has zero measure. A periodic domain has no walls and
+        returns itself.
+        """
+
+    @abstractmethod
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the ``(n, dimension)`` points strictly inside the domain (NaN is outside)."""
+
+    @abstractmethod
+    def to_dict(self) -> dict[str, Any]:
+        """Return the domain as plain data, read back by :func:`domain_from_dict`."""
+
+
+class PlaneDomain(Domain):
+    """A container in the plane.
+
+    Besides the questions of every :class:`Domain`, it gives its outline and
+    the area of a set of polygons that lies inside it.
+    """
+
+    dimension: ClassVar[int] = 2
 
     @property
     @abstractmethod
     def area(self) -> float:
         """Area of the domain."""
 
-    @abstractmethod
-    def bounds(self) -> FloatArray:
-        """Bounding box ``[xmin, xmax, ymin, ymax]`` as a float array."""
+    @property
+    def measure(self) -> float:
+        """Area of the domain (:attr:`area`)."""
+        return self.area
 
     @property
     def center(self) -> tuple[float, float]:
         """Centre point of the domain (centre of the box, polygon centroid, circle centre)."""
-        b = self.bounds()
-        return (0.5 * float(b[0] + b[1]), 0.5 * float(b[2] + b[3]))
+        x, y = super().center
+        return (x, y)
 
     @property
     def width(self) -> float:
@@ -73,24 +131,12 @@ class Domain(ABC):
         return float(b[3] - b[2])
 
     @abstractmethod
-    def interior(self, margin: float) -> Domain:
-        """Return the window of points farther than ``margin`` from every wall.
-
-        An empty window has zero area. A periodic domain has no walls and
-        returns itself.
-        """
-
-    @abstractmethod
-    def contains(self, points: ArrayLike) -> BoolArray:
-        """Mask of the ``(n, 2)`` points strictly inside the domain (NaN is outside)."""
+    def interior(self, margin: float) -> PlaneDomain:
+        """Return the window farther than ``margin`` from every wall (:meth:`Domain.interior`)."""
 
     @abstractmethod
     def outline(self) -> FloatArray:
         """``(k, 2)`` counter-clockwise boundary for drawing (a circle as a fine polygon)."""
-
-    @abstractmethod
-    def to_dict(self) -> dict[str, Any]:
-        """Return the domain as plain data, read back by :func:`domain_from_dict`."""
 
     def covered_area(self, geoms: NDArray[np.object_]) -> float:
         """Total area of the shapely polygons ``geoms`` that lies inside the domain."""
@@ -124,8 +170,51 @@ class Domain(ABC):
         return total
 
 
+class PeriodicDomain(Domain):
+    """A domain whose opposite sides are identified: no walls, and positions wrap.
+
+    The base of :class:`PeriodicRectangle` and :class:`PeriodicBox`. A
+    particle's centre lies in the half-open cell ``[xmin, xmax) x [ymin,
+    ymax)`` (``x [zmin, zmax)`` in 3D); its outline may cross a side and
+    continue on the opposite one.
+    """
+
+    periodic: ClassVar[bool] = True
+
+    @property
+    def period(self) -> tuple[float, ...]:
+        """Lengths of the periods, one per axis: ``(Lx, Ly)`` or ``(Lx, Ly, Lz)``."""
+        b = self.bounds()
+        return tuple(float(b[2 * a + 1] - b[2 * a]) for a in range(self.dimension))
+
+    def interior(self, margin: float) -> Self:
+        """Return the whole domain: there are no walls to keep away from."""
+        return self
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the finite points (every point lies in some periodic image)."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, self.dimension)
+        return np.asarray(np.isfinite(c).all(axis=1), dtype=np.bool_)
+
+    def wrap(self, points: ArrayLike) -> FloatArray:
+        """Map the ``(n, dimension)`` points into the half-open cell."""
+        c = np.array(points, dtype=np.float64).reshape(-1, self.dimension)
+        lo = self.bounds()[0::2]
+        period = np.array(self.period)
+        c = lo + np.mod(c - lo, period)
+        out: FloatArray = np.where(c >= lo + period, lo, c)  # rounding of mod at the upper side
+        return out
+
+    def minimum_image(self, delta: ArrayLike) -> FloatArray:
+        """Return the shortest periodic image of the ``(n, dimension)`` displacements ``delta``."""
+        d = np.array(delta, dtype=np.float64).reshape(-1, self.dimension)
+        period = np.array(self.period)
+        out: FloatArray = d - period * np.round(d / period)
+        return out
+
+
 @dataclass(frozen=True)
-class Rectangle(Domain):
+class Rectangle(PlaneDomain):
     """Axis-aligned rectangular domain with rigid walls.
 
     Parameters
@@ -178,7 +267,7 @@ class Rectangle(Domain):
         hh = max(0.0, self.height / 2 - margin)
         return Rectangle(cx - hw, cx + hw, cy - hh, cy + hh)
 
-    def interior(self, margin: float) -> Domain:
+    def interior(self, margin: float) -> Rectangle:
         """Return the rectangle inset by ``margin`` (see :meth:`shrunk`)."""
         return self.shrunk(margin)
 
@@ -207,7 +296,7 @@ class Rectangle(Domain):
         )
 
     def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
-        """Area of ``geoms`` inside the rectangle, by exact clipping (see :class:`Domain`)."""
+        """Area of ``geoms`` inside the rectangle, by exact clipping (see :class:`PlaneDomain`)."""
         import shapely
 
         if len(geoms) == 0:
@@ -238,7 +327,7 @@ class Rectangle(Domain):
 
 
 @dataclass(frozen=True)
-class PeriodicRectangle(Rectangle):
+class PeriodicRectangle(PeriodicDomain, Rectangle):
     """Axis-aligned rectangle whose opposite sides are identified (no walls).
 
     A particle's centre lies in ``[xmin, xmax) x [ymin, ymax)``; its outline
@@ -246,37 +335,6 @@ class PeriodicRectangle(Rectangle):
     """
 
     kind: ClassVar[str] = "periodic"
-    periodic: ClassVar[bool] = True
-
-    @property
-    def period(self) -> tuple[float, float]:
-        """Lengths of the two periods ``(Lx, Ly)``."""
-        return (self.width, self.height)
-
-    def interior(self, margin: float) -> Domain:
-        """Return the whole domain: there are no walls to keep away from."""
-        return self
-
-    def contains(self, points: ArrayLike) -> BoolArray:
-        """Mask of the finite points (every point lies in some periodic image)."""
-        c = np.asarray(points, dtype=np.float64).reshape(-1, 2)
-        return np.asarray(np.isfinite(c).all(axis=1), dtype=np.bool_)
-
-    def wrap(self, points: ArrayLike) -> FloatArray:
-        """Map points into ``[xmin, xmax) x [ymin, ymax)``."""
-        c = np.array(points, dtype=np.float64).reshape(-1, 2)
-        lo = np.array([self.xmin, self.ymin])
-        period = np.array(self.period)
-        c = lo + np.mod(c - lo, period)
-        c = np.where(c >= lo + period, lo, c)  # rounding of mod at the upper side
-        return c
-
-    def minimum_image(self, delta: ArrayLike) -> FloatArray:
-        """Return the shortest periodic image of the displacements ``delta`` (``(n, 2)``)."""
-        d = np.array(delta, dtype=np.float64).reshape(-1, 2)
-        period = np.array(self.period)
-        out: FloatArray = d - period * np.round(d / period)
-        return out
 
     def covered_parts(self, geoms: NDArray[np.object_]) -> list[FloatArray]:
         """Area of each of ``geoms``: every part of a particle lies in the torus once."""
@@ -286,7 +344,7 @@ class PeriodicRectangle(Rectangle):
 
 
 @dataclass(frozen=True)
-class ConvexPolygon(Domain):
+class ConvexPolygon(PlaneDomain):
     """Convex polygonal container with rigid walls.
 
     Parameters
@@ -348,7 +406,7 @@ class ConvexPolygon(Domain):
         offset = np.einsum("ij,ij->i", normal, v)
         return normal, offset
 
-    def interior(self, margin: float) -> Domain:
+    def interior(self, margin: float) -> PlaneDomain:
         """Return the polygon with every wall moved inward by ``margin`` (mitred, exact)."""
         import shapely
 
@@ -381,7 +439,7 @@ class ConvexPolygon(Domain):
 
 
 @dataclass(frozen=True)
-class Circle(Domain):
+class Circle(PlaneDomain):
     """Circular container with a rigid wall.
 
     Parameters
@@ -415,7 +473,7 @@ class Circle(Domain):
         r = self.radius
         return np.array([self.cx - r, self.cx + r, self.cy - r, self.cy + r])
 
-    def interior(self, margin: float) -> Domain:
+    def interior(self, margin: float) -> Circle:
         """Return the concentric disk of radius ``radius - margin`` (zero when negative)."""
         return Circle(self.cx, self.cy, max(0.0, self.radius - float(margin)))
 
@@ -463,21 +521,173 @@ def _empty_window(c: tuple[float, float]) -> Rectangle:
     return Rectangle(c[0], c[0], c[1], c[1])
 
 
+@dataclass(frozen=True)
+class Box(Domain):
+    """Axis-aligned box with rigid walls.
+
+    Parameters
+    ----------
+    xmin, xmax, ymin, ymax, zmin, zmax
+        Wall positions (any length unit; micrometres by convention).
+
+    Raises
+    ------
+    GeometryError
+        When a wall position is not finite or a min is not below its max.
+    """
+
+    dimension: ClassVar[int] = 3
+    kind: ClassVar[str] = "box"
+
+    xmin: float
+    xmax: float
+    ymin: float
+    ymax: float
+    zmin: float
+    zmax: float
+
+    def __post_init__(self) -> None:
+        b = self.bounds()
+        if not np.isfinite(b).all():
+            raise GeometryError(f"box bounds {b.tolist()} must be finite")
+        if not (self.xmin < self.xmax and self.ymin < self.ymax and self.zmin < self.zmax):
+            raise GeometryError(
+                f"box bounds {b.tolist()} must be [xmin, xmax, ymin, ymax, zmin, zmax] "
+                "with every min below its max"
+            )
+
+    @classmethod
+    def centred(
+        cls,
+        width: float,
+        height: float,
+        depth: float,
+        center: tuple[float, float, float] = (0.0, 0.0, 0.0),
+    ) -> Self:
+        """Build the box (of this class) of the given size around ``center``.
+
+        ``width`` is along x, ``depth`` along y and ``height`` along z, the
+        vertical: packings grow from the bottom wall ``z = zmin``.
+        """
+        cx, cy, cz = center
+        return cls(
+            cx - width / 2, cx + width / 2, cy - depth / 2, cy + depth / 2,
+            cz - height / 2, cz + height / 2,
+        )  # fmt: skip
+
+    @property
+    def size(self) -> tuple[float, float, float]:
+        """Extents ``(x, y, z)``."""
+        return (self.xmax - self.xmin, self.ymax - self.ymin, self.zmax - self.zmin)
+
+    @property
+    def volume(self) -> float:
+        """Volume of the domain."""
+        sx, sy, sz = self.size
+        return sx * sy * sz
+
+    @property
+    def measure(self) -> float:
+        """Volume of the domain (:attr:`volume`)."""
+        return self.volume
+
+    @property
+    def center(self) -> tuple[float, float, float]:
+        """Centre point of the domain."""
+        return (
+            0.5 * (self.xmin + self.xmax),
+            0.5 * (self.ymin + self.ymax),
+            0.5 * (self.zmin + self.zmax),
+        )
+
+    def bounds(self) -> FloatArray:
+        """Return ``[xmin, xmax, ymin, ymax, zmin, zmax]`` as a float array."""
+        return np.array(
+            [self.xmin, self.xmax, self.ymin, self.ymax, self.zmin, self.zmax], dtype=np.float64
+        )
+
+    def interior(self, margin: float) -> Box:
+        """Return the box inset by ``margin`` from every wall.
+
+        An inset larger than half a side collapses that side to the centre (a
+        window of zero volume).
+        """
+        c = self.center
+        half = [max(0.0, s / 2 - margin) for s in self.size]
+        lo = [c[a] - half[a] for a in range(3)]
+        hi = [c[a] + half[a] for a in range(3)]
+        return _Window(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the ``(n, 3)`` points strictly inside the box (NaN is outside)."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        lo = np.array([self.xmin, self.ymin, self.zmin])
+        hi = np.array([self.xmax, self.ymax, self.zmax])
+        with np.errstate(invalid="ignore"):
+            out = np.asarray(((c > lo) & (c < hi)).all(axis=1), dtype=np.bool_)
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": ..., "bounds": [xmin, xmax, ymin, ymax, zmin, zmax]}``."""
+        return {"kind": self.kind, "bounds": [float(v) for v in self.bounds()]}
+
+
+@dataclass(frozen=True)
+class _Window(Box):
+    """An interior window: a box that may have zero extent along some axes."""
+
+    def __post_init__(self) -> None:
+        b = self.bounds()
+        if not np.isfinite(b).all() or not (
+            self.xmin <= self.xmax and self.ymin <= self.ymax and self.zmin <= self.zmax
+        ):
+            raise GeometryError(f"window bounds {b.tolist()} are not a box")
+
+
+@dataclass(frozen=True)
+class PeriodicBox(PeriodicDomain, Box):
+    """Axis-aligned box whose opposite faces are identified (no walls).
+
+    A particle's centre lies in ``[xmin, xmax) x [ymin, ymax) x [zmin, zmax)``;
+    its solid may cross a face and continue on the opposite one.
+    """
+
+    kind: ClassVar[str] = "periodic-box"
+
+
 DOMAIN_KINDS: dict[str, type[Domain]] = {
     "rectangle": Rectangle,
     "polygon": ConvexPolygon,
     "circle": Circle,
     "periodic": PeriodicRectangle,
+    "box": Box,
+    "periodic-box": PeriodicBox,
 }
-"""Domain classes by their ``kind``."""
+"""Domain classes by the ``kind`` written in scenes and packing files (both dimensions)."""
 
 
-def domain_from_dict(data: Mapping[str, Any]) -> Domain:
+@overload
+def domain_from_dict(data: Mapping[str, Any], dimension: Literal[2]) -> PlaneDomain: ...
+@overload
+def domain_from_dict(data: Mapping[str, Any], dimension: Literal[3]) -> Box: ...
+@overload
+def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> Domain: ...
+def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> Domain:
     """Rebuild a domain written by :meth:`Domain.to_dict`.
 
-    The record is checked as the scene's ``[domain]`` is: finite numbers, a
-    rectangle's bounds in increasing order (a positive width and height), a
-    circle's radius positive, a polygon's corners strictly convex.
+    The record is checked as the scene's ``[domain]`` is: finite numbers, the
+    bounds of a rectangle or box in increasing order (a positive extent along
+    every axis), a circle's radius positive, a polygon's corners strictly
+    convex.
+
+    Parameters
+    ----------
+    data
+        The record: its ``kind`` (a record without one is a rectangle) and
+        the fields of that kind.
+    dimension
+        2 or 3 to refuse a domain of the other dimension (a box in a 2D
+        packing's file, say); ``None`` reads every kind.
 
     Raises
     ------
@@ -485,31 +695,50 @@ def domain_from_dict(data: Mapping[str, Any]) -> Domain:
         When the record is incomplete or malformed, or describes no valid domain.
     """
     kind = data.get("kind", "rectangle")
-    if kind in ("rectangle", "periodic"):
-        xmin, xmax, ymin, ymax = (_finite(b, "bounds") for b in data["bounds"])
-        if not (xmin < xmax and ymin < ymax):
-            raise GeometryError(
-                f"bounds [{xmin:g}, {xmax:g}, {ymin:g}, {ymax:g}] must be "
-                "[xmin, xmax, ymin, ymax] with xmin < xmax and ymin < ymax"
-            )
-        cls = PeriodicRectangle if kind == "periodic" else Rectangle
-        return cls(xmin, xmax, ymin, ymax)
-    if kind == "polygon":
+    cls = DOMAIN_KINDS.get(kind) if isinstance(kind, str) else None
+    known = [k for k, c in DOMAIN_KINDS.items() if dimension in (None, c.dimension)]
+    if cls is None:
+        raise ValueError(f"unknown domain kind {kind!r}; known: {', '.join(known)}")
+    if dimension not in (None, cls.dimension):
+        raise ValueError(
+            f"{kind!r} is a {cls.dimension}D domain kind, not {dimension}D; "
+            f"{dimension}D kinds: {', '.join(known)}"
+        )
+    if cls is ConvexPolygon:
         return ConvexPolygon(tuple((float(x), float(y)) for x, y in data["vertices"]))
-    if kind == "circle":
+    if cls is Circle:
         cx, cy = (_finite(c, "center") for c in data["center"])
         radius = _finite(data["radius"], "radius")
         if radius <= 0:
             raise GeometryError(f"radius {radius:g} must be > 0")
         return Circle(cx, cy, radius)
-    raise ValueError(f"unknown domain kind {kind!r}")
+    return cls(*_bounds(data["bounds"], cls.dimension))
+
+
+def _bounds(values: Any, dimension: int) -> list[float]:
+    """Return a record's ``bounds``: ``2 * dimension`` finite numbers, each min below its max."""
+    if isinstance(values, str | bytes | Mapping):
+        raise TypeError(f"bounds: {values!r} is not a list of numbers")
+    bounds = [_finite(b, "bounds") for b in values]
+    axes = "xyz"[:dimension]
+    names = ", ".join(f"{a}min, {a}max" for a in axes)
+    if len(bounds) != 2 * dimension:
+        raise ValueError(f"bounds must be [{names}]")
+    if not all(bounds[2 * a] < bounds[2 * a + 1] for a in range(dimension)):
+        shown = ", ".join(f"{b:g}" for b in bounds)
+        order = " and ".join(f"{a}min < {a}max" for a in axes)
+        raise GeometryError(f"bounds [{shown}] must be [{names}] with {order}")
+    return bounds
 
 
 def _finite(value: Any, what: str) -> float:
     """Return ``value`` as a finite float; a string, boolean or non-finite number is refused."""
     if isinstance(value, bool | str | bytes) or value is None:
         raise TypeError(f"{what}: {value!r} is not a number")
-    number = float(value)
+    try:
+        number = float(value)
+    except OverflowError:  # an integer beyond the floats
+        number = math.inf
     if not math.isfinite(number):
         raise ValueError(f"{what}: {number} is not finite")
     return number
@@ -601,3 +830,21 @@ def polygon_disk_area(ring: ArrayLike, center: Sequence[float], radius: float) -
             else:
                 total += 0.5 * r2 * math.atan2(cross, float(p0 @ p1))
     return abs(total)
+
+
+def __getattr__(name: str) -> Any:
+    """Names of the former ``regopack.domain3d``, deprecated for one release (PEP 562)."""
+    if name == "DOMAIN3D_KINDS":
+        warn_moved("regopack.domain3d.DOMAIN3D_KINDS", "regopack.domain.DOMAIN_KINDS")
+        return {k: c for k, c in DOMAIN_KINDS.items() if c.dimension == 3}
+    if name == "domain3d_from_dict":
+        warn_moved(
+            "regopack.domain3d.domain3d_from_dict", "regopack.domain.domain_from_dict(data, 3)"
+        )
+        return _domain3d_from_dict
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _domain3d_from_dict(data: Mapping[str, Any]) -> Box:
+    """Rebuild a 3D domain: ``domain_from_dict(data, 3)``."""
+    return domain_from_dict(data, 3)

@@ -23,7 +23,7 @@ from typing import IO, TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from regopack.domain import Domain, Rectangle, domain_from_dict
+from regopack.domain import PlaneDomain, Rectangle, domain_from_dict
 from regopack.errors import GeometryError, PackingError, PackingFileError
 
 if TYPE_CHECKING:
@@ -294,7 +294,7 @@ class Packing(PlacedParticles):
     orientation: FloatArray
     centre: FloatArray
     insertion_index: IntArray
-    domain: Domain
+    domain: PlaneDomain
     scene: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
     version: str = "0.0.0"
@@ -334,7 +334,7 @@ class Packing(PlacedParticles):
         - ``rounding``, when present, is one finite radius ``>= 0`` per particle;
         - the mineral names are non-empty, distinct strings, and every
           value of ``stats`` is a number;
-        - the domain is a :class:`~regopack.domain.Domain` with finite bounds
+        - the domain is a :class:`~regopack.domain.PlaneDomain` with finite bounds
           and a positive area.
 
         Raises
@@ -397,8 +397,8 @@ class Packing(PlacedParticles):
         check_particles(
             radius, mineral, self.mineral_names, index, centre, self.rounding, self.stats
         )
-        if not isinstance(self.domain, Domain):
-            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a Domain")
+        if not isinstance(self.domain, PlaneDomain):
+            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a PlaneDomain")
         area = self.domain.area
         if not (np.isfinite(self.domain.bounds()).all() and math.isfinite(area) and area > 0):
             raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite area")
@@ -408,7 +408,7 @@ class Packing(PlacedParticles):
         cls,
         population: Population,
         result: InsertionResult,
-        domain: Domain,
+        domain: PlaneDomain,
         scene_dict: Mapping[str, Any],
         seed: int,
         stats: Mapping[str, float] | None = None,
@@ -1277,11 +1277,11 @@ def row_limits(n: int, arrays: Mapping[str, tuple[type[np.generic], int]]) -> di
     return {name: per_item.get(name, n) for name in (*arrays, "rounding")}
 
 
-def _read_domain(path: Path, data: Any) -> Domain:
+def _read_domain(path: Path, data: Any) -> PlaneDomain:
     if not isinstance(data, dict):
         raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
     try:
-        return domain_from_dict(data)
+        return domain_from_dict(data, 2)
     except (KeyError, TypeError, ValueError, GeometryError) as err:
         why = f"no {err}" if isinstance(err, KeyError) else str(err)
         kind = _short(data.get("kind", "rectangle"))

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain3d import Box, domain3d_from_dict
+from regopack.domain import Box, domain_from_dict
 from regopack.errors import GeometryError, PackingError, PackingFileError
 from regopack.packing import (
     FILE_MAGIC,
@@ -449,7 +449,7 @@ def _read_box(path: Path, data: Any) -> Box:
     if not isinstance(data, dict):
         raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
     try:
-        return domain3d_from_dict(data)
+        return domain_from_dict(data, 3)
     except (KeyError, TypeError, ValueError, GeometryError) as err:
         why = f"no {err}" if isinstance(err, KeyError) else str(err)
         raise _invalid(path, f"meta 'domain' (kind {_short(data.get('kind'))}): {why}") from err

@@ -15,6 +15,7 @@ from regopack import _toml
 from regopack.analysis import AnalysisFiles, write_analysis_files
 from regopack.analysis_plan import run_analyses
 from regopack.compilation import CompileTime, compile_timer
+from regopack.domain import PlaneDomain
 from regopack.errors import ConfigError, ExportError, GeometryError, PluginError
 from regopack.interfaces import (
     Analyzer,
@@ -153,7 +154,7 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
     """
     count = scene.scene.count
     if count == "auto":
-        area, mean = scene.domain.area, float(size_dist.mean_area)
+        area, mean = scene.domain.measure, float(size_dist.mean_area)
         auto = area / mean if mean > 0 else math.inf
         if not math.isfinite(auto):
             raise ConfigError(
@@ -363,7 +364,7 @@ def check_scene(scene: ResolvedScene) -> int:
                 "its size underflows 64-bit floats; give larger sizes",
             )
         )
-    domain_area = scene.domain.area
+    domain_area = scene.domain.measure
     if area_min > domain_area:
         domain_set = scene.scene.origin("domain") != scene.scene.source
         raise ConfigError(
@@ -545,6 +546,7 @@ def _run(
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
     controller: DensityController = _build(resolved.density, DensityController, "density")
     domain = resolved.domain
+    assert isinstance(domain, PlaneDomain), "run_scene hands 3D scenes to run_scene3d"
     try:
         result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
     except LimitError as err:  # a size the inserter derived from the scene, refused

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.compilation import CompileTime, compile_timer
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.exporting import run_exports
 from regopack.interfaces import (
@@ -300,7 +300,7 @@ def _run3d(
     controller: DensityController = _build(resolved.density, DensityController, "density")
     box = _box(resolved)
     try:
-        result: InsertionResult = inserter.pack(population, box, controller, rng, progress)  # type: ignore[arg-type]
+        result: InsertionResult = inserter.pack(population, box, controller, rng, progress)
     except LimitError as err:  # a size the inserter derived from the scene, refused
         from regopack.run import located_limit
 

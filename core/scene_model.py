@@ -38,9 +38,8 @@ from pydantic import (
 )
 
 from regopack import _toml
-from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, Rectangle
+from regopack.domain import DOMAIN_KINDS, Box, Circle, ConvexPolygon, Rectangle
 from regopack.domain import Domain as DomainGeometry
-from regopack.domain3d import Box, PeriodicBox
 from regopack.errors import ConfigError, GeometryError, PluginError
 from regopack.manager import Registry
 from regopack.messages import describe_validation_error, dotted, format_value, where
@@ -82,9 +81,6 @@ Point = Annotated[tuple[FiniteFloat, FiniteFloat], Field(strict=False)]
 """A point ``[x, y]``: a TOML array is taken as a tuple, its items stay strict numbers."""
 Centre = Annotated[tuple[FiniteFloat, ...], Field(strict=False)]
 """A domain's centre: ``[x, y]``, or ``[x, y, z]`` for a box (checked with the kind)."""
-
-DOMAINS_3D = ("box", "periodic-box")
-"""Domain kinds that make a scene three-dimensional."""
 
 STRICT = ConfigDict(extra="forbid", strict=True)
 """Model configuration of the scene sections: unknown keys and coerced values are errors.
@@ -177,7 +173,7 @@ class Domain(BaseModel):
         for name in self._REQUIRED.get(self.kind, ()):
             if getattr(self, name) is None:
                 raise ValueError(f"kind {self.kind!r} needs {name}")
-        points = 3 if self.kind in DOMAINS_3D else 2
+        points = self.dimension
         if len(self.center) != points:
             if "center" in self.model_fields_set:
                 raise ValueError(
@@ -185,59 +181,57 @@ class Domain(BaseModel):
                     f"({'[x, y, z]' if points == 3 else '[x, y]'}), not {len(self.center)}"
                 )
             object.__setattr__(self, "center", (0.0,) * points)
-        if self.kind in DOMAINS_3D:
-            if not math.isfinite(self.to_box().volume):
-                raise ValueError(
-                    f"width x depth x height = {self.width:g} x {self.depth:g} x "
-                    f"{self.height:g} gives a {self.kind} whose volume overflows 64-bit floats "
-                    "(inf); give a smaller domain"
+        try:
+            domain = self.to_domain()
+        except GeometryError as err:
+            if self.kind != "polygon":
+                raise
+            raise ValueError(f"vertices: {err}") from err
+        if not math.isfinite(domain.measure):
+            if self.dimension == 3:
+                given = (
+                    f"width x depth x height = {self.width:g} x {self.depth:g} x {self.height:g}"
                 )
-            return self
-        if self.kind == "polygon":
-            try:
-                self.to_domain()
-            except GeometryError as err:
-                raise ValueError(f"vertices: {err}") from err
-        if not math.isfinite(self.to_domain().area):
-            if self.kind in ("rectangle", "periodic"):
+            elif self.kind in ("rectangle", "periodic"):
                 given = f"width x height = {self.width:g} x {self.height:g}"
             elif self.kind == "circle":
                 given = f"radius = {self.radius:g}"
             else:
                 given = "the vertices"
+            measure = "volume" if self.dimension == 3 else "area"
             raise ValueError(
-                f"{given} gives a {self.kind} whose area overflows 64-bit floats (inf); "
+                f"{given} gives a {self.kind} whose {measure} overflows 64-bit floats (inf); "
                 "give a smaller domain"
             )
         return self
 
     @property
     def dimension(self) -> int:
-        """3 for a box or periodic box, 2 otherwise."""
-        return 3 if self.kind in DOMAINS_3D else 2
-
-    def to_box(self) -> Box:
-        """Return a 3D domain as a :class:`regopack.domain3d.Box`."""
-        if self.kind not in DOMAINS_3D:
-            raise GeometryError(f"the domain is a 2D {self.kind}, not a box")
-        cls = PeriodicBox if self.kind == "periodic-box" else Box
-        cx, cy, cz = (float(c) for c in self.center)
-        return cls.centred(self.width, self.height, self.depth, (cx, cy, cz))
+        """Dimension of the container: 3 for a box or periodic box, 2 otherwise."""
+        return DOMAIN_KINDS[self.kind].dimension
 
     def to_domain(self) -> DomainGeometry:
-        """Return a 2D container as a :class:`regopack.domain.Domain`."""
-        if self.kind in DOMAINS_3D:
-            raise GeometryError(f"the domain is a 3D {self.kind}; see to_box")
-        if self.kind == "circle":
+        """Return the container as a :class:`regopack.domain.Domain` (a box in 3D)."""
+        cls = DOMAIN_KINDS[self.kind]
+        if cls is Circle:
             assert self.radius is not None
             return Circle(self.center[0], self.center[1], self.radius)
-        if self.kind == "polygon":
+        if cls is ConvexPolygon:
             assert self.vertices is not None
             return ConvexPolygon(tuple(self.vertices))
+        if issubclass(cls, Box):
+            cx, cy, cz = (float(c) for c in self.center)
+            return cls.centred(self.width, self.height, self.depth, (cx, cy, cz))
+        assert issubclass(cls, Rectangle)
         cx, cy = (float(c) for c in self.center)
-        if self.kind == "periodic":
-            return PeriodicRectangle.centred(self.width, self.height, (cx, cy))
-        return Rectangle.centred(self.width, self.height, (cx, cy))
+        return cls.centred(self.width, self.height, (cx, cy))
+
+    def to_box(self) -> Box:
+        """Return a 3D domain as a :class:`regopack.domain.Box`."""
+        domain = self.to_domain()
+        if not isinstance(domain, Box):
+            raise GeometryError(f"the domain is a 2D {self.kind}, not a box")
+        return domain
 
     def to_rectangle(self) -> Rectangle:
         """Return a rectangular domain as a :class:`regopack.domain.Rectangle`."""

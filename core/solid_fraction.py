@@ -12,8 +12,7 @@ import math
 import numpy as np
 from scipy.spatial import ConvexHull
 
-from regopack.domain import Domain, Rectangle
-from regopack.domain3d import Box
+from regopack.domain import Box, Domain, PlaneDomain, Rectangle
 from regopack.packing import Packing
 from regopack.packing3d import Packing3D
 from regopack.population import FloatArray
@@ -25,25 +24,27 @@ SHAPELY_BATCH = 1 << 16
 """Particles turned into shapely polygons at a time when measuring a covered area."""
 
 
-def _covered_by_parts(kind: type[Domain]) -> bool:
+def _covered_by_parts(kind: type[PlaneDomain]) -> bool:
     """Whether ``kind.covered_area`` is the sum of ``kind.covered_parts``."""
 
     def owner(name: str) -> type:
         return next(c for c in kind.__mro__ if name in c.__dict__)
 
-    return owner("covered_area") is Domain or issubclass(
+    return owner("covered_area") is PlaneDomain or issubclass(
         owner("covered_parts"), owner("covered_area")
     )
 
 
-def phi_in_window(packing: Packing, window: Domain | tuple[float, float, float, float]) -> float:
+def phi_in_window(
+    packing: Packing, window: PlaneDomain | tuple[float, float, float, float]
+) -> float:
     """Area fraction of ``window`` covered by placed particles.
 
     ``window`` is a domain (e.g. ``packing.domain.interior(margin)``) or the
     bounds ``(xmin, xmax, ymin, ymax)`` of a rectangle. Particles are clipped
     exactly to the window. Returns NaN for an empty window.
     """
-    if not isinstance(window, Domain):
+    if not isinstance(window, PlaneDomain):
         window = Rectangle(*(float(v) for v in window))
     if not window.area > 0:
         return math.nan
@@ -139,7 +140,7 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
 
 def fraction_in(
     packing: Packing | Packing3D,
-    window: Domain | Box | tuple[float, ...],
+    window: Domain | tuple[float, ...],
     volume: FloatArray | None = None,
 ) -> float:
     """Solid fraction of ``window`` in a 2D or a 3D packing (NaN for an empty window).
@@ -148,12 +149,12 @@ def fraction_in(
     (``(xmin, xmax, ymin, ymax)``, with ``zmin, zmax`` in 3D). ``volume``
     gives 3D solids' volumes when they are known already.
     """
-    if isinstance(packing, Packing3D):
-        if not isinstance(window, Box):
-            window = Box(*(float(v) for v in window))  # type: ignore[union-attr]
-        return phi_in_box(packing, window, volume)
-    if isinstance(window, Box):
-        raise TypeError("a 3D window for a 2D packing")
+    dimension = 3 if isinstance(packing, Packing3D) else 2
     if not isinstance(window, Domain):
-        window = Rectangle(*(float(v) for v in window))
-    return phi_in_window(packing, window)
+        bounds = [float(v) for v in window]
+        window = Box(*bounds) if dimension == 3 else Rectangle(*bounds)
+    if isinstance(packing, Packing3D) and isinstance(window, Box):
+        return phi_in_box(packing, window, volume)
+    if isinstance(packing, Packing) and isinstance(window, PlaneDomain):
+        return phi_in_window(packing, window)
+    raise TypeError(f"a {window.dimension}D window for a {dimension}D packing")

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from regopack.domain import Domain, Rectangle
+from regopack.domain import PlaneDomain, Rectangle, domain_from_dict
 from regopack.interfaces import (
     DensityController,
     ShapeGenerator,
@@ -105,7 +105,7 @@ def extreme_radii(n: int, ratio: float, scale: float, rng: np.random.Generator) 
 
 def packing_from_polygons(
     polygons: Sequence[ArrayLike],
-    domain: Domain | tuple[float, float, float, float] | None = None,
+    domain: PlaneDomain | tuple[float, float, float, float] | None = None,
     *,
     placed: Sequence[bool] | None = None,
 ) -> Packing:
@@ -119,7 +119,7 @@ def packing_from_polygons(
     polygons
         One ``(k, 2)`` array of counter-clockwise vertices per particle.
     domain
-        The container (any :class:`~regopack.domain.Domain`) or the rectangle
+        The container (any :class:`~regopack.domain.PlaneDomain`) or the rectangle
         ``(xmin, xmax, ymin, ymax)``; by
         default the bounding box of the polygons.
     placed
@@ -135,7 +135,7 @@ def packing_from_polygons(
             float(allv[:, 1].min()),
             float(allv[:, 1].max()),
         )
-    elif not isinstance(domain, Domain):
+    elif not isinstance(domain, PlaneDomain):
         domain = Rectangle(*(float(v) for v in domain))
     centre = np.array([o.mean(axis=0) for o in outlines]).reshape(n, 2)
     counts = np.array([len(o) for o in outlines], dtype=np.int64)
@@ -797,16 +797,10 @@ def scaled_packing(packing: Any, s: float) -> Any:
         "rounding": None if packing.rounding is None else packing.rounding * s,
     }
     record = packing.domain.to_dict()
-    if getattr(packing, "dimension", 2) == 3:
-        from regopack.domain3d import domain3d_from_dict
-
-        record["bounds"] = _times(record["bounds"], s)
-        return replace(
-            packing, domain=domain3d_from_dict(record), support=packing.support * s, **common
-        )
-    from regopack.domain import domain_from_dict
-
     for key in ("bounds", "vertices", "center", "radius"):
         if key in record:
             record[key] = _times(record[key], s)
-    return replace(packing, domain=domain_from_dict(record), **common)
+    domain = domain_from_dict(record)
+    if domain.dimension == 3:
+        return replace(packing, domain=domain, support=packing.support * s, **common)
+    return replace(packing, domain=domain, **common)

@@ -81,7 +81,7 @@ def _packing_from(
     header: Mapping[str, Any], arrays: Mapping[str, NDArray[Any]], path: Path
 ) -> Packing:
     try:
-        domain = domain_from_dict(header["domain"])
+        domain = domain_from_dict(header["domain"], 2)
         names = tuple(str(m) for m in header["mineral_names"])
         rounding = header.get("rounding")
         if rounding is not None:

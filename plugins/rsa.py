@@ -35,7 +35,8 @@ from numpy.typing import ArrayLike, NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 import regopack.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-from regopack.domain import Domain
+from regopack.domain import Domain, PlaneDomain
+from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
     DensityController,
@@ -231,7 +232,7 @@ def convex_polygons_overlap(
 # neighbour grid
 
 
-def _grid_layout(domain: Domain, circum: FloatArray) -> tuple[float, int, int, int]:
+def _grid_layout(domain: PlaneDomain, circum: FloatArray) -> tuple[float, int, int, int]:
     """Cell size, cells along x and y, and an upper bound on the registrations."""
     width, height = domain.width, domain.height
     n = max(int(circum.shape[0]), 1)
@@ -449,7 +450,7 @@ def _pack_range(
     return placed
 
 
-def _prepare(population: Population, domain: Domain) -> tuple[Outlines, Grid]:
+def _prepare(population: Population, domain: PlaneDomain) -> tuple[Outlines, Grid]:
     """Build the static outlines and an empty grid."""
     n = len(population)
     offsets = np.ascontiguousarray(population.shapes.offsets, dtype=np.int64)
@@ -530,6 +531,8 @@ class RandomSequentialAddition(InsertionStrategy):
         ``stop_after_failures``), ``prepare_time_s`` and ``insert_time_s``, and
         ``controller_ignored = 1`` when the controller is not the identity.
         """
+        if not isinstance(domain, PlaneDomain):
+            raise ConfigError("insertion 'rsa' packs polygons in a 2D domain")
         cfg = self.config
         n = len(population)
         started = time.perf_counter()

@@ -47,7 +47,7 @@ def cube_and_sphere(rounded: bool = True) -> Packing3D:
     """A cube of side 2 at (3, 3, 3) and a sphere of radius 1 at (7, 3, 3) in a 10 µm box."""
     import numpy as np
 
-    from regopack.domain3d import Box
+    from regopack.domain import Box
 
     cube = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     normals = np.array([cube[loop].mean(axis=0) for loop in CUBE_LOOPS])

@@ -1,4 +1,4 @@
-"""Domain geometry: areas, windows, containment, exact clipping and the file record."""
+"""Domains in 2D and 3D: measures, windows, containment, wrapping, exact clipping, records."""
 
 from __future__ import annotations
 
@@ -11,9 +11,15 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from regopack.domain import (
+    DOMAIN_KINDS,
+    Box,
     Circle,
     ConvexPolygon,
+    Domain,
+    PeriodicBox,
+    PeriodicDomain,
     PeriodicRectangle,
+    PlaneDomain,
     Rectangle,
     domain_from_dict,
     polygon_disk_area,
@@ -21,6 +27,44 @@ from regopack.domain import (
 from regopack.errors import GeometryError
 
 TRIANGLE = ((0.0, 0.0), (4.0, 0.0), (0.0, 3.0))
+ONE_OF_EACH_KIND = [
+    Rectangle(-1.0, 2.0, -3.0, 4.0),
+    PeriodicRectangle(0.0, 1.0, 0.0, 2.0),
+    ConvexPolygon(TRIANGLE),
+    Circle(1.5, -2.0, 3.25),
+    Box(-1.0, 2.0, -3.0, 4.0, 0.5, 1.5),
+    PeriodicBox(0.0, 1.0, 0.0, 2.0, -1.0, 1.0),
+]
+
+
+def test_every_kind_is_in_the_list() -> None:
+    assert {type(d).kind: type(d) for d in ONE_OF_EACH_KIND} == DOMAIN_KINDS
+
+
+@pytest.mark.parametrize("domain", ONE_OF_EACH_KIND, ids=lambda d: d.kind)
+def test_every_kind_answers_the_generic_questions(domain: Domain) -> None:
+    dim = domain.dimension
+    assert isinstance(domain, PlaneDomain) == (dim == 2) and dim in (2, 3)
+    assert isinstance(domain, PeriodicDomain) == domain.periodic
+    bounds = domain.bounds()
+    assert bounds.shape == (2 * dim,) and (bounds[0::2] < bounds[1::2]).all()
+    assert domain.measure == (domain.area if dim == 2 else domain.volume) > 0
+    assert len(domain.center) == dim
+    assert domain.contains([domain.center, [np.nan] * dim]).tolist() == [True, False]
+    window = domain.interior(0.1)
+    assert window.dimension == dim and 0 < window.measure <= domain.measure
+
+
+@pytest.mark.parametrize("domain", ONE_OF_EACH_KIND, ids=lambda d: d.kind)
+def test_file_record_round_trips(domain: Domain) -> None:
+    for again in (
+        domain_from_dict(domain.to_dict()),
+        domain_from_dict(domain.to_dict(), domain.dimension),
+    ):
+        assert again == domain
+        assert type(again) is type(domain)
+    with pytest.raises(ValueError, match=f"is a {domain.dimension}D domain kind"):
+        domain_from_dict(domain.to_dict(), 5 - domain.dimension)
 
 
 def test_polygon_area_centroid_and_orientation() -> None:
@@ -64,8 +108,6 @@ def test_interior_windows() -> None:
     dist = offset[None, :] - np.asarray(inset.outline()) @ normal.T
     assert dist.min() == pytest.approx(0.5)
     assert tri.interior(10.0).area == 0.0
-    periodic = PeriodicRectangle.centred(10.0, 10.0)
-    assert periodic.interior(3.0) is periodic
 
 
 def test_contains_is_strict_and_nan_is_outside() -> None:
@@ -76,28 +118,41 @@ def test_contains_is_strict_and_nan_is_outside() -> None:
     assert PeriodicRectangle(0, 1, 0, 1).contains(pts + 5).tolist() == [True, True, True, False]
 
 
-def test_periodic_wrap_and_minimum_image() -> None:
-    d = PeriodicRectangle(0.0, 10.0, -5.0, 5.0)
-    wrapped = d.wrap([[10.0, 5.0], [-0.5, -5.5], [23.0, 1.0]])
-    np.testing.assert_allclose(wrapped, [[0.0, -5.0], [9.5, 4.5], [3.0, 1.0]])
-    np.testing.assert_allclose(
-        d.minimum_image([[9.0, 0.0], [-6.0, 9.0]]), [[-1.0, 0.0], [4.0, -1.0]]
-    )
-
-
 @pytest.mark.parametrize(
-    "domain",
+    ("domain", "points", "wrapped", "delta", "image"),
     [
-        Rectangle(-1.0, 2.0, -3.0, 4.0),
-        PeriodicRectangle(0.0, 1.0, 0.0, 2.0),
-        ConvexPolygon(TRIANGLE),
-        Circle(1.5, -2.0, 3.25),
+        (
+            PeriodicRectangle(0.0, 10.0, -5.0, 5.0),
+            [[10.0, 5.0], [-0.5, -5.5], [23.0, 1.0]],
+            [[0.0, -5.0], [9.5, 4.5], [3.0, 1.0]],
+            [[9.0, 0.0], [-6.0, 9.0]],
+            [[-1.0, 0.0], [4.0, -1.0]],
+        ),
+        (
+            PeriodicBox(0, 2, 0, 3, 0, 4),
+            [[2.0, -0.5, 9.0], [-1e-18, 3.0, 0.0]],  # -1e-18 rounds to the upper face
+            [[0.0, 2.5, 1.0], [0.0, 0.0, 0.0]],
+            [[1.5, -2.0, 3.0]],
+            [[-0.5, 1.0, -1.0]],
+        ),
     ],
+    ids=["rectangle", "box"],
 )
-def test_file_record_round_trips(domain) -> None:
-    again = domain_from_dict(domain.to_dict())
-    assert again == domain
-    assert type(again) is type(domain)
+def test_periodic_domains_wrap_and_take_the_minimum_image(
+    domain: PeriodicDomain,
+    points: list[list[float]],
+    wrapped: list[list[float]],
+    delta: list[list[float]],
+    image: list[list[float]],
+) -> None:
+    lo, hi = domain.bounds()[0::2], domain.bounds()[1::2]
+    assert domain.period == tuple(hi - lo)
+    assert domain.interior(1.0) is domain
+    assert domain.contains([hi + 100.0, [np.nan] * domain.dimension]).tolist() == [True, False]
+    cell = domain.wrap(points)
+    assert ((cell >= lo) & (cell < hi)).all()
+    np.testing.assert_allclose(cell, wrapped, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(domain.minimum_image(delta), image, rtol=0, atol=1e-12)
 
 
 @settings(max_examples=200, deadline=None)
@@ -138,3 +193,73 @@ def test_polygon_disk_area_with_edges_tangent_to_the_circle() -> None:
     assert polygon_disk_area(square, (0.0, 0.0), 60.0) == pytest.approx(math.pi * 3600.0)
     # one tangent edge, the disk otherwise inside
     assert polygon_disk_area(square, (0.0, 20.0), 40.0) == pytest.approx(math.pi * 1600.0)
+
+
+def test_centred_box_puts_height_on_z() -> None:
+    box = Box.centred(4.0, 2.0, 3.0, center=(1.0, 1.0, 1.0))
+    assert box.size == (4.0, 3.0, 2.0)
+    assert box.volume == pytest.approx(24.0)
+    assert box.center == (1.0, 1.0, 1.0)
+    assert box.bounds().tolist() == [-1.0, 3.0, -0.5, 2.5, 0.0, 2.0]
+
+
+@pytest.mark.parametrize(
+    "bounds",
+    [
+        (0, 0, 0, 1, 0, 1),
+        (0, 1, 1, 0, 0, 1),
+        (0, 1, 0, 1, 0, float("nan")),
+        (0, 1, 0, 1, 0, float("inf")),
+    ],
+)
+def test_degenerate_or_non_finite_boxes_are_refused(bounds: tuple[float, ...]) -> None:
+    with pytest.raises(GeometryError):
+        Box(*bounds)
+
+
+def test_box_contains_is_strict_and_nan_is_outside() -> None:
+    box = Box(0, 1, 0, 1, 0, 1)
+    pts = [[0.5, 0.5, 0.5], [0.0, 0.5, 0.5], [0.5, 0.5, 1.0], [np.nan, 0.5, 0.5], [2, 0.5, 0.5]]
+    assert box.contains(pts).tolist() == [True, False, False, False, False]
+
+
+def test_box_interior_window_and_its_collapse() -> None:
+    box = Box(0, 10, 0, 4, 0, 6)
+    w = box.interior(1.0)
+    assert w.bounds().tolist() == [1, 9, 1, 3, 1, 5]
+    collapsed = box.interior(2.5)  # y collapses to its centre
+    assert collapsed.bounds().tolist() == [2.5, 7.5, 2.0, 2.0, 2.5, 3.5]
+    assert collapsed.volume == 0.0
+
+
+@settings(max_examples=50, deadline=None)
+@given(
+    lo=st.lists(st.floats(-1e6, 1e6), min_size=3, max_size=3),
+    size=st.lists(st.floats(1e-6, 1e6), min_size=3, max_size=3),
+    periodic=st.booleans(),
+)
+def test_box_record_round_trips(lo: list[float], size: list[float], periodic: bool) -> None:
+    cls = PeriodicBox if periodic else Box
+    hi = [a + s for a, s in zip(lo, size, strict=True)]
+    if any(not a < b for a, b in zip(lo, hi, strict=True)):
+        return  # the size vanished in rounding
+    box = cls(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2])
+    back = domain_from_dict(box.to_dict(), 3)
+    assert type(back) is cls
+    assert back == box
+
+
+@pytest.mark.parametrize(
+    ("record", "error"),
+    [
+        ({"kind": "rectangle", "bounds": [0, 1, 0, 1]}, ValueError),
+        ({"kind": "box", "bounds": [0, 1, 0, 1]}, ValueError),
+        ({"kind": "box", "bounds": [0, 1, 0, 1, 0, "2"]}, TypeError),
+        ({"kind": "box", "bounds": [0, 1, 0, 1, 0, float("inf")]}, ValueError),
+        ({"kind": "box", "bounds": [0, 1, 0, 1, 2, 1]}, GeometryError),
+        ({"kind": "box"}, KeyError),
+    ],
+)
+def test_bad_box_records_are_refused(record: dict[str, object], error: type[Exception]) -> None:
+    with pytest.raises(error):
+        domain_from_dict(record, 3)

@@ -18,10 +18,10 @@ LAYERS: dict[str, int] = {
     for layer, names in enumerate(
         [
             # 0 base: errors, files, units, limits, kernels' compilation and threads
-            "_version errors _toml messages units limits colours threads jit outdir "
+            "_version _compat errors _toml messages units limits colours threads jit outdir "
             "sphere_volume compilation",
             # 1 the plugin contract: geometry records, interfaces, specs, hooks, registry
-            "domain domain3d population solids interfaces plugin_types hookspecs manager",
+            "domain population solids interfaces plugin_types hookspecs manager",
             # 2 scenes
             "scene_model schema scenes",
             # 3 packings, their checks and measures; planning analyses

@@ -11,8 +11,7 @@ import pytest
 from packings3d import cube_and_sphere
 
 import regopack
-from regopack.domain import Rectangle
-from regopack.domain3d import Box, PeriodicBox
+from regopack.domain import Box, PeriodicBox, Rectangle
 from regopack.errors import PackingError, PackingFileError
 from regopack.packing import load
 from regopack.packing3d import Packing3D, load_packing, save3d

@@ -555,7 +555,7 @@ def test_packing_error_is_a_one_line_user_error():
         ({"radius": [object()] * 49}, "array 'radius' has dtype object"),
         ({"rounding": np.zeros(3)}, "array 'rounding' has shape (3,)"),
         ({"stats": {"tries": "many"}}, "'stats' has 'tries' = 'many', not a number"),
-        ({"domain": (0, 7, 0, 7)}, "'domain' is a tuple, not a Domain"),
+        ({"domain": (0, 7, 0, 7)}, "'domain' is a tuple, not a PlaneDomain"),
     ],
     ids=lambda v: next(iter(v)) if isinstance(v, dict) else None,
 )

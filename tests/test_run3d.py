@@ -12,7 +12,7 @@ import pytest
 from fakes import PythonDensity
 
 import regopack
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import InsertionResult, InsertionStrategy

@@ -75,6 +75,7 @@ def test_a_box_makes_the_scene_3d(tmp_path, registry) -> None:  # type: ignore[n
     d = resolved.scene.domain
     assert d.dimension == 3 and d.center == (0.0, 0.0, 0.0)
     assert d.to_box().size == (50.0, 30.0, 40.0)  # width x, depth y, height z
+    assert resolved.domain == d.to_box() and resolved.domain.dimension == 3
     assert resolved.to_dict()["domain"] == {
         "kind": "box",
         "width": 50.0,

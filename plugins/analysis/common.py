@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel
 
-from regopack.domain import Domain
+from regopack.domain import PlaneDomain
 from regopack.errors import ConfigError
 from regopack.packing import Packing
 from regopack.units import length_scale
@@ -65,7 +65,7 @@ def interior_margin(packing: Packing, margin: float | None = None) -> float:
     return 2.0 * float(np.max(packing.radius)) if packing.n_particles else 0.0
 
 
-def interior_window(packing: Packing, margin: float) -> Domain:
+def interior_window(packing: Packing, margin: float) -> PlaneDomain:
     """Return the domain inset by ``margin`` from every wall (a periodic domain: all of it)."""
     return packing.domain.interior(margin)
 

@@ -7,7 +7,7 @@ from typing import Any, cast
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.errors import ConfigError
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D

@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from regopack.domain import Domain
+from regopack.domain import PlaneDomain
 from regopack.interfaces import Analyzer
 from regopack.limits import derived_count
 from regopack.packing import Packing
@@ -275,7 +275,7 @@ class Homogeneity(Analyzer):
         self.trends: dict[str, Trend] = {}
         self.overall: dict[str, float] = {}
 
-    def _ring_width(self, packing: Packing, window: Domain) -> float:
+    def _ring_width(self, packing: Packing, window: PlaneDomain) -> float:
         near, far = window_reach(window, self.centre)
         if self.config.rings is not None:
             return far / self.config.rings
@@ -416,7 +416,12 @@ class Homogeneity(Analyzer):
 
     @staticmethod
     def _tile_of(
-        xy: FloatArray, inside: NDArray[np.bool_], tiles: Tiles, window: Domain, nx: int, ny: int
+        xy: FloatArray,
+        inside: NDArray[np.bool_],
+        tiles: Tiles,
+        window: PlaneDomain,
+        nx: int,
+        ny: int,
     ) -> IntArray:
         """Tile of each centre in the window (``-1``: none or a left-out tile)."""
         out = np.full(len(xy), -1, dtype=np.int64)

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain3d import Box, PeriodicBox
+from regopack.domain import Box, PeriodicBox
 from regopack.interfaces import Analyzer
 from regopack.packing3d import Packing3D
 from regopack.plugins.analysis.common3d import (

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain import Circle, Domain, PeriodicRectangle
+from regopack.domain import Circle, PeriodicRectangle, PlaneDomain
 from regopack.interfaces import Analyzer
 from regopack.packing import Packing
 from regopack.plugins.analysis.common import (
@@ -216,7 +216,7 @@ class Tessellation(NamedTuple):
 
 
 def domain_cells(
-    domain: Domain, centre: FloatArray, weights: FloatArray | None = None
+    domain: PlaneDomain, centre: FloatArray, weights: FloatArray | None = None
 ) -> Tessellation:
     """Power (or Voronoi) cells of the centres, clipped to the domain, and their exact areas.
 

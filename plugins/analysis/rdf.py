@@ -29,7 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
-from regopack.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle
+from regopack.domain import Circle, ConvexPolygon, PeriodicRectangle, PlaneDomain
 from regopack.interfaces import Analyzer
 from regopack.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
 from regopack.packing import Packing
@@ -155,7 +155,7 @@ def rdf_histogram(
     bins: int,
     a: float,
     b: float,
-    window: Domain | None = None,
+    window: PlaneDomain | None = None,
     n_real: int | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Edge-corrected ``g(r)`` of the points in ``window``, total and per kind pair.
@@ -257,7 +257,7 @@ def _checked_kinds(
     return kind
 
 
-def covariogram(window: Domain, r: FloatArray) -> FloatArray:
+def covariogram(window: PlaneDomain, r: FloatArray) -> FloatArray:
     """Isotropised set covariogram: mean area of ``W ∩ (W + r u)`` over directions ``u``.
 
     Exact for a circle; for a polygon the mean over

@@ -25,7 +25,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.interfaces import Analyzer
 from regopack.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
 from regopack.plugins.analysis.common import eta_of, scaled_defaults

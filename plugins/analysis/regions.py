@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.domain import Circle, Domain, PeriodicRectangle
+from regopack.domain import Circle, PeriodicRectangle, PlaneDomain
 from regopack.packing import Packing
 
 __all__ = [
@@ -89,7 +89,7 @@ def _periodic_images(
     return np.concatenate(out_g), np.concatenate(out_o).astype(np.int64)
 
 
-def window_pieces(packing: Packing, window: Domain) -> WindowPieces:
+def window_pieces(packing: Packing, window: PlaneDomain) -> WindowPieces:
     """Cut the placed particles to ``window`` (rounded outlines drawn as by ``to_shapely``)."""
     import shapely
 
@@ -176,7 +176,7 @@ def _distance_range(geoms: NDArray[np.object_], centre: Centre) -> tuple[FloatAr
     return near, far
 
 
-def window_reach(window: Domain, centre: Centre) -> tuple[float, float]:
+def window_reach(window: PlaneDomain, centre: Centre) -> tuple[float, float]:
     """Distances from ``centre`` to the nearest and to the farthest point of the window's edge."""
     if isinstance(window, Circle):
         d = math.hypot(window.cx - centre[0], window.cy - centre[1])
@@ -192,7 +192,7 @@ def window_reach(window: Domain, centre: Centre) -> tuple[float, float]:
     return near, far
 
 
-def window_area_in_disk(window: Domain, centre: Centre, radius: float) -> float:
+def window_area_in_disk(window: PlaneDomain, centre: Centre, radius: float) -> float:
     """Area of the window inside the disk of ``radius`` about ``centre``."""
     if radius <= 0 or not window.area > 0:
         return 0.0
@@ -204,14 +204,14 @@ def window_area_in_disk(window: Domain, centre: Centre, radius: float) -> float:
     return float(disk_areas(poly, centre, radius)[0])
 
 
-def ring_window_areas(window: Domain, centre: Centre, edges: FloatArray) -> FloatArray:
+def ring_window_areas(window: PlaneDomain, centre: Centre, edges: FloatArray) -> FloatArray:
     """Area of the window in each ring ``[edges[k], edges[k + 1])``."""
     cum = np.array([window_area_in_disk(window, centre, float(r)) for r in edges])
     return np.maximum(np.diff(cum), 0.0)
 
 
 def ring_mean_radius(
-    window: Domain, centre: Centre, lo: float, hi: float, steps: int = 64
+    window: PlaneDomain, centre: Centre, lo: float, hi: float, steps: int = 64
 ) -> float:
     """Mean distance from ``centre`` of the window's points in the ring ``[lo, hi)``.
 
@@ -229,7 +229,7 @@ def ring_mean_radius(
     return float((hi * area[-1] - lo * area[0] - simpson) / ring)
 
 
-def ring_edges(window: Domain, centre: Centre, width: float) -> FloatArray:
+def ring_edges(window: PlaneDomain, centre: Centre, width: float) -> FloatArray:
     """Ring radii from 0 to the farthest window point in steps of ``width``.
 
     The outermost rings, while their area in the window is less than half
@@ -290,7 +290,7 @@ class Tiles:
     area: FloatArray
 
 
-def tile_grid(window: Domain, nx: int, ny: int) -> Tiles:
+def tile_grid(window: PlaneDomain, nx: int, ny: int) -> Tiles:
     """Grid of ``nx`` by ``ny`` cells over the window's bounding box.
 
     Cells with less than :data:`MIN_TILE_FILL` of their area inside the

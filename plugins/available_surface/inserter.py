@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack.domain import Box, Domain
 from regopack.errors import ConfigError
 from regopack.hookspecs import hookimpl
 from regopack.interfaces import (
@@ -155,13 +156,12 @@ class AvailableSurface(InsertionStrategy):
     def pack(
         self,
         population: Population,
-        domain: object,
+        domain: Domain,
         controller: DensityController,
         rng: np.random.Generator,
         progress: ProgressCallback | None = None,
     ) -> InsertionResult:
         """Insert the solids one by one; see the module docstring."""
-        from regopack.domain3d import Box
         from regopack.plugins.available_surface.state import SurfaceState
         from regopack.plugins.available_surface.sweep import (
             STATUS_REFUSED,

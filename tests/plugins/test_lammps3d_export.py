@@ -125,7 +125,7 @@ def test_data_file_layout(packing, bodies, tmp_path) -> None:  # type: ignore[no
 def test_a_periodic_box_and_spheres(packing, tmp_path) -> None:  # type: ignore[no-untyped-def]
     import dataclasses
 
-    from regopack.domain3d import PeriodicBox
+    from regopack.domain import PeriodicBox
 
     periodic = dataclasses.replace(packing, domain=PeriodicBox(*packing.domain.bounds()))
     path = Lammps3dExporter().export(periodic, tmp_path / "p.data")

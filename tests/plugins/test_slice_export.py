@@ -12,7 +12,7 @@ from cli_helpers import one_error_line
 from packings3d import cube_and_sphere, packing3d
 
 from regopack.cli import main
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.errors import ConfigError
 from regopack.packing import load
 from regopack.packing3d import Packing3D, save3d

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from regopack.domain3d import Box
+from regopack.domain import Box
 from regopack.packing3d import Packing3D
 
 _CUBE_VERTICES = np.array(

@@ -182,7 +182,7 @@ def test_every_3d_analyzer_runs_on_a_lone_particle_and_skips_the_unplaced() -> N
 def test_a_periodic_lattice_of_cubes_touches_across_the_faces() -> None:
     import dataclasses
 
-    from regopack.domain3d import PeriodicBox
+    from regopack.domain import PeriodicBox
 
     # 3 x 3 x 3 cubes of side 1 with a gap of 1/64, as a periodic cell of side 3 (1 + 1/64):
     # grown along their face normals, all 26 neighbours meet at the same threshold, those
@@ -207,7 +207,7 @@ def test_a_periodic_lattice_of_cubes_touches_across_the_faces() -> None:
 def test_a_cube_in_a_periodic_cell_of_its_size_touches_its_own_images() -> None:
     import dataclasses
 
-    from regopack.domain3d import PeriodicBox
+    from regopack.domain import PeriodicBox
 
     gap = 1 / 64
     p = cube_lattice((1, 1, 1), (gap, gap, gap))

@@ -37,7 +37,7 @@ def test_the_volumes_of_all_solids_at_once_match_their_hulls(packing3d) -> None:
 def test_a_periodic_box_is_interior_throughout() -> None:
     import dataclasses
 
-    from regopack.domain3d import PeriodicBox
+    from regopack.domain import PeriodicBox
 
     p = cube_lattice((2, 2, 2), (0.0, 0.0, 0.0))
     periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))

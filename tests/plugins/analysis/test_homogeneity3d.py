@@ -39,7 +39,7 @@ def test_a_lattice_of_cubes_is_homogeneous_layer_by_layer() -> None:
 def test_a_periodic_cell_counts_the_solids_that_cross_its_faces_in_their_images() -> None:
     import dataclasses
 
-    from regopack.domain3d import PeriodicBox
+    from regopack.domain import PeriodicBox
 
     # 4 x 4 x 4 touching unit cubes in a cell shifted by half a cube: every cube crosses
     # faces of the cell, and its images fill every layer and shell to phi = 1

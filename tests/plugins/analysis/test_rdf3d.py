@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from regopack.domain3d import Box, PeriodicBox
+from regopack.domain import Box, PeriodicBox
 from regopack.plugins.analysis.rdf3d import rdf3d_histogram
 
 freud = pytest.importorskip("freud", reason="freud-analysis is not installed")
