@@ -1,7 +1,7 @@
 """Time of the default 3D analyses against the number of particles.
 
-Packs cubes of side L of Table-1-like polyhedra (the scene of
-``bench_surface.py``: sizes 2-12 µm, psi per mineral as in Table 2), then
+Packs cubes of side L of Table-1-like polyhedra (the population of the asv
+suite's 3D benchmarks: sizes 2-12 µm, psi per mineral as in Table 2), then
 times each default 3D analyzer (density3d, contacts3d, coordination3d,
 rdf3d, network3d) on it, after a warm-up on a small box that loads the
 compiled kernels and imports everything. Each size runs in its own process.

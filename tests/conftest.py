@@ -130,6 +130,7 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "test_cli_end_to_end.py",
         "test_compilation.py",
         "test_howto_export.py",
+        "test_benchmarks_suite.py",
     ),
 )
 """Test modules by the kernels they compile first, in the order the warm-up compiles them.

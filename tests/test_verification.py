@@ -150,8 +150,8 @@ def test_assert_valid_packing():
 
 
 def test_a_large_touching_packing_is_verified():
-    """40 000 touching particles: every one checked, none overlapping (the time it takes is
-    a benchmark's figure: ``benchmarks/bench_verification.py``)."""
+    """40 000 touching particles: every one checked, none overlapping (the time a
+    verification takes is measured by the asv suite, ``benchmarks/benchmarks/verification.py``)."""
     p = regopack.testing.touching_squares(200)
     report = verify(p)
     assert report.ok

@@ -5,7 +5,7 @@ Run from the repository root (needs the ``docs`` extra, i.e. matplotlib)::
     python docs/scripts/make_3d_figure.py                     # packs a 45 µm box first (~15 s)
     python docs/scripts/make_3d_figure.py --packing runs/bench3d-seed1/packing.npz
 
-The packed scene is that of ``benchmarks/bench_surface.py`` (the six minerals
+The packed scene is that of the asv suite's 3D benchmarks (the six minerals
 of Table 1 as ``polyhedron`` shapes, sizes 2-12 µm). The picture is written to
 ``docs/images/packing3d.png`` unless ``--out`` says otherwise.
 """
