@@ -102,6 +102,9 @@ _AC = r"$A_\mathrm{c}$"
 TOTAL = "#000000"
 """Colour of whole-packing curves (all minerals together)."""
 
+Z_BARS_WIDTH = 0.8
+"""Width, in units of Z, of the group of bars (one per mineral) at each value of Z."""
+
 
 # ---------------------------------------------------------------------------
 # helpers
@@ -567,6 +570,8 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
     top = int(np.percentile(z_in, 99.5)) if z_in.size else 0
     ks = np.arange(0, max(top, 1) + 1)
     means, errs = [], []
+    # Z is an integer: one bar per mineral at each Z, side by side
+    bar = Z_BARS_WIDTH / max(len(names), 1)
     for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
         zm = z[interior & (packing.mineral == m)]
         if zm.size == 0:
@@ -574,20 +579,21 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
             errs.append(0.0)
             continue
         p = np.bincount(np.minimum(zm, ks[-1]), minlength=len(ks))[: len(ks)] / zm.size
-        ax.plot(
-            ks,
+        ax.bar(
+            ks + (m - 0.5 * (len(names) - 1)) * bar,
             p,
-            "-o",
+            width=bar,
             color=colour,
             label=f"{name} (n = {zm.size:,})",
-            markeredgecolor="#333333",
-            markeredgewidth=0.3,
+            edgecolor="#333333",
+            linewidth=0.3,
         )
         means.append(float(zm.mean()))
         errs.append(float(zm.std(ddof=1) / np.sqrt(zm.size)) if zm.size > 1 else 0.0)
-    ax.set_xlabel(f"contacts per particle Z (last point: Z ≥ {ks[-1]})")
-    ax.set_ylabel("fraction of the mineral's particles")
+    ax.set_xlim(ks[0] - 0.5, ks[-1] + 0.5)
+    ax.set_xlabel(f"contacts per particle Z (last bars: Z ≥ {ks[-1]})")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel("fraction of the mineral's particles")
     ax.legend(loc="upper right")
     tol = coordination.results()["tol"]
     ax.set_title(f"distribution of Z, interior particles, tol = {tol:g} {length_unit(packing)}")

@@ -195,3 +195,24 @@ def test_lengths_are_labelled_in_the_scenes_unit_at_its_scale(packing):
     peak = [t.get_text() for t in near.texts if "first peak" in t.get_text()]
     assert peak and peak[0].endswith(" mm") and "0.00" in peak[0]  # 5 decimals in mm
     assert draw_packing(packing).axes[0].get_xlabel() == "x (µm)"
+
+
+def test_the_z_distribution_is_drawn_as_bars(packing, analyzers):
+    """Z is an integer: one bar per mineral at each Z, no line joining the values."""
+    from matplotlib.container import BarContainer
+
+    coordination = analyzers["coordination"]
+    fig = figures.draw_z_per_mineral(packing, coordination)
+    ax = fig.axes[0]
+    assert not ax.get_lines()
+    bars = [c for c in ax.containers if isinstance(c, BarContainer)]
+    present = np.unique(packing.mineral[coordination.interior])
+    assert len(bars) == len(present)
+    for container in bars:
+        heights = [bar.get_height() for bar in container]
+        assert sum(heights) == pytest.approx(1.0)  # each mineral's fractions
+        left = np.array([bar.get_x() for bar in container])
+        width = container[0].get_width()
+        centres = left + 0.5 * width
+        # each bar sits within its integer's group of width Z_BARS_WIDTH
+        assert np.all(np.abs(centres - np.round(centres)) < 0.5 * figures.Z_BARS_WIDTH)
