@@ -67,7 +67,7 @@ def test_rdf_alone_never_builds_contacts(packing, registry, monkeypatch, tmp_pat
     assert list(done) == ["rdf"]
     assert isinstance(done["rdf"], Rdf)
     files = write_analysis(tmp_path, packing, done, figures=False)
-    assert sorted(files.tables) == ["rdf_far", "rdf_near"]
+    assert sorted(files.tables) == ["rdf_far", "rdf_far_pairs", "rdf_near", "rdf_near_pairs"]
     assert not (tmp_path / "contacts.csv").exists()
     assert files.summary["tol"] is None
 
@@ -240,7 +240,8 @@ def test_csv_tables_have_a_header_and_numeric_columns(written, packing):
         "particles": ["particle", "mineral", "x", "y", "radius", "interior", "z"],
         "z_tol": ["tol", "z_domain", "z_interior"],
         "network": ["i", "j", "area"],
-        "rdf_near": ["r", "total", "pyroxene-pyroxene"],
+        "rdf_near": ["r", "total"],
+        "rdf_near_pairs": ["mineral_a", "mineral_b", "r_lo", "r_hi", "r", "g"],
     }
     for table, columns in expected.items():
         path = written.tables[table]

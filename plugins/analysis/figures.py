@@ -28,6 +28,7 @@ small; axes and text stay vector.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -53,10 +54,17 @@ from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
-from regopack.plugins.analysis.rdf_peak import count_bins, merge_bins
+from regopack.plugins.analysis.rdf_peak import BinnedCurve, count_bins, merge_bins
 from regopack.units import decimals, length_scale, length_unit
 
-__all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
+__all__ = [
+    "CAPTIONS",
+    "PALETTE",
+    "draw_binned",
+    "figures_for",
+    "legend_entries",
+    "mineral_colours",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -101,6 +109,9 @@ _AC = r"$A_\mathrm{c}$"
 
 TOTAL = "#000000"
 """Colour of whole-packing curves (all minerals together)."""
+
+NOTE_WIDTH = 36
+"""Characters per line of the notes written inside a panel."""
 
 Z_BARS_WIDTH = 0.8
 """Width, in units of Z, of the group of bars (one per mineral) at each value of Z."""
@@ -653,6 +664,48 @@ def mineral_centred_rdf(
     return out
 
 
+def draw_binned(ax: Axes, curve: BinnedCurve, step: float, **kwargs: Any) -> bool:
+    """Draw merged bins as steps over their extent, bins of the fine width ``step`` as a line.
+
+    A curve of a single bin has no shape to show and is not drawn (the
+    return value is then false). ``kwargs`` go to
+    :meth:`~matplotlib.axes.Axes.stairs` or :meth:`~matplotlib.axes.Axes.plot`.
+    """
+    if curve.g.size < 2 or not np.isfinite(curve.g).any():
+        return False
+    if curve.widest > 1.5 * step:
+        ax.stairs(curve.g, curve.edges, baseline=None, **kwargs)
+    else:
+        ax.plot(0.5 * (curve.r_lo + curve.r_hi), curve.g, **kwargs)
+    return True
+
+
+def note_single_bins(ax: Axes, names: Sequence[str]) -> None:
+    """Name, in a corner of ``ax``, the curves left out because their bins merged into one."""
+    if names:
+        ax.text(
+            0.99,
+            0.98,
+            textwrap.fill("too few pairs for a curve: " + ", ".join(names), NOTE_WIDTH),
+            transform=ax.transAxes,
+            ha="right",
+            va="top",
+            fontsize=6,
+            color="#555555",
+        )
+
+
+def legend_entries(axes: Sequence[Axes], order: Sequence[str]) -> tuple[list[Any], list[str]]:
+    """Collect the handles and labels of all ``axes``, each label once, in the given order."""
+    entries: dict[str, Any] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+    labels = [label for label in order if label in entries]
+    labels += [label for label in entries if label not in labels]
+    return [entries[label] for label in labels], labels
+
+
 def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
     """Fig. 16: g(r) of all centres, and around the particles of each mineral; near and far."""
     from regopack.plugins.analysis.common import interior_mask
@@ -673,23 +726,21 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             continue
         r = curves["r"]
         step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        edges = rdf.edges[key]
         fine = rdf.curves_fine[key]
         per = mineral_centred_rdf(fine, names, counts) if len(names) > 1 else {}
-        shell = np.pi * ((r + 0.5 * step) ** 2 - (r - 0.5 * step) ** 2)
+        shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
         n_all = max(float(sum(counts)), 1.0)
+        single = []
         for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
             if name in per:
                 # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
                 per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
                 factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
-                ax.plot(
-                    r,
-                    merge_bins(per[name], shell, factor),
-                    color=colour,
-                    linewidth=0.8,
-                    label=name,
-                    drawstyle="steps-mid" if factor > 1 else "default",
-                )
+                merged = merge_bins(edges, per[name], shell, factor)
+                if not draw_binned(ax, merged, step, color=colour, linewidth=0.8, label=name):
+                    single.append(name)
+        note_single_bins(ax, single)
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
         peak = rdf.peak if key == "near" else None
@@ -707,14 +758,15 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
         ax.set_title(f"{title}, bins of {step:g} {unit}")
-    handles, labels = axes[0].get_legend_handles_labels()
+    handles, labels = legend_entries(axes, [*names, "all particles"])
     if handles:
         fig.legend(
             handles,
             labels,
             loc="outside lower center",
             ncol=min(len(handles), 7),
-            title="centres around the particles of (a rare mineral's bins merged, as steps)",
+            title="centres around the particles of (a rare mineral's bins merged: steps over "
+            "the merged bins)",
             title_fontsize=7,
         )
     return fig

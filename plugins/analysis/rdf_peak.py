@@ -15,20 +15,34 @@ fill with E pairs, about g E pairs, so its value is uncertain by
   maxima;
 - a pair of rare minerals has few pairs per bin. :func:`count_bins` merges
   adjacent bins until an uncorrelated pattern would put ``min_count`` pairs into
-  each one at a reference distance.
+  each one at a reference distance, and :func:`merge_bins` gives the merged
+  bins with their own edges.
 """
 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
-__all__ = ["PeakFit", "count_bins", "first_peak", "merge_bins"]
+__all__ = [
+    "BinnedCurve",
+    "PeakFit",
+    "count_bins",
+    "first_peak",
+    "merge_bins",
+    "merged_width",
+    "pair_curves",
+    "pair_table",
+    "rdf_tables",
+]
 
 TOP_SHARE = 0.5
 """Bins whose smoothed g is above this share of the way from 1 to the maximum are fitted."""
@@ -227,29 +241,178 @@ def count_bins(expected_per_bin: float, min_count: float, bins: int) -> int:
     return int(min(bins, math.ceil(min_count / expected_per_bin)))
 
 
-def merge_bins(g: FloatArray, shell: FloatArray, factor: int) -> FloatArray:
-    """g(r) over groups of ``factor`` bins, repeated over each group's bins.
+@dataclass(frozen=True)
+class BinnedCurve:
+    """g(r) over bins ``[r_lo, r_hi)`` of their own widths: a mineral pair's merged bins.
 
-    The merged value is the shell-area-weighted mean of the group (what the
-    estimator gives for the merged bin); a last group shorter than
-    ``factor`` joins the one before it. NaN bins are left out of a group's mean.
+    Attributes
+    ----------
+    r_lo, r_hi
+        Edges of each bin (length unit).
+    g
+        g(r) over each bin (NaN where the pair has no pairs to normalise by).
+    """
+
+    r_lo: FloatArray
+    r_hi: FloatArray
+    g: FloatArray
+
+    @property
+    def edges(self) -> FloatArray:
+        """The ``len(g) + 1`` edges of the bins, as ``Axes.stairs`` takes them."""
+        return np.append(self.r_lo, self.r_hi[-1:])
+
+    @property
+    def widest(self) -> float:
+        """Width of the widest bin (0 without bins)."""
+        return float(np.max(self.r_hi - self.r_lo)) if self.g.size else 0.0
+
+
+def merged_width(curve: BinnedCurve, width: float) -> float:
+    """Width of the widest bin of ``curve``, a whole number of fine bins of ``width``.
 
     Examples
     --------
-    >>> merge_bins(np.array([1.0, 3.0, 2.0, 2.0, 5.0]), np.ones(5), 2).tolist()
-    [2.0, 2.0, 3.0, 3.0, 3.0]
+    >>> merged_width(merge_bins(0.1 * np.arange(11), np.ones(10), np.ones(10), 3), 0.1)
+    0.4
     """
-    g = np.asarray(g, dtype=np.float64)
-    if factor <= 1 or g.size == 0:
-        return g.copy()
-    groups = np.arange(g.size) // factor
-    last = groups[-1]
-    if g.size % factor and last > 0:
+    return float(width * round(curve.widest / width))
+
+
+def _groups(bins: int, factor: int) -> IntArray:
+    """Group ``bins`` bins ``factor`` at a time; a short last group joins the one before."""
+    groups = np.arange(bins, dtype=np.int64) // max(factor, 1)
+    last = int(groups[-1]) if bins else 0
+    if factor > 1 and bins % factor and last > 0:
         groups[groups == last] = last - 1
+    return groups
+
+
+def merge_bins(edges: FloatArray, g: FloatArray, shell: FloatArray, factor: int) -> BinnedCurve:
+    """Merge g(r) over groups of ``factor`` adjacent bins, each group one bin with its edges.
+
+    The merged value is the shell-weighted mean of the group (what the
+    estimator gives for the merged bin; ``shell`` is the area or volume of
+    each fine bin's shell); a last group shorter than ``factor`` joins the
+    one before it. NaN bins are left out of a group's mean.
+
+    Examples
+    --------
+    >>> m = merge_bins(np.arange(6.0), np.array([1.0, 3.0, 2.0, 2.0, 5.0]), np.ones(5), 2)
+    >>> m.r_lo.tolist(), m.r_hi.tolist(), m.g.tolist()
+    ([0.0, 2.0], [2.0, 5.0], [2.0, 3.0])
+    """
+    edges = np.asarray(edges, dtype=np.float64)
+    g = np.asarray(g, dtype=np.float64)
+    if factor <= 1:
+        return BinnedCurve(edges[:-1].copy(), edges[1:].copy(), g.copy())
+    groups = _groups(g.size, factor)
+    first = np.flatnonzero(np.diff(groups, prepend=-1))
+    last = np.append(first[1:], g.size) - 1
     ok = np.isfinite(g)
     weight = np.where(ok, shell, 0.0)
     top = np.bincount(groups, weights=np.where(ok, g, 0.0) * weight)
     bottom = np.bincount(groups, weights=weight)
     with np.errstate(invalid="ignore", divide="ignore"):
         merged = np.where(bottom > 0, top / np.where(bottom > 0, bottom, 1.0), np.nan)
-    return np.asarray(merged[groups], dtype=np.float64)
+    return BinnedCurve(edges[first], edges[last + 1], np.asarray(merged, dtype=np.float64))
+
+
+def pair_curves(
+    per: FloatArray,
+    names: Sequence[str],
+    counts: Sequence[float],
+    edges: FloatArray,
+    shell: FloatArray,
+    pairs_per_bin: float,
+    min_count: float,
+) -> tuple[dict[str, BinnedCurve], dict[str, tuple[int, int]]]:
+    """Every mineral pair's curve over bins merged until each expects ``min_count`` pairs.
+
+    Parameters
+    ----------
+    per
+        ``(k, k, bins)`` g(r) of every pair of kinds, at the fine bins.
+    names, counts
+        Name and number of points of each kind.
+    edges, shell
+        The fine bins' edges and shell measures (area in 2D, volume in 3D).
+    pairs_per_bin
+        Pairs an uncorrelated pattern puts into one fine bin in the middle of
+        the range, per pair of points (the shell there over the window's measure).
+    min_count
+        Pairs each merged bin should expect (:func:`count_bins`).
+
+    Returns
+    -------
+    curves, kinds
+        ``"A-B"`` → its :class:`BinnedCurve`, and ``"A-B"`` → ``(a, b)``, the
+        indices of its kinds, in scene order (``a <= b``).
+    """
+    curves: dict[str, BinnedCurve] = {}
+    kinds: dict[str, tuple[int, int]] = {}
+    bins = per.shape[-1]
+    for p, name_a in enumerate(names):
+        for q in range(p, len(names)):
+            cp, cq = float(counts[p]), float(counts[q])
+            norm = cp * (cp - 1.0) / 2.0 if p == q else cp * cq
+            factor = count_bins(norm * pairs_per_bin, min_count, bins)
+            key = f"{name_a}-{names[q]}"
+            curves[key] = merge_bins(edges, per[p, q], shell, factor)
+            kinds[key] = (p, q)
+    return curves, kinds
+
+
+def pair_table(
+    curves: Mapping[str, BinnedCurve], kinds: Mapping[str, tuple[int, int]]
+) -> dict[str, NDArray[Any]]:
+    """One row per merged bin of every pair curve: the long table ``rdf_<field>_pairs``.
+
+    Columns ``mineral_a``, ``mineral_b`` (indices in scene order), ``r_lo``,
+    ``r_hi`` (the bin's edges), ``r`` (its middle) and ``g``.
+
+    Examples
+    --------
+    >>> c = BinnedCurve(np.array([0.0, 2.0]), np.array([2.0, 5.0]), np.array([0.1, 1.2]))
+    >>> t = pair_table({"a-b": c}, {"a-b": (0, 1)})
+    >>> list(t), t["r"].tolist()
+    (['mineral_a', 'mineral_b', 'r_lo', 'r_hi', 'r', 'g'], [1.0, 3.5])
+    """
+    parts: dict[str, list[NDArray[Any]]] = {k: [] for k in ("a", "b", "lo", "hi", "g")}
+    for key, curve in curves.items():
+        a, b = kinds[key]
+        parts["a"].append(np.full(curve.g.size, a, dtype=np.int64))
+        parts["b"].append(np.full(curve.g.size, b, dtype=np.int64))
+        parts["lo"].append(curve.r_lo)
+        parts["hi"].append(curve.r_hi)
+        parts["g"].append(curve.g)
+    cols = {
+        k: np.concatenate(v) if v else np.zeros(0, dtype=np.int64 if k in "ab" else np.float64)
+        for k, v in parts.items()
+    }
+    return {
+        "mineral_a": cols["a"],
+        "mineral_b": cols["b"],
+        "r_lo": cols["lo"],
+        "r_hi": cols["hi"],
+        "r": 0.5 * (cols["lo"] + cols["hi"]),
+        "g": cols["g"],
+    }
+
+
+def rdf_tables(
+    curves: Mapping[str, Mapping[str, FloatArray]],
+    merged: Mapping[str, Mapping[str, BinnedCurve]],
+    kinds: Mapping[str, tuple[int, int]],
+) -> dict[str, dict[str, Any]]:
+    """Tables of the rdf analyzers: ``rdf_<field>`` (``r``, ``total``) and ``rdf_<field>_pairs``.
+
+    The pair table (:func:`pair_table`) follows its field's table, when the
+    field has pair curves.
+    """
+    out: dict[str, dict[str, Any]] = {}
+    for name, columns in curves.items():
+        out[f"rdf_{name}"] = dict(columns)
+        if merged.get(name):
+            out[f"rdf_{name}_pairs"] = pair_table(merged[name], kinds)
+    return out

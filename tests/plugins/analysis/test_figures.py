@@ -216,3 +216,21 @@ def test_the_z_distribution_is_drawn_as_bars(packing, analyzers):
         centres = left + 0.5 * width
         # each bar sits within its integer's group of width Z_BARS_WIDTH
         assert np.all(np.abs(centres - np.round(centres)) < 0.5 * figures.Z_BARS_WIDTH)
+
+
+def test_merged_curves_are_drawn_as_steps_over_their_bins(packing, analyzers):
+    """A rare mineral's curve is one step per merged bin, from its lower edge to its upper one."""
+    from matplotlib.patches import StepPatch
+
+    fig = figures.draw_rdf(packing, analyzers["rdf"])
+    near = fig.axes[0]
+    steps = [p for p in near.patches if isinstance(p, StepPatch)]
+    assert steps  # the packing's rare minerals
+    for step in steps:
+        edges = step.get_data().edges
+        assert edges[0] == 0.0 and edges[-1] == pytest.approx(10.0)
+        assert np.all(np.diff(edges) > 0.15)  # merged: wider than the 0.1 µm bins
+    # the total and the common minerals keep the fine bins, as lines
+    assert [line.get_drawstyle() for line in near.get_lines()] == ["default"] * len(
+        near.get_lines()
+    )
