@@ -287,6 +287,13 @@ def test_main_numbers_skip_what_was_not_run():
     assert dict(main_numbers({"tol": None, "rdf": peak}))["first g(r) peak"] == "4.43 ± 0.23 µm"
 
 
+def test_main_numbers_give_a_plateau_where_g_has_no_distinct_peak():
+    """A top that is no peak is reported as the range it spans, without a position."""
+    top = {"first_peak_r": None, "first_peak_r_err": None, "first_plateau": [3.85, 5.35]}
+    row = dict(main_numbers({"tol": None, "rdf": top}))["first g(r) peak"]
+    assert row == "no distinct peak (plateau 3.85–5.35 µm)"
+
+
 def test_run_scene_writes_the_analysis_beside_the_packing(registry, tmp_path):
     scene = resolve_scene(
         load_scene("small", ["count=80", 'outputs.analyses=["coordination"]']), registry

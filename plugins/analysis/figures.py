@@ -54,7 +54,7 @@ from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
-from regopack.plugins.analysis.rdf_peak import BinnedCurve, count_bins, merge_bins
+from regopack.plugins.analysis.rdf_peak import BinnedCurve, PeakFit, count_bins, merge_bins
 from regopack.units import decimals, length_scale, length_unit
 
 __all__ = [
@@ -63,6 +63,7 @@ __all__ = [
     "draw_binned",
     "figures_for",
     "legend_entries",
+    "mark_first_peak",
     "mineral_colours",
 ]
 
@@ -706,6 +707,24 @@ def legend_entries(axes: Sequence[Axes], order: Sequence[str]) -> tuple[list[Any
     return [entries[label] for label in labels], labels
 
 
+def mark_first_peak(ax: Axes, peak: PeakFit | None, unit: str, places: int) -> None:
+    """Mark the first peak with its ± 1 σ band, or the plateau when the top is no distinct peak."""
+    if peak is None:
+        return
+    if peak.distinct:
+        ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
+        ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
+        x = peak.r
+        text = f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}"
+    else:
+        ax.axvspan(peak.r_lo, peak.r_hi, color="#dddddd", alpha=0.7, lw=0)
+        x = peak.r_lo
+        text = (
+            f" no distinct first peak: plateau {peak.r_lo:.{places}f}–{peak.r_hi:.{places}f} {unit}"
+        )
+    ax.text(x, 0.04, text, transform=ax.get_xaxis_transform(), fontsize=6.5)
+
+
 def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
     """Fig. 16: g(r) of all centres, and around the particles of each mineral; near and far."""
     from regopack.plugins.analysis.common import interior_mask
@@ -743,17 +762,7 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
         note_single_bins(ax, single)
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        peak = rdf.peak if key == "near" else None
-        if peak is not None and np.isfinite(peak.r_err):
-            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
-            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
-            ax.text(
-                peak.r,
-                0.04,
-                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
-                transform=ax.get_xaxis_transform(),
-                fontsize=6.5,
-            )
+        mark_first_peak(ax, rdf.peak if key == "near" else None, unit, places)
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")

@@ -34,6 +34,7 @@ from regopack.plugins.analysis.figures import (
     draw_z_per_mineral,
     draw_z_vs_tol,
     legend_entries,
+    mark_first_peak,
     note_single_bins,
 )
 from regopack.plugins.analysis.homogeneity3d import Homogeneity3D
@@ -140,17 +141,7 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
         note_single_bins(ax, single)
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        peak = rdf.peak if key == "near" else None
-        if peak is not None and np.isfinite(peak.r_err):
-            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
-            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
-            ax.text(
-                peak.r,
-                0.04,
-                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
-                transform=ax.get_xaxis_transform(),
-                fontsize=6.5,
-            )
+        mark_first_peak(ax, rdf.peak if key == "near" else None, unit, places)
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")

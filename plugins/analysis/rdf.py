@@ -16,8 +16,9 @@ Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
 (``N_A (N_A - 1)`` when ``A = B``); a pair's bins are merged until each holds
 enough pairs (:func:`regopack.plugins.analysis.rdf_peak.count_bins`), and its
 curve is tabled over its merged bins, each with its own edges ``r_lo``,
-``r_hi`` (table ``rdf_<field>_pairs``). The first peak of the near-field
-curve is fitted, with its standard error
+``r_hi`` (table ``rdf_<field>_pairs``). The top of the near-field curve is
+fitted, and reported as the first peak, with its standard error, only when it
+is a distinct peak; otherwise as a plateau
 (:func:`regopack.plugins.analysis.rdf_peak.first_peak`).
 """
 
@@ -48,6 +49,7 @@ from regopack.plugins.analysis.rdf_peak import (
     first_peak,
     merged_width,
     pair_curves,
+    peak_results,
     rdf_tables,
 )
 
@@ -418,12 +420,8 @@ class Rdf(Analyzer):
             "n_points": int(sel.sum()),
             "window_kind": w.kind,
             "window": [a, b],
-            "first_peak_r": None if peak is None else peak.r,
-            "first_peak_r_err": None if peak is None else peak.r_err,
-            "first_peak_g": None if peak is None else peak.g,
-            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
+            **peak_results(peak),
             "first_peak_highest_bin_r": None if peak is None else peak.highest_bin_r,
-            "first_peak_fitted": None if peak is None else peak.fitted,
             "pair_bins": pair_bins,
             "far_mean": float(np.nanmean(far["total"])) if far is not None else None,
             "notes": notes,
@@ -431,7 +429,7 @@ class Rdf(Analyzer):
         return self
 
     def results(self) -> dict[str, Any]:
-        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
+        """Scalars: the first peak (or plateau), far-field mean of g, points used, bin widths."""
         if self._results is None:
             raise RuntimeError("call compute() first")
         return dict(self._results)

@@ -12,7 +12,8 @@ correction, up to half the shortest side.
 weighted count of pairs in the bin and ``V_shell = 4/3 pi (r_2^3 - r_1^3)``;
 per mineral pair ``(A, B)`` the count of pairs is ``N_A N_B`` (``N_A (N_A - 1) / 2``
 when ``A = B``), and a pair's bins are merged until each expects enough pairs,
-and tabled with their own edges, as in 2D.
+and tabled with their own edges, as in 2D; the first peak is reported only
+when the top of the near-field curve is a distinct peak, as in 2D.
 """
 
 from __future__ import annotations
@@ -41,6 +42,7 @@ from regopack.plugins.analysis.rdf_peak import (
     first_peak,
     merged_width,
     pair_curves,
+    peak_results,
     rdf_tables,
 )
 
@@ -306,11 +308,7 @@ class Rdf3D(Analyzer):
             "n_points": int(n_pts),
             "window_kind": w.kind,
             "window": [float(s) for s in size],
-            "first_peak_r": None if peak is None else peak.r,
-            "first_peak_r_err": None if peak is None else peak.r_err,
-            "first_peak_g": None if peak is None else peak.g,
-            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
-            "first_peak_fitted": None if peak is None else peak.fitted,
+            **peak_results(peak),
             "pair_bins": pair_bins,
             "far_mean": far_mean,
             "notes": notes,
@@ -318,7 +316,7 @@ class Rdf3D(Analyzer):
         return self
 
     def results(self) -> dict[str, Any]:
-        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
+        """Scalars: the first peak (or plateau), far-field mean of g, points used, bin widths."""
         if self._results is None:
             raise RuntimeError("call compute() first")
         return dict(self._results)

@@ -2,7 +2,7 @@
 
 A histogram estimate of g(r) has, in a bin that an uncorrelated pattern would
 fill with E pairs, about g E pairs, so its value is uncertain by
-``sqrt(g / E)`` (Poisson). Two consequences:
+``sqrt(g / E)`` (Poisson). Three consequences:
 
 - the highest bin is a noisy estimate of the peak's position.
   :func:`first_peak` fits a parabola, by weighted least squares, to the bins at
@@ -13,6 +13,27 @@ fill with E pairs, about g E pairs, so its value is uncertain by
   than the noise) and the spread of the peaks fitted to Poisson resamples of
   the curve, which also covers a fitted window that jumps between competing
   maxima;
+- a top is not always a peak: g(r) may rise to a plateau, or to a broad hump
+  with a flat top, where the vertex of a parabola is a position the curve
+  does not single out (the vertex then sits between the hump's shoulders,
+  as precisely placed as they are, whatever the top looks like). The top is
+  a *distinct* peak only when it both stands out and is rounded:
+
+  - its *contrast*, the drop from the fitted maximum to the smoothed curve
+    at the first bin outside the fitted window, in units of the noise of the
+    difference ``sqrt(err_top^2 + g / E)`` (the standard error of the fitted
+    height and the Poisson noise of that bin), is at least
+    :data:`DISTINCT_CONTRAST` on both sides; a window that reaches an end of
+    the range has no contrast;
+  - its *roundness*, the drop of the smoothed curve from the vertex to
+    half-way to an edge of the window, as a share of its drop from the
+    vertex to that edge (the outermost fitted bin), is at least
+    :data:`MIN_ROUNDNESS` on both sides: a parabola's is a quarter, a
+    Gaussian's about a third, a flat top's about 0, however well it is
+    sampled.
+
+  Without a distinct peak the fitted window (its bin centres ``r_lo`` to
+  ``r_hi``) is reported as the plateau;
 - a pair of rare minerals has few pairs per bin. :func:`count_bins` merges
   adjacent bins until an uncorrelated pattern would put ``min_count`` pairs into
   each one at a reference distance, and :func:`merge_bins` gives the merged
@@ -24,7 +45,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,6 +54,8 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 __all__ = [
+    "DISTINCT_CONTRAST",
+    "MIN_ROUNDNESS",
     "BinnedCurve",
     "PeakFit",
     "count_bins",
@@ -41,6 +64,7 @@ __all__ = [
     "merged_width",
     "pair_curves",
     "pair_table",
+    "peak_results",
     "rdf_tables",
 ]
 
@@ -59,24 +83,45 @@ RESAMPLES = 200
 RESAMPLE_SEED = 20260612
 """Seed of the resampling generator: the same packing always reports the same error."""
 
+DISTINCT_CONTRAST = 3.0
+"""A distinct peak stands this many noise units above the curve just outside its fitted
+window, on both sides (see the module's description)."""
+
+MIN_ROUNDNESS = 0.125
+"""A distinct peak's curve has fallen, half-way to either edge of the fitted window, by at
+least this share of its fall at that edge: half a parabola's (a quarter)."""
+
 
 @dataclass(frozen=True)
 class PeakFit:
-    """The first peak of g(r).
+    """The top of g(r): the first peak, when it is a distinct one.
 
     Attributes
     ----------
     r, r_err
-        Position of the peak and its standard error (length unit).
+        Position of the fitted maximum and its standard error (length unit);
+        a peak's position only when :attr:`distinct`.
     g
-        Height of the fitted parabola at ``r``.
+        Height of the fitted parabola at ``r`` (of the smoothed curve's highest
+        bin when nothing was fitted).
     r_lo, r_hi
-        Range of the bin centres that were fitted.
+        Range of the bin centres that were fitted: the top of the curve, and
+        the extent of the plateau when the top is not a distinct peak.
     highest_bin_r
         Centre of the highest bin (the unfitted estimate).
     fitted
         False when no parabola could be fitted and ``r`` is the smoothed
         curve's highest bin.
+    g_err
+        Standard error of ``g`` (NaN when nothing was fitted).
+    contrast
+        How far the top stands above the smoothed curve just outside the
+        fitted window, in noise units, on the side where it stands lower
+        (NaN when nothing was fitted or the window reaches an end of the range).
+    roundness
+        How far the smoothed curve has fallen half-way from the top to an
+        edge of the window, as a share of its fall at that edge (the smaller
+        of the two sides): a quarter for a parabola, 0 for a flat top.
     """
 
     r: float
@@ -86,6 +131,28 @@ class PeakFit:
     r_hi: float
     highest_bin_r: float
     fitted: bool = True
+    g_err: float = math.nan
+    contrast: float = math.nan
+    roundness: float = math.nan
+
+    @property
+    def distinct(self) -> bool:
+        """Whether the top is a peak: fitted, standing out and rounded (see the module)."""
+        return bool(
+            self.fitted and self.contrast >= DISTINCT_CONTRAST and self.roundness >= MIN_ROUNDNESS
+        )
+
+
+class _Top(NamedTuple):
+    """A fitted top: position, its error, height, its error, window (bin indices), fitted."""
+
+    r: float
+    err: float
+    g: float
+    g_err: float
+    lo: int
+    hi: int
+    fitted: bool
 
 
 def _smooth(g: FloatArray) -> FloatArray:
@@ -102,33 +169,40 @@ def _smooth(g: FloatArray) -> FloatArray:
     return np.asarray(savgol_filter(g, window, 2, mode="interp", axis=-1), dtype=np.float64)
 
 
+def _window(smooth: FloatArray, top: int) -> tuple[int, int]:
+    """Bins about ``top`` where the smoothed g is above :data:`TOP_SHARE` of the way from 1."""
+    level = smooth[top] - (1.0 - TOP_SHARE) * (smooth[top] - min(1.0, smooth[top]))
+    lo = top
+    while lo > 0 and smooth[lo - 1] >= level:
+        lo -= 1
+    hi = top
+    while hi < smooth.size - 1 and smooth[hi + 1] >= level:
+        hi += 1
+    while hi - lo + 1 < MIN_FIT_BINS:
+        lo, hi = (lo - 1, hi) if lo > 0 else (lo, hi + 1)
+    return lo, hi
+
+
 def _fit(
     r: FloatArray,
     g: FloatArray,
     e: FloatArray,
     smooth: FloatArray | None = None,
     position_only: bool = False,
-) -> tuple[float, float, float, int, int, bool]:
-    """Fit the top of the highest peak: ``(r, error, g, lo, hi, fitted)`` (bin indices lo, hi).
+) -> _Top:
+    """Fit the top of the highest peak (bin indices ``lo``, ``hi`` of the fitted window).
 
     ``smooth`` is ``g`` smoothed, when already known; with ``position_only``
-    the error is not computed (returned as NaN).
+    the errors and the height are not computed (returned as NaN).
     """
     if smooth is None:
         smooth = _smooth(g)
     top = int(np.argmax(smooth))
+    nan = math.nan
     if r.size < MIN_FIT_BINS:
         half = 0.5 * float(r[-1] - r[0]) if r.size > 1 else 0.0
-        return float(r[top]), half, float(smooth[top]), 0, r.size - 1, False
-    level = smooth[top] - (1.0 - TOP_SHARE) * (smooth[top] - min(1.0, smooth[top]))
-    lo = top
-    while lo > 0 and smooth[lo - 1] >= level:
-        lo -= 1
-    hi = top
-    while hi < r.size - 1 and smooth[hi + 1] >= level:
-        hi += 1
-    while hi - lo + 1 < MIN_FIT_BINS:
-        lo, hi = (lo - 1, hi) if lo > 0 else (lo, hi + 1)
+        return _Top(float(r[top]), half, float(smooth[top]), nan, 0, r.size - 1, False)
+    lo, hi = _window(smooth, top)
     x = r[lo : hi + 1] - r[top]
     y = g[lo : hi + 1]
     # Poisson error of each bin, from the smoothed g so that no bin gets zero weight
@@ -137,13 +211,11 @@ def _fit(
     coef, *_ = np.linalg.lstsq(design, y / sigma, rcond=None)
     c0, c1, c2 = (float(c) for c in coef)
     half = 0.5 * float(r[hi] - r[lo])
-    if not c2 < 0:
-        return float(r[top]), half, float(smooth[top]), lo, hi, False
-    vertex = -c1 / (2.0 * c2)
+    vertex = -c1 / (2.0 * c2) if c2 < 0 else nan
     if not float(x[0]) <= vertex <= float(x[-1]):
-        return float(r[top]), half, float(smooth[top]), lo, hi, False
+        return _Top(float(r[top]), half, float(smooth[top]), nan, lo, hi, False)
     if position_only:
-        return float(r[top] + vertex), math.nan, math.nan, lo, hi, True
+        return _Top(float(r[top] + vertex), nan, nan, nan, lo, hi, True)
     cov = np.linalg.pinv(design.T @ design)
     dof = x.size - 3
     if dof > 0:
@@ -151,13 +223,52 @@ def _fit(
         cov = cov * max(1.0, chi2)
     jac = np.array([0.0, -1.0 / (2.0 * c2), c1 / (2.0 * c2 * c2)])
     err = float(np.sqrt(max(float(jac @ cov @ jac), 0.0)))
-    return float(r[top] + vertex), err, c0 + c1 * vertex + c2 * vertex * vertex, lo, hi, True
+    at = np.array([1.0, vertex, vertex * vertex])  # the height's gradient (flat in the vertex)
+    g_err = float(np.sqrt(max(float(at @ cov @ at), 0.0)))
+    height = c0 + c1 * vertex + c2 * vertex * vertex
+    return _Top(float(r[top] + vertex), err, height, g_err, lo, hi, True)
+
+
+def _shape(top: _Top, r: FloatArray, smooth: FloatArray, e: FloatArray) -> tuple[float, float]:
+    """Contrast and roundness of a fitted top (see the module); NaN for a top not fitted.
+
+    The contrast is the smaller drop, in noise units, from the fitted maximum
+    to the smoothed curve at the first bin outside the window; the roundness
+    the smaller ratio of the smoothed curve's drop from the vertex to half-way
+    to an edge of the window to its drop to that edge (the outermost fitted bin).
+    """
+    nan = math.nan
+    if not top.fitted or not math.isfinite(top.g_err):
+        return nan, nan
+    contrast, roundness = math.inf, math.inf
+    peak = float(np.interp(top.r, r, smooth))  # the curve's top, not the parabola's
+    for out, edge in ((top.lo - 1, top.lo), (top.hi + 1, top.hi)):
+        if not 0 <= out < smooth.size:
+            return nan, nan
+        noise = math.sqrt(max(float(smooth[out]), 1.0 / float(e[out])) / float(e[out]))
+        contrast = min(contrast, (top.g - float(smooth[out])) / math.hypot(top.g_err, noise))
+        half = float(np.interp(0.5 * (top.r + float(r[edge])), r, smooth))
+        fall = peak - float(smooth[edge])
+        roundness = min(roundness, (peak - half) / fall if fall > 0 else nan)
+    return contrast, roundness
+
+
+def _resampled_error(r: FloatArray, g: FloatArray, e: FloatArray, resamples: int) -> float:
+    """Spread of the tops fitted to Poisson resamples of the curve (a fixed seed)."""
+    rng = np.random.default_rng(RESAMPLE_SEED)
+    counts = g * e
+    samples = np.stack([rng.poisson(counts) / e for _ in range(int(resamples))])
+    smoothed = _smooth(samples)
+    found = [
+        _fit(r, samples[k], e, smoothed[k], position_only=True).r for k in range(samples.shape[0])
+    ]
+    return float(np.std(found, ddof=1))
 
 
 def first_peak(
     r: FloatArray, g: FloatArray, expected: FloatArray, resamples: int = RESAMPLES
 ) -> PeakFit | None:
-    """Fit the highest peak of ``g(r)`` (see the module's description).
+    """Fit the top of ``g(r)`` and tell whether it is a distinct peak (see the module).
 
     Parameters
     ----------
@@ -177,21 +288,29 @@ def first_peak(
     PeakFit or None
         ``None`` when no bin is finite with pairs expected, or when g is zero
         in every bin (no pair at all). With fewer than five such bins, or when
-        the parabola has no maximum inside the fitted bins, the peak is the
-        smoothed curve's highest bin, ``fitted`` is false and the error is at
-        least half the fitted range.
+        the parabola has no maximum inside the fitted bins, the top is the
+        smoothed curve's highest bin, ``fitted`` is false, the error is at
+        least half the fitted range and the top is not a distinct peak.
 
     Examples
     --------
-    A peak at 3.27 between bins of 0.1, with 300 r pairs per bin expected:
+    A peak at 3.27 between bins of 0.1, with 3000 r pairs per bin expected:
 
     >>> rng = np.random.default_rng(1)
     >>> r = np.arange(0.05, 10.0, 0.1)
-    >>> expected = 300 * r
+    >>> expected = 3000 * r
     >>> g = rng.poisson((1 + np.exp(-((r - 3.27) ** 2) / 0.5)) * expected) / expected
     >>> fit = first_peak(r, g, expected)
-    >>> abs(fit.r - 3.27) < 2 * fit.r_err < 0.05, round(fit.highest_bin_r, 2), fit.fitted
-    (True, 3.35, True)
+    >>> abs(fit.r - 3.27) < 2 * fit.r_err < 0.05, round(fit.highest_bin_r, 2), fit.distinct
+    (True, 3.25, True)
+
+    A curve that rises to 1.3 and stays there has a top, but no peak; the
+    fitted window is the plateau:
+
+    >>> plateau = np.clip((r - 2.0) / 1.5, 0.0, 1.3)
+    >>> top = first_peak(r, rng.poisson(plateau * expected) / expected, expected)
+    >>> top.distinct, round(top.r_hi, 2)
+    (False, 9.95)
     """
     r = np.asarray(r, dtype=np.float64)
     g = np.asarray(g, dtype=np.float64)
@@ -201,28 +320,25 @@ def first_peak(
         return None
     idx = np.flatnonzero(ok)
     r_ok, g_ok, e_ok = r[idx], g[idx], expected[idx]
-    highest = float(r_ok[int(np.argmax(g_ok))])
-    peak_r, err, peak_g, lo, hi, fitted = _fit(r_ok, g_ok, e_ok)
+    smooth = _smooth(g_ok)
+    top = _fit(r_ok, g_ok, e_ok, smooth)
+    contrast, roundness = _shape(top, r_ok, smooth, e_ok)
+    err = top.err
     if resamples > 0 and r_ok.size >= MIN_FIT_BINS:
         # the error of the parabola alone misses how the fitted window itself
         # moves with the noise (between competing maxima): resample the counts
-        rng = np.random.default_rng(RESAMPLE_SEED)
-        counts = g_ok * e_ok
-        samples = np.stack([rng.poisson(counts) / e_ok for _ in range(int(resamples))])
-        smoothed = _smooth(samples)
-        found = [
-            _fit(r_ok, samples[k], e_ok, smoothed[k], position_only=True)[0]
-            for k in range(samples.shape[0])
-        ]
-        err = max(err, float(np.std(found, ddof=1)))
+        err = max(err, _resampled_error(r_ok, g_ok, e_ok, resamples))
     return PeakFit(
-        float(peak_r),
-        float(err),
-        float(peak_g),
-        float(r_ok[lo]),
-        float(r_ok[hi]),
-        highest,
-        bool(fitted),
+        r=float(top.r),
+        r_err=float(err),
+        g=float(top.g),
+        r_lo=float(r_ok[top.lo]),
+        r_hi=float(r_ok[top.hi]),
+        highest_bin_r=float(r_ok[int(np.argmax(g_ok))]),
+        fitted=bool(top.fitted),
+        g_err=float(top.g_err),
+        contrast=float(contrast),
+        roundness=float(roundness),
     )
 
 
@@ -416,3 +532,38 @@ def rdf_tables(
         if merged.get(name):
             out[f"rdf_{name}_pairs"] = pair_table(merged[name], kinds)
     return out
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def peak_results(peak: PeakFit | None) -> dict[str, Any]:
+    """Return the ``first_peak_*`` results of the rdf analyzers: a position only for a peak.
+
+    Without a distinct peak, ``first_plateau`` gives the extent of the top
+    (the fitted bin centres) and the position and its error are ``None``.
+
+    Examples
+    --------
+    >>> top = PeakFit(4.7, 0.2, 1.26, 3.85, 5.35, 4.25, contrast=2.6)
+    >>> res = peak_results(top)
+    >>> res["first_peak_r"], res["first_peak_distinct"], res["first_plateau"]
+    (None, False, [3.85, 5.35])
+    """
+    if peak is None:
+        keys = ("r", "r_err", "distinct", "contrast", "roundness", "g", "fit_range", "fitted")
+        return {**{f"first_peak_{k}": None for k in keys}, "first_plateau": None}
+    distinct = peak.distinct
+    top = [peak.r_lo, peak.r_hi]
+    return {
+        "first_peak_r": peak.r if distinct else None,
+        "first_peak_r_err": peak.r_err if distinct else None,
+        "first_peak_distinct": distinct,
+        "first_peak_contrast": _finite(peak.contrast),
+        "first_peak_roundness": _finite(peak.roundness),
+        "first_peak_g": peak.g,
+        "first_peak_fit_range": top,
+        "first_plateau": None if distinct else top,
+        "first_peak_fitted": peak.fitted,
+    }

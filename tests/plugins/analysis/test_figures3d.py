@@ -50,3 +50,5 @@ def test_the_3d_rdf_draws_merged_curves_as_steps(packing3d, analysed3d) -> None:
     assert len(steps) == len(merged) > 0
     for step, curve in zip(steps, merged, strict=True):
         np.testing.assert_allclose(step.get_data().edges, curve.edges)
+    texts = " ".join(t.get_text() for t in near.texts)
+    assert "no distinct first peak: plateau" in texts
