@@ -441,13 +441,34 @@ def _either(summary: Mapping[str, Any], name: str) -> Any:
     return value if value is not None else summary.get(f"{name}3d")
 
 
+def _first_peak(rdf: Mapping[str, Any], unit: str) -> str:
+    """Format the first peak of g(r) with two significant digits of its error, or its plateau.
+
+    Examples
+    --------
+    >>> _first_peak({"first_peak_r": 4.434, "first_peak_r_err": 0.2287}, "µm")
+    '4.43 ± 0.23 µm'
+    >>> _first_peak({"first_peak_r": None, "first_plateau": [3.85, 5.35]}, "µm")
+    'no distinct peak (plateau 3.85–5.35 µm)'
+    """
+    peak, err = rdf.get("first_peak_r"), rdf.get("first_peak_r_err")
+    plateau = rdf.get("first_plateau")
+    if peak is None and isinstance(plateau, list) and len(plateau) == 2:
+        return f"no distinct peak (plateau {_fmt(plateau[0])}–{_fmt(plateau[1])} {unit})"
+    if isinstance(peak, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
+        digits = max(0, 1 - math.floor(math.log10(err)))  # two significant digits of err
+        return f"{peak:.{digits}f} ± {err:.{digits}f} {unit}"
+    return f"{_fmt(peak)} {unit}"
+
+
 def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     """``(label, value)`` rows of the headline numbers of ``analysis.json``.
 
     Rows appear for the built-in analyzers that were run: packing density,
     contacts, coordination numbers (overall, interior, per mineral), the first
-    peak of g(r) and the fabric anisotropy (of 2D packings, or of 3D ones
-    from the analyzers whose names end in ``3d``).
+    peak of g(r) (or its plateau, when the top is no distinct peak) and the
+    fabric anisotropy (of 2D packings, or of 3D ones from the analyzers whose
+    names end in ``3d``).
     """
     rows: list[tuple[str, str]] = []
     u = str(summary.get("length_unit") or DEFAULT_LENGTH_UNIT)
@@ -478,12 +499,7 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
             rows.append((f"Z {mineral} (interior)", _fmt(z)))
     rdf = _either(summary, "rdf")
     if isinstance(rdf, dict):
-        peak, err = rdf.get("first_peak_r"), rdf.get("first_peak_r_err")
-        if isinstance(peak, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
-            digits = max(0, 1 - math.floor(math.log10(err)))  # two significant digits of err
-            rows.append(("first g(r) peak", f"{peak:.{digits}f} ± {err:.{digits}f} {u}"))
-        else:
-            rows.append(("first g(r) peak", f"{_fmt(peak)} {u}"))
+        rows.append(("first g(r) peak", _first_peak(rdf, u)))
         rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
     network = _either(summary, "network")
     if isinstance(network, dict):

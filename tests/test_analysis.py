@@ -67,7 +67,7 @@ def test_rdf_alone_never_builds_contacts(packing, registry, monkeypatch, tmp_pat
     assert list(done) == ["rdf"]
     assert isinstance(done["rdf"], Rdf)
     files = write_analysis(tmp_path, packing, done, figures=False)
-    assert sorted(files.tables) == ["rdf_far", "rdf_near"]
+    assert sorted(files.tables) == ["rdf_far", "rdf_far_pairs", "rdf_near", "rdf_near_pairs"]
     assert not (tmp_path / "contacts.csv").exists()
     assert files.summary["tol"] is None
 
@@ -240,7 +240,8 @@ def test_csv_tables_have_a_header_and_numeric_columns(written, packing):
         "particles": ["particle", "mineral", "x", "y", "radius", "interior", "z"],
         "z_tol": ["tol", "z_domain", "z_interior"],
         "network": ["i", "j", "area"],
-        "rdf_near": ["r", "total", "pyroxene-pyroxene"],
+        "rdf_near": ["r", "total"],
+        "rdf_near_pairs": ["mineral_a", "mineral_b", "r_lo", "r_hi", "r", "g"],
     }
     for table, columns in expected.items():
         path = written.tables[table]
@@ -284,6 +285,13 @@ def test_main_numbers_skip_what_was_not_run():
     assert rows == {"first g(r) peak": "4.5 µm", "far-field mean g(r)": "1.1"}
     peak = {"first_peak_r": 4.434, "first_peak_r_err": 0.2287}
     assert dict(main_numbers({"tol": None, "rdf": peak}))["first g(r) peak"] == "4.43 ± 0.23 µm"
+
+
+def test_main_numbers_give_a_plateau_where_g_has_no_distinct_peak():
+    """A top that is no peak is reported as the range it spans, without a position."""
+    top = {"first_peak_r": None, "first_peak_r_err": None, "first_plateau": [3.85, 5.35]}
+    row = dict(main_numbers({"tol": None, "rdf": top}))["first g(r) peak"]
+    assert row == "no distinct peak (plateau 3.85–5.35 µm)"
 
 
 def test_run_scene_writes_the_analysis_beside_the_packing(registry, tmp_path):

@@ -28,6 +28,7 @@ small; axes and text stay vector.
 from __future__ import annotations
 
 import math
+import textwrap
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from pathlib import Path
@@ -53,10 +54,18 @@ from regopack.plugins.analysis.homogeneity import Homogeneity
 from regopack.plugins.analysis.local_fraction import LocalFraction
 from regopack.plugins.analysis.psd import Psd
 from regopack.plugins.analysis.rdf import Rdf
-from regopack.plugins.analysis.rdf_peak import count_bins, merge_bins
+from regopack.plugins.analysis.rdf_peak import BinnedCurve, PeakFit, count_bins, merge_bins
 from regopack.units import decimals, length_scale, length_unit
 
-__all__ = ["CAPTIONS", "PALETTE", "figures_for", "mineral_colours"]
+__all__ = [
+    "CAPTIONS",
+    "PALETTE",
+    "draw_binned",
+    "figures_for",
+    "legend_entries",
+    "mark_first_peak",
+    "mineral_colours",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -101,6 +110,12 @@ _AC = r"$A_\mathrm{c}$"
 
 TOTAL = "#000000"
 """Colour of whole-packing curves (all minerals together)."""
+
+NOTE_WIDTH = 36
+"""Characters per line of the notes written inside a panel."""
+
+Z_BARS_WIDTH = 0.8
+"""Width, in units of Z, of the group of bars (one per mineral) at each value of Z."""
 
 
 # ---------------------------------------------------------------------------
@@ -567,6 +582,8 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
     top = int(np.percentile(z_in, 99.5)) if z_in.size else 0
     ks = np.arange(0, max(top, 1) + 1)
     means, errs = [], []
+    # Z is an integer: one bar per mineral at each Z, side by side
+    bar = Z_BARS_WIDTH / max(len(names), 1)
     for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
         zm = z[interior & (packing.mineral == m)]
         if zm.size == 0:
@@ -574,20 +591,21 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
             errs.append(0.0)
             continue
         p = np.bincount(np.minimum(zm, ks[-1]), minlength=len(ks))[: len(ks)] / zm.size
-        ax.plot(
-            ks,
+        ax.bar(
+            ks + (m - 0.5 * (len(names) - 1)) * bar,
             p,
-            "-o",
+            width=bar,
             color=colour,
             label=f"{name} (n = {zm.size:,})",
-            markeredgecolor="#333333",
-            markeredgewidth=0.3,
+            edgecolor="#333333",
+            linewidth=0.3,
         )
         means.append(float(zm.mean()))
         errs.append(float(zm.std(ddof=1) / np.sqrt(zm.size)) if zm.size > 1 else 0.0)
-    ax.set_xlabel(f"contacts per particle Z (last point: Z ≥ {ks[-1]})")
-    ax.set_ylabel("fraction of the mineral's particles")
+    ax.set_xlim(ks[0] - 0.5, ks[-1] + 0.5)
+    ax.set_xlabel(f"contacts per particle Z (last bars: Z ≥ {ks[-1]})")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+    ax.set_ylabel("fraction of the mineral's particles")
     ax.legend(loc="upper right")
     tol = coordination.results()["tol"]
     ax.set_title(f"distribution of Z, interior particles, tol = {tol:g} {length_unit(packing)}")
@@ -647,6 +665,66 @@ def mineral_centred_rdf(
     return out
 
 
+def draw_binned(ax: Axes, curve: BinnedCurve, step: float, **kwargs: Any) -> bool:
+    """Draw merged bins as steps over their extent, bins of the fine width ``step`` as a line.
+
+    A curve of a single bin has no shape to show and is not drawn (the
+    return value is then false). ``kwargs`` go to
+    :meth:`~matplotlib.axes.Axes.stairs` or :meth:`~matplotlib.axes.Axes.plot`.
+    """
+    if curve.g.size < 2 or not np.isfinite(curve.g).any():
+        return False
+    if curve.widest > 1.5 * step:
+        ax.stairs(curve.g, curve.edges, baseline=None, **kwargs)
+    else:
+        ax.plot(0.5 * (curve.r_lo + curve.r_hi), curve.g, **kwargs)
+    return True
+
+
+def note_single_bins(ax: Axes, names: Sequence[str]) -> None:
+    """Name, in a corner of ``ax``, the curves left out because their bins merged into one."""
+    if names:
+        ax.text(
+            0.99,
+            0.98,
+            textwrap.fill("too few pairs for a curve: " + ", ".join(names), NOTE_WIDTH),
+            transform=ax.transAxes,
+            ha="right",
+            va="top",
+            fontsize=6,
+            color="#555555",
+        )
+
+
+def legend_entries(axes: Sequence[Axes], order: Sequence[str]) -> tuple[list[Any], list[str]]:
+    """Collect the handles and labels of all ``axes``, each label once, in the given order."""
+    entries: dict[str, Any] = {}
+    for ax in axes:
+        for handle, label in zip(*ax.get_legend_handles_labels(), strict=True):
+            entries.setdefault(label, handle)
+    labels = [label for label in order if label in entries]
+    labels += [label for label in entries if label not in labels]
+    return [entries[label] for label in labels], labels
+
+
+def mark_first_peak(ax: Axes, peak: PeakFit | None, unit: str, places: int) -> None:
+    """Mark the first peak with its ± 1 σ band, or the plateau when the top is no distinct peak."""
+    if peak is None:
+        return
+    if peak.distinct:
+        ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
+        ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
+        x = peak.r
+        text = f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}"
+    else:
+        ax.axvspan(peak.r_lo, peak.r_hi, color="#dddddd", alpha=0.7, lw=0)
+        x = peak.r_lo
+        text = (
+            f" no distinct first peak: plateau {peak.r_lo:.{places}f}–{peak.r_hi:.{places}f} {unit}"
+        )
+    ax.text(x, 0.04, text, transform=ax.get_xaxis_transform(), fontsize=6.5)
+
+
 def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
     """Fig. 16: g(r) of all centres, and around the particles of each mineral; near and far."""
     from regopack.plugins.analysis.common import interior_mask
@@ -667,48 +745,37 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
             continue
         r = curves["r"]
         step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        edges = rdf.edges[key]
         fine = rdf.curves_fine[key]
         per = mineral_centred_rdf(fine, names, counts) if len(names) > 1 else {}
-        shell = np.pi * ((r + 0.5 * step) ** 2 - (r - 0.5 * step) ** 2)
+        shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
         n_all = max(float(sum(counts)), 1.0)
+        single = []
         for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
             if name in per:
                 # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
                 per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
                 factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
-                ax.plot(
-                    r,
-                    merge_bins(per[name], shell, factor),
-                    color=colour,
-                    linewidth=0.8,
-                    label=name,
-                    drawstyle="steps-mid" if factor > 1 else "default",
-                )
+                merged = merge_bins(edges, per[name], shell, factor)
+                if not draw_binned(ax, merged, step, color=colour, linewidth=0.8, label=name):
+                    single.append(name)
+        note_single_bins(ax, single)
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        peak = rdf.peak if key == "near" else None
-        if peak is not None and np.isfinite(peak.r_err):
-            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
-            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
-            ax.text(
-                peak.r,
-                0.04,
-                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
-                transform=ax.get_xaxis_transform(),
-                fontsize=6.5,
-            )
+        mark_first_peak(ax, rdf.peak if key == "near" else None, unit, places)
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
         ax.set_title(f"{title}, bins of {step:g} {unit}")
-    handles, labels = axes[0].get_legend_handles_labels()
+    handles, labels = legend_entries(axes, [*names, "all particles"])
     if handles:
         fig.legend(
             handles,
             labels,
             loc="outside lower center",
             ncol=min(len(handles), 7),
-            title="centres around the particles of (a rare mineral's bins merged, as steps)",
+            title="centres around the particles of (a rare mineral's bins merged: steps over "
+            "the merged bins)",
             title_fontsize=7,
         )
     return fig

@@ -30,8 +30,12 @@ from regopack.plugins.analysis.figures import (
     _note,
     _save,
     _style,
+    draw_binned,
     draw_z_per_mineral,
     draw_z_vs_tol,
+    legend_entries,
+    mark_first_peak,
+    note_single_bins,
 )
 from regopack.plugins.analysis.homogeneity3d import Homogeneity3D
 from regopack.plugins.analysis.psd3d import Psd3D
@@ -125,28 +129,24 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
             continue
         r = curves["r"]
         step = float(r[1] - r[0]) if len(r) > 1 else 0.0
+        pairs = rdf.pair_curves.get(key, {})
+        single = []
         for name, colour in zip(names, colours, strict=True):
-            g = curves.get(f"{name}-{name}")
-            if g is not None and np.isfinite(g).any():
-                ax.plot(r, g, color=colour, linewidth=0.8, label=f"{name}–{name}")
+            curve = pairs.get(f"{name}-{name}")
+            label = f"{name}–{name}"
+            if curve is not None and not draw_binned(
+                ax, curve, step, color=colour, linewidth=0.8, label=label
+            ):
+                single.append(label)
+        note_single_bins(ax, single)
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
-        peak = rdf.peak if key == "near" else None
-        if peak is not None and np.isfinite(peak.r_err):
-            ax.axvspan(peak.r - peak.r_err, peak.r + peak.r_err, color="#bbbbbb", alpha=0.5, lw=0)
-            ax.axvline(peak.r, color=TOTAL, linestyle="--", linewidth=0.7)
-            ax.text(
-                peak.r,
-                0.04,
-                f" first peak {peak.r:.{places}f} ± {peak.r_err:.{places}f} {unit}",
-                transform=ax.get_xaxis_transform(),
-                fontsize=6.5,
-            )
+        mark_first_peak(ax, rdf.peak if key == "near" else None, unit, places)
         ax.set_xlim(float(r[0]) - 0.5 * step, float(r[-1]) + 0.5 * step)
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
         ax.set_title(f"{title}, bins of {step:g} {unit}")
-    handles, labels = axes[0].get_legend_handles_labels()
+    handles, labels = legend_entries(axes, [*(f"{n}–{n}" for n in names), "all particles"])
     if handles:
         fig.legend(
             handles,
@@ -155,7 +155,7 @@ def draw_rdf3d(packing: Any, rdf: Rdf3D) -> Figure:
             ncol=min(len(handles), 4),
             title=f"{res['n_points']:,} interior centres; window "
             + " × ".join(f"{s:g}" for s in res["window"])
-            + f" {unit} (a rare mineral's bins merged)",
+            + f" {unit} (a rare mineral's bins merged: steps over the merged bins)",
             title_fontsize=7,
         )
     return fig

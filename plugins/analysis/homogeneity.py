@@ -10,9 +10,21 @@ radius, the weighted least-squares trend of each quantity.
 Sampling errors (standard errors):
 
 - number density ``n / A``: Poisson, ``sqrt(max(n, 1)) / A``;
-- φ ``= sum(a_i) / A`` (``a_i`` the area of particle ``i`` inside the
-  region): compound Poisson, ``sqrt(sum(a_i^2)) / A``, as if the particles
-  were placed independently;
+- φ: from the data, by the scatter of φ between equal parts of the region
+  (:func:`~regopack.plugins.analysis.regions.scatter_error`): a ring is cut
+  into :data:`SECTORS` wedges about the centre, a tile into
+  :data:`TILE_SPLIT` × :data:`TILE_SPLIT` cells, the whole window into the
+  wedges of all its rings, every outline cut exactly to each part. The
+  compound Poisson error ``sqrt(sum(a_i^2)) / A`` (``a_i`` the area of
+  particle ``i`` inside the region) assumes particles placed independently;
+  particles that cannot overlap fill a region far more evenly than that, and
+  in the built-in packings it came out 7 to 20 times the scatter of φ between
+  seeds, between tiles and between rings. Over 20 seeds of the ``small``
+  scene the scatter of the parts gives 0.86 to 1.39 times (median 1.03) the
+  seed-to-seed scatter of a ring's φ, and 0.52 to 1.25 times (median 0.82)
+  that of a tile's, whose cells are smaller than the largest particles and
+  fill together. A real trend across a region (the packings are radially
+  graded) adds to the scatter of its parts, an error on the large side;
 - mean diameter: ``std(d) / sqrt(n)`` (``ddof = 1``; NaN when ``n < 2``);
 - mineral fraction ``p``: binomial, ``sqrt(p (1 - p) / n)`` (the trends use
   the window's fraction for ``p``).
@@ -39,7 +51,10 @@ from regopack.plugins.analysis.regions import (
     ring_edges,
     ring_mean_radius,
     ring_piece_areas,
+    ring_sector_areas,
     ring_window_areas,
+    scatter_error,
+    tile_cell_areas,
     tile_grid,
     tile_piece_areas,
     window_pieces,
@@ -72,6 +87,12 @@ MAX_RINGS = 1000
 
 RING_FIELD = "homogeneity.ring_width"
 """The field a refused ring width is reported under."""
+
+SECTORS = 8
+"""Equal wedges each ring is cut into: the scatter of φ between them gives its error."""
+
+TILE_SPLIT = 3
+"""Each tile is cut into this many by this many equal cells for the error of its φ."""
 
 
 class HomogeneityConfig(BaseModel):
@@ -173,10 +194,10 @@ def region_stats(
     n_regions: int,
     area: FloatArray,
     piece_area: FloatArray,
-    piece_owner: IntArray,
     diameter: FloatArray,
     mineral: IntArray,
     mineral_names: tuple[str, ...],
+    cells: tuple[FloatArray, FloatArray],
 ) -> dict[str, FloatArray]:
     """Measure number density, φ, mean diameter and mineral fractions per region, with errors.
 
@@ -190,12 +211,14 @@ def region_stats(
         ``(R,)`` area of each region.
     piece_area
         ``(m, R)`` area of each particle piece in each region.
-    piece_owner
-        Particle of each piece (pieces of one particle are added before squaring).
     diameter, mineral
         Equivalent diameter and mineral of each particle (same order as ``region``).
     mineral_names
         Names of the minerals, for the ``frac_<name>`` columns.
+    cells
+        ``(R, C)`` particle area and window area of the parts of each region
+        whose scatter gives the error of its φ
+        (:func:`~regopack.plugins.analysis.regions.scatter_error`).
 
     Returns
     -------
@@ -210,9 +233,6 @@ def region_stats(
     d = diameter[inside]
     sum_d = np.bincount(reg, weights=d, minlength=n_regions)
     sum_d2 = np.bincount(reg, weights=d * d, minlength=n_regions)
-    _, owner = np.unique(piece_owner, return_inverse=True)
-    per_particle = np.zeros((int(owner.max()) + 1 if len(owner) else 0, n_regions))
-    np.add.at(per_particle, owner, piece_area)
     with np.errstate(divide="ignore", invalid="ignore"):
         mean_d = np.where(n > 0, sum_d / n, np.nan)
         var = np.where(n > 1, (sum_d2 - n * mean_d**2) / (n - 1), np.nan)
@@ -221,8 +241,8 @@ def region_stats(
             "n": n.astype(np.int64),
             "number_density": n / area,
             "number_density_err": np.sqrt(np.maximum(n, 1.0)) / area,
-            "phi": per_particle.sum(axis=0) / area,
-            "phi_err": np.sqrt((per_particle**2).sum(axis=0)) / area,
+            "phi": piece_area.sum(axis=0) / area,
+            "phi_err": scatter_error(*cells),
             "mean_d": mean_d,
             "mean_d_err": np.sqrt(np.maximum(var, 0.0) / n),
         }
@@ -301,7 +321,6 @@ class Homogeneity(Analyzer):
         diameter = 2.0 * packing.radius[idx]
         mineral = packing.mineral[idx]
         pieces = window_pieces(packing, window)
-        position = np.searchsorted(idx, pieces.owner)
         notes: list[str] = []
 
         # rings
@@ -313,7 +332,8 @@ class Homogeneity(Analyzer):
         ring_of = np.where(inside & (k > 0), ring_of, -1).astype(np.int64)
         ring_area = ring_window_areas(window, self.centre, edges)
         ring_pieces = ring_piece_areas(pieces, self.centre, edges)
-        rings = region_stats(ring_of, k, ring_area, ring_pieces, position, diameter, mineral, names)
+        sectors = ring_sector_areas(pieces, window, self.centre, edges, SECTORS)
+        rings = region_stats(ring_of, k, ring_area, ring_pieces, diameter, mineral, names, sectors)
         r_mean = np.array(
             [ring_mean_radius(window, self.centre, edges[j], edges[j + 1]) for j in range(k)]
         )
@@ -334,10 +354,10 @@ class Homogeneity(Analyzer):
             len(tiles.area),
             tiles.area,
             tile_piece_areas(pieces, tiles),
-            position,
             diameter,
             mineral,
             names,
+            tile_cell_areas(pieces, window, tiles, TILE_SPLIT),
         )
         self.tiles_table = {
             "tile": np.arange(len(tiles.area), dtype=np.int64),
@@ -356,10 +376,10 @@ class Homogeneity(Analyzer):
             1,
             np.array([window.area]),
             ring_pieces.sum(axis=1, keepdims=True),
-            position,
             diameter,
             mineral,
             names,
+            (sectors[0].reshape(1, -1), sectors[1].reshape(1, -1)),
         )
         self.overall = {key: float(v[0]) for key, v in whole.items()}
         per_length = PER_LENGTH * length_scale(packing)

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from regopack.packing import Packing
 from regopack.plugins.analysis.figures import WIDTH, _note, axis_unit, length_ticks
-from regopack.plugins.analysis.homogeneity import Homogeneity
+from regopack.plugins.analysis.homogeneity import SECTORS, Homogeneity
 from regopack.units import length_scale, length_unit
 
 __all__ = ["draw_homogeneity"]
@@ -58,7 +58,7 @@ def _profile(
         elinewidth=0.6,
         capsize=1.5,
         markersize=3,
-        label="rings: value ± 1 s.e., ring extent",
+        label=f"rings: value ± 1 standard error (of φ: from its {SECTORS} sectors), ring extent",
     )
     overall = scale * h.overall[column]
     ax.axhline(overall, color="#777777", linestyle=":", linewidth=0.8, label="whole window")

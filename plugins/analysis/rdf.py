@@ -14,8 +14,11 @@
 
 Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
 (``N_A (N_A - 1)`` when ``A = B``); a pair's bins are merged until each holds
-enough pairs (:func:`regopack.plugins.analysis.rdf_peak.count_bins`). The first
-peak of the near-field curve is fitted, with its standard error
+enough pairs (:func:`regopack.plugins.analysis.rdf_peak.count_bins`), and its
+curve is tabled over its merged bins, each with its own edges ``r_lo``,
+``r_hi`` (table ``rdf_<field>_pairs``). The top of the near-field curve is
+fitted, and reported as the first peak, with its standard error, only when it
+is a distinct peak; otherwise as a plateau
 (:func:`regopack.plugins.analysis.rdf_peak.first_peak`).
 """
 
@@ -41,7 +44,14 @@ from regopack.plugins.analysis.common import (
     periodic_images,
     scaled_defaults,
 )
-from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
+from regopack.plugins.analysis.rdf_peak import (
+    BinnedCurve,
+    first_peak,
+    merged_width,
+    pair_curves,
+    peak_results,
+    rdf_tables,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -282,7 +292,16 @@ def covariogram(window: PlaneDomain, r: FloatArray) -> FloatArray:
 
 
 class Rdf(Analyzer):
-    """Radial distribution function, total and per mineral pair, near and far field."""
+    """Radial distribution function, total and per mineral pair, near and far field.
+
+    After :meth:`compute`, by field (``"near"``, ``"far"``): :attr:`curves`
+    holds ``r`` (bin centres) and ``total``; :attr:`curves_fine` those and
+    every pair ``"A-B"`` at the same bins; :attr:`pair_curves` every pair over
+    its merged bins (a :class:`~regopack.plugins.analysis.rdf_peak.BinnedCurve`);
+    :attr:`edges` the bin edges and :attr:`expected` the pairs an uncorrelated
+    pattern puts into each bin. :attr:`pair_kinds` gives the indices of the
+    minerals of each pair and :attr:`peak` the top of the near field.
+    """
 
     name = "rdf"
 
@@ -315,7 +334,10 @@ class Rdf(Analyzer):
             kinds = np.concatenate([kinds, packing.mineral[origin[ghosts]]]).astype(np.int64)
         self.curves: dict[str, dict[str, FloatArray]] = {}
         self.curves_fine: dict[str, dict[str, FloatArray]] = {}
+        self.pair_curves: dict[str, dict[str, BinnedCurve]] = {}
+        self.pair_kinds: dict[str, tuple[int, int]] = {}
         self.expected: dict[str, FloatArray] = {}
+        self.edges: dict[str, FloatArray] = {}
         pair_bins: dict[str, dict[str, float]] = {}
         n_pts = len(pts) if n_real is None else n_real
         kind_counts = np.bincount(kinds[:n_pts], minlength=len(packing.mineral_names))
@@ -364,29 +386,28 @@ class Rdf(Analyzer):
                 n_real=n_real,
             )
             centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
-            edges = lo + width * np.arange(bins + 1)
+            edges = np.asarray(lo + width * np.arange(bins + 1), dtype=np.float64)
             shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
             self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / area
-            curves: dict[str, FloatArray] = {"r": centres, "total": total}
+            self.edges[field_name] = edges
+            self.curves[field_name] = {"r": centres, "total": total}
             fine: dict[str, FloatArray] = {"r": centres, "total": total}
-            r_mid = 0.5 * (lo + hi)
-            widths: dict[str, float] = {}
+            merged: dict[str, BinnedCurve] = {}
             if n_kinds > 1:
-                for p, na in enumerate(names):
-                    for q in range(p, n_kinds):
-                        key = f"{na}-{names[q]}"
-                        cp, cq = float(kind_counts[p]), float(kind_counts[q])
-                        norm = cp * (cp - 1.0) / 2.0 if p == q else cp * cq
-                        per_bin = norm * 2.0 * np.pi * r_mid * width / area
-                        factor = count_bins(per_bin, cfg.min_pairs_per_bin, bins)
-                        fine[key] = per[p, q]
-                        curves[key] = merge_bins(per[p, q], shell, factor)
-                        # the widest merged bin: a short last group joins the one before
-                        groups = max(bins // factor, 1)
-                        widths[key] = float(width * (bins - factor * (groups - 1)))
-            self.curves[field_name] = curves
+                r_mid = 0.5 * (lo + hi)
+                merged, self.pair_kinds = pair_curves(
+                    per,
+                    names,
+                    kind_counts.tolist(),
+                    edges,
+                    shell,
+                    2.0 * np.pi * r_mid * width / area,
+                    cfg.min_pairs_per_bin,
+                )
+                fine.update({key: per[p, q] for key, (p, q) in self.pair_kinds.items()})
             self.curves_fine[field_name] = fine
-            pair_bins[field_name] = widths
+            self.pair_curves[field_name] = merged
+            pair_bins[field_name] = {key: merged_width(c, width) for key, c in merged.items()}
         near = self.curves.get("near")
         peak = None
         if near is not None:
@@ -399,12 +420,8 @@ class Rdf(Analyzer):
             "n_points": int(sel.sum()),
             "window_kind": w.kind,
             "window": [a, b],
-            "first_peak_r": None if peak is None else peak.r,
-            "first_peak_r_err": None if peak is None else peak.r_err,
-            "first_peak_g": None if peak is None else peak.g,
-            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
+            **peak_results(peak),
             "first_peak_highest_bin_r": None if peak is None else peak.highest_bin_r,
-            "first_peak_fitted": None if peak is None else peak.fitted,
             "pair_bins": pair_bins,
             "far_mean": float(np.nanmean(far["total"])) if far is not None else None,
             "notes": notes,
@@ -412,13 +429,13 @@ class Rdf(Analyzer):
         return self
 
     def results(self) -> dict[str, Any]:
-        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
+        """Scalars: the first peak (or plateau), far-field mean of g, points used, bin widths."""
         if self._results is None:
             raise RuntimeError("call compute() first")
         return dict(self._results)
 
     def tables(self) -> dict[str, dict[str, Any]]:
-        """g(r) curves per field (columns r, total, and one per mineral pair)."""
+        """g(r) per field: ``rdf_<field>`` (r, total) and ``rdf_<field>_pairs`` (merged bins)."""
         if self._results is None:
             raise RuntimeError("call compute() first")
-        return {f"rdf_{name}": dict(c) for name, c in self.curves.items()}
+        return rdf_tables(self.curves, self.pair_curves, self.pair_kinds)

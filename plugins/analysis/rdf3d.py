@@ -12,7 +12,8 @@ correction, up to half the shortest side.
 weighted count of pairs in the bin and ``V_shell = 4/3 pi (r_2^3 - r_1^3)``;
 per mineral pair ``(A, B)`` the count of pairs is ``N_A N_B`` (``N_A (N_A - 1) / 2``
 when ``A = B``), and a pair's bins are merged until each expects enough pairs,
-as in 2D.
+and tabled with their own edges, as in 2D; the first peak is reported only
+when the top of the near-field curve is a distinct peak, as in 2D.
 """
 
 from __future__ import annotations
@@ -36,7 +37,14 @@ from regopack.plugins.analysis.common3d import (
     interior_window3d,
 )
 from regopack.plugins.analysis.rdf import _bins
-from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
+from regopack.plugins.analysis.rdf_peak import (
+    BinnedCurve,
+    first_peak,
+    merged_width,
+    pair_curves,
+    peak_results,
+    rdf_tables,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -184,7 +192,12 @@ def rdf3d_histogram(
 
 
 class Rdf3D(Analyzer):
-    """Radial distribution function of a 3D packing, total and per mineral pair, near and far."""
+    """Radial distribution function of a 3D packing, total and per mineral pair, near and far.
+
+    After :meth:`compute` it holds what :class:`~regopack.plugins.analysis.rdf.Rdf`
+    holds: :attr:`curves`, :attr:`curves_fine`, :attr:`pair_curves`,
+    :attr:`edges`, :attr:`expected`, :attr:`pair_kinds` and :attr:`peak`.
+    """
 
     name = "rdf3d"
 
@@ -213,7 +226,11 @@ class Rdf3D(Analyzer):
         n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
         kind_counts = np.bincount(kinds, minlength=len(names))
         self.curves: dict[str, dict[str, FloatArray]] = {}
+        self.curves_fine: dict[str, dict[str, FloatArray]] = {}
+        self.pair_curves: dict[str, dict[str, BinnedCurve]] = {}
+        self.pair_kinds: dict[str, tuple[int, int]] = {}
         self.expected: dict[str, FloatArray] = {}
+        self.edges: dict[str, FloatArray] = {}
         pair_bins: dict[str, dict[str, float]] = {}
         notes = []
         for field_name, (lo, hi), width in (
@@ -254,25 +271,28 @@ class Rdf3D(Analyzer):
                 w,
             )
             centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
-            edges = lo + width * np.arange(bins + 1)
+            edges = np.asarray(lo + width * np.arange(bins + 1), dtype=np.float64)
             shell = 4.0 / 3.0 * np.pi * (edges[1:] ** 3 - edges[:-1] ** 3)
             self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / volume
-            curves: dict[str, FloatArray] = {"r": centres, "total": total}
-            widths: dict[str, float] = {}
+            self.edges[field_name] = edges
+            self.curves[field_name] = {"r": centres, "total": total}
+            fine: dict[str, FloatArray] = {"r": centres, "total": total}
+            merged: dict[str, BinnedCurve] = {}
             if n_kinds > 1:
                 r_mid = 0.5 * (lo + hi)
-                for p, na in enumerate(names):
-                    for q in range(p, n_kinds):
-                        key = f"{na}-{names[q]}"
-                        cp, cq = float(kind_counts[p]), float(kind_counts[q])
-                        norm = cp * (cp - 1.0) / 2.0 if p == q else cp * cq
-                        per_bin = norm * 4.0 * np.pi * r_mid * r_mid * width / volume
-                        factor = count_bins(per_bin, cfg.min_pairs_per_bin, bins)
-                        curves[key] = merge_bins(per[p, q], shell, factor)
-                        groups = max(bins // factor, 1)
-                        widths[key] = float(width * (bins - factor * (groups - 1)))
-            self.curves[field_name] = curves
-            pair_bins[field_name] = widths
+                merged, self.pair_kinds = pair_curves(
+                    per,
+                    names,
+                    kind_counts.tolist(),
+                    edges,
+                    shell,
+                    4.0 * np.pi * r_mid * r_mid * width / volume,
+                    cfg.min_pairs_per_bin,
+                )
+                fine.update({key: per[p, q] for key, (p, q) in self.pair_kinds.items()})
+            self.curves_fine[field_name] = fine
+            self.pair_curves[field_name] = merged
+            pair_bins[field_name] = {key: merged_width(c, width) for key, c in merged.items()}
         near = self.curves.get("near")
         peak = None
         if near is not None and n_pts > 1:
@@ -288,11 +308,7 @@ class Rdf3D(Analyzer):
             "n_points": int(n_pts),
             "window_kind": w.kind,
             "window": [float(s) for s in size],
-            "first_peak_r": None if peak is None else peak.r,
-            "first_peak_r_err": None if peak is None else peak.r_err,
-            "first_peak_g": None if peak is None else peak.g,
-            "first_peak_fit_range": None if peak is None else [peak.r_lo, peak.r_hi],
-            "first_peak_fitted": None if peak is None else peak.fitted,
+            **peak_results(peak),
             "pair_bins": pair_bins,
             "far_mean": far_mean,
             "notes": notes,
@@ -300,13 +316,13 @@ class Rdf3D(Analyzer):
         return self
 
     def results(self) -> dict[str, Any]:
-        """Scalars: first peak (fitted, with its error), far-field mean of g, points used."""
+        """Scalars: the first peak (or plateau), far-field mean of g, points used, bin widths."""
         if self._results is None:
             raise RuntimeError("call compute() first")
         return dict(self._results)
 
     def tables(self) -> dict[str, dict[str, Any]]:
-        """g(r) curves per field (columns r, total, and one per mineral pair)."""
+        """g(r) per field: ``rdf_<field>`` (r, total) and ``rdf_<field>_pairs`` (merged bins)."""
         if self._results is None:
             raise RuntimeError("call compute() first")
-        return {f"rdf_{name}": dict(c) for name, c in self.curves.items()}
+        return rdf_tables(self.curves, self.pair_curves, self.pair_kinds)

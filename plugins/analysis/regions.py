@@ -27,7 +27,10 @@ __all__ = [
     "ring_edges",
     "ring_mean_radius",
     "ring_piece_areas",
+    "ring_sector_areas",
     "ring_window_areas",
+    "scatter_error",
+    "tile_cell_areas",
     "tile_grid",
     "tile_piece_areas",
     "window_area_in_disk",
@@ -290,30 +293,33 @@ class Tiles:
     area: FloatArray
 
 
+def _areas_inside(window: PlaneDomain, cells: FloatArray) -> FloatArray:
+    """Area inside the window of each rectangle ``[x_min, x_max, y_min, y_max]`` of ``cells``."""
+    import shapely
+
+    boxes = shapely.box(cells[:, 0], cells[:, 2], cells[:, 1], cells[:, 3])
+    if isinstance(window, Circle):
+        return disk_areas(np.asarray(boxes, dtype=object), (window.cx, window.cy), window.radius)
+    poly = shapely.Polygon(window.outline())
+    return np.asarray(shapely.area(shapely.intersection(boxes, poly)), dtype=np.float64)
+
+
 def tile_grid(window: PlaneDomain, nx: int, ny: int) -> Tiles:
     """Grid of ``nx`` by ``ny`` cells over the window's bounding box.
 
     Cells with less than :data:`MIN_TILE_FILL` of their area inside the
     window are left out (all of them for an empty window).
     """
-    import shapely
-
     x0, x1, y0, y1 = (float(b) for b in window.bounds())
     if not window.area > 0:
         nx = ny = 0
     xs = np.linspace(x0, x1, nx + 1)
     ys = np.linspace(y0, y1, ny + 1)
     rows: list[tuple[float, float, float, float, int, int, float]] = []
-    poly = None if isinstance(window, Circle) else shapely.Polygon(window.outline())
     for iy in range(ny):
         for ix in range(nx):
             cell = (xs[ix], xs[ix + 1], ys[iy], ys[iy + 1])
-            box = shapely.box(cell[0], cell[2], cell[1], cell[3])
-            if isinstance(window, Circle):
-                cell_geom = np.array([box], dtype=object)
-                inside = float(disk_areas(cell_geom, (window.cx, window.cy), window.radius)[0])
-            else:
-                inside = float(shapely.area(shapely.intersection(box, poly)))
+            inside = float(_areas_inside(window, np.array([cell]))[0])
             full = (cell[1] - cell[0]) * (cell[3] - cell[2])
             if full > 0 and inside >= MIN_TILE_FILL * full:
                 rows.append((*cell, ix, iy, inside))
@@ -357,3 +363,151 @@ def tile_piece_areas(pieces: WindowPieces, tiles: Tiles) -> FloatArray:
             area[far_out] = disk_areas(cut[far_out], (cx, cy), radius)
         out[rest, t] = area
     return out
+
+
+def _wedges(centre: Centre, sectors: int, reach: float) -> NDArray[np.object_]:
+    """``sectors`` equal wedges about ``centre`` (from angle 0, counter-clockwise) to ``reach``."""
+    import shapely
+
+    arc = 16  # chords per wedge: the wedges stay far outside the reach they cover
+    cx, cy = centre
+    out = []
+    for s in range(sectors):
+        t = 2.0 * np.pi * (s + np.linspace(0.0, 1.0, arc + 1)) / sectors
+        ring = np.column_stack([cx + reach * np.cos(t), cy + reach * np.sin(t)])
+        out.append(shapely.Polygon(np.vstack([[cx, cy], ring])))
+    return np.asarray(out, dtype=object)
+
+
+def _sector_of(geoms: NDArray[np.object_], centre: Centre, sectors: int) -> IntArray:
+    """Wedge of each shape by the angle of its centroid (right for a shape inside one wedge)."""
+    import shapely
+
+    c = shapely.get_coordinates(shapely.centroid(geoms))
+    angle = np.mod(np.arctan2(c[:, 1] - centre[1], c[:, 0] - centre[0]), 2.0 * np.pi)
+    out: IntArray = np.minimum((angle / (2.0 * np.pi) * sectors).astype(np.int64), sectors - 1)
+    return out
+
+
+def _sector_pieces(
+    pieces: WindowPieces, centre: Centre, wedges: NDArray[np.object_], reach: float
+) -> tuple[WindowPieces, IntArray]:
+    """Cut the pieces along the wedges' sides; return the parts and the wedge of each.
+
+    A piece that crosses no side of a wedge (and is one polygon) lies in one
+    wedge whole; only the others are cut.
+    """
+    import shapely
+
+    geoms = pieces.geoms
+    cx, cy = centre
+    sectors = len(wedges)
+    t = 2.0 * np.pi * np.arange(sectors) / sectors
+    sides = shapely.multilinestrings(
+        [[(cx, cy), (cx + reach * np.cos(a), cy + reach * np.sin(a))] for a in t]
+    )
+    cut = shapely.intersects(geoms, sides) | (shapely.get_type_id(geoms) != 3)
+    parts = [geoms[~cut]]
+    owners = [pieces.owner[~cut]]
+    which = [_sector_of(geoms[~cut], centre, sectors)]
+    for k, wedge in enumerate(wedges):
+        inside = shapely.intersection(geoms[cut], wedge)
+        keep = shapely.area(inside) > 0
+        parts.append(inside[keep])
+        owners.append(pieces.owner[cut][keep])
+        which.append(np.full(int(keep.sum()), k, dtype=np.int64))
+    out = WindowPieces(np.concatenate(parts), np.concatenate(owners), pieces.disk)
+    return out, np.concatenate(which)
+
+
+def ring_sector_areas(
+    pieces: WindowPieces, window: PlaneDomain, centre: Centre, edges: FloatArray, sectors: int
+) -> tuple[FloatArray, FloatArray]:
+    """Particle area and window area in each cell of the rings cut into ``sectors`` wedges.
+
+    The wedges are equal, about ``centre``; every outline is cut exactly to
+    each cell (polygon clipping at the wedges' sides, the exact polygon–disk
+    intersection at the ring radii), so the cells of a ring add up to it.
+
+    Returns
+    -------
+    solid, area
+        ``(rings, sectors)`` particle area and window area of each cell.
+    """
+    import shapely
+
+    k = len(edges) - 1
+    if k < 1 or not window.area > 0:
+        return np.zeros((max(k, 0), sectors)), np.zeros((max(k, 0), sectors))
+    reach = 2.0 * window_reach(window, centre)[1]
+    wedges = _wedges(centre, sectors, reach)
+    solid = np.zeros((sectors, k))
+    if len(pieces.geoms):
+        parts, sector = _sector_pieces(pieces, centre, wedges, reach)
+        np.add.at(solid, sector, ring_piece_areas(parts, centre, edges))
+    if isinstance(window, Circle):  # cut to the window's disk with the rings
+        disk = (window.cx, window.cy, window.radius)
+        own = WindowPieces(wedges, np.arange(sectors, dtype=np.int64), disk)
+    else:
+        inside = shapely.intersection(wedges, shapely.Polygon(window.outline()))
+        own = WindowPieces(inside, np.arange(sectors, dtype=np.int64))
+    return solid.T, ring_piece_areas(own, centre, edges).T
+
+
+def tile_cell_areas(
+    pieces: WindowPieces, window: PlaneDomain, tiles: Tiles, split: int
+) -> tuple[FloatArray, FloatArray]:
+    """Particle area and window area in each of ``split`` × ``split`` equal cells of every tile.
+
+    Returns
+    -------
+    solid, area
+        ``(tiles, split²)`` particle area and window area of each cell, cut
+        exactly to it (the cells of a tile add up to the tile).
+    """
+    t = np.linspace(0.0, 1.0, split + 1)
+    cells = []
+    for x0, x1, y0, y1 in tiles.bounds:
+        xs, ys = x0 + (x1 - x0) * t, y0 + (y1 - y0) * t
+        cells += [(xs[i], xs[i + 1], ys[j], ys[j + 1]) for j in range(split) for i in range(split)]
+    bounds = np.asarray(cells, dtype=np.float64).reshape(-1, 4)
+    n = len(bounds)
+    area = _areas_inside(window, bounds) if n else np.zeros(0)
+    grid = Tiles(bounds, np.zeros(n, dtype=np.int64), np.zeros(n, dtype=np.int64), area)
+    solid = tile_piece_areas(pieces, grid).sum(axis=0)
+    shape = (len(tiles.area), split * split)
+    return solid.reshape(shape), area.reshape(shape)
+
+
+def scatter_error(solid: FloatArray, area: FloatArray) -> FloatArray:
+    """Estimate the standard error of each region's area fraction from the scatter of its cells.
+
+    A region's fraction ``phi = sum(solid) / sum(area)`` is the mean of its
+    cells' fractions ``phi_c`` weighted by their shares ``w_c`` of its area;
+    its variance is estimated as ``m / (m - 1) * sum((w_c (phi_c - phi))^2)``
+    over the ``m`` cells inside the window (NaN with fewer than 2).
+
+    Parameters
+    ----------
+    solid, area
+        ``(regions, cells)`` particle area and window area of each cell.
+
+    Examples
+    --------
+    Two cells of equal area at 0.8 and 0.9: the mean's standard error is 0.05.
+
+    >>> scatter_error(np.array([[0.8, 0.9]]), np.ones((1, 2))).round(12).tolist()
+    [0.05]
+    """
+    solid = np.asarray(solid, dtype=np.float64)
+    area = np.asarray(area, dtype=np.float64)
+    inside = area > 0
+    m = inside.sum(axis=1)
+    total = area.sum(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        phi = solid.sum(axis=1) / total
+        share = np.where(inside, area / total[:, None], 0.0)
+        cell_phi = np.where(inside, solid / np.where(inside, area, 1.0), 0.0)
+        spread = np.sum((share * (cell_phi - phi[:, None])) ** 2, axis=1)
+        err = np.sqrt(m / (m - 1.0) * spread)
+    return np.asarray(np.where(m >= 2, err, np.nan), dtype=np.float64)

@@ -195,3 +195,51 @@ def test_lengths_are_labelled_in_the_scenes_unit_at_its_scale(packing):
     peak = [t.get_text() for t in near.texts if "first peak" in t.get_text()]
     assert peak and peak[0].endswith(" mm") and "0.00" in peak[0]  # 5 decimals in mm
     assert draw_packing(packing).axes[0].get_xlabel() == "x (µm)"
+
+
+def test_merged_curves_are_drawn_as_steps_over_their_bins(packing, analyzers):
+    """A rare mineral's curve is one step per merged bin, from its lower edge to its upper one."""
+    from matplotlib.patches import StepPatch
+
+    fig = figures.draw_rdf(packing, analyzers["rdf"])
+    near = fig.axes[0]
+    steps = [p for p in near.patches if isinstance(p, StepPatch)]
+    assert steps  # the packing's rare minerals
+    for step in steps:
+        edges = step.get_data().edges
+        assert edges[0] == 0.0 and edges[-1] == pytest.approx(10.0)
+        assert np.all(np.diff(edges) > 0.15)  # merged: wider than the 0.1 µm bins
+    # the total and the common minerals keep the fine bins, as lines
+    assert [line.get_drawstyle() for line in near.get_lines()] == ["default"] * len(
+        near.get_lines()
+    )
+
+
+def test_a_top_without_a_distinct_peak_is_labelled_as_a_plateau(packing, analyzers):
+    rdf = analyzers["rdf"]
+    assert not rdf.peak.distinct  # 300 particles: a noisy top
+    texts = [t.get_text() for t in figures.draw_rdf(packing, rdf).axes[0].texts]
+    lo, hi = rdf.results()["first_plateau"]
+    assert f" no distinct first peak: plateau {lo:.2f}–{hi:.2f} µm" in texts
+    assert not [t for t in texts if "±" in t]
+
+
+def test_the_z_distribution_is_drawn_as_bars(packing, analyzers):
+    """Z is an integer: one bar per mineral at each Z, no line joining the values."""
+    from matplotlib.container import BarContainer
+
+    coordination = analyzers["coordination"]
+    fig = figures.draw_z_per_mineral(packing, coordination)
+    ax = fig.axes[0]
+    assert not ax.get_lines()
+    bars = [c for c in ax.containers if isinstance(c, BarContainer)]
+    present = np.unique(packing.mineral[coordination.interior])
+    assert len(bars) == len(present)
+    for container in bars:
+        heights = [bar.get_height() for bar in container]
+        assert sum(heights) == pytest.approx(1.0)  # each mineral's fractions
+        left = np.array([bar.get_x() for bar in container])
+        width = container[0].get_width()
+        centres = left + 0.5 * width
+        # each bar sits within its integer's group of width Z_BARS_WIDTH
+        assert np.all(np.abs(centres - np.round(centres)) < 0.5 * figures.Z_BARS_WIDTH)

@@ -60,7 +60,8 @@ def test_packing_rdf_has_a_contact_peak() -> None:
     near = rdf.curves["near"]
     assert near["total"][near["r"] < 1.0].max(initial=0.0) == 0.0  # no two centres that close
     assert np.nanmax(near["total"]) > 1.5
-    assert "pyroxene-pyroxene" in near
+    assert "pyroxene-pyroxene" in rdf.pair_curves["near"]
+    assert "pyroxene-pyroxene" in rdf.curves_fine["near"]
 
 
 def test_bad_range_names_field() -> None:

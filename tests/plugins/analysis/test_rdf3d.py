@@ -49,7 +49,10 @@ def test_the_packing_rdf_is_zero_below_contact_and_knows_its_expected_pairs(anal
     near = rdf.tables["rdf_near"]
     assert np.all(near["total"][near["r"] < 1.0] == 0)  # no two centres closer than 1 µm
     assert rdf["n_points"] > 10 and rdf["window"] == [12.0, 12.0, 12.0]
-    assert rdf["first_peak_r"] is not None and 2.0 < rdf["first_peak_r"] < 6.0
+    lo, hi = rdf["first_peak_fit_range"]
+    assert 2.0 < lo < hi < 6.0
+    # about 25 centres: the top of the curve is within its noise of a plateau
+    assert rdf["first_peak_distinct"] is False and rdf["first_peak_r"] is None
     # d_min = 3: the near field reaches 5 d_min = 15, beyond the 12 µm window, as the far one
     cut = [n.split(":")[0] for n in rdf["notes"]]
     assert cut == ["near field cut at 12", "far field cut at 12"]

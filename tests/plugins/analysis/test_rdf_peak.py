@@ -6,7 +6,13 @@ import numpy as np
 import pytest
 
 from regopack.plugins.analysis.rdf import Rdf, RdfConfig, rdf_histogram
-from regopack.plugins.analysis.rdf_peak import count_bins, first_peak, merge_bins
+from regopack.plugins.analysis.rdf_peak import (
+    DISTINCT_CONTRAST,
+    MIN_ROUNDNESS,
+    count_bins,
+    first_peak,
+    merge_bins,
+)
 
 R = np.arange(0.05, 10.0, 0.1)
 
@@ -51,7 +57,7 @@ def test_degenerate_curves():
     few = first_peak(R[:3], np.array([0.0, 2.0, 1.0]), R[:3])
     assert few is not None and few.r == pytest.approx(R[1])
     flat = first_peak(R, np.ones(R.size), 100 * R)  # no peak: the error says so
-    assert flat is not None and flat.r_err > 0.1
+    assert flat is not None and flat.r_err > 0.1 and not flat.distinct
 
 
 def test_merged_bins_are_what_wider_bins_give():
@@ -63,8 +69,12 @@ def test_merged_bins_are_what_wider_bins_give():
     wide, _ = rdf_histogram(x, y, kind, 1, 0.0, 2.0, 6, a, b)
     edges = 0.5 * np.arange(25)
     shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-    merged = merge_bins(fine, shell, 4)
-    np.testing.assert_allclose(merged[::4], wide, rtol=1e-12)
+    merged = merge_bins(edges, fine, shell, 4)
+    np.testing.assert_allclose(merged.g, wide, rtol=1e-12)
+    np.testing.assert_array_equal(merged.edges, 2.0 * np.arange(7))
+    # a short last group joins the one before it
+    five = merge_bins(edges[:6], fine[:5], shell[:5], 2)
+    assert five.r_lo.tolist() == [0.0, 1.0] and five.r_hi.tolist() == [1.0, 2.5]
     assert count_bins(25.0, 100, 24) == 4 and count_bins(0.0, 100, 24) == 24
     assert count_bins(5.0, 0, 24) == 1
 
@@ -79,33 +89,116 @@ def packing():
     return run_scene(resolved, None).packing
 
 
-def test_the_analyzer_reports_the_fitted_peak_and_the_pair_bins(packing):
+def test_the_analyzer_reports_the_top_and_the_pair_bins(packing):
     rdf = Rdf(RdfConfig(far=(20.0, 50.0))).compute(packing, {})
     res = rdf.results()
     lo, hi = res["first_peak_fit_range"]
-    assert lo <= res["first_peak_r"] <= hi
-    assert 0 < res["first_peak_r_err"] < 10.0
-    assert res["first_peak_fitted"] in (True, False)
-    assert res["first_peak_g"] > 1.0
+    assert 0.0 < lo < hi < 10.0 and res["first_peak_g"] > 1.0
+    # 412 centres: the top of the curve is not told from a plateau within its noise
+    assert res["first_peak_distinct"] is False and res["first_peak_contrast"] < DISTINCT_CONTRAST
+    assert res["first_peak_r"] is None and res["first_peak_r_err"] is None
+    assert res["first_plateau"] == [lo, hi]
     assert 0.0 < res["first_peak_highest_bin_r"] < 10.0  # a noisy bin, maybe far from the fit
     widths = res["pair_bins"]["near"]
     assert min(widths.values()) >= 0.1 and widths["others-others"] > widths["pyroxene-feldspar"]
     near, fine = rdf.curves["near"], rdf.curves_fine["near"]
-    assert np.array_equal(near["total"], fine["total"])
-    # a merged pair curve is flat over each of its bins and less noisy than the fine one
-    curve = near["pyroxene-feldspar"]
-    k = int(np.min(np.diff(np.flatnonzero(np.diff(curve) != 0))))  # the regular group size
-    assert k > 1 and round(widths["pyroxene-feldspar"] / 0.1) >= k
-    start = (60 // k) * k  # groups start at multiples of k
-    tail = slice(start, start + 3 * k)  # well past the contact peak
-    assert np.ptp(near["pyroxene-feldspar"][tail.start : tail.start + k]) == 0.0
-    assert np.std(np.diff(near["pyroxene-feldspar"][tail][::k])) < np.std(
-        np.diff(fine["pyroxene-feldspar"][tail])
-    )
+    assert np.array_equal(near["total"], fine["total"]) and set(near) == {"r", "total"}
+    # a merged pair curve has bins of its own, each the shell-weighted mean of its fine bins
+    edges = 0.1 * np.arange(101)
+    shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+    curve = rdf.pair_curves["near"]["pyroxene-feldspar"]
+    k = round((curve.r_hi[0] - curve.r_lo[0]) / 0.1)
+    assert k > 1 and curve.r_lo[0] == 0.0 and curve.r_hi[-1] == pytest.approx(10.0)
+    np.testing.assert_array_equal(curve.r_hi[:-1], curve.r_lo[1:])  # no gap, no overlap
+    j = len(curve.g) - 2  # well past the contact peak
+    cut = slice(round(curve.r_lo[j] / 0.1), round(curve.r_hi[j] / 0.1))
+    expected = np.average(fine["pyroxene-feldspar"][cut], weights=shell[cut])
+    assert curve.g[j] == pytest.approx(expected, rel=1e-12)
     unmerged = Rdf(RdfConfig(far=(20.0, 50.0), min_pairs_per_bin=0)).compute(packing, {})
-    for key, curve in unmerged.curves["near"].items():
-        np.testing.assert_array_equal(curve, fine[key])
+    for key, pair in unmerged.pair_curves["near"].items():
+        np.testing.assert_array_equal(pair.g, fine[key])
     assert set(unmerged.results()["pair_bins"]["near"].values()) == {0.1}
+
+
+def test_a_merged_pair_bin_holds_g_only_where_its_pairs_are(packing):
+    """No merged bin shows pairs closer than the closest pair of its minerals.
+
+    The merged value used to be repeated over every fine bin, so that the
+    table showed g > 0 at r = 0.05 for a pair of rare minerals whose closest
+    centres are some 2 µm apart.
+    """
+    from regopack.plugins.analysis.common import interior_mask
+
+    rdf = Rdf(RdfConfig(far=(20.0, 50.0))).compute(packing, {})
+    sel = interior_mask(packing, rdf.results()["interior_margin"])
+    xy, mineral = packing.centre[sel], packing.mineral[sel]
+    table = rdf.tables()["rdf_near_pairs"]
+    assert list(table) == ["mineral_a", "mineral_b", "r_lo", "r_hi", "r", "g"]
+    merged = 0
+    pairs = np.unique(np.column_stack([table["mineral_a"], table["mineral_b"]]), axis=0)
+    for a, b in pairs.tolist():
+        rows = (table["mineral_a"] == a) & (table["mineral_b"] == b)
+        d = np.hypot(*(xy[mineral == a][:, None] - xy[mineral == b][None]).transpose(2, 0, 1))
+        closest = float(np.min(d[d > 0])) if d.size else np.inf
+        r_lo, r_hi, g = table["r_lo"][rows], table["r_hi"][rows], table["g"][rows]
+        assert np.all(g[r_hi <= closest] == 0.0)  # no pair that close: nothing there
+        assert np.all(r_hi[g > 0] > closest)  # a bin with pairs reaches the closest pair
+        merged += int(np.max(r_hi - r_lo) > 0.15)
+    assert merged > 5  # most pairs of this packing are merged
+    others = (table["mineral_a"] == 5) & (table["mineral_b"] == 5)
+    assert table["r_lo"][others][0] == 0.0 and table["r_hi"][others][0] > 1.0
+
+
+def contact_plateau(r: np.ndarray) -> np.ndarray:
+    """A g(r) that rises from contact to 1.3 and stays there."""
+    return np.clip((r - 2.0) / 1.5, 0.0, 1.3)
+
+
+def flat_topped_hump(r: np.ndarray) -> np.ndarray:
+    """A g(r) like the one of the dem scene: a flat top from 4 to 5.4, then down to about 1."""
+    return np.interp(r, [2.2, 4.0, 5.4, 6.0, 10.0], [0.0, 1.25, 1.25, 1.1, 1.05])
+
+
+@pytest.mark.parametrize("shape", [contact_plateau, flat_topped_hump])
+def test_a_plateau_gives_no_peak_however_well_it_is_sampled(shape):
+    rng = np.random.default_rng(2)
+    for per_bin in (100.0, 3000.0, 1e5):
+        expected = per_bin * R
+        fits = [first_peak(R, rng.poisson(shape(R) * expected) / expected, expected, 0)]
+        fits.append(first_peak(R, shape(R), 1e12 * R, 0))  # no noise at all
+        for fit in fits:
+            assert fit is not None and not fit.distinct, (per_bin, fit)
+            assert fit.r_lo < 4.5 and fit.r_hi > 5.0  # the plateau's extent
+    noiseless = first_peak(R, flat_topped_hump(R), 1e12 * R, 0)
+    assert noiseless.contrast > 10 and noiseless.roundness < MIN_ROUNDNESS  # high, but flat
+
+
+@pytest.mark.parametrize("per_bin", [300.0, 3000.0])
+def test_a_real_peak_is_still_distinct(per_bin):
+    rng = np.random.default_rng(4)
+    expected = per_bin * R
+    fits = [
+        first_peak(R, rng.poisson(contact_peak(R, 3.27) * expected) / expected, expected, 0)
+        for _ in range(40)
+    ]
+    assert np.mean([f.distinct for f in fits]) >= 0.85
+    assert all(f.roundness > MIN_ROUNDNESS for f in fits if f.distinct)
+
+
+def test_a_near_monodisperse_packing_has_a_distinct_contact_peak():
+    import regopack
+
+    scene = regopack.scene(
+        "small",
+        size={"kind": "uniform", "d_min": 2.0, "d_max": 2.5},
+        domain__width=100.0,
+        domain__height=100.0,
+    )
+    rdf = Rdf().compute(regopack.pack(scene, verify=False), {})
+    res = rdf.results()
+    assert res["first_peak_distinct"] is True and res["first_plateau"] is None
+    assert 2.2 < res["first_peak_r"] < 2.6 and 0 < res["first_peak_r_err"] < 0.1
+    assert res["first_peak_contrast"] > DISTINCT_CONTRAST
 
 
 def test_no_pair_at_all_gives_no_peak():
@@ -145,10 +238,6 @@ def test_the_reported_pair_width_is_the_widest_merged_bin(packing):
     rdf = Rdf(RdfConfig(far=(20.0, 50.0))).compute(packing, {})
     widths = rdf.results()["pair_bins"]["near"]
     for key, width in widths.items():
-        curve = rdf.curves["near"][key]
-        runs, start = [], 0
-        for k in range(1, len(curve) + 1):
-            if k == len(curve) or curve[k] != curve[start]:
-                runs.append(k - start)
-                start = k
-        assert max(runs) * 0.1 == pytest.approx(width), key
+        curve = rdf.pair_curves["near"][key]
+        assert width == pytest.approx(float(np.max(curve.r_hi - curve.r_lo)), rel=1e-12), key
+        assert round(width / 0.1) * 0.1 == width  # a whole number of fine bins
