@@ -71,16 +71,16 @@ def _graph() -> tuple[list[str], list[Edge]]:
 
 
 def _layer(name: str) -> int | None:
+    """Layer of a module: a plugin's is :data:`PLUGIN_LAYER`, as importer and as imported."""
     if name.startswith("regopack.plugins"):
-        return None
+        return PLUGIN_LAYER
     return LAYERS.get(name)
 
 
 def _upward(edges: list[Edge]) -> list[Edge]:
     out = []
     for e in edges:
-        src = PLUGIN_LAYER if e.src.startswith("regopack.plugins") else _layer(e.src)
-        dst = _layer(e.dst)
+        src, dst = _layer(e.src), _layer(e.dst)
         if src is not None and dst is not None and dst > src:
             out.append(e)
     return out
