@@ -22,7 +22,7 @@ from __future__ import annotations
 import itertools
 import math
 from abc import ABC, abstractmethod
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, ClassVar, Literal, Self, overload
 
@@ -717,7 +717,7 @@ def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> D
 
 def _bounds(values: Any, dimension: int) -> list[float]:
     """Return a record's ``bounds``: ``2 * dimension`` finite numbers, each min below its max."""
-    if isinstance(values, str | bytes | Mapping):
+    if isinstance(values, str | bytes | Mapping) or not isinstance(values, Iterable):
         raise TypeError(f"bounds: {values!r} is not a list of numbers")
     bounds = [_finite(b, "bounds") for b in values]
     axes = "xyz"[:dimension]

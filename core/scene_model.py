@@ -778,13 +778,16 @@ class ResolvedScene:
         """:meth:`to_dict` as a TOML document."""
         return _toml.dumps(self.to_dict())
 
-    def with_(self, **overrides: Any) -> ResolvedScene:
+    def with_(
+        self, *, seed: int | None = None, registry: Registry | None = None, **overrides: Any
+    ) -> ResolvedScene:
         """Return this scene with some fields changed, validated again.
 
         Keys are dotted names as for ``--set``, written with ``__`` for the
         dots (``domain__width=400``, ``phases__0__shape__psi=3``) or passed
-        as a dictionary (``**{"domain.width": 400}``). See
-        :func:`regopack.scene`.
+        as a dictionary (``**{"domain.width": 400}``). ``seed`` and
+        ``registry`` are those of :func:`regopack.scene` (``None`` keeps the
+        scene's own).
 
         Examples
         --------
@@ -792,7 +795,7 @@ class ResolvedScene:
         >>> regopack.scene("small").with_(density__eta=5, seed=3).seed
         3
         """
-        return make_scene(self, overrides=overrides)
+        return make_scene(self, seed=seed, registry=registry, overrides=overrides)
 
     def __repr__(self) -> str:
         d = self.scene.domain

@@ -13,12 +13,11 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from regopack import api, compilation, manager
 from regopack.analysis_plan import dimensions_of
-from regopack.api import analyze, export, pack, scene
-from regopack.compilation import CompileTime, compile_timer
+from regopack.compilation import CompileTime
 from regopack.errors import RegopackError
 from regopack.exporting import exporter_dimensions
-from regopack.manager import default_registry
 from regopack.packing import Packing
 
 __all__ = ["TINY", "VARIANTS", "compile_kernels"]
@@ -98,7 +97,8 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     CompileTime
         The compilation time of the whole call (zero when everything was cached).
     """
-    registry = default_registry()
+    # looked up when called, as before the move out of compilation.py (tests patch them)
+    registry = manager.default_registry()
     by_dimension = {
         d: [n for n in sorted(registry.names("analysis")) if d in dimensions_of(registry, n)]
         for d in (2, 3)
@@ -109,26 +109,29 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
     exporters = [
         n for n in sorted(registry.names("export")) if 2 in exporter_dimensions(registry, n)
     ]
-    with compile_timer() as total, tempfile.TemporaryDirectory(prefix="regopack-") as folder:
+    with (
+        compilation.compile_timer() as total,
+        tempfile.TemporaryDirectory(prefix="regopack-") as folder,
+    ):
         for k, (label, changes) in enumerate(VARIANTS):
             start = time.perf_counter()
             try:
-                resolved = scene("small", registry=registry, **{**TINY, **changes})
+                resolved = api.scene("small", registry=registry, **{**TINY, **changes})
             except RegopackError:
                 continue  # a plugin of this variant is not installed
-            packing = pack(resolved)
+            packing = api.pack(resolved)
             if not isinstance(packing, Packing):  # 3D packings have no exports yet
-                analyze(packing, by_dimension[3], registry=registry)
+                api.analyze(packing, by_dimension[3], registry=registry)
                 if report is not None:
                     report(f"{label}: packed, analysed", time.perf_counter() - start)
                 continue
             # the analyses and exports of every variant: some kernels have a
             # signature per domain kind (periodic images) or per particle kind
-            results = analyze(packing, analyzers, registry=registry)
+            results = api.analyze(packing, analyzers, registry=registry)
             for name in exporters:
                 target = Path(folder) / f"{k}-{name}"
                 target.mkdir()
-                export(packing, name, target, analyses=results, registry=registry)
+                api.export(packing, name, target, analyses=results, registry=registry)
             if report is not None:
                 report(f"{label}: packed, analysed, exported", time.perf_counter() - start)
     return total

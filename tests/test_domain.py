@@ -263,3 +263,11 @@ def test_box_record_round_trips(lo: list[float], size: list[float], periodic: bo
 def test_bad_box_records_are_refused(record: dict[str, object], error: type[Exception]) -> None:
     with pytest.raises(error):
         domain_from_dict(record, 3)
+
+
+@pytest.mark.parametrize("dimension", [2, 3, None])
+@pytest.mark.parametrize("bounds", [5, None, 2.5, "abcdef", {"x": 1}])
+def test_bounds_that_are_no_list_are_named(bounds: object, dimension: int | None) -> None:
+    kind = "box" if dimension == 3 else "rectangle"
+    with pytest.raises(TypeError, match=r"^bounds: .* is not a list of numbers$"):
+        domain_from_dict({"kind": kind, "bounds": bounds}, dimension)

@@ -71,16 +71,16 @@ def _graph() -> tuple[list[str], list[Edge]]:
 
 
 def _layer(name: str) -> int | None:
+    """Layer of a module: a plugin's is :data:`PLUGIN_LAYER`, as importer and as imported."""
     if name.startswith("regopack.plugins"):
-        return None
+        return PLUGIN_LAYER
     return LAYERS.get(name)
 
 
 def _upward(edges: list[Edge]) -> list[Edge]:
     out = []
     for e in edges:
-        src = PLUGIN_LAYER if e.src.startswith("regopack.plugins") else _layer(e.src)
-        dst = _layer(e.dst)
+        src, dst = _layer(e.src), _layer(e.dst)
         if src is not None and dst is not None and dst > src:
             out.append(e)
     return out
@@ -147,3 +147,18 @@ def test_every_kind_of_import_is_an_edge() -> None:
     assert ("regopack.drawing", "regopack.analysis_plan", "local") in found
     assert ("regopack.interfaces", "regopack.packing", "typing") in found
     assert any(e.src.startswith("regopack.plugins.") and e.kind == "module" for e in edges)
+
+
+def test_a_core_module_below_the_plugins_importing_a_plugin_is_upward() -> None:
+    """Plugins sit at PLUGIN_LAYER: the core below it must not import them."""
+    edges = [
+        Edge("regopack.threads", "regopack.plugins.analysis.density", "local", 1),
+        Edge("regopack.packing", "regopack.plugins.rsa", "module", 1),
+        Edge("regopack.drawing", "regopack.plugins.walls", "local", 1),
+        Edge("regopack.cli", "regopack.plugins.rsa", "local", 1),
+        Edge("regopack.plugins.x", "regopack.plugins.y", "module", 1),
+    ]
+    assert [(e.src, e.dst) for e in _upward(edges)] == [
+        ("regopack.threads", "regopack.plugins.analysis.density"),
+        ("regopack.packing", "regopack.plugins.rsa"),
+    ]

@@ -234,3 +234,22 @@ def test_a_scaled_3d_file_loads(tmp_path, factor) -> None:
     }
     save3d(dataclasses.replace(p, **scaled), path)
     assert load_packing(path).n_placed == 2
+
+
+@pytest.mark.parametrize("bounds", [5, None, 1.5])
+def test_a_3d_file_whose_domain_bounds_are_no_list_names_the_field(tmp_path, bounds) -> None:
+    path = tmp_path / "p.npz"
+    save3d(cube_packing([[1, 1, 1]]), path)
+
+    def edit(contents: dict[str, np.ndarray]) -> None:
+        meta = json.loads(str(contents["meta"]))
+        meta["domain"] = {"kind": "box", "bounds": bounds}
+        contents["meta"] = np.array(json.dumps(meta))
+
+    _rewrite(path, edit)
+    with pytest.raises(PackingFileError) as caught:
+        load_packing(path)
+    assert str(caught.value) == (
+        f"{path}: invalid packing file: meta 'domain' (kind 'box'): "
+        f"bounds: {bounds!r} is not a list of numbers"
+    )

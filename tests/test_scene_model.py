@@ -563,3 +563,19 @@ keys = st.text(min_size=1, max_size=8)
 )
 def test_toml_writer_round_trips(data):
     assert tomllib.loads(_toml.dumps(data)) == data
+
+
+def test_with_takes_the_seed_and_registry_of_scene():
+    """``ResolvedScene.with_`` takes ``seed`` and ``registry`` as :func:`regopack.scene` does."""
+    import regopack
+    from regopack.manager import default_registry
+
+    base = regopack.scene("small")
+    assert base.with_(seed=None).seed == base.seed
+    registry = default_registry()
+    changed = base.with_(registry=registry, seed=7, count=30)
+    assert changed.registry is registry
+    assert (changed.seed, changed.scene.count) == (7, 30)
+    assert changed.scene.origin("seed") == "scene(seed=...)"
+    with pytest.raises(ConfigError, match=r"^registry: expected a regopack.manager.Registry"):
+        base.with_(registry=3)
