@@ -703,6 +703,38 @@ _CHUNK = 2**16
 """Vertices checked at a time by :func:`check_file_values` (whole particles)."""
 
 
+_MEASURE_WORDS = {
+    2: ("outline", "area", "sqrt(area / pi)"),
+    3: ("solid", "volume", "(3 volume / 4 pi)^(1/3)"),
+}
+"""How the radius check names a particle's measure in each dimension."""
+
+
+def check_equivalent_radius(radius: FloatArray, measure: FloatArray, dimension: int) -> None:
+    """Refuse a radius that is not the equivalent radius of its particle's area or volume.
+
+    The equivalent radius is that of the disk (2D) or ball (3D) of the same
+    ``measure``, within a relative :data:`RADIUS_RTOL`.
+
+    Raises
+    ------
+    PackingError
+        Naming the first particle whose radius disagrees.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below
+        m = np.maximum(measure, 0.0)
+        eq = np.sqrt(m / np.pi) if dimension == 2 else np.cbrt(m * 3.0 / (4.0 * np.pi))
+    bad = ~(np.abs(eq - radius) <= RADIUS_RTOL * radius)
+    if bad.any():
+        j = _first(bad)
+        body, what, rule = _MEASURE_WORDS[dimension]
+        raise PackingError(
+            f"array 'radius' has the value {radius[j]} at particle {j}, but its {body}'s "
+            f"{what} {measure[j]:.17g} has the equivalent radius {eq[j]:.17g}; a radius is "
+            f"{rule} within a relative {RADIUS_RTOL:g}"
+        )
+
+
 def _check_outlines(
     v: FloatArray, offsets: IntArray, rho: FloatArray, base: int
 ) -> tuple[FloatArray, FloatArray]:
@@ -854,16 +886,7 @@ def _check_values(packing: Packing, version: int | None) -> None:
         area[p0:p1], reach[p0:p1] = _check_outlines(
             v[a0:a1], offsets[p0 : p1 + 1] - a0, rho[p0:p1], p0
         )
-    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below
-        eq = np.sqrt(np.maximum(area, 0.0) / np.pi)
-    bad = ~(np.abs(eq - packing.radius) <= RADIUS_RTOL * packing.radius)
-    if bad.any():
-        j = _first(bad)
-        raise PackingError(
-            f"array 'radius' has the value {packing.radius[j]} at particle {j}, but its outline's "
-            f"area {area[j]:.17g} has the equivalent radius {eq[j]:.17g}; a radius is "
-            f"sqrt(area / pi) within a relative {RADIUS_RTOL:g}"
-        )
+    check_equivalent_radius(packing.radius, area, 2)
     placed = packing.placed
     b = dom.bounds()
     size = max(float(b[1] - b[0]), float(b[3] - b[2]))

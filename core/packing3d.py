@@ -25,7 +25,6 @@ from regopack.packing import (
     FILE_MAGIC,
     FORMAT_VERSION_3D,
     MIN_RADIUS,
-    RADIUS_RTOL,
     REACH,
     Packing,
     PlacedParticles,
@@ -38,6 +37,7 @@ from regopack.packing import (
     _read_meta_keys,
     _short,
     check_array_types,
+    check_equivalent_radius,
     check_file_scene,
     check_particles,
     load,
@@ -491,16 +491,7 @@ def check_file_values3d(packing: Packing3D) -> None:
         cone = np.einsum("ij,ij->i", twice_area, packing.normals) * packing.support / 6.0
         face_owner = np.repeat(np.arange(n), np.diff(packing.face_offsets))
         volume = volume + np.bincount(face_owner, weights=cone, minlength=n)
-    with np.errstate(over="ignore", invalid="ignore"):
-        eq = np.cbrt(np.maximum(volume, 0.0) * 3.0 / (4.0 * np.pi))
-    bad = ~(np.abs(eq - packing.radius) <= RADIUS_RTOL * packing.radius)
-    if bad.any():
-        j = _first(bad)
-        raise PackingError(
-            f"array 'radius' has the value {packing.radius[j]} at particle {j}, but its solid's "
-            f"volume {volume[j]:.17g} has the equivalent radius {eq[j]:.17g}; a radius is "
-            f"(3 volume / 4 pi)^(1/3) within a relative {RADIUS_RTOL:g}"
-        )
+    check_equivalent_radius(packing.radius, volume, 3)
     placed = packing.placed
     b = packing.domain.bounds()
     low, high = b[0::2], b[1::2]
