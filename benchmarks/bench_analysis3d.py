@@ -29,8 +29,8 @@ CHILD = r"""
 import json, shutil, sys, tempfile, time
 from pathlib import Path
 import regopack
-from regopack.analysis import DEFAULT_ANALYSES_3D, run_analyses, write_analysis
-from regopack.manager import default_registry
+from regopack.analysis.pipeline import DEFAULT_ANALYSES_3D, run_analyses, write_analysis
+from regopack.registry.manager import default_registry
 size = float(sys.argv[1]); seed = int(sys.argv[2]); figure = sys.argv[3]
 phases = [
     ("pyroxene", 0.343, 0.25), ("feldspar", 0.315, 0.5), ("glass", 0.161, 1.0),
@@ -77,8 +77,8 @@ print(json.dumps({"L": size, "placed": packing.n_placed, "pack_s": pack_s, "tota
 COMPILE = r"""
 import time
 t = time.perf_counter()
-from regopack.plugins.analysis.contacts3d import Contacts3D
-import sys; sys.path.insert(0, "tests/plugins/analysis")
+from regopack.plugins.analyzers.contacts3d import Contacts3D
+import sys; sys.path.insert(0, "tests/plugins/analyzers")
 from lattices3d import cube_lattice
 Contacts3D().compute(cube_lattice((2, 1, 1), (0.0, 0.0, 0.0)), {})
 print(time.perf_counter() - t)

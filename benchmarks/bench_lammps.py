@@ -36,11 +36,11 @@ def main() -> None:
     parser.add_argument("--gravity", type=float, default=0.05)
     args = parser.parse_args()
 
-    from regopack.manager import default_registry
-    from regopack.packing import load
-    from regopack.plugins.lammps_export import LammpsExporter, lammps_bodies, script_path
-    from regopack.run import run_scene
-    from regopack.scene_model import load_scene, resolve_scene
+    from regopack.packing.core import load
+    from regopack.plugins.exporters.lammps_export import LammpsExporter, lammps_bodies, script_path
+    from regopack.registry.manager import default_registry
+    from regopack.run.pipeline import run_scene
+    from regopack.scenes.model import load_scene, resolve_scene
 
     if args.packing:
         packing = load(args.packing)

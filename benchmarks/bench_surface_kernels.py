@@ -24,15 +24,18 @@ from collections.abc import Callable
 import numba
 import numpy as np
 
-from regopack.plugins.available_surface.envelope import minkowski_envelope
-from regopack.plugins.available_surface.free_surface import (
+from regopack.plugins.inserters.available_surface.envelope import minkowski_envelope
+from regopack.plugins.inserters.available_surface.free_surface import (
     FreeSurface,
     Interferers,
     free_surface,
     interferers_from,
     sample_free_point,
 )
-from regopack.plugins.available_surface.polyhedron import Polyhedron, polyhedron_from_points
+from regopack.plugins.inserters.available_surface.polyhedron import (
+    Polyhedron,
+    polyhedron_from_points,
+)
 
 
 def random_polyhedron(rng: np.random.Generator, n: int, scale: float = 1.0) -> Polyhedron:
@@ -157,7 +160,7 @@ def main() -> None:
 
 
 def _area(poly: Polyhedron) -> float:
-    from regopack.plugins.available_surface.polyhedron import face_area
+    from regopack.plugins.inserters.available_surface.polyhedron import face_area
 
     return sum(face_area(poly, f) for f in range(len(poly.normals)))
 

@@ -16,9 +16,9 @@ import argparse
 import platform
 import statistics
 
-from regopack.manager import default_registry
-from regopack.run import run_scene
-from regopack.scene_model import load_scene, resolve_scene
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import run_scene
+from regopack.scenes.model import load_scene, resolve_scene
 
 SETTINGS = {
     "zone": {

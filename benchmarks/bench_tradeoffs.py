@@ -3,7 +3,7 @@
 For every setting of a knob, prints the insertion time, the packing fraction
 of the domain, the interior coordination number Z (contacts at tol 0.05) and
 the overlaps (number of overlapping pairs, worst relative area from
-``regopack.verification.verify`` and worst penetration depth). Run from the
+``regopack.verification.polygons.verify`` and worst penetration depth). Run from the
 repository root:
 
     python benchmarks/bench_tradeoffs.py                       # L = 400, 1 seed
@@ -42,11 +42,11 @@ CHILD = r"""
 import json, sys, time
 import numpy as np
 import shapely
-from regopack.analysis import run_analyses
-from regopack.manager import default_registry
-from regopack.run import run_scene
-from regopack.scene_model import load_scene, resolve_scene
-from regopack.verification import verify
+from regopack.analysis.pipeline import run_analyses
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import run_scene
+from regopack.scenes.model import load_scene, resolve_scene
+from regopack.verification.polygons import verify
 
 overrides, tol, repeats = json.loads(sys.argv[1]), float(sys.argv[2]), int(sys.argv[3])
 registry = default_registry()

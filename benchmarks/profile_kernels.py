@@ -129,7 +129,7 @@ def main() -> None:
     args = parser.parse_args()
     keep_object_code()
     import regopack
-    from regopack.plugins import available_arc
+    from regopack.plugins.inserters import available_arc
 
     settings: dict[str, Any] = {
         "insertion.closing": "tail",
@@ -137,9 +137,9 @@ def main() -> None:
         "domain.width": args.size,
         "domain.height": args.size,
     }
-    from regopack.errors import RegopackError
-    from regopack.manager import default_registry
-    from regopack.scene_model import _parse_override, load_scene, resolve_scene
+    from regopack.base.errors import RegopackError
+    from regopack.registry.manager import default_registry
+    from regopack.scenes.model import _parse_override, load_scene, resolve_scene
 
     fixed = ['insertion.closing="tail"', "insertion.strip=800"]
     sized = [f"domain.width={args.size}", f"domain.height={args.size}"]

@@ -32,12 +32,12 @@ import time
 
 import numpy as np
 
-from regopack.api import pack_and_summarise
-from regopack.manager import default_registry
-from regopack.plugins.available_arc import sweep
-from regopack.plugins.available_arc.state import ArcState
-from regopack.run import draw_population
-from regopack.scene_model import load_scene, resolve_scene
+from regopack.api.functions import pack_and_summarise
+from regopack.plugins.inserters.available_arc import sweep
+from regopack.plugins.inserters.available_arc.state import ArcState
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import draw_population
+from regopack.scenes.model import load_scene, resolve_scene
 
 MARGIN = 40.0
 """Distance from the side walls within which centres are left out (d_max)."""

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-from regopack.api import pack_and_summarise
+from regopack.api.functions import pack_and_summarise
 
 SLABS = ((20.0, 60.0), (60.0, 100.0), (100.0, 150.0))
 """Heights over the floor (µm) whose density is compared with the bulk's."""

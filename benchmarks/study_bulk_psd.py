@@ -20,7 +20,7 @@ import tomllib
 import numpy as np
 
 import regopack
-from regopack.sieve import class_of, reference_diameter, sieve_edges
+from regopack.packing.sieve import class_of, reference_diameter, sieve_edges
 
 
 def shares(d: np.ndarray, edges: np.ndarray, n_classes: int) -> tuple[np.ndarray, np.ndarray]:

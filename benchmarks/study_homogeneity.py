@@ -68,7 +68,7 @@ def main() -> None:
     _check_scene(parser, args, height)
     print(f"machine: {platform.machine()}, Python {platform.python_version()}")
     print(f"{args.scene}, {args.size:g} × {height:g} µm, rings {args.ring_width:g} wide")
-    from regopack.errors import RegopackError
+    from regopack.base.errors import RegopackError
 
     try:
         for seed in args.seeds:
@@ -137,9 +137,9 @@ def study_seed(args: argparse.Namespace, seed: int, height: float) -> None:
 
 def _check_scene(parser: argparse.ArgumentParser, args: argparse.Namespace, height: float) -> None:
     """Stop with regopack's one line unless the scene builds at this size and count."""
-    from regopack.errors import RegopackError
-    from regopack.manager import default_registry
-    from regopack.scene_model import load_scene, resolve_scene
+    from regopack.base.errors import RegopackError
+    from regopack.registry.manager import default_registry
+    from regopack.scenes.model import load_scene, resolve_scene
 
     settings = [f"domain.width={args.size}", f"domain.height={height}"]
     if args.count:

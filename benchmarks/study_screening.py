@@ -33,12 +33,12 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box
 
-from regopack.manager import default_registry
-from regopack.plugins.available_arc import kernel
-from regopack.plugins.available_arc.candidates import first_candidate, tree_set
-from regopack.plugins.available_arc.state import ArcState
-from regopack.run import draw_population, run_scene
-from regopack.scene_model import load_scene, resolve_scene
+from regopack.plugins.inserters.available_arc import kernel
+from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.inserters.available_arc.state import ArcState
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import draw_population, run_scene
+from regopack.scenes.model import load_scene, resolve_scene
 
 RATIO_BINS = (0.0, 0.5, 0.8, 0.9, 0.95, 0.98, 0.99, 0.999)
 RETIRE_AFTER = (1, 2, 4, 8, 16, 24, 32)

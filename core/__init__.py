@@ -1,6 +1,6 @@
 """regopack: dense packings of lunar regolith particles.
 
-The Python API mirrors the commands (see :mod:`regopack.api`)::
+The Python API mirrors the commands (see :mod:`regopack.api.functions`)::
 
     import regopack
 
@@ -17,16 +17,24 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-import regopack.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
+import regopack.base.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
 from regopack import _compat
 from regopack._version import __version__
-from regopack.packing import Packing
-from regopack.packing3d import Packing3D
-from regopack.packing3d import load_packing as load
-from regopack.packing3d import save_packing as save
+from regopack.packing.core import Packing
+from regopack.packing.core3d import Packing3D
+from regopack.packing.core3d import load_packing as load
+from regopack.packing.core3d import save_packing as save
 
 if TYPE_CHECKING:
-    from regopack.api import analyze, export, pack, pack_and_summarise, scene, sweep, verify
+    from regopack.api.functions import (
+        analyze,
+        export,
+        pack,
+        pack_and_summarise,
+        scene,
+        sweep,
+        verify,
+    )
 
 __all__ = [
     "Packing",
@@ -51,7 +59,7 @@ _API = frozenset({"analyze", "export", "pack", "pack_and_summarise", "scene", "s
 def __getattr__(name: str) -> Any:
     """Load the API functions on first use (PEP 562)."""
     if name in _API:
-        from regopack import api
+        from regopack.api import functions as api
 
         value = getattr(api, name)
         globals()[name] = value

@@ -1,5 +1,5 @@
 """Run the command line: ``python -m regopack``."""
 
-from regopack.cli import main
+from regopack.cli.commands import main
 
 raise SystemExit(main())

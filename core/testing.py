@@ -16,7 +16,7 @@ Examples
 >>> assert_valid_packing(p).ok
 True
 
->>> from regopack.plugins.eta import EtaConfig, EtaController
+>>> from regopack.plugins.density.eta import EtaConfig, EtaController
 >>> check_density_controller(EtaController(EtaConfig(eta=20)))
 """
 
@@ -30,18 +30,18 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from regopack.domain import PlaneDomain, Rectangle, domain_from_dict
-from regopack.interfaces import (
+from regopack.geometry.domain import PlaneDomain, Rectangle, domain_from_dict
+from regopack.geometry.population import ShapeBatch
+from regopack.geometry.solids import SolidBatch
+from regopack.packing.core import Packing
+from regopack.registry.interfaces import (
     DensityController,
     ShapeGenerator,
     SizeDistribution,
     SolidGenerator,
 )
-from regopack.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
-from regopack.packing import Packing
-from regopack.population import ShapeBatch
-from regopack.solids import SolidBatch
-from regopack.verification import VerifyReport, assert_valid_packing, verify
+from regopack.registry.manager import BUILTIN_PLUGINS, Registry, build_plugin_manager
+from regopack.verification.polygons import VerifyReport, assert_valid_packing, verify
 
 __all__ = [
     "DEFAULT_RADII",
@@ -109,7 +109,7 @@ def packing_from_polygons(
     *,
     placed: Sequence[bool] | None = None,
 ) -> Packing:
-    """Build a :class:`~regopack.packing.Packing` from absolute polygon outlines.
+    """Build a :class:`~regopack.packing.core.Packing` from absolute polygon outlines.
 
     Each particle's centre is the mean of its vertices. Useful to construct
     packings with known defects.
@@ -119,7 +119,7 @@ def packing_from_polygons(
     polygons
         One ``(k, 2)`` array of counter-clockwise vertices per particle.
     domain
-        The container (any :class:`~regopack.domain.PlaneDomain`) or the rectangle
+        The container (any :class:`~regopack.geometry.domain.PlaneDomain`) or the rectangle
         ``(xmin, xmax, ymin, ymax)``; by
         default the bounding box of the polygons.
     placed
@@ -329,7 +329,7 @@ def check_shape_generator(
 
     The rules checked:
 
-    - ``generate`` returns a :class:`~regopack.population.ShapeBatch` of the
+    - ``generate`` returns a :class:`~regopack.geometry.population.ShapeBatch` of the
       right shapes (one outline per radius, offsets rising from 0), with finite
       values, also for an empty array of radii;
     - every outline has at least three vertices, is counter-clockwise and convex
@@ -358,7 +358,7 @@ def check_shape_generator(
 
     Examples
     --------
-    >>> from regopack.plugins.octagon import OctagonConfig, RandomPolygon
+    >>> from regopack.plugins.shapes.octagon import OctagonConfig, RandomPolygon
     >>> batch = check_shape_generator(RandomPolygon(OctagonConfig(psi=2.0)))
     >>> len(batch)
     41
@@ -472,7 +472,7 @@ def check_solid_generator(
     """Check the contract of a 3D shape generator; raise :class:`AssertionError` if broken.
 
     The rules checked: ``generate`` returns a
-    :class:`~regopack.solids.SolidBatch` with one solid per radius (also for
+    :class:`~regopack.geometry.solids.SolidBatch` with one solid per radius (also for
     no radii); each solid is a sphere (the vertex ``(0, 0, 0)`` rounded by
     its radius) or a sharp convex polyhedron whose faces are planar loops of
     local vertex indices without repeats, counter-clockwise seen from
@@ -552,7 +552,7 @@ def check_size_distribution(
 
     Examples
     --------
-    >>> from regopack.plugins.change5 import Change5, Change5Config
+    >>> from regopack.plugins.sizes.change5 import Change5, Change5Config
     >>> radii = check_size_distribution(Change5(Change5Config()), n=20_000)
     >>> radii.shape
     (20000,)
@@ -693,7 +693,7 @@ def check_density_controller(
 
     Examples
     --------
-    >>> from regopack.plugins.eta import EtaConfig, EtaController
+    >>> from regopack.plugins.density.eta import EtaConfig, EtaController
     >>> check_density_controller(EtaController(EtaConfig(eta=0)))
     """
     who = _name(controller)

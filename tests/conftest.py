@@ -40,7 +40,7 @@ WARMUP_DONE = "test-warmup.done"
 
 def _warmup_marker() -> Path | None:
     """Return where the warm-up marks the kernel cache of the current sources as warm."""
-    import regopack.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
+    import regopack.base.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
 
     folder = os.environ.get("NUMBA_CACHE_DIR")
     return Path(folder) / WARMUP_DONE if folder else None
@@ -94,41 +94,40 @@ def pytest_collection_finish(session: pytest.Session) -> None:
 KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
     # the paper's order with disks (its loop for rounded particles)
     (
-        "plugins/analysis/test_common.py",
-        "plugins/analysis/test_homogeneity.py",
-        "plugins/available_arc/test_bound_queue.py",
-        "plugins/test_image_export.py",
-        "test_cli_domains.py",
+        "plugins/analyzers/test_common.py",
+        "plugins/analyzers/test_homogeneity.py",
+        "plugins/inserters/available_arc/test_bound_queue.py",
+        "plugins/exporters/test_image_export.py",
+        "cli/test_cli_domains.py",
     ),
     # the sweep (sharp and rounded, one thread and several), exact refusals, RSA
     (
-        "plugins/available_arc/test_batches.py",
-        "plugins/available_arc/test_disk_bound.py",
-        "plugins/available_arc/test_disk_path.py",
-        "plugins/available_arc/test_domains.py",
-        "plugins/available_arc/test_lag.py",
-        "plugins/available_arc/test_neighbours.py",
-        "plugins/available_arc/test_partner.py",
-        "plugins/available_arc/test_sweep.py",
-        "plugins/test_disk.py",
-        "plugins/test_rsa.py",
-        "test_summary_counts.py",
+        "plugins/inserters/available_arc/test_batches.py",
+        "plugins/inserters/available_arc/test_disk_bound.py",
+        "plugins/inserters/available_arc/test_disk_path.py",
+        "plugins/inserters/available_arc/test_domains.py",
+        "plugins/inserters/available_arc/test_lag.py",
+        "plugins/inserters/available_arc/test_neighbours.py",
+        "plugins/inserters/available_arc/test_partner.py",
+        "plugins/inserters/available_arc/test_sweep.py",
+        "plugins/shapes/test_disk.py",
+        "plugins/inserters/test_rsa.py",
+        "run/test_summary_counts.py",
         "test_doctests.py",
     ),
     # three dimensions (and the modules that run every kind of scene)
     (
-        "plugins/available_surface/test_*.py",
-        "plugins/polyhedra/test_*.py",
-        "plugins/analysis/test_*3d.py",
-        "plugins/test_*3d*.py",
-        "plugins/test_slice_export.py",
-        "plugins/test_solid_export_common.py",
-        "plugins/test_stl_export.py",
-        "plugins/solid_templates/test_*.py",
-        "test_*3d*.py",
-        "test_solids.py",
-        "test_cli_end_to_end.py",
-        "test_compilation.py",
+        "plugins/inserters/available_surface/test_*.py",
+        "plugins/shapes/polyhedra/test_*.py",
+        "plugins/analyzers/test_*3d.py",
+        "plugins/exporters/test_slice_export.py",
+        "plugins/exporters/test_solid_export_common.py",
+        "plugins/exporters/test_stl_export.py",
+        "plugins/shapes/solid_templates/test_*.py",
+        "*/test_*3d*.py",
+        "geometry/test_solids.py",
+        "cli/test_cli_end_to_end.py",
+        "run/test_compilation.py",
         "test_howto_export.py",
         "test_benchmarks_suite.py",
     ),

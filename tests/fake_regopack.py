@@ -14,18 +14,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from fakes import fake_registry
 
-import regopack.manager
-import regopack.plugins.analysis
+import regopack.plugins.analyzers
 import regopack.plugins.exporters
+import regopack.registry.manager
 
 
-def registry(**kwargs: object) -> regopack.manager.Registry:
+def registry(**kwargs: object) -> regopack.registry.manager.Registry:
     """The fakes with the built-in exporters and analyzers."""
-    return fake_registry(regopack.plugins.exporters, regopack.plugins.analysis)
+    return fake_registry(regopack.plugins.exporters, regopack.plugins.analyzers)
 
 
 if __name__ == "__main__":
-    regopack.manager.default_registry = registry  # type: ignore[assignment]
+    regopack.registry.manager.default_registry = registry  # type: ignore[assignment]
     from regopack.cli import main
 
     raise SystemExit(main())

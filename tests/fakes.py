@@ -12,9 +12,10 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.domain import Rectangle
-from regopack.hookspecs import hookimpl
-from regopack.interfaces import (
+from regopack.geometry.domain import Rectangle
+from regopack.geometry.population import Population, ShapeBatch
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.interfaces import (
     DensityController,
     InsertionResult,
     InsertionStrategy,
@@ -22,13 +23,12 @@ from regopack.interfaces import (
     ShapeGenerator,
     SizeDistribution,
 )
-from regopack.plugin_types import (
+from regopack.registry.plugin_types import (
     DensityControllerSpec,
     InserterSpec,
     ShapeSpec,
     SizeDistributionSpec,
 )
-from regopack.population import Population, ShapeBatch
 from regopack.testing import make_registry
 
 
@@ -176,8 +176,8 @@ class PythonDensity:
     def regopack_density_controllers(self):  # type: ignore[no-untyped-def]
         from pydantic import BaseModel
 
-        from regopack.interfaces import DensityController
-        from regopack.plugin_types import DensityControllerSpec
+        from regopack.registry.interfaces import DensityController
+        from regopack.registry.plugin_types import DensityControllerSpec
 
         class Config(BaseModel):
             pass

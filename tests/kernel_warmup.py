@@ -7,7 +7,7 @@ one compiles, in the order of the suite's later stages (``KERNEL_STAGES`` in
 ``conftest.py``), the paper's loop for disks, the four variants of the sweep
 (sharp polygons or rounded particles, on one thread or several), the loops of
 exact refusals and RSA, then the 3D scan and analyses. Both processes write the
-same on-disk cache (:mod:`regopack.jit`); a test that reaches a kernel first
+same on-disk cache (:mod:`regopack.base.jit`); a test that reaches a kernel first
 compiles it itself, with the same result. Between steps the script stops once the process named by
 its first argument (the test session) has gone; at the end it creates the file
 named by its second argument, which tells later sessions that the cache is warm.
@@ -23,7 +23,7 @@ from typing import Any
 import numba
 
 import regopack
-from regopack.warmup import TINY, VARIANTS
+from regopack.api.warmup import TINY, VARIANTS
 
 DISKS: dict[str, Any] = {"phases.0.shape": {"kind": "disk"}}
 
@@ -48,8 +48,8 @@ stage of the suite)."""
 
 def main() -> None:
     """Pack each step's tiny scene once (compiling or loading its kernels)."""
-    from regopack.analysis import dimensions_of
-    from regopack.manager import default_registry
+    from regopack.analysis.pipeline import dimensions_of
+    from regopack.registry.manager import default_registry
 
     parent = int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid()
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]

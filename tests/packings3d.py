@@ -4,8 +4,11 @@ from __future__ import annotations
 
 import functools
 
+import numpy as np
+
 import regopack
-from regopack.packing3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core3d import Packing3D
 
 PHASES = (("plagioclase", 0.5, 1.0), ("pyroxene", 0.3, 3.0), ("glass", 0.2, 0.5))
 
@@ -47,7 +50,7 @@ def cube_and_sphere(rounded: bool = True) -> Packing3D:
     """A cube of side 2 at (3, 3, 3) and a sphere of radius 1 at (7, 3, 3) in a 10 µm box."""
     import numpy as np
 
-    from regopack.domain import Box
+    from regopack.geometry.domain import Box
 
     cube = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     normals = np.array([cube[loop].mean(axis=0) for loop in CUBE_LOOPS])
@@ -80,3 +83,51 @@ def spheres3d(side: float = 15.0) -> Packing3D:
     packing = regopack.pack(scene, verify=False)
     assert isinstance(packing, Packing3D)
     return packing
+
+
+def _cube_arrays(half: float) -> dict[str, np.ndarray]:
+    """One axis-aligned cube of half-side ``half``: vertices and faces as in a solid batch."""
+    v = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float) * half
+    # vertex index = 4 * (x > 0) + 2 * (y > 0) + (z > 0); loops counter-clockwise from outside
+    loops = [
+        [0, 1, 3, 2],  # x = -h
+        [4, 6, 7, 5],  # x = +h
+        [0, 4, 5, 1],  # y = -h
+        [2, 3, 7, 6],  # y = +h
+        [0, 2, 6, 4],  # z = -h
+        [1, 5, 7, 3],  # z = +h
+    ]
+    normals = np.array([[-1, 0, 0], [1, 0, 0], [0, -1, 0], [0, 1, 0], [0, 0, -1], [0, 0, 1]], float)
+    return {
+        "vertices": v,
+        "face_vertices": np.array(loops, dtype=np.int64).ravel(),
+        "normals": normals,
+        "support": np.full(6, half),
+    }
+
+
+def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) -> Packing3D:
+    """Cubes at ``centres`` (NaN rows: not placed) in a 10-µm box."""
+    n = len(centres)
+    cube = _cube_arrays(half)
+    placed = ~np.isnan(np.asarray(centres, float)).any(axis=1)
+    index = np.full(n, -1)
+    index[placed] = np.arange(int(placed.sum()))
+    args: dict[str, object] = {
+        "radius": np.full(n, half * (6 / np.pi) ** (1 / 3)),
+        "mineral": np.zeros(n, dtype=np.int64),
+        "mineral_names": ("glass",),
+        "vertices": np.tile(cube["vertices"], (n, 1)),
+        "offsets": np.arange(n + 1) * 8,
+        "face_vertices": np.tile(cube["face_vertices"], n),
+        "face_vertex_offsets": np.arange(6 * n + 1) * 4,
+        "face_offsets": np.arange(n + 1) * 6,
+        "normals": np.tile(cube["normals"], (n, 1)),
+        "support": np.tile(cube["support"], n),
+        "rotation": np.tile([1.0, 0, 0, 0], (n, 1)),
+        "centre": np.asarray(centres, float),
+        "insertion_index": index,
+        "domain": Box(0, 10, 0, 10, 0, 10),
+    }
+    args.update(kw)
+    return Packing3D(**args)  # type: ignore[arg-type]

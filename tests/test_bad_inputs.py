@@ -19,14 +19,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import regopack.analysis
-import regopack.experiment_file
-import regopack.run
+import regopack.analysis.pipeline
+import regopack.experiments.file
+import regopack.run.pipeline
+from regopack.base.errors import PackingError
 from regopack.cli import main
-from regopack.errors import PackingError
-from regopack.packing import save
+from regopack.packing.core import save
 from regopack.testing import packing_from_polygons
-from regopack.verification import verify
+from regopack.verification.polygons import verify
 
 GIB = 1024**3
 SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]
@@ -86,9 +86,11 @@ FILES: dict[str, Callable[[Path], None]] = {
 def workdir(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Path:
     """Run in a temporary directory holding the input files, on a machine with 16 GiB."""
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setattr(regopack.run, "memory_limit", lambda: (16 * GIB, "memory"), raising=False)
     monkeypatch.setattr(
-        regopack.experiment_file, "memory_limit", lambda: (16 * GIB, "memory"), raising=False
+        regopack.run.pipeline, "memory_limit", lambda: (16 * GIB, "memory"), raising=False
+    )
+    monkeypatch.setattr(
+        regopack.experiments.file, "memory_limit", lambda: (16 * GIB, "memory"), raising=False
     )
     for name, write in FILES.items():
         write(tmp_path / name)
@@ -460,8 +462,13 @@ def _disk_full(*args: object, **kwargs: object) -> None:
 @pytest.mark.parametrize(
     ("module", "writer", "argv", "out"),
     [
-        (regopack.run, "save", ["run", "small", "--set", "count=5", "--quiet"], "runs/x"),
-        (regopack.analysis, "write_json_atomic", ["analyze", "packing.npz", "--no-figures"], "a"),
+        (regopack.run.pipeline, "save", ["run", "small", "--set", "count=5", "--quiet"], "runs/x"),
+        (
+            regopack.analysis.pipeline,
+            "write_json_atomic",
+            ["analyze", "packing.npz", "--no-figures"],
+            "a",
+        ),
     ],
     ids=["run", "analyze"],
 )

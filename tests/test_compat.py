@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-import regopack.domain
+import regopack.geometry.domain
 from regopack._compat import FINDER, MOVED_MODULES, AliasFinder, install
 
 REPO = Path(__file__).resolve().parents[1]
@@ -32,30 +32,30 @@ def test_an_old_module_name_is_the_new_module_and_warns_once(
     fresh_domain3d: None, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     with pytest.warns(
-        DeprecationWarning, match=r"regopack\.domain3d is deprecated.*regopack\.domain"
+        DeprecationWarning, match=r"regopack\.domain3d is deprecated.*regopack\.geometry\.domain"
     ) as caught:
         import regopack.domain3d as old
     assert [w.filename for w in caught] == [__file__]  # blames the importing line
-    assert old is regopack.domain
-    assert old.Box is regopack.domain.Box
-    assert regopack.domain.__spec__.name == "regopack.domain"
+    assert old is regopack.geometry.domain
+    assert old.Box is regopack.geometry.domain.Box
+    assert regopack.geometry.domain.__spec__.name == "regopack.geometry.domain"
     monkeypatch.setattr(old, "DOMAIN_KINDS", {})
-    assert regopack.domain.DOMAIN_KINDS == {}
+    assert regopack.geometry.domain.DOMAIN_KINDS == {}
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         from regopack.domain3d import Box  # imported already: no second warning
-    assert Box is regopack.domain.Box
+    assert Box is regopack.geometry.domain.Box
 
 
 def test_the_old_3d_names_read_boxes_and_warn(fresh_domain3d: None) -> None:
     with pytest.warns(DeprecationWarning):
         from regopack.domain3d import DOMAIN3D_KINDS, domain3d_from_dict
     assert DOMAIN3D_KINDS == {
-        "box": regopack.domain.Box,
-        "periodic-box": regopack.domain.PeriodicBox,
+        "box": regopack.geometry.domain.Box,
+        "periodic-box": regopack.geometry.domain.PeriodicBox,
     }
     box = domain3d_from_dict({"kind": "periodic-box", "bounds": [0, 1, 0, 2, 0, 3]})
-    assert box == regopack.domain.PeriodicBox(0.0, 1.0, 0.0, 2.0, 0.0, 3.0)
+    assert box == regopack.geometry.domain.PeriodicBox(0.0, 1.0, 0.0, 2.0, 0.0, 3.0)
     with pytest.raises(ValueError):
         domain3d_from_dict({"kind": "rectangle", "bounds": [0, 1, 0, 1]})
 

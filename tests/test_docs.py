@@ -1,6 +1,6 @@
 """The documentation keeps up with the code.
 
-- every hook of :mod:`regopack.hookspecs` has a section in the plugin guide;
+- every hook of :mod:`regopack.registry.hookspecs` has a section in the plugin guide;
 - every field of every built-in plugin's config model, and of the core scene
   models, has a description and is named in the scene format reference, in the
   section of its plugin or model;
@@ -20,11 +20,11 @@ from pathlib import Path
 import pytest
 from pydantic import BaseModel
 
-from regopack import hookspecs
-from regopack.cli import build_parser
-from regopack.manager import default_registry
-from regopack.plugin_types import KINDS
-from regopack.scene_model import Domain, Outputs, Phase, PluginRef, Scene
+from regopack.cli.commands import build_parser
+from regopack.registry import hookspecs
+from regopack.registry.manager import default_registry
+from regopack.registry.plugin_types import KINDS
+from regopack.scenes.model import Domain, Outputs, Phase, PluginRef, Scene
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"

@@ -7,10 +7,10 @@ from pathlib import Path
 
 import pytest
 
-from regopack.experiment import expand, load_experiment
-from regopack.manager import default_registry
-from regopack.run import default_out_dir, run_scene
-from regopack.scene_model import builtin_scenes, load_scene, resolve_scene
+from regopack.experiments import expand, load_experiment
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import default_out_dir, run_scene
+from regopack.scenes.model import builtin_scenes, load_scene, resolve_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLES = ROOT / "docs" / "examples"

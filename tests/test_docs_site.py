@@ -29,6 +29,6 @@ def test_the_site_builds_strictly(tmp_path):
     assert done.returncode == 0, done.stderr[-3000:]
     page = (tmp_path / "site" / "reference" / "api" / "functions" / "index.html").read_text()
     for name in ("scene", "pack", "analyze", "verify", "export", "sweep"):
-        assert f'id="regopack.api.{name}"' in page
+        assert f'id="regopack.api.functions.{name}"' in page
     assert ":func:" not in page  # Sphinx roles are rewritten
     shutil.rmtree(tmp_path / "site")

@@ -5,11 +5,11 @@ from __future__ import annotations
 import pytest
 from cli_helpers import one_error_line
 
+from regopack.base.messages import closest, fields_at
 from regopack.cli import main
-from regopack.manager import default_registry
-from regopack.messages import closest, fields_at
-from regopack.packing import save
-from regopack.scene_model import Domain, Scene
+from regopack.packing.core import save
+from regopack.registry.manager import default_registry
+from regopack.scenes.model import Domain, Scene
 from regopack.testing import packing_from_polygons
 
 SCENE_FIELDS = "name, seed, count, length_unit, domain, size, phases, insertion, density, outputs"
@@ -76,8 +76,8 @@ def test_a_bad_exporter_parameter_names_the_exporter_and_its_parameters(tmp_path
 
 
 def test_the_exporter_names_the_source_of_its_parameters():
-    from regopack.errors import ConfigError
-    from regopack.exporting import build_exporter
+    from regopack.base.errors import ConfigError
+    from regopack.exports.pipeline import build_exporter
 
     with pytest.raises(ConfigError) as info:
         build_exporter(default_registry(), "svg", {"width_px": -1}, source="--set")
@@ -109,7 +109,7 @@ def test_a_set_in_the_same_table_is_not_blamed_for_the_file(tmp_path, capsys):
 @pytest.mark.parametrize("extra", ["gsd", "dask"])
 def test_install_hints_work_from_a_clone(extra):
     """``pip install regopack[gsd]`` needs regopack on an index; a clone installs '.[gsd]'."""
-    from regopack.messages import install_hint
+    from regopack.base.messages import install_hint
 
     hint = install_hint(extra)
     assert "regopack[" not in hint
@@ -145,7 +145,7 @@ def test_every_sampled_scene_error_names_its_source(tmp_path, monkeypatch, capsy
     """Bad values over the scene's fields, by --set and in a file: each error names where."""
     import tomllib
 
-    from regopack import _toml
+    from regopack.base import toml as _toml
 
     monkeypatch.chdir(tmp_path)
     text = main_scene_text()

@@ -33,9 +33,9 @@ from typing import Any
 import numpy as np
 import pytest
 
-from regopack.packing import load
-from regopack.run import run_scene
-from regopack.scene_model import load_scene, resolve_scene
+from regopack.packing.core import load
+from regopack.run.pipeline import run_scene
+from regopack.scenes.model import load_scene, resolve_scene
 from regopack.testing import (
     assert_valid_packing,
     check_shape_generator,

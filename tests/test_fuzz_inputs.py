@@ -21,9 +21,9 @@ import numpy as np
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from regopack import _toml
+from regopack.base import toml as _toml
 from regopack.cli import main
-from regopack.packing import save
+from regopack.packing.core import save
 from regopack.testing import packing_from_polygons
 
 SQUARE = [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (0.0, 1.0)]

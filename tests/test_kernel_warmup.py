@@ -51,12 +51,12 @@ def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
     conftest = _suite_conftest()
     here = Path(conftest.__file__).resolve().parent
     names = [
-        "test_cli_end_to_end.py",
-        "plugins/available_arc/test_sweep.py",
-        "test_schema.py",
-        "plugins/analysis/test_common.py",
-        "plugins/analysis/test_rdf.py",
-        "plugins/analysis/test_contacts3d.py",
-        "plugins/test_octagon.py",
+        "cli/test_cli_end_to_end.py",
+        "plugins/inserters/available_arc/test_sweep.py",
+        "scene/test_schema.py",
+        "plugins/analyzers/test_common.py",
+        "plugins/analyzers/test_rdf.py",
+        "plugins/analyzers/test_contacts3d.py",
+        "plugins/shapes/test_octagon.py",
     ]
     assert [conftest._stage(here / n, here) for n in names] == [3, 2, 0, 1, 0, 3, 0]

@@ -21,10 +21,10 @@ from typing import Any
 
 import pytest
 
-import regopack.manager
+import regopack.registry.manager
+from regopack.base.outdir import PAUSE_ENV
 from regopack.cli import main
-from regopack.outdir import PAUSE_ENV
-from regopack.packing import load
+from regopack.packing.core import load
 
 HERE = Path(__file__).resolve().parent
 FAKE_CLI = HERE / "fake_regopack.py"
@@ -123,7 +123,7 @@ def fakes(monkeypatch: pytest.MonkeyPatch) -> None:
         import fake_regopack
     finally:
         sys.path.remove(str(HERE))
-    monkeypatch.setattr(regopack.manager, "default_registry", fake_regopack.registry)
+    monkeypatch.setattr(regopack.registry.manager, "default_registry", fake_regopack.registry)
 
 
 def run(*argv: str) -> None:
@@ -193,7 +193,7 @@ def test_a_killed_analysis_leaves_the_old_one(tmp_path: Path, fakes: None) -> No
 
 
 def test_a_terminated_sweep_stops_its_workers_and_resumes(tmp_path: Path) -> None:
-    from regopack.experiment import run_experiment
+    from regopack.experiments import run_experiment
 
     experiment = tmp_path / "tiny.toml"
     experiment.write_text(

@@ -8,12 +8,12 @@ import math
 import numpy as np
 import pytest
 
-from regopack.interfaces import DensityController, ShapeGenerator, SizeDistribution
-from regopack.manager import default_registry
-from regopack.plugins.change5 import Change5, Change5Config
-from regopack.plugins.eta import EtaConfig, EtaController
-from regopack.plugins.octagon import OctagonConfig, RandomPolygon
-from regopack.population import ShapeBatch
+from regopack.geometry.population import ShapeBatch
+from regopack.plugins.density.eta import EtaConfig, EtaController
+from regopack.plugins.shapes.octagon import OctagonConfig, RandomPolygon
+from regopack.plugins.sizes.change5 import Change5, Change5Config
+from regopack.registry.interfaces import DensityController, ShapeGenerator, SizeDistribution
+from regopack.registry.manager import default_registry
 from regopack.testing import (
     DEFAULT_RADII,
     check_density_controller,

@@ -1,50 +1,121 @@
-"""Built-in experiments (TOML files), run with ``regopack sweep --builtin NAME``.
+"""Experiments: sweeps of scene parameters described by a TOML file.
 
-Each ``NAME.toml`` here is an experiment file (see :mod:`regopack.experiment`);
-files named ``*-scene.toml`` are scenes that the experiments use as their base.
+An experiment file names a base scene and the scene fields to vary::
+
+    name = "eta-vs-seed"
+    base = "small"                       # built-in scene or path of a scene file
+    metrics = ["placed", "phi_interior"]  # optional; see DEFAULT_METRICS
+    max_runs = 10000                     # optional; a larger grid is refused (MAX_RUNS)
+
+    [set]                                # applied to every run
+    count = 150
+
+    [sweep]                              # every combination is run
+    "density.eta" = [0, 5, 10]
+    seed = "1..3"                        # integer range, both ends included
+
+    [[zip]]                              # these vary together
+    "domain.width" = [200, 400]
+    "domain.height" = [200, 400]
+
+:func:`load_experiment` reads and checks the file, :func:`expand` lists the
+runs of the grid, :func:`check_runs` validates every run's scene, and
+:func:`run_experiment` runs them (in worker processes, in-process, or on a Dask
+cluster) and collects their summaries into ``results.csv``.
+
+The code lies in one module per concern: :mod:`regopack.experiments.file` (the
+model and reading the file), :mod:`regopack.experiments.grid` (the runs of the
+grid), :mod:`regopack.experiments.workers` (running scenes on processes or
+Dask), :mod:`regopack.experiments.results` (``results.csv``) and
+:mod:`regopack.experiments.run` (the sweep as a whole); this module gathers
+their public names.
 """
 
 from __future__ import annotations
 
-from importlib import resources
-from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
-from regopack._toml import first_comment
-from regopack.errors import ConfigError
+from regopack._exports import load_export
 
-__all__ = ["builtin_experiment_path", "builtin_experiments"]
+if TYPE_CHECKING:
+    from regopack.experiments.builtin import builtin_experiment_path as builtin_experiment_path
+    from regopack.experiments.builtin import builtin_experiments as builtin_experiments
+    from regopack.experiments.file import MAX_RUNS as MAX_RUNS
+    from regopack.experiments.file import Experiment as Experiment
+    from regopack.experiments.file import SweepValues as SweepValues
+    from regopack.experiments.file import experiment_from_dict as experiment_from_dict
+    from regopack.experiments.file import load_experiment as load_experiment
+    from regopack.experiments.grid import ERROR_TXT as ERROR_TXT
+    from regopack.experiments.grid import SCENE_JSON as SCENE_JSON
+    from regopack.experiments.grid import RunSpec as RunSpec
+    from regopack.experiments.grid import check_runs as check_runs
+    from regopack.experiments.grid import expand as expand
+    from regopack.experiments.results import DEFAULT_METRICS as DEFAULT_METRICS
+    from regopack.experiments.results import RESULTS_CSV as RESULTS_CSV
+    from regopack.experiments.results import ExperimentProgress as ExperimentProgress
+    from regopack.experiments.results import ExperimentResult as ExperimentResult
+    from regopack.experiments.results import RunResult as RunResult
+    from regopack.experiments.run import EXPERIMENT_JSON as EXPERIMENT_JSON
+    from regopack.experiments.run import default_experiment_dir as default_experiment_dir
+    from regopack.experiments.run import run_experiment as run_experiment
+    from regopack.experiments.workers import PARENT_POLL_S as PARENT_POLL_S
+    from regopack.experiments.workers import verify_metrics as verify_metrics
 
-_SCENE_SUFFIX = "-scene.toml"
+__all__ = [
+    "DEFAULT_METRICS",
+    "ERROR_TXT",
+    "EXPERIMENT_JSON",
+    "MAX_RUNS",
+    "PARENT_POLL_S",
+    "RESULTS_CSV",
+    "SCENE_JSON",
+    "Experiment",
+    "ExperimentProgress",
+    "ExperimentResult",
+    "RunResult",
+    "RunSpec",
+    "SweepValues",
+    "builtin_experiment_path",
+    "builtin_experiments",
+    "check_runs",
+    "default_experiment_dir",
+    "expand",
+    "experiment_from_dict",
+    "load_experiment",
+    "run_experiment",
+    "verify_metrics",
+]
+
+_SOURCES = {
+    "DEFAULT_METRICS": "regopack.experiments.results",
+    "ERROR_TXT": "regopack.experiments.grid",
+    "EXPERIMENT_JSON": "regopack.experiments.run",
+    "Experiment": "regopack.experiments.file",
+    "ExperimentProgress": "regopack.experiments.results",
+    "ExperimentResult": "regopack.experiments.results",
+    "MAX_RUNS": "regopack.experiments.file",
+    "PARENT_POLL_S": "regopack.experiments.workers",
+    "RESULTS_CSV": "regopack.experiments.results",
+    "RunResult": "regopack.experiments.results",
+    "RunSpec": "regopack.experiments.grid",
+    "SCENE_JSON": "regopack.experiments.grid",
+    "SweepValues": "regopack.experiments.file",
+    "builtin_experiment_path": "regopack.experiments.builtin",
+    "builtin_experiments": "regopack.experiments.builtin",
+    "check_runs": "regopack.experiments.grid",
+    "default_experiment_dir": "regopack.experiments.run",
+    "expand": "regopack.experiments.grid",
+    "experiment_from_dict": "regopack.experiments.file",
+    "load_experiment": "regopack.experiments.file",
+    "run_experiment": "regopack.experiments.run",
+    "verify_metrics": "regopack.experiments.workers",
+}
 
 
-def builtin_experiments() -> dict[str, str]:
-    """Built-in experiments: name to one-line description (the file's first comment).
-
-    Examples
-    --------
-    >>> sorted(builtin_experiments())
-    ['eta', 'scaling', 'screening', 'seeds', 'stress']
-    """
-    out: dict[str, str] = {}
-    for entry in sorted(resources.files(__name__).iterdir(), key=lambda e: e.name):
-        name = entry.name
-        if not name.endswith(".toml") or name.endswith(_SCENE_SUFFIX):
-            continue
-        out[name.removesuffix(".toml")] = first_comment(entry.read_text(encoding="utf-8"))
-    return out
+def __getattr__(name: str) -> Any:
+    """Load the names of the experiment modules on first use (PEP 562)."""
+    return load_export(globals(), _SOURCES, name)
 
 
-def builtin_experiment_path(name: str) -> Path:
-    """Return the file of the built-in experiment ``name``.
-
-    Raises
-    ------
-    ConfigError
-        One line listing the built-in experiments when ``name`` is not one.
-    """
-    names = builtin_experiments()
-    if name not in names:
-        raise ConfigError(
-            f"--builtin {name}: no such built-in experiment; choose one of: {', '.join(names)}"
-        )
-    return Path(str(resources.files(__name__).joinpath(f"{name}.toml")))
+def __dir__() -> list[str]:
+    return sorted(__all__)

@@ -22,8 +22,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 import regopack
-from regopack.drawing3d import draw_section, draw_view
-from regopack.packing3d import Packing3D
+from regopack.packing.core3d import Packing3D
+from regopack.packing.drawing3d import draw_section, draw_view
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE.parent / "images" / "packing3d.png"

@@ -18,8 +18,8 @@ from pathlib import Path
 import vtk
 
 import regopack
-from regopack.colours import mineral_colours
-from regopack.exporting import export_packing
+from regopack.base.colours import mineral_colours
+from regopack.exports.pipeline import export_packing
 
 HERE = Path(__file__).resolve().parent
 IMAGES_DIR = HERE.parent / "images"
@@ -81,12 +81,12 @@ def main() -> None:
     parser.add_argument("--packing", type=Path, help="packing file (default: pack the small scene)")
     parser.add_argument("--out", type=Path, default=IMAGES_DIR / "export-vtk.png")
     args = parser.parse_args()
-    from regopack.manager import default_registry
+    from regopack.registry.manager import default_registry
 
     with tempfile.TemporaryDirectory() as tmp:
         if args.packing is None:
-            from regopack.run import run_scene
-            from regopack.scene_model import load_scene, resolve_scene
+            from regopack.run.pipeline import run_scene
+            from regopack.scenes.model import load_scene, resolve_scene
 
             resolved = resolve_scene(load_scene("small"), default_registry())
             packing = run_scene(resolved, None).packing

@@ -33,11 +33,11 @@ from matplotlib.patches import Patch
 from PIL import Image
 
 import regopack
-from regopack.colours import mineral_colours
-from regopack.exporting import export_packing
-from regopack.manager import default_registry
-from regopack.packing import Packing
-from regopack.plugins.image_export import image_paths
+from regopack.base.colours import mineral_colours
+from regopack.exports.pipeline import export_packing
+from regopack.packing.core import Packing
+from regopack.plugins.exporters.image_export import image_paths
+from regopack.registry.manager import default_registry
 
 HERE = Path(__file__).resolve().parent
 IMAGES_DIR = HERE.parent / "images"
@@ -67,8 +67,8 @@ WINDOW = 60.0
 
 
 def _pack_small() -> Packing:
-    from regopack.run import run_scene
-    from regopack.scene_model import load_scene, resolve_scene
+    from regopack.run.pipeline import run_scene
+    from regopack.scenes.model import load_scene, resolve_scene
 
     return run_scene(resolve_scene(load_scene("small"), default_registry())).packing
 

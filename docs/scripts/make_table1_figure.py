@@ -27,8 +27,8 @@ from matplotlib.patches import ConnectionPatch, Patch, Rectangle
 from PIL import Image
 
 import regopack
-from regopack.colours import mineral_colours
-from regopack.packing import Packing
+from regopack.base.colours import mineral_colours
+from regopack.packing.core import Packing
 
 HERE = Path(__file__).resolve().parent
 IMAGES_DIR = HERE.parent / "images"
@@ -40,9 +40,9 @@ ZOOM = (0.0, 100.0, 0.0, 100.0)
 
 def run_default_scene(seed: int | None) -> Packing:
     """Pack the default scene (the paper's Table 1) in memory and return the packing."""
-    from regopack.manager import default_registry
-    from regopack.run import run_scene
-    from regopack.scene_model import load_scene, resolve_scene
+    from regopack.registry.manager import default_registry
+    from regopack.run.pipeline import run_scene
+    from regopack.scenes.model import load_scene, resolve_scene
 
     scene = resolve_scene(load_scene(None, seed=seed), default_registry())
     return run_scene(scene).packing

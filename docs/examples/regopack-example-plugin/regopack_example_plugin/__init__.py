@@ -33,11 +33,11 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from regopack.hookspecs import hookimpl
-from regopack.interfaces import Analyzer, ShapeGenerator
-from regopack.packing import Packing
-from regopack.plugin_types import AnalyzerSpec, ShapeSpec
-from regopack.population import ShapeBatch
+from regopack.geometry.population import ShapeBatch
+from regopack.packing.core import Packing
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.interfaces import Analyzer, ShapeGenerator
+from regopack.registry.plugin_types import AnalyzerSpec, ShapeSpec
 
 __all__ = [
     "AspectConfig",

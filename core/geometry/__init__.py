@@ -1,0 +1,1 @@
+"""Geometry that does not depend on the dimension's inserter: domains, particle batches, volumes."""

@@ -1,0 +1,210 @@
+"""Convex solids of a three-dimensional population: polyhedra and spheres.
+
+A :class:`SolidBatch` is the 3D counterpart of :class:`regopack.geometry.population.ShapeBatch`:
+every particle is a convex polyhedron given by its vertices and faces,
+relative to its reference point (which lies strictly inside), possibly grown
+by a sphere of radius ``rounding``. A sphere of radius ``r`` is the single
+vertex ``(0, 0, 0)`` rounded by ``r``, with no faces.
+
+The equivalent radius of a solid is that of the sphere of equal volume.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+__all__ = ["SolidBatch", "concat_solids", "sphere_volume"]
+
+
+def sphere_volume(radius: FloatArray | float) -> FloatArray:
+    """Volume ``4/3 pi r^3`` of spheres of radius ``radius``."""
+    r = np.asarray(radius, dtype=np.float64)
+    out: FloatArray = (4.0 / 3.0) * np.pi * r * r * r
+    return out
+
+
+@dataclass(frozen=True)
+class SolidBatch:
+    """Convex solids of a batch of particles, in ragged (flat + offsets) form.
+
+    Attributes
+    ----------
+    vertices
+        ``(M, 3)`` vertices of all particles, relative to each particle's
+        reference point.
+    offsets
+        ``(n + 1,)``: particle ``j``'s vertices are ``vertices[offsets[j]:offsets[j + 1]]``.
+    face_vertices
+        Vertex loops of all faces, counter-clockwise seen from outside; the
+        indices are local to the particle (``0`` is its first vertex).
+    face_vertex_offsets
+        ``(F + 1,)``: face ``f``'s loop runs from ``face_vertices[face_vertex_offsets[f]]``
+        to just before ``face_vertices[face_vertex_offsets[f + 1]]``.
+    face_offsets
+        ``(n + 1,)``: particle ``j``'s faces are ``face_offsets[j]`` to ``face_offsets[j + 1] - 1``.
+    normals
+        ``(F, 3)`` unit outward normal of every face.
+    support
+        ``(F,)`` plane offset of every face: face ``f`` lies in the plane
+        ``normals[f] . x = support[f]``.
+    rotation
+        ``(n, 4)`` unit quaternion ``(w, x, y, z)`` that turned each particle from
+        its generator's frame into the packing's.
+    rounding
+        ``(n,)`` radius of the sphere that rounds each solid, or ``None`` for
+        sharp polyhedra.
+    """
+
+    vertices: FloatArray
+    offsets: IntArray
+    face_vertices: IntArray
+    face_vertex_offsets: IntArray
+    face_offsets: IntArray
+    normals: FloatArray
+    support: FloatArray
+    rotation: FloatArray
+    rounding: FloatArray | None = None
+
+    dimension = 3
+    """Spatial dimension of the solids."""
+
+    def __post_init__(self) -> None:
+        n = self.offsets.shape[0] - 1
+        problems = []
+        if self.vertices.ndim != 2 or self.vertices.shape[1] != 3:
+            problems.append(f"vertices of shape {self.vertices.shape}, not (M, 3)")
+        if self.face_offsets.shape != (n + 1,):
+            problems.append(f"face_offsets of shape {self.face_offsets.shape}, not ({n + 1},)")
+        faces = int(self.face_vertex_offsets.shape[0]) - 1
+        if self.normals.shape != (faces, 3) or self.support.shape != (faces,):
+            problems.append(
+                f"normals {self.normals.shape} and support {self.support.shape} for {faces} faces"
+            )
+        if self.rotation.shape != (n, 4):
+            problems.append(f"rotation of shape {self.rotation.shape}, not ({n}, 4)")
+        if self.rounding is not None and self.rounding.shape != (n,):
+            problems.append(f"rounding of shape {self.rounding.shape}, not ({n},)")
+        if problems:
+            raise ValueError("inconsistent solid batch: " + "; ".join(problems))
+
+    def __len__(self) -> int:
+        return int(self.offsets.shape[0] - 1)
+
+    def solid(self, j: int) -> tuple[FloatArray, list[IntArray]]:
+        """Vertices of particle ``j`` and its faces as loops of local vertex indices."""
+        verts = self.vertices[self.offsets[j] : self.offsets[j + 1]]
+        loops = [
+            self.face_vertices[self.face_vertex_offsets[f] : self.face_vertex_offsets[f + 1]]
+            for f in range(int(self.face_offsets[j]), int(self.face_offsets[j + 1]))
+        ]
+        return verts, loops
+
+    @property
+    def rounding_radius(self) -> FloatArray:
+        """Rounding radius of every particle (zeros for sharp polyhedra)."""
+        if self.rounding is None:
+            return np.zeros(len(self), dtype=np.float64)
+        return np.asarray(self.rounding, dtype=np.float64)
+
+    @property
+    def circumradius(self) -> FloatArray:
+        """Largest distance from each particle's reference point to its surface."""
+        d = np.sqrt(np.einsum("ij,ij->i", self.vertices, self.vertices))
+        counts = np.diff(self.offsets)
+        out = np.zeros(len(self), dtype=np.float64)
+        nonempty = counts > 0
+        out[nonempty] = np.maximum.reduceat(d, self.offsets[:-1][nonempty])
+        return out + self.rounding_radius
+
+    @property
+    def volume(self) -> FloatArray:
+        """Volume of every particle.
+
+        A polyhedron's is the sum of the cones from its reference point over
+        its faces; a sphere's is ``4/3 pi r^3``. A rounded polyhedron (whose
+        volume would need Steiner's formula) raises ``NotImplementedError``.
+        """
+        n = len(self)
+        rho = self.rounding_radius
+        out = np.zeros(n, dtype=np.float64)
+        for j in range(n):
+            f0, f1 = int(self.face_offsets[j]), int(self.face_offsets[j + 1])
+            if f1 > f0 and rho[j] > 0:
+                raise NotImplementedError("the volume of a rounded polyhedron")
+            verts = self.vertices[self.offsets[j] : self.offsets[j + 1]]
+            total = 0.0
+            for f in range(f0, f1):
+                loop = self.face_vertices[
+                    self.face_vertex_offsets[f] : self.face_vertex_offsets[f + 1]
+                ]
+                p = verts[loop]
+                # area vector of the planar loop, times the plane's distance / 3
+                area = 0.5 * np.cross(p - p[0], np.roll(p, -1, axis=0) - p[0]).sum(axis=0)
+                total += float(np.dot(area, self.normals[f])) * float(self.support[f]) / 3.0
+            out[j] = total + (4.0 / 3.0) * np.pi * rho[j] ** 3
+        return out
+
+
+def concat_solids(parts: list[tuple[IntArray, SolidBatch]], n: int) -> SolidBatch:
+    """Interleave solid batches generated per phase back into particle order.
+
+    Parameters
+    ----------
+    parts
+        ``(indices, batch)`` pairs: ``batch`` holds the solids of the particles
+        ``indices`` (ascending) of the population.
+    n
+        Total number of particles.
+    """
+    owner = np.full(n, -1, dtype=np.int64)
+    local = np.zeros(n, dtype=np.int64)
+    for b, (idx, _) in enumerate(parts):
+        owner[idx] = b
+        local[idx] = np.arange(len(idx))
+    rounded = any(batch.rounding is not None for _, batch in parts)
+    verts, loops = [], []
+    vcount = np.zeros(n, dtype=np.int64)
+    fcount = np.zeros(n, dtype=np.int64)
+    lcount = []
+    normals, support = [], []
+    rotation = np.zeros((n, 4))
+    rounding = np.zeros(n) if rounded else None
+    for j in range(n):
+        batch = parts[int(owner[j])][1]
+        q = int(local[j])
+        verts.append(batch.vertices[batch.offsets[q] : batch.offsets[q + 1]])
+        vcount[j] = batch.offsets[q + 1] - batch.offsets[q]
+        f0, f1 = int(batch.face_offsets[q]), int(batch.face_offsets[q + 1])
+        fcount[j] = f1 - f0
+        normals.append(batch.normals[f0:f1])
+        support.append(batch.support[f0:f1])
+        for f in range(f0, f1):
+            a, b = int(batch.face_vertex_offsets[f]), int(batch.face_vertex_offsets[f + 1])
+            loops.append(batch.face_vertices[a:b])
+            lcount.append(b - a)
+        rotation[j] = batch.rotation[q]
+        if rounding is not None:
+            rounding[j] = batch.rounding_radius[q]
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(vcount, out=offsets[1:])
+    face_offsets = np.zeros(n + 1, dtype=np.int64)
+    np.cumsum(fcount, out=face_offsets[1:])
+    fvo = np.zeros(len(lcount) + 1, dtype=np.int64)
+    np.cumsum(np.asarray(lcount, dtype=np.int64), out=fvo[1:])
+    return SolidBatch(
+        vertices=np.concatenate(verts) if verts else np.zeros((0, 3)),
+        offsets=offsets,
+        face_vertices=(np.concatenate(loops) if loops else np.zeros(0)).astype(np.int64),
+        face_vertex_offsets=fvo,
+        face_offsets=face_offsets,
+        normals=np.concatenate(normals) if normals else np.zeros((0, 3)),
+        support=np.concatenate(support) if support else np.zeros(0),
+        rotation=rotation,
+        rounding=rounding,
+    )

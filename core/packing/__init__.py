@@ -1,0 +1,28 @@
+"""Packings: the placed particles and their domain, their files, their pictures and measures."""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from regopack._exports import load_export
+
+if TYPE_CHECKING:
+    from regopack.packing.core import FILE_MAGIC as FILE_MAGIC
+    from regopack.packing.core import FORMAT_VERSION as FORMAT_VERSION
+    from regopack.packing.core import Packing as Packing
+    from regopack.packing.core import load as load
+    from regopack.packing.core import save as save
+    from regopack.packing.core import write_json_atomic as write_json_atomic
+
+__all__ = ["FILE_MAGIC", "FORMAT_VERSION", "Packing", "load", "save", "write_json_atomic"]
+
+_SOURCES = dict.fromkeys(__all__, "regopack.packing.core")
+
+
+def __getattr__(name: str) -> Any:
+    """Load the names of :mod:`regopack.packing.core` on first use (PEP 562)."""
+    return load_export(globals(), _SOURCES, name)
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

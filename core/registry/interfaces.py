@@ -1,0 +1,282 @@
+"""Interfaces of the six plugin kinds.
+
+A plugin supplies an implementation of one of these classes through a spec
+record (:mod:`regopack.registry.plugin_types`). The core never depends on a concrete
+implementation.
+"""
+
+from __future__ import annotations
+
+import math
+from abc import ABC, abstractmethod
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, ClassVar, Self
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.geometry.domain import Domain
+from regopack.geometry.population import Population, ShapeBatch
+from regopack.geometry.solids import SolidBatch
+
+if TYPE_CHECKING:
+    from regopack.packing.core import Packing
+    from regopack.packing.core3d import Packing3D
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+ProgressCallback = Callable[[int, int, int], None]
+"""Called as ``progress(done, placed, total)`` while particles are inserted."""
+
+
+class SizeDistribution(ABC):
+    """Distribution of equivalent particle radii."""
+
+    @abstractmethod
+    def sample(self, n: int, rng: np.random.Generator) -> FloatArray:
+        """Draw ``n`` equivalent radii (area = pi r^2)."""
+
+    @property
+    @abstractmethod
+    def mean_area(self) -> float:
+        """Expected particle area E[pi r^2]; sets the particle count of ``count = "auto"``."""
+
+    @property
+    def mean_volume(self) -> float:
+        """Expected particle volume E[4/3 pi r^3]; sets ``count = "auto"`` of a 3D scene.
+
+        NaN (the default) when the distribution does not know it: a 3D scene
+        with this distribution then needs an explicit ``count``.
+        """
+        return math.nan
+
+    @property
+    @abstractmethod
+    def r_min(self) -> float:
+        """Smallest radius the distribution can return."""
+
+    @property
+    @abstractmethod
+    def r_max(self) -> float:
+        """Largest radius the distribution can return."""
+
+
+class ShapeGenerator(ABC):
+    """Generator of convex particle outlines of prescribed area."""
+
+    @abstractmethod
+    def generate(self, radius: FloatArray, rng: np.random.Generator) -> ShapeBatch:
+        """Return one convex outline per radius, of area ``pi r^2``.
+
+        Outlines are counter-clockwise and relative to the particle's reference
+        point, which must lie strictly inside.
+        """
+
+
+class SolidGenerator(ABC):
+    """Generator of convex solids of prescribed volume (the shapes of 3D scenes)."""
+
+    @abstractmethod
+    def generate(self, radius: FloatArray, rng: np.random.Generator) -> SolidBatch:
+        """Return one convex solid per radius, of volume ``4/3 pi r^3``.
+
+        Solids are relative to the particle's reference point, which must lie
+        strictly inside; every random choice comes from ``rng``.
+        """
+
+
+class DensityController(ABC):
+    """Rule that trims available arcs before a centre is sampled on them."""
+
+    identity: bool = False
+    """True when :meth:`shrink` never changes the arcs; inserters may then skip it."""
+
+    @abstractmethod
+    def shrink(
+        self, arcs: FloatArray, r_new: float, r_candidate: float, rng: np.random.Generator
+    ) -> FloatArray:
+        """Trim arcs.
+
+        Parameters
+        ----------
+        arcs
+            ``(k, 2)`` polar-angle intervals ``[start, end]`` with ``start < end``,
+            unwrapped: an arc through the reference angle has ends outside
+            ``[-pi, pi]`` (below or above), so ends may be negative or exceed 2 pi.
+        r_new, r_candidate
+            Equivalent radii of the particle being inserted and of the candidate.
+        rng
+            The run's generator.
+
+        Returns
+        -------
+        ndarray
+            ``(k', 2)`` arcs, each contained in one of the input arcs; arcs of
+            zero or negative length are dropped.
+        """
+
+
+@dataclass
+class InsertionResult:
+    """Outcome of an insertion run.
+
+    Attributes
+    ----------
+    centre
+        ``(n, 2)`` reference-point position of every particle; NaN where not placed.
+    insertion_index
+        ``(n,)`` order in which particles were placed, ``-1`` where not placed.
+    stats
+        Counters of the run (e.g. candidate analyses performed) as ``int``,
+        and timings or lengths as ``float``; they are written to JSON as they are.
+    """
+
+    centre: FloatArray
+    insertion_index: IntArray
+    stats: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def placed(self) -> NDArray[np.bool_]:
+        """Mask of the particles that were placed."""
+        return self.insertion_index >= 0
+
+
+class InsertionStrategy(ABC):
+    """Algorithm that places a population inside a domain without overlaps."""
+
+    @abstractmethod
+    def pack(
+        self,
+        population: Population,
+        domain: Domain,
+        controller: DensityController,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Place the particles in population order; return where each went."""
+
+    def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
+        """Say, before anything is drawn, why this strategy cannot pack a scene.
+
+        ``shapes`` are the kinds of the phases' shapes, in phase order, and
+        ``density`` the kind of the density controller. Returns ``(field,
+        reason)``, the field a dotted scene path such as ``density.kind`` or
+        ``phases.2.shape.kind``, or ``None`` when nothing is known to conflict
+        (the default). :meth:`pack` still refuses what it cannot pack.
+        """
+        return None
+
+    def may_overlap(self) -> bool:
+        """Tell whether this strategy, as configured, can place overlapping particles.
+
+        A run verifies the packing of a strategy that says so (an approximate
+        interference test, say) and reports what it finds. The default is
+        ``False``: the strategy guarantees overlap-free packings.
+        """
+        return False
+
+
+class Analyzer(ABC):
+    """Structure analysis of a packing.
+
+    ``compute`` returns ``self``; results are properties or :meth:`results`.
+    Analyzers declare the names of the analyzers whose results they need in
+    ``requires``; the runner computes those first and passes them in ``context``.
+    """
+
+    name: ClassVar[str] = ""
+    requires: ClassVar[tuple[str, ...]] = ()
+
+    @abstractmethod
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+        """Analyse ``packing``; ``context`` maps required analyzer names to computed ones."""
+
+    @abstractmethod
+    def results(self) -> dict[str, Any]:
+        """Scalar results (JSON-serialisable) of the last :meth:`compute`."""
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Tables of the last :meth:`compute`: name -> column name -> 1-D array.
+
+        Columns of one table have equal length. The default has no tables.
+        """
+        return {}
+
+
+class Exporter(ABC):
+    """Writer of a packing in a file format that other programs read.
+
+    ``suffix`` is the file name suffix (with its dot, e.g. ``".vtp"``) of the
+    main file the exporter writes; the command line uses it to name the output.
+    """
+
+    suffix: str = ""
+
+    @abstractmethod
+    def export(
+        self,
+        packing: Packing,
+        path: Path,
+        *,
+        analyses: Mapping[str, Analyzer] | None = None,
+    ) -> Path:
+        """Write ``packing`` to ``path``; return the path of the main file written.
+
+        Parameters
+        ----------
+        packing
+            The packing to write.
+        path
+            Main output file. An exporter may write companion files beside it,
+            named after its stem.
+        analyses
+            Computed analyzers by name (e.g. ``"coordination"``); an exporter
+            may add their per-particle results to the file and ignores the rest.
+        """
+
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Companion files that :meth:`export` writes beside the main file ``path``.
+
+        A run checks that no two of its outputs are one file, so an exporter
+        that writes more than its main file lists the others here. The
+        default is none.
+        """
+        return ()
+
+
+class SolidExporter(ABC):
+    """Writer of a 3D packing (:class:`~regopack.packing.core3d.Packing3D`) in another format.
+
+    The 3D counterpart of :class:`Exporter`, with the same ``suffix`` and
+    :meth:`companions`; its spec (:class:`~regopack.registry.plugin_types.ExporterSpec`)
+    declares ``dimensions = (3,)``.
+    """
+
+    suffix: str = ""
+
+    @abstractmethod
+    def export(
+        self,
+        packing: Packing3D,
+        path: Path,
+        *,
+        analyses: Mapping[str, Analyzer] | None = None,
+    ) -> Path:
+        """Write ``packing`` to ``path``; return the path of the main file written.
+
+        Parameters
+        ----------
+        packing
+            The 3D packing to write.
+        path
+            Main output file. An exporter may write companion files beside it,
+            named after its stem.
+        analyses
+            Computed analyzers by name; an exporter may ignore them.
+        """
+
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Companion files that :meth:`export` writes beside the main file ``path``."""
+        return ()

@@ -1,0 +1,146 @@
+"""Spec records that plugins return from their hooks.
+
+Each record names one implementation, the pydantic model that validates its
+parameters (``extra="forbid"``, every field described) and a factory that
+builds the implementation from a validated config.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
+
+from pydantic import BaseModel
+
+from regopack.registry.interfaces import (
+    Analyzer,
+    DensityController,
+    Exporter,
+    InsertionStrategy,
+    ShapeGenerator,
+    SizeDistribution,
+    SolidExporter,
+    SolidGenerator,
+)
+
+if TYPE_CHECKING:
+    from regopack.packing.core import Packing
+
+T = TypeVar("T")
+
+
+@dataclass(frozen=True)
+class PluginSpec(Generic[T]):
+    """One named implementation of a plugin kind.
+
+    Attributes
+    ----------
+    name
+        The ``kind`` users write in a scene (e.g. ``"octagon"``).
+    config_model
+        Pydantic model of the parameters.
+    factory
+        Builds the implementation from a validated ``config_model`` instance.
+    description
+        One sentence shown by the command line and the docs.
+    """
+
+    name: str
+    config_model: type[BaseModel]
+    factory: Callable[[Any], T]
+    description: str = ""
+
+    def build(self, params: dict[str, Any]) -> T:
+        """Validate ``params`` with :attr:`config_model` and build the implementation."""
+        return self.factory(self.config_model.model_validate(params))
+
+
+class SizeDistributionSpec(PluginSpec[SizeDistribution]):
+    """Spec of a size distribution plugin."""
+
+
+@dataclass(frozen=True)
+class ShapeSpec(PluginSpec[ShapeGenerator | SolidGenerator]):
+    """Spec of a shape generator plugin.
+
+    ``dimension`` is 2 for outlines (a :class:`~regopack.registry.interfaces.ShapeGenerator`)
+    and 3 for solids (a :class:`~regopack.registry.interfaces.SolidGenerator`).
+    """
+
+    dimension: int = 2
+
+
+@dataclass(frozen=True)
+class InserterSpec(PluginSpec[InsertionStrategy]):
+    """Spec of an insertion strategy plugin; ``dimensions`` lists the dimensions it packs."""
+
+    dimensions: tuple[int, ...] = (2,)
+
+
+class DensityControllerSpec(PluginSpec[DensityController]):
+    """Spec of a density controller plugin."""
+
+
+@dataclass(frozen=True)
+class AnalyzerSpec(PluginSpec[Analyzer]):
+    """Spec of an analyzer plugin; ``dimensions`` lists the dimensions of packings it analyses."""
+
+    dimensions: tuple[int, ...] = (2,)
+
+
+@dataclass(frozen=True)
+class ExporterSpec(PluginSpec[Exporter | SolidExporter]):
+    """Spec of an exporter plugin; ``dimensions`` lists the dimensions of the packings it writes.
+
+    A 2D exporter (the default) builds an :class:`~regopack.registry.interfaces.Exporter`,
+    a 3D one a :class:`~regopack.registry.interfaces.SolidExporter`.
+    """
+
+    dimensions: tuple[int, ...] = (2,)
+
+
+KINDS: dict[str, type[PluginSpec[Any]]] = {
+    "size": SizeDistributionSpec,
+    "shape": ShapeSpec,
+    "insertion": InserterSpec,
+    "density": DensityControllerSpec,
+    "analysis": AnalyzerSpec,
+    "export": ExporterSpec,
+}
+"""Plugin kinds by the scene section that selects them."""
+
+
+FigureMaker = Callable[["Packing", Mapping[str, Analyzer], Path], Sequence[Path]]
+"""``draw(packing, analyzers, out_dir)``: draw into ``out_dir``, return the files written."""
+
+
+@dataclass(frozen=True)
+class FigureSpec:
+    """Figures of one analyzer, drawn into an analysis folder.
+
+    Returned by :func:`regopack.registry.hookspecs.regopack_analysis_figures`. Unlike the
+    records of :data:`KINDS`, a figure spec has no parameters and no name of
+    its own: it belongs to the analyzer it draws.
+
+    Attributes
+    ----------
+    analyzer
+        Name of the analyzer whose results the figures show;
+        :func:`regopack.analysis.pipeline.write_analysis` calls :attr:`draw` only when
+        that analyzer was computed.
+    draw
+        ``draw(packing, analyzers, out_dir)`` receives the packing, every
+        computed analyzer by name and the figures folder (``figures/`` of the
+        analysis; create it when writing into it). It returns the files it
+        wrote: each PNG file is embedded in ``report.md``, and an SVG file of
+        the same stem is linked beside it.
+    captions
+        Caption of each figure in ``report.md``, by file stem (default: the
+        stem with its hyphens as spaces).
+    """
+
+    analyzer: str
+    draw: FigureMaker
+    captions: Mapping[str, str] = field(default_factory=dict)

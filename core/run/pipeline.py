@@ -1,0 +1,764 @@
+"""Running a scene: draw the population, insert it, summarise, write the files."""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from regopack.analysis.pipeline import AnalysisFiles, write_analysis_files
+from regopack.base import toml as _toml
+from regopack.base.errors import ConfigError, ExportError, GeometryError, PluginError
+from regopack.base.limits import (
+    MAX_EXTENT_RATIO,
+    LimitError,
+    check_memory,
+    format_bytes,
+    memory_limit,
+)
+from regopack.base.outdir import (
+    MARKER,
+    NAME_RULE,
+    check_replaceable,
+    checkpoint,
+    name_key,
+    name_problem,
+    rebase,
+    replace_folder,
+)
+from regopack.geometry.domain import PlaneDomain
+from regopack.geometry.population import FloatArray, IntArray, Population, ShapeBatch, concat_shapes
+from regopack.packing.core import Packing, save, write_json_atomic
+from regopack.packing.sieve import unplaced_per_class
+from regopack.packing.solid_fraction import phi_in_window
+from regopack.registry.interfaces import (
+    Analyzer,
+    DensityController,
+    Exporter,
+    InsertionResult,
+    InsertionStrategy,
+    ProgressCallback,
+    ShapeGenerator,
+    SizeDistribution,
+)
+from regopack.run.compilation import CompileTime, compile_timer
+from regopack.scenes.analysis_plan import run_analyses
+from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
+
+__all__ = [
+    "BYTES_PER_PARTICLE",
+    "PARTICLE_BYTES",
+    "RUN_FOLDER",
+    "RunOutcome",
+    "check_runnable",
+    "check_scene",
+    "default_out_dir",
+    "draw_population",
+    "memory_limit",
+    "particle_bytes",
+    "particle_count",
+    "phi_in_window",
+    "run_scene",
+]
+
+
+RUN_FOLDER = "run"
+"""Kind of the folder a run writes (in its :data:`regopack.base.outdir.MARKER` file)."""
+
+BYTES_PER_PARTICLE = 3_200
+"""Memory a 2D run needs per particle drawn, in bytes (paper order; measured, with a margin).
+
+Peak resident memory grows by about 2.6 kB a particle in the paper order
+(``small`` scaled to 5,000-52,000 particles; see ``docs/benchmarks.md``):
+the particle's radius, mineral, orientation and vertices, the inserter's
+arrays and outlines and the shapely polygons that measure the covered
+area. A scene whose particle count times this exceeds :func:`memory_limit`
+is refused before anything is allocated. :data:`PARTICLE_BYTES` holds the
+figure of each kind of run.
+"""
+
+MIN_AREA = 1e-300
+"""Smallest area of a particle of a 2D scene (as :mod:`regopack.run.pipeline3d` bounds a volume).
+
+Below it, squared lengths leave 64-bit floats' normal range: they lose their
+precision, then become zero (a scene written with ``d_min = 2e-200`` once
+sized its neighbour grid by a cell of zero and overflowed). Like the largest
+area's overflow, this is where floats end, not a length chosen for particles.
+"""
+
+PARTICLE_BYTES: dict[str, int] = {
+    "2D paper order": BYTES_PER_PARTICLE,
+    "2D sweep": 1_200,
+    "3D polyhedra": 32_000,
+    "3D spheres": 8_000,
+}
+"""Memory a run needs per particle drawn, in bytes, by kind of run (see :func:`particle_bytes`).
+
+The growth of the peak resident memory per particle between runs of
+increasing size (``docs/benchmarks.md``, "Memory per particle"), rounded up
+by a quarter or more: 2.6 kB in the paper order, 0.81 kB in the sweep
+(`dem` from 16 579 to 1 061 033 particles drawn: 232 MB to 1 077 MB), 14-25
+kB at the peak of generating polyhedra.
+Spheres grew by 0.3 kB a particle up to 9,638 (the kernels' fixed memory is
+the peak there); their 8 kB is a cautious bound until a larger run measures
+them.
+"""
+
+
+@dataclass(frozen=True)
+class RunOutcome:
+    """Result of :func:`run_scene`.
+
+    Attributes
+    ----------
+    packing
+        The packing.
+    summary
+        Scalar results of the run (what ``summary.json`` holds).
+    packing_path, summary_path
+        Files written, or ``None`` when nothing was written.
+    analysis
+        The analysis files (under ``<out_dir>/analysis``), when the scene lists
+        analyses and files were written.
+    exports
+        Files written by the exporters of ``outputs.exports``, in scene order.
+    """
+
+    packing: Packing
+    summary: dict[str, Any]
+    packing_path: Path | None = None
+    summary_path: Path | None = None
+    analysis: AnalysisFiles | None = None
+    exports: tuple[Path, ...] = ()
+
+
+def _build(plugin: ResolvedPlugin[Any], interface: type[Any], what: str) -> Any:
+    obj = plugin.build()
+    if not isinstance(obj, interface):
+        raise PluginError(
+            f"{what} plugin {plugin.kind!r} ({plugin.origin}) built a {type(obj).__name__}, "
+            f"not a {interface.__name__}"
+        )
+    return obj
+
+
+def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
+    """Return the number of particles to draw.
+
+    This is the scene's ``count``, or ``round(domain area / size_dist.mean_area)``
+    for ``count = "auto"``.
+
+    Raises
+    ------
+    ConfigError
+        When ``count = "auto"`` gives no finite number of particles.
+    """
+    count = scene.scene.count
+    if count == "auto":
+        area, mean = scene.domain.measure, float(size_dist.mean_area)
+        auto = area / mean if mean > 0 else math.inf
+        if not math.isfinite(auto):
+            raise ConfigError(
+                _located(
+                    scene,
+                    "count",
+                    f"domain area / mean particle area = {area:g} / {mean:g} is not a finite "
+                    "number of particles; give a count or larger particles",
+                )
+            )
+        return round(auto)
+    return int(count)
+
+
+def _bytes(n: float) -> str:
+    """``n`` bytes in binary units, e.g. ``7.3 TiB`` (as ``format_bytes``)."""
+    return format_bytes(n)
+
+
+def _located(scene: ResolvedScene, loc: str, text: str, value: Any = None) -> str:
+    """``<source>: <loc> = <value>: <text>``, the style of the scene's validation errors."""
+    where = scene.scene.origin(loc)
+    if value is None and loc == "count":
+        value = scene.scene.count
+    shown = f"{loc} = {_toml._value(value)}" if value is not None else loc
+    return f"{where}: {shown}: {text}" if where else f"{shown}: {text}"
+
+
+def located_limit(scene: ResolvedScene, err: LimitError) -> ConfigError:
+    """``err`` prefixed with the source of its field (the scene file or ``--set``)."""
+    return ConfigError(err.located(scene.scene.origin(err.field)))
+
+
+def particle_bytes(scene: ResolvedScene) -> tuple[int, str]:
+    """Memory per particle of a run of ``scene`` (:data:`PARTICLE_BYTES`) and its kind."""
+    if scene.scene.domain.dimension == 3:
+        spheres = all(phase.shape.kind == "sphere" for phase in scene.phases)
+        kind = "3D spheres" if spheres else "3D polyhedra"
+    else:
+        sweep = getattr(scene.insertion.config, "order", "paper") == "sweep"
+        kind = "2D sweep" if sweep else "2D paper order"
+    return PARTICLE_BYTES[kind], kind
+
+
+def check_particle_memory(scene: ResolvedScene, n: int, auto: str = "") -> None:
+    """Refuse ``n`` particles whose memory (:func:`particle_bytes`) exceeds :func:`memory_limit`.
+
+    ``auto`` tells how ``count = "auto"`` gave ``n`` (shown in the message).
+    """
+    each, kind = particle_bytes(scene)
+    given = f"gives {_count(n)} particles ({auto}), which" if auto else f"{_count(n)} particles"
+    try:
+        check_memory(
+            float(n) * each,
+            f"{given} ({kind} runs: about {each:,} bytes a particle)",
+            field="count",
+            given=scene.scene.count,
+            limit=memory_limit(),
+        )
+    except LimitError as err:
+        raise located_limit(scene, err) from None
+
+
+def check_extents(scene: ResolvedScene, extents: Mapping[str, float], d_min: float) -> None:
+    """Refuse a domain more than ``MAX_EXTENT_RATIO`` smallest diameters long.
+
+    The ratio is :data:`~regopack.base.limits.MAX_EXTENT_RATIO`.
+
+    ``extents`` maps the domain field that sets each extent (``domain.width``)
+    to the extent's length.
+    """
+    for field, length in extents.items():
+        ratio = length / d_min
+        if ratio <= MAX_EXTENT_RATIO:
+            continue
+        size_set = scene.scene.origin("size") != scene.scene.source
+        domain_set = scene.scene.origin(field) != scene.scene.source
+        blame, value = (
+            ("size", None) if size_set and not domain_set else (field, _field_value(scene, field))
+        )
+        raise ConfigError(
+            _located(
+                scene,
+                blame,
+                f"the domain's extent ({length:g}) is {ratio:.3g} times the smallest particle "
+                f"diameter ({d_min:g}); at most {MAX_EXTENT_RATIO:g} times, or 64-bit "
+                "coordinates do not resolve the particles and the neighbour grids grow "
+                "without bound; give a smaller domain or larger particles",
+                value,
+            )
+        )
+
+
+def _field_value(scene: ResolvedScene, field: str) -> Any:
+    """Return the scalar value of a dotted ``domain.<name>`` field, or ``None``."""
+    value = getattr(scene.scene.domain, field.removeprefix("domain."), None)
+    return value if isinstance(value, int | float) else None
+
+
+def domain_extents(scene: ResolvedScene) -> dict[str, float]:
+    """Each extent of the domain by the scene field that sets it (for :func:`check_extents`)."""
+    d = scene.scene.domain
+    if d.dimension == 3:
+        width, depth, height = d.to_box().size
+        return {"domain.width": width, "domain.depth": depth, "domain.height": height}
+    if d.kind == "circle":
+        return {"domain.radius": 2.0 * float(d.radius or 0.0)}
+    bounds = scene.domain.bounds()
+    width, height = float(bounds[1] - bounds[0]), float(bounds[3] - bounds[2])
+    if d.kind == "polygon":
+        return {"domain.vertices": max(width, height)}
+    return {"domain.width": width, "domain.height": height}
+
+
+def check_shapes(scene: ResolvedScene, r_min: float) -> None:
+    """Draw one smallest particle of each phase (on a generator of its own), to refuse early.
+
+    A shape generator's mistake (a template file that is missing or
+    malformed, an outline that overflows) then ends ``regopack config`` and
+    ``regopack run`` alike, naming the phase's shape field.
+    """
+    for p, phase in enumerate(scene.phases):
+        try:
+            generator = phase.shape.build()
+            with np.errstate(over="ignore", invalid="ignore"):
+                generator.generate(np.array([r_min]), np.random.default_rng(0))
+        except ConfigError as err:
+            raise ConfigError(_located(scene, f"phases.{p}.shape", str(err))) from err
+
+
+def check_runnable(scene: ResolvedScene) -> int:
+    """Every check of a scene before a run (2D or 3D); return the particle count.
+
+    ``regopack run`` and ``regopack config`` both call it, so a scene that
+    one accepts the other accepts too.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the source (scene file or ``--set``), the field, the
+        value and what is allowed.
+    """
+    if scene.scene.domain.dimension == 3:
+        from regopack.run.pipeline3d import check_scene3d
+
+        return check_scene3d(scene)
+    return check_scene(scene)
+
+
+def _count(n: int) -> str:
+    return f"{n:,}" if n < 10**15 else f"{n:.3g}"
+
+
+def check_inserter(scene: ResolvedScene) -> None:
+    """Refuse, before anything is drawn, a scene that its inserter says it cannot pack.
+
+    Raises
+    ------
+    ConfigError
+        One line naming the scene file (or ``--set``), the field and the reason
+        (see :meth:`~regopack.registry.interfaces.InsertionStrategy.scene_conflict`).
+    """
+    inserter: InsertionStrategy = _build(scene.insertion, InsertionStrategy, "insertion")
+    conflict = inserter.scene_conflict(
+        tuple(phase.shape.kind for phase in scene.phases), scene.density.kind
+    )
+    if conflict is not None:
+        field, reason = conflict
+        raise ConfigError(_located(scene, field, reason))
+
+
+def check_scene(scene: ResolvedScene) -> int:
+    """Check that ``scene`` can be drawn and packed at all; return its particle count.
+
+    Refused, before anything is drawn: particles whose area overflows 64-bit
+    floats, or whose smallest area is below :data:`MIN_AREA`; particles larger
+    than the domain (the smallest particle's area exceeds the domain's, so none
+    can be placed); and a particle count (given, or from ``count = "auto"``)
+    whose memory (:func:`particle_bytes` per particle) exceeds
+    :func:`memory_limit`; a domain more than
+    :data:`~regopack.base.limits.MAX_EXTENT_RATIO` smallest diameters long; a shape
+    generator that cannot draw a particle (:func:`check_shapes`); and
+    what the inserter says it cannot pack (:func:`check_inserter`).
+
+    Raises
+    ------
+    ConfigError
+        One line naming the scene file (or ``--set``), the field and the limit.
+    """
+    check_inserter(scene)
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
+    area_max, area_min = math.pi * r_max * r_max, math.pi * r_min * r_min
+    if not math.isfinite(area_max):
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the largest particle (diameter {2 * r_max:g}) has an area of {area_max:g}: "
+                "its size overflows 64-bit floats; give smaller sizes",
+            )
+        )
+    if not area_min >= MIN_AREA:
+        raise ConfigError(
+            _located(
+                scene,
+                "size",
+                f"the smallest particle (diameter {2 * r_min:g}) has an area of {area_min:g}: "
+                "its size underflows 64-bit floats; give larger sizes",
+            )
+        )
+    domain_area = scene.domain.measure
+    if area_min > domain_area:
+        domain_set = scene.scene.origin("domain") != scene.scene.source
+        raise ConfigError(
+            _located(
+                scene,
+                "domain"
+                if domain_set and scene.scene.origin("size") == scene.scene.source
+                else "size",
+                f"the smallest particle (diameter {2 * r_min:g}, area {area_min:g}) is larger "
+                f"than the domain (area {domain_area:g}), so no particle can be placed; "
+                "give smaller sizes or a larger domain",
+            )
+        )
+    check_extents(scene, domain_extents(scene), 2.0 * r_min)
+    check_shapes(scene, r_min)
+    n = particle_count(scene, size_dist)
+    auto = (
+        f"domain area {domain_area:g} / mean particle area {float(size_dist.mean_area):g}"
+        if scene.scene.count == "auto"
+        else ""
+    )
+    check_particle_memory(scene, n, auto)
+    return n
+
+
+def draw_sizes_and_minerals(
+    scene: ResolvedScene, rng: np.random.Generator, n: int
+) -> tuple[FloatArray, IntArray]:
+    """Draw the ``n`` radii, then the minerals (2D and 3D scenes draw them alike).
+
+    Raises
+    ------
+    PluginError
+        When the size plugin returns other than ``n`` finite positive radii.
+    """
+    size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
+    radii = np.asarray(size_dist.sample(n, rng), dtype=np.float64)
+    if radii.shape != (n,) or not np.all(np.isfinite(radii) & (radii > 0)):
+        raise PluginError(
+            f"size plugin {scene.size.kind!r} returned radii of shape {radii.shape} "
+            f"(expected ({n},), all finite and positive)"
+        )
+    minerals = rng.choice(len(scene.phases), size=n, p=scene.fractions).astype(np.int64)
+    return radii, minerals
+
+
+def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
+    """Draw every particle of ``scene`` up front, in insertion order.
+
+    The random draws happen in exactly this order: the radii
+    (``size.sample(N, rng)``); the minerals (``rng.choice`` over the phases
+    with the normalised fractions); then, for each phase in scene order, the
+    shapes of that phase's particles (``shape.generate(radii[idx], rng)``).
+    """
+    n = check_scene(scene)
+    radii, minerals = draw_sizes_and_minerals(scene, rng, n)
+    parts: list[tuple[IntArray, ShapeBatch]] = []
+    for p, phase in enumerate(scene.phases):
+        generator: ShapeGenerator = _build(phase.shape, ShapeGenerator, "shape")
+        idx = np.flatnonzero(minerals == p).astype(np.int64)
+        with np.errstate(over="ignore", invalid="ignore"):  # refused just below
+            batch = generator.generate(radii[idx], rng)
+        if len(batch) != len(idx):
+            raise PluginError(
+                f"shape plugin {phase.shape.kind!r} returned {len(batch)} outlines "
+                f"for {len(idx)} radii (phase {phase.name!r})"
+            )
+        finite = np.isfinite(batch.vertices).all(axis=1)
+        if not finite.all():
+            j = int(np.searchsorted(batch.offsets, np.flatnonzero(~finite)[0], side="right")) - 1
+            raise GeometryError(
+                _located(
+                    scene,
+                    f"phases.{p}.shape",
+                    f"the {phase.shape.kind!r} outline of a particle of diameter "
+                    f"{2 * radii[idx][j]:g} (phase {phase.name!r}) has non-finite vertices "
+                    "(64-bit float overflow); give smaller sizes",
+                )
+            )
+        parts.append((idx, batch))
+    shapes = concat_shapes(parts, n)
+    return Population(
+        radius=radii, mineral=minerals, mineral_names=scene.phase_names, shapes=shapes
+    )
+
+
+def default_out_dir(scene: ResolvedScene) -> Path:
+    """``runs/<scene name>-seed<seed>`` (relative to the working directory)."""
+    return Path("runs") / f"{scene.name}-seed{scene.seed}"
+
+
+def run_scene(
+    resolved: ResolvedScene,
+    out_dir: str | Path | None = None,
+    progress: ProgressCallback | None = None,
+    *,
+    figures: bool = True,
+    summary_extras: Callable[[Packing], Mapping[str, Any]] | None = None,
+    verify: bool | None = None,
+    extra_files: Mapping[str, str] | None = None,
+) -> RunOutcome:
+    """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
+
+    Parameters
+    ----------
+    resolved
+        The scene, with validated plugin parameters.
+    out_dir
+        The run folder (see :func:`default_out_dir`), written as a whole:
+        it ends up holding this run's files and nothing else. ``None``
+        writes nothing.
+    progress
+        Called as ``progress(done, placed, total)`` during insertion.
+    figures
+        Draw the analysis figures when the scene lists analyses and
+        ``out_dir`` is given.
+    summary_extras
+        Called with the packing once it is analysed; the items it returns are
+        added to the summary before anything is written.
+    verify
+        Check the packing for overlaps and wall violations
+        (:func:`regopack.verification.polygons.verify`) and add the ``verify`` entry to the
+        summary. ``None`` (the default) verifies when the insertion strategy
+        says its settings may overlap (:meth:`InsertionStrategy.may_overlap`).
+    extra_files
+        More text files for the run folder, by plain file name (a sweep's
+        ``scene.json``); a name that is also one of the run's outputs is
+        refused.
+
+    Returns
+    -------
+    RunOutcome
+        The packing, the summary and the paths written.
+
+    Raises
+    ------
+    ConfigError
+        When ``out_dir`` may not be replaced (it exists, is not empty and
+        does not hold a previous regopack run; or it is the current
+        directory) or cannot be written, checked before the packing starts.
+
+    Notes
+    -----
+    The analyzers in ``outputs.analyses`` (and those they require) run after
+    packing; the summary holds the results of the listed ones, and
+    :func:`regopack.analysis.pipeline.write_analysis` writes all of them into
+    ``<out_dir>/analysis``. The exporters in ``outputs.exports`` then write
+    the packing beside the packing file, as ``<packing stem><suffix>``, with
+    the computed analyzers passed on.
+
+    Everything is written into a fresh temporary folder beside ``out_dir``
+    (``<out_dir>.tmp-<random>``), which replaces ``out_dir`` as a whole once
+    every file is complete (see :func:`regopack.base.outdir.replace_folder`): an
+    interrupted or killed run leaves the previous run untouched, and a rerun
+    leaves nothing of the previous one (no stale analysis or exports).
+    """
+    if out_dir is not None:
+        check_replaceable(out_dir, RUN_FOLDER)
+        _check_extra_files(resolved, extra_files or {})
+    with compile_timer() as compiling:
+        return _run(
+            resolved, out_dir, progress, figures, summary_extras, verify, extra_files, compiling
+        )
+
+
+def _run(
+    resolved: ResolvedScene,
+    out_dir: str | Path | None,
+    progress: ProgressCallback | None,
+    figures: bool,
+    summary_extras: Callable[[Packing], Mapping[str, Any]] | None,
+    verify: bool | None,
+    extra_files: Mapping[str, str] | None,
+    compiling: CompileTime,
+) -> RunOutcome:
+    start = time.perf_counter()
+    rng = np.random.default_rng(resolved.seed)
+    population = draw_population(resolved, rng)
+    inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
+    controller: DensityController = _build(resolved.density, DensityController, "density")
+    domain = resolved.domain
+    assert isinstance(domain, PlaneDomain), "run_scene hands 3D scenes to run_scene3d"
+    try:
+        result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
+    except LimitError as err:  # a size the inserter derived from the scene, refused
+        raise located_limit(resolved, err) from None
+    times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
+    size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
+
+    scene_dict = resolved.to_dict()
+    packing = Packing.from_parts(
+        population, result, domain, scene_dict, resolved.seed, result.stats
+    )
+    n_placed = packing.n_placed
+    margin = 2.0 * float(size_dist.r_max)
+    phi_domain = float(packing.area()[packing.placed].sum()) / domain.area
+    phi_interior = phi_in_window(packing, domain.interior(margin))
+
+    summary: dict[str, Any] = {
+        "scene": resolved.name,
+        "seed": resolved.seed,
+        "tried": packing.n_particles,
+        "placed": n_placed,
+        "not_placed": packing.n_particles - n_placed,
+        "phi_domain": phi_domain,
+        "phi_interior": phi_interior,
+        "interior_margin": margin,
+        **times,
+    }
+    if math.isnan(phi_interior):
+        summary["phi_interior_note"] = (
+            f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
+        )
+    if n_placed < packing.n_particles:
+        summary["not_placed_by_class"] = [
+            row for row in unplaced_per_class(packing) if row["not_placed"] > 0
+        ]
+    eta = getattr(resolved.density.config, "eta", None)
+    if eta is not None:
+        summary["eta"] = eta
+    for key, value in result.stats.items():
+        summary.setdefault(key, value)
+    if verify if verify is not None else inserter.may_overlap():
+        summary["verify"] = verify_summary(packing)
+    analyzers: dict[str, Analyzer] = {}
+    if resolved.analyses:
+        requests = [(p.kind, _params(p)) for p in resolved.analyses]
+        origin = resolved.scene.origin("outputs.analyses")
+        analyzers = run_analyses(packing, resolved.registry, requests, source=origin)
+        summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
+    summary["compile_time_s"] = compiling.seconds
+    if summary_extras is not None:
+        summary.update(summary_extras(packing))
+
+    if out_dir is None:
+        return RunOutcome(packing, summary)
+    return _write_run(
+        resolved, Path(out_dir), packing, summary, analyzers, figures, extra_files or {}
+    )
+
+
+def verify_summary(packing: Packing) -> dict[str, Any]:
+    """Return the ``verify`` entry of a run's summary.
+
+    ``ok``, ``overlap_pairs`` (pairs overlapping by more than 1e-9 of the
+    smaller area), ``worst_overlap`` (the largest overlap as a fraction of the
+    smaller area, 0 when none) and ``outside`` (particles leaving the domain).
+    """
+    from regopack.verification.polygons import verify
+
+    report = verify(packing)
+    worst = report.worst_overlap[2] if report.worst_overlap is not None else 0.0
+    return {
+        "ok": bool(report.ok),
+        "overlap_pairs": int(report.n_overlapping_pairs),
+        "worst_overlap": float(worst),
+        "outside": int(report.n_outside),
+    }
+
+
+def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) -> None:
+    taken = {name_key(name): loc for loc, names in output_files(resolved).items() for name in names}
+    taken[name_key(MARKER)] = "regopack's marker file"
+    for name in extra_files:
+        problem = name_problem(name)
+        if problem is not None:
+            raise ConfigError(f"extra run file {name!r}: {problem} ({NAME_RULE})")
+        if name_key(name) in taken:
+            raise ConfigError(f"extra run file {name!r}: the same file as {taken[name_key(name)]}")
+
+
+def _write_run(
+    resolved: ResolvedScene,
+    out: Path,
+    packing: Packing,
+    summary: dict[str, Any],
+    analyzers: Mapping[str, Analyzer],
+    figures: bool,
+    extra_files: Mapping[str, str],
+) -> RunOutcome:
+    """Write the run into a fresh folder and swap it in place of ``out``."""
+    outputs = resolved.scene.outputs
+    packing_path = out / outputs.packing
+    summary_path = out / outputs.summary
+    analysis = None
+    exports: tuple[Path, ...] = ()
+    with replace_folder(out, RUN_FOLDER) as tmp:
+        try:
+            checkpoint("packing")
+            save(packing, tmp / outputs.packing)
+            checkpoint("summary")
+            write_json_atomic(tmp / outputs.summary, summary)
+            for name, text in extra_files.items():
+                (tmp / name).write_text(text, encoding="utf-8")
+        except (PermissionError, IsADirectoryError, NotADirectoryError) as err:
+            raise ConfigError(f"cannot write the run's output: {err}") from err
+        if analyzers:
+            checkpoint("analysis")
+            analysis = write_analysis_files(
+                tmp / ANALYSIS_FOLDER,
+                packing,
+                analyzers,
+                figures=figures,
+                packing_path=packing_path,
+                registry=resolved.registry,
+            )
+        if resolved.exports:
+            checkpoint("exports")
+        exports = tuple(
+            _export(packing, plugin, tmp / outputs.packing, packing_path, analyzers)
+            for plugin in resolved.exports
+        )
+    if analysis is not None:
+        analysis = analysis.moved(tmp, out)
+    exports = tuple(rebase(p, tmp, out) for p in exports)
+    return RunOutcome(packing, summary, packing_path, summary_path, analysis, exports)
+
+
+def _export(
+    packing: Packing,
+    plugin: ResolvedPlugin[Any],
+    packing_path: Path,
+    shown_path: Path,
+    analyzers: Mapping[str, Analyzer],
+) -> Path:
+    """Write ``packing`` with one exporter of ``outputs.exports``, beside ``packing_path``.
+
+    ``shown_path`` is where the packing file will be, for messages.
+    """
+    exporter: Exporter = _build(plugin, Exporter, "export")
+    path = packing_path.with_suffix(exporter.suffix)
+    try:
+        return exporter.export(packing, path, analyses=analyzers or None)
+    except OSError as err:
+        shown = shown_path.with_suffix(exporter.suffix)
+        raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err
+
+
+def _params(plugin: ResolvedPlugin[Any]) -> dict[str, Any]:
+    """Return the validated parameters of a plugin selection, without its ``kind``."""
+    params = plugin.to_dict()
+    params.pop("kind", None)
+    return params
+
+
+def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """Human-readable ``(label, value)`` rows of a run summary."""
+
+    def fmt(v: Any, spec: str = "") -> str:
+        if isinstance(v, float) and math.isnan(v):
+            return "n/a"
+        return format(v, spec)
+
+    rows = [
+        ("scene", str(summary["scene"])),
+        ("seed", str(summary["seed"])),
+        ("tried", fmt(summary["tried"], ",")),
+        ("placed", fmt(summary["placed"], ",")),
+        ("not placed", fmt(summary["not_placed"], ",")),
+        ("φ domain", fmt(summary["phi_domain"], ".4f")),
+        (
+            f"φ interior (margin {summary['interior_margin']:g})",
+            fmt(summary["phi_interior"], ".4f"),
+        ),
+        (
+            "insertion time",
+            f"{summary.get('insertion_time_s', summary['wall_time_s']):.2f} s"
+            + (" (kernels compiled meanwhile)" if "insertion_time_note" in summary else ""),
+        ),
+    ]
+    compiled = summary.get("compile_time_s") or 0.0
+    if compiled >= 0.05:
+        rows.append(("compiling kernels", f"{compiled:.1f} s (first run only; then cached)"))
+    if "eta" in summary:
+        rows.insert(2, ("η", fmt(summary["eta"], "g")))
+    checked = summary.get("verify")
+    if checked is not None and "skipped" in checked:
+        rows.append(("verified", f"skipped: {checked['skipped']}"))
+    elif checked is not None:
+        rows.append(
+            (
+                "verified",
+                "OK"
+                if checked["ok"]
+                else f"VIOLATED: {checked['overlap_pairs']:,} pairs, "
+                f"{checked['outside']:,} outside",
+            )
+        )
+    return rows

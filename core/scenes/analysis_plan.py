@@ -1,0 +1,256 @@
+"""Planning and computing analyses: which analyzers run, in what order, with what parameters.
+
+:func:`run_analyses` looks the requested analyzers up in a registry, adds
+those they require, validates every parameter against the packing (its
+dimension and the work a parameter implies) before any is computed, and
+computes them requirements first. Writing the results is
+:mod:`regopack.analysis.pipeline`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any
+
+from pydantic import ValidationError
+
+from regopack.base.errors import ConfigError, PluginError
+from regopack.base.limits import LimitError
+from regopack.registry.interfaces import Analyzer
+from regopack.registry.manager import Registry
+from regopack.registry.plugin_types import AnalyzerSpec
+
+if TYPE_CHECKING:
+    from regopack.packing.core import Packing
+    from regopack.packing.core3d import Packing3D
+
+__all__ = [
+    "DEFAULT_ANALYSES",
+    "DEFAULT_ANALYSES_3D",
+    "check_dimension",
+    "default_analyses",
+    "dimensions_of",
+    "run_analyses",
+]
+
+DEFAULT_ANALYSES: tuple[str, ...] = ("density", "contacts", "coordination", "rdf", "network")
+"""Analyzers that ``regopack analyze`` runs on a 2D packing when ``--only`` is not given."""
+
+DEFAULT_ANALYSES_3D: tuple[str, ...] = (
+    "density3d",
+    "contacts3d",
+    "coordination3d",
+    "rdf3d",
+    "network3d",
+)
+"""Analyzers that ``regopack analyze`` runs on a 3D packing when ``--only`` is not given."""
+
+
+def default_analyses(packing: Packing | Packing3D) -> tuple[str, ...]:
+    """Return the analyzers run by default on ``packing`` (2D or 3D defaults)."""
+    return DEFAULT_ANALYSES_3D if getattr(packing, "dimension", 2) == 3 else DEFAULT_ANALYSES
+
+
+def _known(registry: Registry) -> str:
+    return ", ".join(registry.names("analysis")) or "(none)"
+
+
+def _build(
+    registry: Registry,
+    name: str,
+    params: Mapping[str, Any],
+    needed_by: str | None,
+    params_source: str | None = None,
+) -> Analyzer:
+    """Validate ``params`` with the analyzer's config model and build it.
+
+    ``params_source`` (e.g. ``--set``) starts the message refusing a parameter.
+    """
+    from regopack.scenes.model import _describe_validation_error
+
+    if ("analysis", name) not in registry:
+        if needed_by is not None:
+            raise PluginError(
+                f"analyzer {needed_by!r} requires {name!r}, which is not registered; "
+                f"known analyzers: {_known(registry)}"
+            )
+        raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+    spec = registry.get("analysis", name)
+    try:
+        config = spec.config_model.model_validate(dict(params))
+    except ValidationError as err:
+        raise ConfigError(
+            _describe_validation_error(
+                err, source=params_source, prefix=(name,), model=spec.config_model
+            )
+        ) from err
+    analyzer = spec.factory(config)
+    if not isinstance(analyzer, Analyzer):
+        origin = registry.origin("analysis", name)
+        raise PluginError(
+            f"analysis plugin {name!r} ({origin}) built a {type(analyzer).__name__}, "
+            "not an Analyzer"
+        )
+    return analyzer
+
+
+def dimensions_of(registry: Registry, name: str) -> tuple[int, ...]:
+    """Dimensions of the packings that the analyzer ``name`` analyses (2D by default)."""
+    spec = registry.get("analysis", name)
+    dims = spec.dimensions if isinstance(spec, AnalyzerSpec) else (2,)
+    return tuple(dims)
+
+
+def _fitting(registry: Registry, dimension: int) -> str:
+    names = [n for n in registry.names("analysis") if dimension in dimensions_of(registry, n)]
+    return ", ".join(names) or "(none)"
+
+
+def check_dimension(
+    registry: Registry, names: Iterable[str], dimension: int, source: str | None = None
+) -> None:
+    """Refuse, in one line, an analyzer that does not analyse packings of ``dimension``.
+
+    Unknown names are left to the planning, which lists the known ones.
+    ``source`` (a file and key, or an option) starts the message.
+    """
+    for name in names:
+        if ("analysis", name) not in registry:
+            continue
+        dims = dimensions_of(registry, name)
+        if dimension not in dims:
+            where = f"{source}: " if source else ""
+            fits = " or ".join(f"{d}D" for d in dims)
+            raise ConfigError(
+                f"{where}analyzer {name!r} analyses {fits} packings, not {dimension}D ones; "
+                f"analyzers of {dimension}D packings: {_fitting(registry, dimension)}"
+            )
+
+
+def _plan(
+    registry: Registry,
+    requests: Sequence[tuple[str, Mapping[str, Any]]],
+    params: Mapping[str, Mapping[str, Any]],
+    dimension: int = 2,
+    source: str | None = None,
+    params_source: str | None = None,
+) -> dict[str, Analyzer]:
+    """Build every analyzer to run, requirements before the analyzers needing them."""
+    wanted: dict[str, dict[str, Any]] = {}
+    for name, request_params in requests:
+        wanted.setdefault(name, {}).update(request_params)
+    for name in params:
+        if ("analysis", name) not in registry:
+            raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+    check_dimension(registry, [*wanted, *params], dimension, source)
+
+    planned: dict[str, Analyzer] = {}
+
+    def visit(name: str, chain: tuple[str, ...]) -> None:
+        if name in planned:
+            return
+        if name in chain:
+            cycle = " -> ".join((*chain, name))
+            raise PluginError(f"analyzers require each other in a cycle: {cycle}")
+        merged = {**wanted.get(name, {}), **params.get(name, {})}
+        check_dimension(registry, [name], dimension, source)
+        analyzer = _build(registry, name, merged, chain[-1] if chain else None, params_source)
+        for requirement in analyzer.requires:
+            visit(requirement, (*chain, name))
+        planned[name] = analyzer
+
+    for name in wanted:
+        visit(name, ())
+    unused = [name for name in params if name not in planned]
+    if unused:
+        raise ConfigError(
+            f"parameters given for analyzer {unused[0]!r}, which is not run "
+            f"(running: {', '.join(planned) or 'none'})"
+        )
+    return planned
+
+
+def run_analyses(
+    packing: Packing | Packing3D,
+    registry: Registry,
+    requests: Sequence[tuple[str, Mapping[str, Any]]],
+    *,
+    params: Mapping[str, Mapping[str, Any]] | None = None,
+    source: str | None = None,
+    params_source: str | None = None,
+) -> dict[str, Analyzer]:
+    """Compute the requested analyzers and those they require, requirements first.
+
+    Parameters
+    ----------
+    packing
+        The packing to analyse.
+    registry
+        Registry the analyzers are looked up in (``kind = "analysis"``).
+    requests
+        ``(name, parameters)`` pairs. An analyzer that another one requires is
+        computed once; when it is also requested, it keeps the requested
+        parameters, and otherwise it uses its defaults. A name requested twice
+        gets the parameters of both requests (the later wins).
+    params
+        Parameters by analyzer name, applied over ``requests``; they also reach
+        analyzers that run only as a requirement (``{"contacts": {"tol": 0.1}}``
+        with ``requests=[("coordination", {})]``). Naming an analyzer that is
+        not run is an error.
+    source
+        Where the requests come from (a scene file and key, an option); it
+        starts the message that refuses an analyzer of another dimension.
+    params_source
+        Where ``params`` come from (e.g. ``--set``); it starts the message
+        that refuses a parameter.
+
+    Returns
+    -------
+    dict
+        Every computed analyzer by name, in the order of computation (the
+        requested ones and their requirements).
+
+    Raises
+    ------
+    ConfigError
+        One line: an unknown analyzer (listing the known ones), an analyzer
+        of another dimension than the packing's (listing those that fit), a bad parameter
+        (naming the field, e.g. ``contacts.tol = -1: ...``), parameters
+        for an analyzer that is not run, or a parameter that implies more work
+        on this packing than allowed (a :class:`~regopack.base.limits.LimitError`,
+        prefixed with ``params_source`` or ``source``). Every analyzer is validated before
+        any is computed.
+    PluginError
+        Analyzers that require each other in a cycle, or an unregistered
+        requirement.
+    PackingError
+        The packing breaks the packing format (see
+        :meth:`~regopack.packing.core.Packing.validate`); nothing is computed.
+
+    Examples
+    --------
+    >>> from regopack.registry.manager import default_registry
+    >>> from regopack.testing import packing_from_polygons
+    >>> p = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
+    >>> done = run_analyses(p, default_registry(), [("density", {"margin": 0.0})])
+    >>> list(done), done["density"].results()["phi_domain"]
+    (['density'], 0.25)
+    """
+    packing.validate()  # the arrays may have changed in place since the packing was built
+    dimension = int(getattr(packing, "dimension", 2))
+    planned = _plan(registry, requests, params or {}, dimension, source, params_source)
+    done: dict[str, Analyzer] = {}
+    for name, analyzer in planned.items():
+        context = {req: done[req] for req in analyzer.requires}
+        try:
+            result = analyzer.compute(packing, context)  # type: ignore[arg-type]
+        except LimitError as err:  # a size a parameter implies on this packing
+            field = err.field.removeprefix(f"{name}.")
+            given = params_source if field in (params or {}).get(name, {}) else source
+            raise ConfigError(err.located(given)) from err
+        if not isinstance(result, Analyzer):
+            raise PluginError(
+                f"analyzer {name!r}: compute() returned {type(result).__name__}, not the analyzer"
+            )
+        done[name] = result
+    return done

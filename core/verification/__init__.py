@@ -1,0 +1,29 @@
+"""Verification of a packing against independent oracles.
+
+Shapely checks polygons; Qhull and linear programming check polyhedra.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from regopack._exports import load_export
+
+if TYPE_CHECKING:
+    from regopack.verification.polygons import CONFIRM_GRID as CONFIRM_GRID
+    from regopack.verification.polygons import VerifyReport as VerifyReport
+    from regopack.verification.polygons import assert_valid_packing as assert_valid_packing
+    from regopack.verification.polygons import verify as verify
+
+__all__ = ["CONFIRM_GRID", "VerifyReport", "assert_valid_packing", "verify"]
+
+_SOURCES = dict.fromkeys(__all__, "regopack.verification.polygons")
+
+
+def __getattr__(name: str) -> Any:
+    """Load the names of :mod:`regopack.verification.polygons` on first use (PEP 562)."""
+    return load_export(globals(), _SOURCES, name)
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)

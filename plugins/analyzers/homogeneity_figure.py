@@ -1,0 +1,174 @@
+"""Figure of the homogeneity analyzer: radial profiles with their trends, and tile maps."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import matplotlib
+import matplotlib.colors as mcolors
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.cm import ScalarMappable
+from matplotlib.figure import Figure
+from matplotlib.patches import Polygon as PolygonPatch
+from matplotlib.patches import Rectangle
+from numpy.typing import NDArray
+
+from regopack.base.units import length_scale, length_unit
+from regopack.packing.core import Packing
+from regopack.plugins.analyzers.figures import WIDTH, _note, axis_unit, length_ticks
+from regopack.plugins.analyzers.homogeneity import SECTORS, Homogeneity
+
+__all__ = ["draw_homogeneity"]
+
+PANELS: tuple[tuple[str, str, str, str, int], ...] = (
+    ("density", "number_density", "number density ({unit})", "number density", -2),
+    ("phi", "phi", "area fraction φ", "area fraction φ", 0),
+    ("mean_d", "mean_d", "mean equivalent diameter ({unit})", "mean diameter", 1),
+)
+"""Result prefix, column, axis label (``{unit}``: the axis unit), short name and the power
+of length of each quantity."""
+
+
+POINTS = "#0072B2"
+FIT = "#D55E00"
+MAX_LABELLED_TILES = 36
+"""Tile maps with more tiles than this carry no value labels."""
+
+
+def _profile(
+    ax: Axes, h: Homogeneity, prefix: str, column: str, label: str, scale: float, unit: str
+) -> None:
+    rings = h.rings
+    r = np.asarray(rings["r_mean"])
+    y = scale * np.asarray(rings[column])
+    err = scale * np.asarray(rings[f"{column}_err"])
+    if len(r) == 0:
+        _note(ax, "no rings (empty window)")
+        return
+    lo, hi = np.asarray(rings["r_inner"]), np.asarray(rings["r_outer"])
+    ax.errorbar(
+        r,
+        y,
+        yerr=err,
+        xerr=[r - lo, hi - r],
+        fmt="o",
+        color=POINTS,
+        ecolor=POINTS,
+        elinewidth=0.6,
+        capsize=1.5,
+        markersize=3,
+        label=f"rings: value ± 1 standard error (of φ: from its {SECTORS} sectors), ring extent",
+    )
+    overall = scale * h.overall[column]
+    ax.axhline(overall, color="#777777", linestyle=":", linewidth=0.8, label="whole window")
+    fit = h.trends[prefix]
+    if np.isfinite(fit.slope):
+        xs = np.array([0.0, float(hi[-1])])
+        ax.plot(
+            xs,
+            scale * (fit.intercept + fit.slope * xs),
+            color=FIT,
+            linewidth=1.0,
+            label="weighted least-squares trend",
+        )
+        per = float(h.results()["slope_length"])
+        ax.set_title(
+            f"trend {scale * fit.slope * per:+.3g} ± "
+            f"{scale * fit.slope_err * per:.2g} per {per:g} {unit}",
+            fontsize=7,
+        )
+    ax.set_xlim(0.0, float(hi[-1]))
+    ax.set_xlabel(f"distance from the centre ({unit})")
+    ax.set_ylabel(label)
+
+
+def _outline(ax: Axes, xy: NDArray[np.float64], **kwargs: Any) -> None:
+    ax.add_patch(PolygonPatch(xy, closed=True, fill=False, **kwargs))
+
+
+def _tile_map(
+    ax: Axes,
+    fig: Figure,
+    h: Homogeneity,
+    column: str,
+    scale: float,
+    unit: str,
+    scale_of_lengths: float = 1.0,
+) -> None:
+    tiles = h.tiles_table
+    values = scale * np.asarray(tiles[column], dtype=np.float64)
+    overall = scale * h.overall[column]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dev = 100.0 * (values / overall - 1.0)
+    finite = dev[np.isfinite(dev)]
+    top = max(float(np.max(np.abs(finite))) if finite.size else 1.0, 1.0)
+    norm = mcolors.Normalize(vmin=-top, vmax=top)
+    cmap = matplotlib.colormaps["RdBu_r"]
+    labelled = len(values) <= MAX_LABELLED_TILES
+    clip = PolygonPatch(h.window.outline(), closed=True, fill=False, edgecolor="none")
+    ax.add_patch(clip)
+    for t, value in enumerate(values):
+        x0, x1 = float(tiles["x_min"][t]), float(tiles["x_max"][t])
+        y0, y1 = float(tiles["y_min"][t]), float(tiles["y_max"][t])
+        face = cmap(norm(dev[t])) if np.isfinite(dev[t]) else "#dddddd"
+        cell = Rectangle(
+            (x0, y0), x1 - x0, y1 - y0, facecolor=face, edgecolor="white", linewidth=0.6
+        )
+        ax.add_patch(cell)
+        cell.set_clip_path(clip)  # a tile shows only its part inside the window
+        if labelled and np.isfinite(value):
+            dark = np.isfinite(dev[t]) and abs(norm(dev[t]) - 0.5) > 0.35
+            ax.text(
+                0.5 * (x0 + x1),
+                0.5 * (y0 + y1),
+                f"{value:.3g}",
+                ha="center",
+                va="center",
+                fontsize=6,
+                color="white" if dark else "black",
+            )
+    _outline(ax, h.window.outline(), edgecolor="black", linewidth=0.8)
+    b = h.window.bounds()
+    pad = 0.03 * max(float(b[1] - b[0]), float(b[3] - b[2]))
+    ax.set_xlim(float(b[0]) - pad, float(b[1]) + pad)
+    ax.set_ylim(float(b[2]) - pad, float(b[3]) + pad)
+    ax.set_aspect("equal")
+    text = length_ticks(ax, unit, scale_of_lengths)
+    ax.set_xlabel(f"x ({text})")
+    ax.set_ylabel(f"y ({text})")
+    bar = fig.colorbar(
+        ScalarMappable(norm=norm, cmap=cmap), ax=ax, location="bottom", shrink=0.8, aspect=25
+    )
+    bar.set_label("tile / window value − 1 (%)")
+
+
+def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
+    """Ring profiles of number density, φ and mean diameter with their trends; tile maps."""
+    res = h.results()
+    unit = length_unit(packing)
+    shown = [axis_unit(power, unit, length_scale(packing)) for *_, power in PANELS]
+    fig = Figure(figsize=(WIDTH, 5.6))
+    axes = fig.subplots(2, 3, height_ratios=(1.0, 1.25))
+    for ax, (prefix, column, label, *_), (text, scale) in zip(axes[0], PANELS, shown, strict=True):
+        _profile(ax, h, prefix, column, label.format(unit=text), scale, unit)
+    nx, ny = res["tiles"]
+    for ax, (_, column, _, short, _), (_, scale) in zip(axes[1], PANELS, shown, strict=True):
+        if len(h.tiles_table.get("tile", [])) == 0:
+            _note(ax, "no tiles (empty window)")
+            continue
+        _tile_map(ax, fig, h, column, scale, unit, length_scale(packing))
+        ax.set_title(f"{short}, {nx} × {ny} tiles")
+    handles, labels = axes[0, 0].get_legend_handles_labels()
+    if handles:
+        order = [labels.index(t) for t in labels if t.startswith("rings")]
+        order += [k for k in range(len(labels)) if k not in order]
+        handles, labels = [handles[k] for k in order], [labels[k] for k in order]
+        fig.legend(handles, labels, loc="outside lower center", ncol=len(handles))
+    fig.suptitle(
+        f"{res['n_interior']:,} particles in the interior window "
+        f"(margin {res['interior_margin']:g} {unit}); rings of {res['ring_width']:.3g} {unit} "
+        f"about the centre; tile values labelled",
+        fontsize=8,
+    )
+    return fig

@@ -1,0 +1,344 @@
+"""Particle size distribution: the placed particles against the requested ones.
+
+"Requested" are all drawn particles of the packing, placed or not. The
+distribution is counted in √2 sieve classes of the equivalent diameter
+``d = 2 r`` (:mod:`~regopack.plugins.analyzers.sieve`), by number and by mass.
+In two dimensions a particle's mass is taken as its area ``π r²`` (every
+mineral at the same density); nothing else weights the mass.
+
+When the scene's size distribution has a method ``cdf(d)`` (the probability
+that a diameter is at most ``d``, as every built-in one has), the classes
+and the Kolmogorov–Smirnov distance are also compared with it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from typing import Any, ClassVar, Self
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from regopack.packing.core import Packing
+from regopack.packing.sieve import (
+    SIEVE_RATIO,
+    class_of,
+    reference_diameter,
+    sieve_edges,
+    unplaced_per_class,
+)
+from regopack.registry.interfaces import Analyzer
+
+__all__ = [
+    "Psd",
+    "PsdConfig",
+    "analytic_shares",
+    "ks_distance",
+    "scene_size_distribution",
+    "unplaced_per_class",
+]
+
+FloatArray = NDArray[np.float64]
+Cdf = Callable[[FloatArray], FloatArray]
+
+MASS_GRID = 4096
+"""Log-spaced diameters on which the analytic mass shares are integrated."""
+
+
+class PsdConfig(BaseModel):
+    """Parameters of the size distribution analyzer."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    min_class_count: int = Field(
+        100,
+        ge=1,
+        description="Only classes with at least this many drawn particles count for the "
+        "worst class errors.",
+    )
+    d_ref: float | None = Field(
+        None,
+        gt=0,
+        allow_inf_nan=False,
+        description="A class bound (length unit); default: the scene's size.d_min, else the "
+        "smallest drawn diameter.",
+    )
+    analytic: bool = Field(
+        True, description="Also compare with the scene's size distribution when it has a CDF."
+    )
+
+
+def ks_distance(diameter: FloatArray, subset: NDArray[np.bool_], weight: FloatArray) -> float:
+    """Largest difference between the weighted CDFs of ``subset`` and of all diameters.
+
+    With unit weights this is the two-sample Kolmogorov–Smirnov statistic of
+    the subset against the whole sample. NaN when the subset has no weight.
+    """
+    order = np.argsort(diameter, kind="stable")
+    d, w, s = diameter[order], weight[order], subset[order]
+    total, total_s = float(w.sum()), float(w[s].sum())
+    if not (total > 0 and total_s > 0):
+        return math.nan
+    last = np.flatnonzero(np.append(d[1:] != d[:-1], True))  # end of each group of ties
+    f_all = np.cumsum(w)[last] / total
+    f_sub = np.cumsum(np.where(s, w, 0.0))[last] / total_s
+    return float(np.max(np.abs(f_sub - f_all)))
+
+
+def scene_size_distribution(packing: Packing) -> tuple[Any, str | None]:
+    """Build the scene's size distribution again; ``(distribution, None)`` or ``(None, why)``."""
+    from pydantic import ValidationError
+
+    from regopack.base.errors import RegopackError
+    from regopack.registry.manager import default_registry
+
+    size = packing.scene.get("size") if isinstance(packing.scene, dict) else None
+    if not isinstance(size, dict) or "kind" not in size:
+        return None, "the scene has no size section"
+    kind = str(size["kind"])
+    try:
+        spec = default_registry().get("size", kind)
+        params = {k: v for k, v in size.items() if k != "kind"}
+        return spec.factory(spec.config_model.model_validate(params)), None
+    except (RegopackError, ValidationError, ValueError, TypeError, KeyError, OSError) as err:
+        return None, f"size distribution {kind!r} not rebuilt: {' '.join(str(err).split())}"
+
+
+def _cdf_of(dist: Any) -> Cdf | None:
+    cdf = getattr(dist, "cdf", None)
+    if not callable(cdf):
+        return None
+    if not float(getattr(dist, "r_max", 0.0)) > float(getattr(dist, "r_min", 0.0)):
+        return None  # a single size: no continuous CDF to compare with
+
+    def f(d: FloatArray) -> FloatArray:
+        return np.asarray(cdf(np.asarray(d, dtype=np.float64)), dtype=np.float64).reshape(
+            np.shape(d)
+        )
+
+    return f
+
+
+def analytic_shares(
+    cdf: Cdf, edges: FloatArray, d_lo: float, d_hi: float, power: int = 2
+) -> tuple[FloatArray, FloatArray]:
+    """Return the number and the mass (area) share of each class under ``cdf``.
+
+    The first class also holds the probability below it and the last class
+    the probability above it. Mass shares integrate ``d**power`` (``d²``, the
+    area in 2D; ``d³``, the volume in 3D) over the CDF on
+    :data:`MASS_GRID` log-spaced diameters from ``d_lo`` to ``d_hi`` (the
+    distribution's range) plus the class bounds.
+    """
+    f = cdf(edges)
+    f[0], f[-1] = 0.0, 1.0
+    number = np.maximum(np.diff(f), 0.0)
+    grid = np.unique(np.concatenate([np.geomspace(d_lo, d_hi, MASS_GRID), edges]))
+    grid = grid[(grid >= d_lo) & (grid <= d_hi)]
+    fg = cdf(grid)
+    mid = 0.5 * (grid[:-1] + grid[1:])
+    cell_mass = mid**power * np.maximum(np.diff(fg), 0.0)
+    k = class_of(mid, edges)
+    mass = np.bincount(k, weights=cell_mass, minlength=len(edges) - 1)
+    total = float(mass.sum())
+    return number, mass / total if total > 0 else np.full_like(mass, np.nan)
+
+
+def _weighted_median(d: FloatArray, w: FloatArray) -> float | None:
+    if d.size == 0 or not w.sum() > 0:
+        return None
+    order = np.argsort(d, kind="stable")
+    cum = np.cumsum(w[order])
+    return float(d[order][np.searchsorted(cum, 0.5 * cum[-1])])
+
+
+def _worst(rel: FloatArray, ok: NDArray[np.bool_], edges: FloatArray) -> tuple[Any, Any]:
+    sel = np.flatnonzero(ok & np.isfinite(rel))
+    if len(sel) == 0:
+        return None, None
+    j = int(sel[np.argmax(np.abs(rel[sel]))])
+    return float(rel[j]), [float(edges[j]), float(edges[j + 1])]
+
+
+def _none(x: float) -> float | None:
+    return float(x) if math.isfinite(x) else None
+
+
+class Psd(Analyzer):
+    """Size distribution of the placed particles against all drawn ones, per √2 class.
+
+    After :meth:`compute`, :attr:`classes` holds the class table,
+    :attr:`diameter`, :attr:`mass` and :attr:`placed` the particles, and
+    :attr:`cdf` the analytic CDF (or ``None``).
+    """
+
+    name = "psd"
+    mass_power: ClassVar[int] = 2
+    """Power of the diameter that a particle's mass is proportional to: 2 (area) in 2D."""
+
+    def __init__(self, config: PsdConfig | None = None) -> None:
+        self.config = config or PsdConfig()
+        self._results: dict[str, Any] | None = None
+        self.classes: dict[str, Any] = {}
+        self.cdf: Cdf | None = None
+
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+        """Count the drawn and placed particles per class; the KS distances."""
+        from scipy import stats
+
+        d = 2.0 * packing.radius
+        placed = packing.placed
+        mass = self.masses(packing.radius)
+        self.diameter, self.mass, self.placed = d, mass, placed
+        n, n_placed = len(d), int(placed.sum())
+        notes: list[str] = []
+        ref = self.config.d_ref if self.config.d_ref is not None else reference_diameter(packing)
+        if ref is not None and n and ref > float(d.min()) * (1 + 1e-9):
+            notes.append(f"d_ref = {ref:g} is above the smallest diameter; classes start lower")
+        edges = sieve_edges(d, ref) if n else np.array([1.0, SIEVE_RATIO])
+        k = class_of(d, edges)
+        m = len(edges) - 1
+        drawn = np.bincount(k, minlength=m)
+        done = np.bincount(k[placed], minlength=m)
+        mass_drawn = np.bincount(k, weights=mass, minlength=m)
+        mass_done = np.bincount(k[placed], weights=mass[placed], minlength=m)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = {
+                "number_share_drawn": drawn / max(n, 1),
+                "number_share_placed": done / n_placed if n_placed else np.full(m, np.nan),
+                "mass_share_drawn": mass_drawn / mass_drawn.sum(),
+                "mass_share_placed": mass_done / mass_done.sum(),
+            }
+            number_rel = share["number_share_placed"] / share["number_share_drawn"] - 1.0
+            mass_rel = share["mass_share_placed"] / share["mass_share_drawn"] - 1.0
+            fraction = np.where(drawn > 0, done / drawn, np.nan)
+        analytic_n, analytic_m, res_analytic = self._compare(
+            packing, edges, share["number_share_placed"], drawn, notes
+        )
+        self.classes = {
+            "class": np.arange(m, dtype=np.int64),
+            "d_lo": edges[:-1],
+            "d_hi": edges[1:],
+            "drawn": drawn.astype(np.int64),
+            "placed": done.astype(np.int64),
+            "not_placed": (drawn - done).astype(np.int64),
+            "placed_fraction": fraction,
+            "number_share_drawn": share["number_share_drawn"],
+            "number_share_placed": share["number_share_placed"],
+            "number_rel_error": number_rel,
+            "mass_share_drawn": share["mass_share_drawn"],
+            "mass_share_placed": share["mass_share_placed"],
+            "mass_rel_error": mass_rel,
+            "number_share_analytic": analytic_n,
+            "mass_share_analytic": analytic_m,
+        }
+        for key in ("number", "mass"):
+            for who in ("drawn", "placed", "analytic"):
+                self.classes[f"passing_{key}_{who}"] = 100.0 * np.cumsum(
+                    self.classes[f"{key}_share_{who}"]
+                )
+
+        ks_number = ks_distance(d, placed, np.ones(n)) if n else math.nan
+        ks_mass = ks_distance(d, placed, mass) if n else math.nan
+        p_number: float | None = None
+        if 0 < n_placed < n:
+            p_number = float(stats.ks_2samp(d[placed], d[~placed]).pvalue)
+        elif n_placed == n and n:
+            p_number = 1.0
+        ok = drawn >= self.config.min_class_count
+        worst_n = _worst(number_rel, ok, edges)
+        worst_m = _worst(mass_rel, ok, edges)
+        self._results = {
+            "n_drawn": n,
+            "n_placed": n_placed,
+            "n_not_placed": n - n_placed,
+            "placed_share_mass": _none(float(mass[placed].sum() / mass.sum())) if n else None,
+            "d_ref": float(edges[0]) if ref is None else float(ref),
+            "n_classes": m,
+            "d50_number_drawn": _weighted_median(d, np.ones(n)),
+            "d50_number_placed": _weighted_median(d[placed], np.ones(n_placed)),
+            "d50_mass_drawn": _weighted_median(d, mass),
+            "d50_mass_placed": _weighted_median(d[placed], mass[placed]),
+            "ks_number": _none(ks_number),
+            "ks_number_pvalue": p_number,
+            "ks_mass": _none(ks_mass),
+            "min_class_count": self.config.min_class_count,
+            "worst_number_rel_error": worst_n[0],
+            "worst_number_class": worst_n[1],
+            "worst_mass_rel_error": worst_m[0],
+            "worst_mass_class": worst_m[1],
+            **res_analytic,
+            "notes": notes,
+        }
+        return self
+
+    def _compare(
+        self,
+        packing: Packing,
+        edges: FloatArray,
+        placed_share: FloatArray,
+        drawn: NDArray[np.int64],
+        notes: list[str],
+    ) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
+        """Class shares and KS tests against the scene's size distribution, when it has a CDF."""
+        from scipy import stats
+
+        nan = np.full(len(edges) - 1, np.nan)
+        res: dict[str, Any] = {
+            "analytic": None,
+            "ks_drawn_vs_analytic": None,
+            "ks_drawn_vs_analytic_pvalue": None,
+            "ks_placed_vs_analytic": None,
+            "ks_placed_vs_analytic_pvalue": None,
+            "worst_analytic_number_rel_error": None,
+            "worst_analytic_number_class": None,
+        }
+        self.cdf = None
+        if not self.config.analytic or self.diameter.size == 0:
+            return nan, nan, res
+        dist, why = scene_size_distribution(packing)
+        cdf = _cdf_of(dist) if dist is not None else None
+        if cdf is None:
+            notes.append(why or "the size distribution gives no continuous CDF")
+            return nan, nan, res
+        d, placed = self.diameter, self.placed
+        try:
+            lo, hi = 2.0 * float(dist.r_min), 2.0 * float(dist.r_max)
+            number, mass = analytic_shares(cdf, edges.copy(), lo, hi, self.mass_power)
+            ks_d = stats.kstest(d, cdf)
+            ks_p = stats.kstest(d[placed], cdf) if placed.any() else None
+        except (ValueError, TypeError, ArithmeticError) as err:
+            notes.append(f"the size distribution's CDF failed: {' '.join(str(err).split())}")
+            return nan, nan, res
+        self.cdf = cdf
+        res["analytic"] = packing.scene["size"]["kind"]
+        res["ks_drawn_vs_analytic"] = float(ks_d.statistic)
+        res["ks_drawn_vs_analytic_pvalue"] = float(ks_d.pvalue)
+        if ks_p is not None:
+            res["ks_placed_vs_analytic"] = float(ks_p.statistic)
+            res["ks_placed_vs_analytic_pvalue"] = float(ks_p.pvalue)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rel = placed_share / number - 1.0
+        worst = _worst(rel, drawn >= self.config.min_class_count, edges)
+        res["worst_analytic_number_rel_error"], res["worst_analytic_number_class"] = worst
+        return number, mass, res
+
+    @staticmethod
+    def masses(radius: FloatArray) -> FloatArray:
+        """Mass of particles of equivalent radius ``radius``: their area ``pi r^2``."""
+        out: FloatArray = np.pi * radius**2
+        return out
+
+    def results(self) -> dict[str, Any]:
+        """Scalars: counts, medians, KS distances, worst class errors, the analytic comparison."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return dict(self._results)
+
+    def tables(self) -> dict[str, dict[str, Any]]:
+        """Table ``psd_classes``: one row per sieve class."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return {"psd_classes": dict(self.classes)}

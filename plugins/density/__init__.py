@@ -1,0 +1,1 @@
+"""Density controllers: the packing control coefficient eta."""

@@ -1,0 +1,69 @@
+"""Built-in exporters: CSV, JSON, SVG, VTK and LAMMPS, registered as one plugin.
+
+Each format lives in its own module: :mod:`.csv_export`, :mod:`.json_export`,
+:mod:`.svg_export`, :mod:`.vtk_export` and :mod:`.lammps_export` (what they
+share is in :mod:`.export_common`). This module registers them and gathers
+their public names, so ``from regopack.plugins.exporters import read_csv``
+keeps working. Every exporter writes one main file (and, for CSV, two
+companion files named after its stem); CSV and JSON keep every array of the
+packing exactly and are read back by :func:`read_csv` and :func:`read_json`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+from regopack.plugins.exporters.csv_export import (
+    CSV_FORMAT,
+    CsvConfig,
+    CsvExporter,
+    companion_paths,
+    read_csv,
+)
+from regopack.plugins.exporters.csv_export import PARTICLE_COLUMNS as PARTICLE_COLUMNS
+from regopack.plugins.exporters.csv_export import VERTEX_COLUMNS as VERTEX_COLUMNS
+from regopack.plugins.exporters.export_common import EXPORT_FORMAT_VERSION as EXPORT_FORMAT_VERSION
+from regopack.plugins.exporters.json_export import JSON_FORMAT, JsonConfig, JsonExporter, read_json
+from regopack.plugins.exporters.lammps_export import LammpsConfig, LammpsExporter
+from regopack.plugins.exporters.rounded_bodies import polygon_moments as polygon_moments
+from regopack.plugins.exporters.svg_export import SvgConfig, SvgExporter
+from regopack.plugins.exporters.vtk_export import VtkConfig, VtkExporter
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.plugin_types import ExporterSpec
+
+__all__ = [
+    "CSV_FORMAT",
+    "JSON_FORMAT",
+    "CsvConfig",
+    "CsvExporter",
+    "JsonConfig",
+    "JsonExporter",
+    "LammpsConfig",
+    "LammpsExporter",
+    "SvgConfig",
+    "SvgExporter",
+    "VtkConfig",
+    "VtkExporter",
+    "companion_paths",
+    "read_csv",
+    "read_json",
+]
+
+
+@hookimpl
+def regopack_exporters() -> Iterable[ExporterSpec]:
+    """Register the built-in exporters."""
+    return [
+        ExporterSpec(
+            "csv", CsvConfig, CsvExporter, "Particle and vertex tables (exact round trip)."
+        ),
+        ExporterSpec("json", JsonConfig, JsonExporter, "One JSON document (exact round trip)."),
+        ExporterSpec("svg", SvgConfig, SvgExporter, "Picture of the particles, by mineral."),
+        ExporterSpec("vtk", VtkConfig, VtkExporter, "VTK XML PolyData (.vtp) for ParaView."),
+        ExporterSpec(
+            "lammps",
+            LammpsConfig,
+            LammpsExporter,
+            "LAMMPS data file (body rounded/polygon) and an input script that runs it.",
+        ),
+    ]

@@ -1,0 +1,179 @@
+"""The lag of each particle size in the sweep order, learned from a pilot sweep.
+
+In the sweep's steady state the small particles do not land where the stream
+is: they fill the last pores of the oldest candidates, near the bottom of the
+zone, a size-dependent depth below its top (the smallest about 0.85 of the
+zone height for the Table-1 materials, the coarse ones at the top). At the
+start there are no such old candidates yet, so every small particle of the
+first zone height fills the young pores next to the floor, which ends up
+with too many of them. Offering each particle only after the front has risen
+by its size's depth gives the first zone what the steady state gives every
+other, and the particles held back fill the last zone's old pores under the
+top.
+
+The depths are a property of the materials and the zone, not known before a
+packing, so a *pilot* measures them: the first particles of the stream are
+swept into a small walled rectangle at the bottom of the domain (two zone
+heights wide, three high), and the depth of every particle placed once the
+pilot's zone top is two zone heights up is averaged per √2 size class.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.geometry.domain import Domain, Rectangle
+from regopack.geometry.population import Population, ShapeBatch
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+PILOT_WIDTH = 2.0
+"""Width of the pilot's rectangle, in zone heights (at most the domain's width)."""
+PILOT_HEIGHT = 3.0
+"""Height of the pilot's rectangle, in zone heights."""
+MEASURE_FROM = 2.0
+"""Placements count once the pilot's zone top is this many zone heights up: its
+zone has then left the pilot's own first zone height, which has no lags."""
+MIN_HEIGHT = 2.5
+"""Domains lower than this many zone heights get no lags (no steady state to learn from)."""
+PILOT_FILL = 1.0
+"""Particle area given to the pilot, over its rectangle's area (it fills about 0.87)."""
+MIN_LAG = 0.1
+"""Mean depths under this many zone heights are no lag (about the depth at which the
+coarse particles that make the front land)."""
+MIN_SAMPLES = 20
+"""Placements a size class needs in the pilot to get a lag (fewer: no lag)."""
+
+
+def head(population: Population, m: int) -> Population:
+    """Return the first ``m`` particles of ``population``."""
+    sh = population.shapes
+    off = sh.offsets[: m + 1]
+    shapes = ShapeBatch(
+        vertices=sh.vertices[: int(off[-1])],
+        offsets=off,
+        orientation=sh.orientation[:m],
+        rounding=None if sh.rounding is None else sh.rounding[:m],
+    )
+    return Population(
+        radius=population.radius[:m],
+        mineral=population.mineral[:m],
+        mineral_names=population.mineral_names,
+        shapes=shapes,
+    )
+
+
+def size_class(radius: FloatArray, r_min: float) -> IntArray:
+    """√2 size class of each equivalent radius, 0 for ``[r_min, √2 r_min)``."""
+    return np.floor(2.0 * np.log2(np.maximum(radius / r_min, 1.0))).astype(np.int64)
+
+
+def class_lags(
+    radius: FloatArray,
+    depth: FloatArray,
+    r_min: float,
+    min_lag: float,
+    min_samples: int = MIN_SAMPLES,
+) -> tuple[FloatArray, IntArray]:
+    """Lag (length) of each size class: its mean depth below the zone top when placed.
+
+    Parameters
+    ----------
+    radius
+        Equivalent radius of each measured placement.
+    depth
+        Its depth below its zone's top when it was placed (negative above it).
+    r_min
+        Radius of the lower end of class 0.
+    min_lag
+        Shallower means are no lag: the particles that make the front land
+        about their own size below the top.
+    min_samples
+        Classes with fewer placements get no lag.
+
+    Returns
+    -------
+    lag, samples
+        Per class: the lag (0 where undersampled or shallow) and the number of placements.
+    """
+    cls = size_class(radius, r_min)
+    ncls = int(cls.max()) + 1 if cls.size else 0
+    samples = np.bincount(cls, minlength=ncls).astype(np.int64)
+    total = np.bincount(cls, weights=depth, minlength=ncls)
+    lag = np.zeros(ncls, dtype=np.float64)
+    ok = samples >= min_samples
+    lag[ok] = total[ok] / samples[ok]
+    lag[lag < min_lag] = 0.0
+    return lag, samples
+
+
+def pilot_lags(
+    population: Population,
+    domain: Domain,
+    zone: float,
+    delta: float,
+    run_pilot: Callable[[Population, Rectangle, float], tuple[FloatArray, IntArray, float]],
+) -> tuple[IntArray, dict[str, Any]]:
+    """Lag of every particle, in bins of height ``delta``, learned from a pilot sweep.
+
+    Parameters
+    ----------
+    population
+        The particles of the run, in stream order.
+    domain
+        The run's domain; the pilot is a walled rectangle at the bottom of its box.
+    zone
+        The run's zone height.
+    delta
+        The run's bin height.
+    run_pilot
+        Sweeps a population into a rectangle with the run's settings and zone;
+        returns the placed centres' heights above the rectangle's bottom
+        (NaN where not placed), each particle's zone top (bin, -1 where not
+        measured, see ``Lags.top_at``) and the pilot's bin height.
+
+    Returns
+    -------
+    lag, info
+        ``(n,)`` lags in bins, and what the pilot measured (for the summary).
+    """
+    n = len(population)
+    lag = np.zeros(n, dtype=np.int64)
+    bounds = domain.bounds()
+    width = float(bounds[1] - bounds[0])
+    height = float(bounds[3] - bounds[2])
+    info: dict[str, Any] = {
+        "lag_pilot_particles": 0,
+        "lag_samples": 0,
+        "lagged": 0,
+        "lag_max": 0.0,
+    }
+    if n == 0 or not zone > 0 or height < MIN_HEIGHT * zone:
+        return lag, info
+    pw = min(width, PILOT_WIDTH * zone)
+    ph = min(height, PILOT_HEIGHT * zone)
+    # enough of the stream's first particles to fill the pilot, whatever the run's count
+    mean_area = math.pi * float(np.mean(population.radius**2))
+    m = min(n, math.ceil(PILOT_FILL * pw * ph / mean_area))
+    x0 = float(bounds[0])
+    y0 = float(bounds[2])
+    pilot = Rectangle(x0, x0 + pw, y0, y0 + ph)
+    y, top_at, pdelta = run_pilot(head(population, m), pilot, zone)
+    measured = (top_at >= 0) & ((top_at + 1.0) * pdelta >= MEASURE_FROM * zone)
+    depth = (top_at[measured] + 1.0) * pdelta - y[measured]
+    r_min = float(population.radius.min())
+    lags, _ = class_lags(population.radius[:m][measured], depth, r_min, MIN_LAG * zone)
+    cls = size_class(population.radius, r_min)
+    known = cls < lags.shape[0]
+    lag[known] = np.rint(lags[cls[known]] / delta).astype(np.int64)
+    info["lag_pilot_particles"] = m
+    info["lag_samples"] = int(measured.sum())
+    info["lagged"] = int(np.count_nonzero(lag))
+    info["lag_max"] = float(lags.max()) if lags.size else 0.0
+    return lag, info

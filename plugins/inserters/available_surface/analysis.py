@@ -1,0 +1,642 @@
+"""Compiled analysis of one candidate: interferers, their envelopes, the free surface, a centre.
+
+:class:`SurfaceState` keeps the placed particles in flat arrays
+(:class:`Solids`, :class:`Arcs`, :class:`Grid`) so that the whole analysis of
+a candidate runs in one compiled call, :func:`analyse`:
+
+1. the envelope ``E_k = P_k ⊕ (-Q)``;
+2. the interferers: the placed particles (and, in a periodic box, their
+   images among the 27 shifts) in the grid cells that a ball about ``c_k``
+   reaches, kept when ``|c_j - c_k| < R_k + R_j + 2 R_Q`` (plus the packing
+   control's margin, when there is one);
+3. each interferer's envelope as half-spaces, computed once per particle
+   being placed and kept in :class:`HalfspaceCache`;
+4. the free surface and, when it has area, a centre drawn uniformly by area
+   with three uniform numbers from the run's generator.
+
+The order of the interferers (cells in ascending x, y, z, and in each cell
+the order of insertion) is fixed, so the packing does not depend on how the
+analysis is run.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, NamedTuple
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.base.limits import derived_count
+from regopack.plugins.inserters.available_surface.envelope import minkowski_envelope
+from regopack.plugins.inserters.available_surface.free_surface import (
+    Interferers,
+    free_surface,
+    sample_free_point,
+)
+from regopack.plugins.inserters.available_surface.halfspaces import (
+    EdgeArcs,
+    edge_arcs,
+    halfspaces_of_arcs,
+)
+from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
+from regopack.plugins.inserters.available_surface.spheres import EPS, free_arcs, sample_free
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+SEPARATION_EPS = 1e-9
+"""Relative margin of the face-plane test that drops interferers (see :func:`_separated`)."""
+FOUND, EMPTY, FULL = 1, 0, -1
+"""Return codes of :func:`analyse`: a centre, no free area, the cache needs more room."""
+
+
+class Solids(NamedTuple):
+    """The population's polyhedra in flat arrays (see :func:`solid`)."""
+
+    vertices: FloatArray
+    vertex_offsets: IntArray
+    normals: FloatArray
+    support: FloatArray
+    face_offsets: IntArray
+    loops: IntArray
+    loop_offsets: IntArray
+    loop_starts: IntArray
+    loop_start_offsets: IntArray
+
+
+class Arcs(NamedTuple):
+    """Edge arcs of every particle, made on first use (``done``)."""
+
+    left: IntArray
+    right: IntArray
+    t: FloatArray
+    u: FloatArray
+    offsets: IntArray
+    done: NDArray[np.bool_]
+
+
+class Grid(NamedTuple):
+    """Placed particles in cubic cells: per-cell lists in insertion order.
+
+    Cell ``floor(x / cell) - origin`` per axis (cells aligned on multiples of
+    ``cell``); ``dims`` counts them per axis; ``head``/``tail`` per cell and
+    ``link`` per particle link the lists.
+    """
+
+    origin: IntArray
+    cell: FloatArray
+    dims: IntArray
+    head: IntArray
+    tail: IntArray
+    link: IntArray
+
+
+class HalfspaceCache(NamedTuple):
+    """Interferer envelopes of the particle being placed, as half-space rows.
+
+    ``stamp[j]`` is the particle whose envelope with ``P_j`` rows
+    ``start[j]:start[j] + size[j]`` hold; ``fill[0]`` is the next free row.
+    """
+
+    normals: FloatArray
+    support: FloatArray
+    stamp: IntArray
+    start: IntArray
+    size: IntArray
+    fill: IntArray
+
+
+def solids_of(polys: list[Polyhedron]) -> Solids:
+    """Pack :class:`Polyhedron` tuples into :class:`Solids`."""
+
+    def offsets(sizes: list[int]) -> IntArray:
+        out = np.zeros(len(sizes) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=out[1:])
+        return out
+
+    def cat(arrays: list[NDArray[Any]], shape: tuple[int, ...], dtype: type) -> NDArray[Any]:
+        return np.ascontiguousarray(np.concatenate(arrays) if arrays else np.zeros(shape, dtype))
+
+    return Solids(
+        vertices=cat([p.vertices for p in polys], (0, 3), np.float64),
+        vertex_offsets=offsets([len(p.vertices) for p in polys]),
+        normals=cat([p.normals for p in polys], (0, 3), np.float64),
+        support=cat([p.support for p in polys], (0,), np.float64),
+        face_offsets=offsets([len(p.normals) for p in polys]),
+        loops=cat([p.face_vertices for p in polys], (0,), np.int64),
+        loop_offsets=offsets([len(p.face_vertices) for p in polys]),
+        loop_starts=cat([p.face_offsets for p in polys], (0,), np.int64),
+        loop_start_offsets=offsets([len(p.face_offsets) for p in polys]),
+    )
+
+
+def arcs_for(solids: Solids) -> Arcs:
+    """Room for every particle's edge arcs (``E = loops / 2`` edges each)."""
+    n = solids.vertex_offsets.shape[0] - 1
+    offsets = solids.loop_offsets // 2
+    e = int(offsets[-1])
+    return Arcs(
+        left=np.zeros(e, dtype=np.int64),
+        right=np.zeros(e, dtype=np.int64),
+        t=np.zeros((e, 3)),
+        u=np.zeros((e, 6)),
+        offsets=np.ascontiguousarray(offsets),
+        done=np.zeros(n, dtype=np.bool_),
+    )
+
+
+MAX_GRID_CELLS = 1 << 24
+"""Cells a neighbour grid may have whatever the particle count (128 MiB of lists)."""
+GRID_CELLS_PER_PARTICLE = 8
+"""Cells a neighbour grid may have per particle beyond :data:`MAX_GRID_CELLS`."""
+
+
+def grid_for(lo: FloatArray, hi: FloatArray, cell: float, n: int) -> Grid:
+    """Return an empty grid of cells of side ``cell`` over the box ``[lo, hi]``.
+
+    Raises
+    ------
+    regopack.base.limits.LimitError
+        When the box holds more than ``max(MAX_GRID_CELLS,
+        GRID_CELLS_PER_PARTICLE * n)`` cells (or no finite number of them).
+    """
+    lo_cells = np.floor(np.asarray(lo, dtype=np.float64) / cell)
+    hi_cells = np.floor(np.asarray(hi, dtype=np.float64) / cell)
+    spans = hi_cells - lo_cells + 1.0
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(np.prod(spans))
+    if not np.all(np.isfinite(lo_cells) & np.isfinite(hi_cells)):
+        total = math.inf
+    cells = derived_count(
+        total,
+        "cells of the neighbour grid (box sides / twice the largest circumradius)",
+        max(MAX_GRID_CELLS, GRID_CELLS_PER_PARTICLE * n),
+        field="domain",
+        hint="give a box nearer the particles' size or more particles",
+    )
+    first = lo_cells.astype(np.int64)
+    dims = spans.astype(np.int64)
+    return Grid(
+        origin=first,
+        cell=np.array([cell]),
+        dims=dims,
+        head=np.full(cells, -1, dtype=np.int64),
+        tail=np.full(cells, -1, dtype=np.int64),
+        link=np.full(max(n, 1), -1, dtype=np.int64),
+    )
+
+
+def cache_for(n: int, rows: int) -> HalfspaceCache:
+    """Return an empty half-space cache of ``rows`` rows."""
+    return HalfspaceCache(
+        normals=np.zeros((rows, 3)),
+        support=np.zeros(rows),
+        stamp=np.full(max(n, 1), -1, dtype=np.int64),
+        start=np.zeros(max(n, 1), dtype=np.int64),
+        size=np.zeros(max(n, 1), dtype=np.int64),
+        fill=np.zeros(1, dtype=np.int64),
+    )
+
+
+@numba.njit(cache=True)
+def solid(s: Solids, j: int) -> Polyhedron:
+    """Particle ``j`` as a :class:`Polyhedron` (views of the flat arrays)."""
+    return Polyhedron(
+        s.vertices[s.vertex_offsets[j] : s.vertex_offsets[j + 1]],
+        s.normals[s.face_offsets[j] : s.face_offsets[j + 1]],
+        s.support[s.face_offsets[j] : s.face_offsets[j + 1]],
+        s.loops[s.loop_offsets[j] : s.loop_offsets[j + 1]],
+        s.loop_starts[s.loop_start_offsets[j] : s.loop_start_offsets[j + 1]],
+    )
+
+
+@numba.njit(cache=True)
+def arcs_of(a: Arcs, s: Solids, j: int) -> EdgeArcs:
+    """Edge arcs of particle ``j``, made on first use."""
+    e0 = a.offsets[j]
+    e1 = a.offsets[j + 1]
+    if not a.done[j]:
+        made = edge_arcs(solid(s, j), 1.0)
+        a.left[e0:e1] = made.left
+        a.right[e0:e1] = made.right
+        a.t[e0:e1] = made.t
+        a.u[e0:e1] = made.u
+        a.done[j] = True
+    return EdgeArcs(a.left[e0:e1], a.right[e0:e1], a.t[e0:e1], a.u[e0:e1])
+
+
+@numba.njit(cache=True)
+def _cell(g: Grid, x: float, axis: int) -> int:
+    return int(math.floor(x / g.cell[0]) - g.origin[axis])
+
+
+@numba.njit(cache=True)
+def grid_add(g: Grid, j: int, x: FloatArray) -> None:
+    """File particle ``j`` at ``x`` (inside the box) at the end of its cell's list."""
+    ix = min(max(_cell(g, x[0], 0), 0), g.dims[0] - 1)
+    iy = min(max(_cell(g, x[1], 1), 0), g.dims[1] - 1)
+    iz = min(max(_cell(g, x[2], 2), 0), g.dims[2] - 1)
+    c = (ix * g.dims[1] + iy) * g.dims[2] + iz
+    g.link[j] = -1
+    if g.tail[c] < 0:
+        g.head[c] = j
+    else:
+        g.link[g.tail[c]] = j
+    g.tail[c] = j
+
+
+@numba.njit(cache=True)
+def _gather(
+    g: Grid,
+    p: FloatArray,
+    reach: float,
+    shift: FloatArray,
+    ck: FloatArray,
+    pk: int,
+    i: int,
+    centre: FloatArray,
+    circum: FloatArray,
+    near: IntArray,
+    at: FloatArray,
+    count: int,
+    margin: float,
+) -> tuple[int, IntArray, FloatArray]:
+    """Append the interferers found in the cells about ``p`` (their images at ``+ shift``).
+
+    Returns the new count and the arrays, grown when full.
+    """
+    lo0 = max(_cell(g, p[0] - reach, 0), 0)
+    lo1 = max(_cell(g, p[1] - reach, 1), 0)
+    lo2 = max(_cell(g, p[2] - reach, 2), 0)
+    hi0 = min(_cell(g, p[0] + reach, 0), g.dims[0] - 1)
+    hi1 = min(_cell(g, p[1] + reach, 1), g.dims[1] - 1)
+    hi2 = min(_cell(g, p[2] + reach, 2), g.dims[2] - 1)
+    for ix in range(lo0, hi0 + 1):
+        for iy in range(lo1, hi1 + 1):
+            for iz in range(lo2, hi2 + 1):
+                j = g.head[(ix * g.dims[1] + iy) * g.dims[2] + iz]
+                while j >= 0:
+                    dx = centre[j, 0] + shift[0] - ck[0]
+                    dy = centre[j, 1] + shift[1] - ck[1]
+                    dz = centre[j, 2] + shift[2] - ck[2]
+                    d2 = dx * dx + dy * dy + dz * dz
+                    lim = circum[pk] + circum[j] + 2.0 * circum[i] + margin
+                    if d2 < lim * lim and not (j == pk and d2 == 0.0):
+                        if count == near.shape[0]:
+                            grown = np.empty(2 * count, dtype=np.int64)
+                            grown[:count] = near
+                            near = grown
+                            grown_at = np.empty((2 * count, 3))
+                            grown_at[:count] = at
+                            at = grown_at
+                        near[count] = j
+                        at[count, 0] = centre[j, 0] + shift[0]
+                        at[count, 1] = centre[j, 1] + shift[1]
+                        at[count, 2] = centre[j, 2] + shift[2]
+                        count += 1
+                    j = g.link[j]
+    return count, near, at
+
+
+@numba.njit(cache=True)
+def _interferers(
+    g: Grid,
+    pk: int,
+    i: int,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    margin: float,
+) -> tuple[int, IntArray, FloatArray]:
+    """Placed particles (or periodic images) that pass the circumradius test with ``pk``.
+
+    ``|c_j - c_k| < R_k + R_j + 2 R_Q + margin``: with the packing control's
+    margin, a particle that the new one could come closer to than the margin
+    interferes too.
+    """
+    ck = centre[pk]
+    reach = circum[pk] + reach_max + 2.0 * circum[i] + margin
+    near = np.empty(64, dtype=np.int64)
+    at = np.empty((64, 3))
+    count = 0
+    if period.shape[0] == 0:
+        return _gather(g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, 0, margin)
+    shift = np.empty(3)
+    for sx in (-1, 0, 1):
+        for sy in (-1, 0, 1):
+            for sz in (-1, 0, 1):
+                shift[0] = sx * period[0]
+                shift[1] = sy * period[1]
+                shift[2] = sz * period[2]
+                skip = False
+                for ax in range(3):
+                    pa = ck[ax] - shift[ax]
+                    if pa + reach < lo[ax] or pa - reach > hi[ax]:
+                        skip = True
+                if skip:
+                    continue
+                p = ck - shift
+                count, near, at = _gather(
+                    g, p, reach, shift, ck, pk, i, centre, circum, near, at, count, margin
+                )
+    return count, near, at
+
+
+@numba.njit(cache=True)
+def analyse_sphere(
+    k: int,
+    i: int,
+    g: Grid,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    margin: float,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> int:
+    """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`."""
+    pk = order[k]
+    ck = centre[pk]
+    r = circum[i]
+    big_r = circum[pk] + r
+    tau = EPS * big_r
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
+    caps = np.empty((count + 6, 4))
+    nc = 0
+    for m in range(count):
+        dx = at[m, 0] - ck[0]
+        dy = at[m, 1] - ck[1]
+        dz = at[m, 2] - ck[2]
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        rho = circum[near[m]] + r + margin
+        h = (big_r * big_r + dist * dist - rho * rho) / (2.0 * dist)
+        if h >= big_r - tau:
+            continue  # the ball misses the sphere, or touches it
+        if h <= -big_r + tau:
+            return EMPTY  # it holds the whole sphere (but a point)
+        caps[nc, 0] = dx / dist
+        caps[nc, 1] = dy / dist
+        caps[nc, 2] = dz / dist
+        caps[nc, 3] = h
+        nc += 1
+    for ax in range(3):
+        for side in (-1.0, 1.0):
+            bound = adm_lo[ax] + margin if side < 0 else adm_hi[ax] - margin
+            if not math.isfinite(bound):
+                continue
+            h = side * (bound - ck[ax])
+            if h >= big_r - tau:
+                continue
+            if h <= -big_r + tau:
+                return EMPTY
+            caps[nc, 0] = 0.0
+            caps[nc, 1] = 0.0
+            caps[nc, 2] = 0.0
+            caps[nc, ax] = side
+            caps[nc, 3] = h
+            nc += 1
+    arcs = free_arcs(caps, nc, big_r, tau)
+    if nc > 0 and arcs.shape[0] == 0:
+        return EMPTY
+    ux, uy, uz = sample_free(caps, nc, arcs, big_r, tau, rng)
+    out[0] = ck[0] + ux
+    out[1] = ck[1] + uy
+    out[2] = ck[2] + uz
+    return FOUND
+
+
+@numba.njit(cache=True)
+def _face_gap(
+    s: Solids, a: int, ca: FloatArray, b: int, cb: FloatArray, q: int, margin: float
+) -> bool:
+    """Whether a face plane of ``a`` leaves ``b`` farther than ``Q``'s width (plus ``margin``).
+
+    Along a face normal ``n`` of ``a``, ``b`` lies beyond ``a`` by a gap; ``Q``
+    can touch ``a`` and overlap ``b`` only if its own width along ``n`` (and
+    the margin) spans that gap.
+    """
+    va = s.vertex_offsets
+    for f in range(s.face_offsets[a], s.face_offsets[a + 1]):
+        nx = s.normals[f, 0]
+        ny = s.normals[f, 1]
+        nz = s.normals[f, 2]
+        far = nx * ca[0] + ny * ca[1] + nz * ca[2] + s.support[f]
+        near_b = np.inf
+        for v in range(va[b], va[b + 1]):
+            near_b = min(
+                near_b, nx * s.vertices[v, 0] + ny * s.vertices[v, 1] + nz * s.vertices[v, 2]
+            )
+        gap = nx * cb[0] + ny * cb[1] + nz * cb[2] + near_b - far
+        if gap <= margin:
+            continue
+        qmin = np.inf
+        qmax = -np.inf
+        for v in range(va[q], va[q + 1]):
+            d = nx * s.vertices[v, 0] + ny * s.vertices[v, 1] + nz * s.vertices[v, 2]
+            qmin = min(qmin, d)
+            qmax = max(qmax, d)
+        if gap > (qmax - qmin) + margin + SEPARATION_EPS * (abs(far) + abs(gap) + qmax - qmin):
+            return True
+    return False
+
+
+@numba.njit(cache=True)
+def _separated(
+    s: Solids, pk: int, j: int, i: int, ck: FloatArray, cj: FloatArray, margin: float
+) -> bool:
+    """Whether the envelopes ``E_k``, ``E_j`` of particle ``i`` cannot meet (:func:`_face_gap`)."""
+    return _face_gap(s, pk, ck, j, cj, i, margin) or _face_gap(s, j, cj, pk, ck, i, margin)
+
+
+@numba.njit(cache=True)
+def analyse(
+    k: int,
+    i: int,
+    q_arcs: EdgeArcs,
+    s: Solids,
+    a: Arcs,
+    g: Grid,
+    cache: HalfspaceCache,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    margin: float,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> int:
+    """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
+
+    ``period`` has length 0 for a walled box. ``margin`` (the packing
+    control) moves every interferer's facets out and the walls in by that
+    length, so the free surface keeps that distance from what covers it.
+    Returns :data:`FOUND` (the
+    centre in ``out``), :data:`EMPTY`, or :data:`FULL` when the half-space
+    cache has no room for an interferer (nothing was drawn; grow it and call
+    again).
+    """
+    pk = order[k]
+    q = solid(s, i)
+    ck = centre[pk]
+    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
+    kept = 0
+    for m in range(count):  # drop the interferers that a face plane keeps off E_k
+        # (exact without a margin only: facets moved out by it reach farther at vertices)
+        if margin > 0.0 or not _separated(s, pk, near[m], i, ck, at[m], margin):
+            near[kept] = near[m]
+            at[kept] = at[m]
+            kept += 1
+    count = kept
+    rows = 0
+    for m in range(count):
+        j = near[m]
+        if cache.stamp[j] != i:
+            hn, hh = halfspaces_of_arcs(solid(s, j), arcs_of(a, s, j), q, q_arcs)
+            f = cache.fill[0]
+            if f + hh.shape[0] > cache.support.shape[0]:
+                return FULL
+            cache.normals[f : f + hh.shape[0]] = hn
+            cache.support[f : f + hh.shape[0]] = hh
+            cache.stamp[j] = i
+            cache.start[j] = f
+            cache.size[j] = hh.shape[0]
+            cache.fill[0] = f + hh.shape[0]
+        rows += cache.size[j]
+    normals = np.empty((rows, 3))
+    support = np.empty(rows)
+    offsets = np.zeros(count + 1, dtype=np.int64)
+    radii = np.empty(count)
+    r = 0
+    for m in range(count):
+        j = near[m]
+        c0 = cache.start[j]
+        for h in range(cache.size[j]):
+            normals[r, 0] = cache.normals[c0 + h, 0]
+            normals[r, 1] = cache.normals[c0 + h, 1]
+            normals[r, 2] = cache.normals[c0 + h, 2]
+            support[r] = cache.support[c0 + h] + margin
+            r += 1
+        offsets[m + 1] = r
+        radii[m] = circum[j] + circum[i] + margin
+    inter = Interferers(normals, support, offsets, at[:count].copy(), radii)
+    envelope = minkowski_envelope(solid(s, pk), q)
+    if margin > 0.0:
+        adm_lo = adm_lo + margin
+        adm_hi = adm_hi - margin
+    surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
+    if surface.area > 0.0:
+        u1 = rng.random()  # three uniforms in the order of rng.random(3)
+        u2 = rng.random()
+        u3 = rng.random()
+        x = sample_free_point(surface, u1, u2, u3)
+        out[0] = x[0]
+        out[1] = x[1]
+        out[2] = x[2]
+        return FOUND
+    return EMPTY
+
+
+@numba.njit(cache=True)
+def eta_margin(eta: float, xi: float, r: float) -> float:
+    """Margin of the packing control: ``max(0, eta + xi - 1) / 100`` of the diameter ``2 r``.
+
+    The 2D control trims each free arc by ``delta = max(0, eta + xi - 1) / 100 *
+    2 r / (r_k + r)`` radians at both ends; on an envelope of equivalent
+    radius ``r_k + r`` that is this length.
+    """
+    return max(0.0, eta + xi - 1.0) / 100.0 * 2.0 * r
+
+
+@numba.njit(cache=True)
+def scan(
+    candidates: IntArray,
+    begin: int,
+    i: int,
+    t: float,
+    radius: FloatArray,
+    rmin: FloatArray,
+    tried: IntArray,
+    counters: IntArray,
+    q_arcs: EdgeArcs,
+    s: Solids,
+    a: Arcs,
+    g: Grid,
+    cache: HalfspaceCache,
+    order: IntArray,
+    centre: FloatArray,
+    circum: FloatArray,
+    reach_max: float,
+    period: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
+    adm_lo: FloatArray,
+    adm_hi: FloatArray,
+    eta: float,
+    xi: FloatArray,
+    spheres: bool,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> tuple[int, int]:
+    """Offer particle ``i`` to ``candidates[begin:]`` in turn; stop at the first with free area.
+
+    A candidate is analysed when ``radius[i] < t * rmin[k]`` (``t = inf``: every
+    one); an empty one records ``rmin[k] = radius[i]``; each analysed one
+    records ``tried[k] = i`` (when ``tried`` is not empty). With ``eta > 0``
+    each analysis first draws ``xi ~ U(0, 1)`` and keeps the free surface
+    ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
+    from the interferers and walls (:func:`eta_margin`). With ``spheres`` the
+    population is spheres (:func:`analyse_sphere`). ``counters``
+    counts analyses and empty ones; ``xi[0]`` holds a drawn ``xi`` across a
+    :data:`FULL` return (negative: none). Returns ``(code, position)``: :data:`FOUND`
+    and the candidate's position (the centre in ``out``), :data:`EMPTY` and
+    ``len(candidates)``, or :data:`FULL` and the position to resume from
+    after growing the cache.
+    """
+    r = radius[i]
+    for m in range(begin, candidates.shape[0]):
+        k = candidates[m]
+        if not r < t * rmin[k]:
+            continue
+        margin = 0.0
+        if eta > 0.0:
+            if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
+                xi[0] = rng.random()
+            margin = eta_margin(eta, xi[0], r)
+        if spheres:
+            code = analyse_sphere(
+                k, i, g, order, centre, circum, reach_max, period,
+                lo, hi, adm_lo, adm_hi, margin, rng, out,
+            )  # fmt: skip
+        else:
+            code = analyse(
+                k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
+                lo, hi, adm_lo, adm_hi, margin, rng, out,
+            )  # fmt: skip
+        if code == FULL:
+            return FULL, m
+        xi[0] = -1.0
+        counters[0] += 1
+        if tried.shape[0] > 0:
+            tried[k] = i
+        if code == FOUND:
+            return FOUND, m
+        counters[1] += 1
+        rmin[k] = r
+    return EMPTY, candidates.shape[0]

@@ -1,0 +1,264 @@
+"""The ``available-surface`` inserter: the paper's sequential insertion in three dimensions.
+
+Particles are inserted one by one in population order. The first goes to
+the centre of the box (or, when it does not fit there, it is not placed).
+Each later particle ``Q`` is offered to the placed particles in the order
+they were placed (the paper's candidate order); a candidate ``k`` is
+analysed only when ``r_Q < t * rmin_k`` (the screening of 2D: ``rmin_k`` is
+the smallest radius refused at ``k`` so far). The analysis is exact:
+
+- the envelope ``E_k = P_k ⊕ (-Q)`` (:func:`envelope.minkowski_envelope`) is
+  the set of centres at which ``Q`` touches ``P_k``;
+- the interferers are the placed particles ``j`` with
+  ``|c_j - c_k| < R_k + R_j + 2 R_Q`` (circumradii: the exact test of 2D);
+  their envelopes ``E_j``, open, hold the centres at which ``Q`` would
+  overlap ``P_j``;
+- the walls admit the centres of a box (``Q``'s vertices inside the domain);
+- the free part of ``∂E_k`` is computed exactly as convex polygons
+  (:func:`free_surface.free_surface`), and the centre is drawn uniformly **by
+  area** on it (:func:`free_surface.sample_free_point`, three uniform
+  numbers from the run's generator).
+
+By area rather than by solid angle about ``c_k``: area is what a uniform
+random contact means on a polyhedral envelope, it is exact with planar
+pieces, and it does not favour the faces that happen to lie close to the
+candidate's centre. A candidate without free area records ``rmin_k = r_Q``;
+a particle that no candidate takes is not placed.
+
+Candidates are offered in the paper's order (``order = "paper"``) or in
+the sweep order (``order = "sweep"``, :mod:`.sweep`); the box may be walled
+or periodic (:class:`.state.SurfaceState`); the ``eta`` controller keeps
+the free surface a margin from what covers it
+(:func:`.analysis.eta_margin`). This version packs sharp polyhedra; spheres
+come next.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterable, Sequence
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict, Field
+
+from regopack.base.errors import ConfigError
+from regopack.geometry.domain import Box, Domain
+from regopack.geometry.population import Population
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.interfaces import (
+    DensityController,
+    InsertionResult,
+    InsertionStrategy,
+    ProgressCallback,
+)
+from regopack.registry.plugin_types import InserterSpec
+
+if TYPE_CHECKING:
+    from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+PROGRESS_EVERY = 500
+"""Particles between progress reports."""
+ZONE_PER_RADIUS = 6.0
+"""Default sweep zone height over the largest equivalent radius (three diameters)."""
+
+
+class AvailableSurfaceConfig(BaseModel):
+    """Parameters of the available-surface inserter."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    t: float = Field(
+        0.999,
+        gt=0,
+        le=1,
+        allow_inf_nan=False,
+        description=(
+            "Screening coefficient t in (0, 1]: candidate k is analysed for a particle of "
+            "radius r only when r < t * rmin_k, the smallest radius it refused."
+        ),
+    )
+    first: Literal["center"] = Field(
+        "center",
+        description=(
+            "Where the first particle goes in the paper's order: the box's 'center' "
+            "(the sweep starts at the bottom of the box below its centre)."
+        ),
+    )
+    order: Literal["paper", "sweep"] = Field(
+        "paper",
+        description=(
+            "Which candidates a particle is offered to: 'paper' (every placed particle, "
+            "oldest first: grows from the centre and grades radially) or 'sweep' (only "
+            "those of a zone rising from the bottom of the box: homogeneous, and its cost "
+            "per particle does not grow with the box; see docs/explanation/method.md)."
+        ),
+    )
+    zone: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Height of the sweep's zone (length units); 0: three times the largest "
+            "particle's equivalent diameter. Ignored by order = 'paper'."
+        ),
+    )
+    closing: Literal["paced", "prompt", "tail"] = Field(
+        "paced",
+        description=(
+            "How the sweep ends under the top wall, as in 2D: 'paced', 'prompt' or 'tail' "
+            "(see the available-arc inserter). Ignored by order = 'paper'."
+        ),
+    )
+    strip: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Width of the sweep's columns (length units): the box's floor is cut into equal "
+            "tiles of about this width (at least two circumradii of the largest particle), "
+            "each column with its own rising zone, and each particle is offered to the "
+            "column whose zone is lowest, as the 2D strips; 0: one zone over the whole "
+            "floor. Ignored by order = 'paper'."
+        ),
+    )
+
+
+class AvailableSurface(InsertionStrategy):
+    """Sequential insertion by available-surface analysis (see the module docstring)."""
+
+    def __init__(self, config: AvailableSurfaceConfig | None = None) -> None:
+        self.config = config or AvailableSurfaceConfig()
+
+    def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
+        """Refuse a non-``eta`` density controller and spheres mixed with polyhedra."""
+        if density != "eta":
+            return (
+                "density.kind",
+                f"{density!r} is not the built-in 'eta' density controller, which "
+                "insertion 'available-surface' needs",
+            )
+        spheres = [kind == "sphere" for kind in shapes]
+        if any(spheres) and not all(spheres):
+            first = spheres.index(not spheres[0])
+            return (
+                f"phases.{first}.shape.kind",
+                f"{shapes[first]!r} beside {shapes[0]!r} in phase 0: insertion "
+                "'available-surface' packs spheres or polyhedra, not both in one scene; "
+                "give every phase the same kind of shape",
+            )
+        return None
+
+    def pack(
+        self,
+        population: Population,
+        domain: Domain,
+        controller: DensityController,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Insert the solids one by one; see the module docstring."""
+        from regopack.geometry.solids import SolidBatch
+        from regopack.plugins.inserters.available_surface.state import SurfaceState
+        from regopack.plugins.inserters.available_surface.sweep import (
+            STATUS_REFUSED,
+            SurfaceSweep,
+        )
+
+        started = time.perf_counter()
+        shapes = population.shapes
+        if not isinstance(domain, Box) or not isinstance(shapes, SolidBatch):
+            raise ConfigError("insertion 'available-surface' packs solids in a 3D box")
+        rounding = shapes.rounding_radius
+        spheres = shapes.normals.shape[0] == 0 and bool(np.all(rounding > 0))
+        if np.any(rounding > 0) and not spheres:
+            raise ConfigError(
+                "insertion 'available-surface' packs sharp polyhedra or spheres, not both in "
+                "one scene nor rounded polyhedra; give every phase the same kind of shape"
+            )
+        from regopack.plugins.density.eta import EtaController
+
+        if not isinstance(controller, EtaController):
+            raise ConfigError(
+                "insertion 'available-surface' needs the built-in 'eta' density controller "
+                "(density.kind = 'eta')"
+            )
+        cfg = self.config
+        n = len(population)
+        radius = np.asarray(population.radius, dtype=np.float64)
+        lo = np.array([domain.xmin, domain.ymin, domain.zmin])
+        hi = np.array([domain.xmax, domain.ymax, domain.zmax])
+        st = SurfaceState(
+            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta
+        )
+        stats: dict[str, float] = {}
+        if cfg.order == "sweep":
+            zone = (
+                cfg.zone
+                if cfg.zone > 0.0
+                else ZONE_PER_RADIUS * (float(radius.max()) if n else 1.0)
+            )
+            strip = cfg.strip
+            if strip > 0.0 and n:
+                # columns at least two circumradii of the largest particle wide: a
+                # narrower column's own candidates cannot hold up a front
+                strip = max(strip, 2.0 * float(np.max(shapes.circumradius)))
+            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip)
+            sweep.run(rng, progress, PROGRESS_EVERY)
+            refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
+            stats = {
+                "zone": float(sweep.zone),
+                "zone_raises": float(sweep.raises),
+                "strips": float(len(sweep.zones)),
+                "refused": float(refused),
+                "not_offered": float(n - st.count - refused),
+            }
+        else:
+            _pack_paper(st, rng, progress)
+        if progress is not None:
+            progress(n, st.count, n)
+        stats = {
+            "candidate_analyses": float(st.analyses),
+            "empty_analyses": float(st.empty),
+            **stats,
+            "insert_time_s": time.perf_counter() - started,
+        }
+        return InsertionResult(centre=st.centre, insertion_index=st.index, stats=stats)
+
+
+def _pack_paper(
+    st: SurfaceState, rng: np.random.Generator, progress: ProgressCallback | None
+) -> None:
+    """Insert in the paper's order: every placed particle, oldest first, screened by ``t``."""
+    n = st.n
+    for i in range(n):
+        if progress is not None and i % PROGRESS_EVERY == 0:
+            progress(i, st.count, n)
+        if not st.begin(i):
+            continue  # larger than the box
+        if st.count == 0:
+            c = 0.5 * (st.lo + st.hi)
+            if st.fits_at(c):
+                st.insert(i, c)
+            continue
+        _, x = st.scan(np.arange(st.count), rng)
+        if x is not None:
+            st.insert(i, x)
+
+
+@hookimpl
+def regopack_inserters() -> Iterable[InserterSpec]:
+    """Register the ``available-surface`` inserter."""
+    return [
+        InserterSpec(
+            name="available-surface",
+            config_model=AvailableSurfaceConfig,
+            factory=AvailableSurface,
+            description="Sequential insertion by available-surface analysis (3D polyhedra).",
+            dimensions=(3,),
+        )
+    ]

@@ -1,0 +1,251 @@
+"""The placed particles of an available-surface run and the analysis of one candidate.
+
+:class:`SurfaceState` holds what every candidate order needs: the population as
+:class:`Polyhedron` tuples, the centres placed so far, the insertion order,
+each candidate's screening radius ``rmin_k`` and a grid of cells for the
+interferer search. :meth:`SurfaceState.analyse` is the exact analysis of one
+candidate for one particle (see :mod:`regopack.plugins.inserters.available_surface.inserter`):
+it returns the sampled centre, or ``None`` and records ``rmin_k``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.geometry.solids import SolidBatch
+from regopack.plugins.inserters.available_surface.analysis import (
+    FOUND,
+    FULL,
+    arcs_for,
+    cache_for,
+    grid_add,
+    grid_for,
+    scan,
+    solids_of,
+)
+from regopack.plugins.inserters.available_surface.halfspaces import (
+    EdgeArcs,
+    edge_arcs,
+    minkowski_halfspaces,
+)
+from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+def polyhedra_of(shapes: SolidBatch) -> list[Polyhedron]:
+    """Return the solids of a batch as :class:`Polyhedron` tuples (relative to their centres)."""
+    polys = []
+    for j in range(len(shapes)):
+        verts, loops = shapes.solid(j)
+        f0, f1 = int(shapes.face_offsets[j]), int(shapes.face_offsets[j + 1])
+        fo = np.zeros(len(loops) + 1, dtype=np.int64)
+        np.cumsum([len(lp) for lp in loops], out=fo[1:])
+        polys.append(
+            Polyhedron(
+                vertices=np.ascontiguousarray(verts),
+                normals=np.ascontiguousarray(shapes.normals[f0:f1]),
+                support=np.ascontiguousarray(shapes.support[f0:f1]),
+                face_vertices=np.concatenate(loops).astype(np.int64),
+                face_offsets=fo,
+            )
+        )
+    return polys
+
+
+class SurfaceState:
+    """Placed particles of one run and the exact analysis of a candidate.
+
+    Parameters
+    ----------
+    shapes
+        The population's solids (sharp polyhedra).
+    radius
+        ``(n,)`` equivalent radii (the screening compares them).
+    lo, hi
+        Corners of the box.
+    t
+        Screening coefficient.
+    eta
+        Packing control coefficient (see :func:`.analysis.eta_margin`).
+    periodic
+        Whether the box's opposite faces are identified (no walls): then the
+        interferers include the periodic images of the placed particles (and
+        of the candidate itself), and a centre is wrapped into the box.
+    """
+
+    def __init__(
+        self,
+        shapes: SolidBatch,
+        radius: FloatArray,
+        lo: FloatArray,
+        hi: FloatArray,
+        periodic: bool = False,
+        t: float = 0.999,
+        eta: float = 0.0,
+    ):
+        n = len(shapes)
+        self.n = n
+        self.period = (hi - lo) if periodic else None
+        self.t = t
+        self.eta = eta
+        self._xi = np.full(1, -1.0)
+        rounding = shapes.rounding_radius
+        self.spheres = bool(n > 0 and shapes.normals.shape[0] == 0 and np.all(rounding > 0))
+        self.rounding = rounding
+        self.polys = [] if self.spheres else polyhedra_of(shapes)
+        self.circum = shapes.circumradius
+        self.radius = radius
+        self.lo = lo
+        self.hi = hi
+        self.centre = np.full((n, 3), np.nan)
+        self.index = np.full(n, -1, dtype=np.int64)
+        self.order = np.full(n, -1, dtype=np.int64)
+        self.rmin = np.full(n, np.inf)
+        self.count = 0
+        self.counters = np.zeros(2, dtype=np.int64)
+        self._no_tried = np.zeros(0, dtype=np.int64)
+        self._no_arcs = EdgeArcs(
+            np.zeros(0, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
+            np.zeros((0, 3)),
+            np.zeros((0, 6)),
+        )
+        self.reach_max = 0.0
+        self.solids = solids_of(self.polys)
+        self.arcs = arcs_for(self.solids)
+        self.grid = grid_for(lo, hi, 2.0 * float(self.circum.max()) if n else 1.0, n)
+        self.cache = cache_for(n, 4096)
+        self._period = self.period if self.period is not None else np.zeros(0)
+        self._out = np.zeros(3)
+        self._particle = -1
+        self._q_arcs: Any = None
+        self.adm_lo = lo
+        self.adm_hi = hi
+
+    def begin(self, i: int) -> bool:
+        """Start on particle ``i``; False when it is larger than the box.
+
+        In a periodic box: False when it overlaps its own images.
+        """
+        self._particle = i
+        self._q_arcs = None
+        self.cache.fill[0] = 0
+        if self.period is not None:
+            self.adm_lo = np.full(3, -np.inf)
+            self.adm_hi = np.full(3, np.inf)
+            return not self._meets_own_images(i)
+        if self.spheres:
+            self.adm_lo = self.lo + self.rounding[i]
+            self.adm_hi = self.hi - self.rounding[i]
+        else:
+            q = self.polys[i]
+            self.adm_lo = self.lo - q.vertices.min(axis=0)
+            self.adm_hi = self.hi - q.vertices.max(axis=0)
+        return not bool(np.any(self.adm_lo > self.adm_hi))
+
+    def _meets_own_images(self, i: int) -> bool:
+        """Whether particle ``i`` overlaps its own periodic images (it then fits nowhere).
+
+        A sphere does when its diameter exceeds the shortest period; a
+        polyhedron ``Q`` when a period shift lies inside the open difference
+        body ``Q ⊕ (-Q)`` (touching images are allowed).
+        """
+        period = self.period
+        assert period is not None
+        if self.spheres:
+            return bool(2.0 * self.rounding[i] > period.min())
+        q = self.polys[i]
+        normals, support = minkowski_halfspaces(q, q)
+        tol = 1e-12 * float(support.max())
+        reach = np.ceil(2.0 * float(self.circum[i]) / period).astype(np.int64)
+        axes = [np.arange(-m, m + 1) for m in reach]
+        shifts = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
+        shifts = shifts[np.any(shifts != 0, axis=1)] * period
+        inside = (shifts @ normals.T - support).max(axis=1) < -tol
+        return bool(np.any(inside))
+
+    def fits_at(self, x: FloatArray) -> bool:
+        """Whether the current particle's centre ``x`` keeps it inside the box."""
+        return bool(np.all(x >= self.adm_lo) and np.all(x <= self.adm_hi))
+
+    def scan(
+        self,
+        candidates: IntArray,
+        rng: np.random.Generator,
+        screened: bool = True,
+        tried: IntArray | None = None,
+    ) -> tuple[int, FloatArray | None]:
+        """Offer the current particle to ``candidates`` (insertion indices) in turn.
+
+        A candidate is analysed when the particle passes its screening (every
+        one when ``screened`` is False); the first with free area takes it.
+        Each analysed candidate gets ``tried[k] = i`` when ``tried`` is given.
+
+        Returns
+        -------
+        k, x
+            The candidate and a centre drawn uniformly by area on its free
+            surface, or ``(-1, None)``.
+        """
+        i = self._particle
+        if self._q_arcs is None:
+            self._q_arcs = self._no_arcs if self.spheres else edge_arcs(self.polys[i], -1.0)
+        cands = np.ascontiguousarray(candidates, dtype=np.int64)
+        t = self.t if screened else np.inf
+        begin = 0
+        while True:
+            code, at = scan(
+                cands, begin, i, t, self.radius, self.rmin,
+                self._no_tried if tried is None else tried, self.counters,
+                self._q_arcs, self.solids, self.arcs, self.grid, self.cache,
+                self.order, self.centre, self.circum, self.reach_max, self._period,
+                self.lo, self.hi, self.adm_lo, self.adm_hi, self.eta, self._xi, self.spheres,
+                rng, self._out,
+            )  # fmt: skip
+            if code != FULL:
+                break
+            self._grow_cache()
+            begin = at
+        if code == FOUND:
+            return int(cands[at]), self._out.copy()
+        return -1, None
+
+    @property
+    def analyses(self) -> int:
+        """Candidates analysed so far."""
+        return int(self.counters[0])
+
+    @property
+    def empty(self) -> int:
+        """Analyses that found no free area."""
+        return int(self.counters[1])
+
+    def _grow_cache(self) -> None:
+        """Double the half-space cache, keeping its rows."""
+        old = self.cache
+        rows = 2 * old.support.shape[0]
+        new = cache_for(self.n, rows)
+        new.normals[: old.support.shape[0]] = old.normals
+        new.support[: old.support.shape[0]] = old.support
+        for name in ("stamp", "start", "size", "fill"):
+            getattr(new, name)[:] = getattr(old, name)
+        self.cache = new
+
+    def insert(self, i: int, x: FloatArray) -> int:
+        """Place particle ``i`` at ``x`` (wrapped into a periodic box); return its index."""
+        if self.period is not None:
+            x = self.lo + np.mod(x - self.lo, self.period)
+            x = np.where(x >= self.hi, self.lo, x)
+        k = self.count
+        self.centre[i] = x
+        self.index[i] = k
+        self.order[k] = i
+        self.count += 1
+        grid_add(self.grid, i, self.centre[i])
+        self.reach_max = max(self.reach_max, float(self.circum[i]))
+        return k

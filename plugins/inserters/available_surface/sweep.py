@@ -1,0 +1,341 @@
+"""The sweep order in three dimensions: available-surface insertion inside a rising zone.
+
+The same order as the 2D sweep (:mod:`regopack.plugins.inserters.available_arc.sweep`),
+with the height along ``z``: the first particle sits at the bottom of the box
+below its centre; candidates are filed in horizontal bins by the height of
+their centre (``ZONE_BINS`` bins per zone height); only the candidates of the
+*zone*, bins ``lo..hi``, are searched, oldest first with the screening; bins
+above are *frozen*, bins below *retired*. A particle that no zone candidate
+takes raises the zone by one bin and is offered again; after a full zone
+height of rises that did not help, the rises are undone (the zone keeps its
+top once it has reached the top of the box) and the particle is analysed
+exactly, without screening, at every candidate not retired; it is *refused*
+when none has free area. The closings (``paced``, ``prompt``, ``tail``) are
+those of 2D.
+
+A candidate analysed for a particle keeps its answer while that particle is
+being placed (nothing changes in between), so the exact pass skips the
+candidates the screened passes already found without free area.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.base.limits import MAX_ZONE_BINS as MAX_BINS
+from regopack.base.limits import zone_bins
+from regopack.plugins.common.strips import strip_count
+from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+FloatArray = NDArray[np.float64]
+
+ZONE_BINS = 80
+"""Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
+
+
+FROZEN, ACTIVE, RETIRED = 0, 1, 2
+CLOSINGS = ("paced", "prompt", "tail")
+STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
+
+
+MAX_TILES = 1 << 10
+"""Most columns over the box's floor."""
+
+
+class Zone:
+    """The rising zone of one column: its bins, lowest and top bin, and counters."""
+
+    def __init__(self) -> None:
+        self.bins: dict[int, list[int]] = {}  # filled bins only
+        self.lo = self.hi = 0
+        self.full = self.closed = self.seeded = False
+        self.raises = self.offered = self.pace = self.since = 0
+
+
+class SurfaceSweep:
+    """State of one sweep run over a :class:`SurfaceState`.
+
+    Parameters
+    ----------
+    state
+        The run's placed particles.
+    t
+        Screening coefficient.
+    zone
+        Zone height (length units, > 0).
+    closing
+        ``"paced"``, ``"prompt"`` or ``"tail"``.
+    strip
+        Width of the columns (length units): the box's floor is cut into
+        equal tiles of about this width, each column with its own zone, as the
+        2D strips; 0: one zone over the whole floor.
+    """
+
+    def __init__(
+        self, state: SurfaceState, t: float, zone: float, closing: str, strip: float = 0.0
+    ) -> None:
+        if closing not in CLOSINGS:
+            raise ValueError(f"closing must be one of {CLOSINGS}, not {closing!r}")
+        self.state = state
+        self.t = t
+        height = float(state.hi[2] - state.lo[2])
+        self.z0 = float(state.lo[2])
+        span = state.hi[:2] - state.lo[:2]
+        self.ntile = np.array(
+            [
+                strip_count(float(span[0]), strip, MAX_TILES),
+                strip_count(float(span[1]), strip, MAX_TILES),
+            ]
+        )
+        while int(self.ntile.prod()) > MAX_TILES:
+            self.ntile = np.maximum(1, self.ntile // 2)
+        self.twidth = span / self.ntile
+        if int(self.ntile.prod()) > 1 and state.n > 0:
+            # with columns, a zone at least two circumradii of the largest particle
+            # high: a column's next candidate is then always within one zone of its top
+            zone = max(zone, 2.0 * float(np.max(state.circum)))
+        self.zone = zone
+        self.delta = max(min(zone, height) / ZONE_BINS, height / MAX_BINS)
+        if not self.delta > 0:
+            self.delta = 1.0
+        self.nbins = max(1, math.ceil(height / self.delta)) + 1
+        self.zones = [Zone() for _ in range(int(self.ntile.prod()))]
+        n = max(state.n, 1)
+        self.flag = np.full(n, FROZEN, dtype=np.int8)
+        self.tile = np.zeros(n, dtype=np.int64)
+        self.tried = np.full(n, -1, dtype=np.int64)  # particle last analysed at each candidate
+        self.status = np.zeros(n, dtype=np.int8)
+        self.nzone = max(1, zone_bins(zone, self.delta, height, ZONE_BINS))
+        self.closing = closing
+        self.cur = -1
+        self.done = self.started = False
+        self.refused = 0
+
+    @property
+    def raises(self) -> int:
+        """Rises of the zones, over all columns."""
+        return sum(z.raises for z in self.zones)
+
+    # ------------------------------------------------------------------ bins
+
+    def _bin_of(self, z: float) -> int:
+        b = math.floor((z - self.z0) / self.delta)
+        return min(max(b, 0), self.nbins - 1)
+
+    def _tile_of(self, c: FloatArray) -> int:
+        if len(self.zones) == 1:
+            return 0
+        ij = np.floor((c[:2] - self.state.lo[:2]) / self.twidth).astype(np.int64)
+        ij = np.clip(ij, 0, self.ntile - 1)
+        return int(ij[1] * self.ntile[0] + ij[0])
+
+    def _register(self, k: int) -> None:
+        c = self.state.centre[self.state.order[k]]
+        b = self._bin_of(float(c[2]))
+        tile = self._tile_of(c)
+        self.tile[k] = tile
+        z = self.zones[tile]
+        z.bins.setdefault(b, []).append(k)
+        if not z.seeded and (self.cur < 0 or b <= self.zones[self.cur].hi + self.nzone):
+            # a column starts at its first candidate near the front (not at one that a
+            # periodic box wrapped to the top: that one is filed frozen)
+            z.seeded = True
+            z.hi = b
+            z.lo = max(0, b - self.nzone + 1)
+            for bb, ks in z.bins.items():  # candidates filed before it join the zone
+                if z.lo <= bb <= z.hi:
+                    for kk in ks:
+                        self.flag[kk] = ACTIVE
+        if b > z.hi:
+            self.flag[k] = FROZEN
+        elif b < z.lo:
+            self.flag[k] = RETIRED
+        else:
+            self.flag[k] = ACTIVE
+
+    def _retire_lowest(self, z: Zone) -> None:
+        for k in z.bins.get(z.lo, ()):
+            self.flag[k] = RETIRED
+        z.lo += 1
+
+    def _raise(self, z: Zone) -> bool:
+        """Raise zone ``z`` by one bin; False when its top is the box's top already."""
+        if z.hi + 1 >= self.nbins:
+            return False
+        z.hi += 1
+        z.raises += 1
+        for k in z.bins.get(z.hi, ()):
+            if self.flag[k] == FROZEN:
+                self.flag[k] = ACTIVE
+        if z.hi - z.lo + 1 > self.nzone:
+            self._retire_lowest(z)
+        return True
+
+    def _roll_back(self, z: Zone, lo0: int, hi0: int, raises: int) -> None:
+        for b in range(hi0 + 1, z.hi + 1):
+            for k in z.bins.get(b, ()):
+                if self.flag[k] == ACTIVE:
+                    self.flag[k] = FROZEN
+        for b in range(lo0, z.lo):
+            for k in z.bins.get(b, ()):
+                self.flag[k] = ACTIVE
+        z.lo = lo0
+        z.hi = hi0
+        z.raises -= raises
+
+    def _choose(self, tried: set[int]) -> int:
+        """Return the column to offer the particle to next; -1 when no open one is left.
+
+        The open column whose zone top is lowest, the first such one, among
+        those not yet tried; among full columns the turn passes on after the
+        current one, so that they close together.
+        """
+        best = -1
+        for k, z in enumerate(self.zones):
+            if z.seeded and not z.closed and k not in tried:
+                if best < 0 or z.hi < self.zones[best].hi:
+                    best = k
+        if best >= 0 and len(self.zones) > 1 and self.zones[best].full and self.cur >= 0:
+            m = len(self.zones)
+            for d in range(1, m + 1):
+                k = (self.cur + d) % m
+                z = self.zones[k]
+                if z.seeded and not z.closed and k not in tried and z.full:
+                    if z.hi == self.zones[best].hi:
+                        return k
+        return best
+
+    # ---------------------------------------------------------------- search
+
+    def _screened(self, i: int, rng: np.random.Generator) -> tuple[int, FloatArray | None]:
+        st = self.state
+        c = st.count
+        open_ = (self.flag[:c] == ACTIVE) & (st.radius[i] < self.t * st.rmin[:c])
+        if len(self.zones) > 1:
+            open_ &= self.tile[:c] == self.cur
+        return st.scan(np.flatnonzero(open_), rng, tried=self.tried)
+
+    def _exhaustive(self, i: int, rng: np.random.Generator) -> FloatArray | None:
+        st = self.state
+        c = st.count
+        todo = (self.flag[:c] != RETIRED) & (self.tried[:c] != i)
+        if len(self.zones) > 1:
+            todo &= self.tile[:c] == self.cur
+        return st.scan(np.flatnonzero(todo), rng, screened=False, tried=self.tried)[1]
+
+    def _offer_to(self, i: int, z: Zone, rng: np.random.Generator) -> FloatArray | None:
+        """Offer particle ``i`` to the current column: screened, rising, then exact."""
+        raises = 0
+        lo0, hi0 = z.lo, z.hi
+        while True:
+            _, x = self._screened(i, rng)
+            if x is not None:
+                return x
+            if not z.full and raises < self.nzone:
+                if self._raise(z):
+                    raises += 1
+                    continue
+                z.full = True
+                z.pace = max(1, z.offered // max(1, z.raises))
+            if raises > 0:
+                # rising did not help: the bins it retired reopen, those it opened
+                # freeze again, unless the zone reached the top (the closing)
+                self._roll_back(z, lo0, z.hi if z.full else hi0, raises)
+            return self._exhaustive(i, rng)
+
+    # ------------------------------------------------------------------ loop
+
+    def offer(self, i: int, rng: np.random.Generator) -> None:
+        """Offer particle ``i`` (after the run has closed it is not offered)."""
+        st = self.state
+        if self.done:
+            return
+        if not self.started:
+            if st.begin(i):
+                first = np.clip(0.5 * (st.lo + st.hi), st.adm_lo, st.adm_hi)
+                first[2] = st.lo[2] if st.period is not None else st.adm_lo[2]
+                if st.fits_at(first):
+                    self.started = True
+                    self.cur = self._tile_of(first)
+                    z = self.zones[self.cur]
+                    z.seeded = True
+                    z.hi = self._bin_of(float(first[2]))
+                    self._register(st.insert(i, first))
+                    self.status[i] = STATUS_PLACED
+                    return
+            self.status[i] = STATUS_REFUSED
+            self.refused += 1
+            return
+        x: FloatArray | None = None
+        tried: set[int] = set()
+        offered = -1  # the first column the particle is offered to
+        fits = True
+        while True:
+            k = self._choose(tried)
+            if k < 0:
+                break
+            tried.add(k)
+            self.cur = k
+            z = self.zones[k]
+            if z.full and self.closing == "paced":
+                # the lowest bin retires after as many offers as a bin took to pass before
+                z.since += 1
+                if z.since > z.pace:
+                    z.since = 0
+                    self._retire_lowest(z)
+                    if z.lo > z.hi:
+                        z.closed = True
+                        continue
+            elif not z.full:
+                z.offered += 1
+            was_full = z.full
+            if offered < 0:
+                offered = k
+                fits = st.begin(i)
+            x = self._offer_to(i, z, rng) if fits else None
+            if x is not None:
+                break
+            if was_full and self.closing == "tail":
+                z.closed = True  # the first refusal under the top closes the column
+            if not fits:
+                break  # larger than the box
+            # a particle one column refuses goes on to the other open columns
+        if offered < 0:
+            self.done = True  # every column closed before this particle was offered
+            return
+        if x is None:
+            self.status[i] = STATUS_REFUSED
+            self.refused += 1
+            if self.closing == "prompt":
+                # the refusal stands for the rise each full column that refused it
+                # would have made
+                for k in sorted(tried):
+                    z = self.zones[k]
+                    if z.full and not z.closed:
+                        self._retire_lowest(z)
+                        if z.lo > z.hi:
+                            z.closed = True
+            if self.closing in ("tail", "prompt") and self._choose(set()) < 0:
+                self.done = True
+            return
+        self._register(st.insert(i, x))
+        self.status[i] = STATUS_PLACED
+
+    def run(
+        self,
+        rng: np.random.Generator,
+        progress: Callable[[int, int, int], None] | None = None,
+        every: int = 500,
+    ) -> None:
+        """Offer every particle in population order."""
+        n = self.state.n
+        for i in range(n):
+            if progress is not None and i % every == 0:
+                progress(i, self.state.count, n)
+            if self.done:
+                break
+            self.offer(i, rng)

@@ -1,0 +1,75 @@
+"""The ``sphere`` shape: exact spheres, the 3D counterpart of ``disk``.
+
+A sphere of radius ``r`` is stored as the single vertex ``(0, 0, 0)`` rounded
+by ``r`` (:attr:`regopack.geometry.solids.SolidBatch.rounding`), with no faces, so
+its volume is exactly ``4/3 pi r^3`` and every part of regopack that meets it
+can use sphere geometry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+
+import numpy as np
+from numpy.typing import NDArray
+from pydantic import BaseModel, ConfigDict
+
+from regopack.geometry.solids import SolidBatch
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.interfaces import SolidGenerator
+from regopack.registry.plugin_types import ShapeSpec
+
+FloatArray = NDArray[np.float64]
+
+
+class SphereConfig(BaseModel):
+    """The sphere takes no parameters: its radius is the particle's equivalent radius."""
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+
+class Sphere(SolidGenerator):
+    """Exact spheres of volume ``4/3 pi r^3`` about their centre; draws no random numbers.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> batch = Sphere().generate(np.array([1.0, 2.5]), np.random.default_rng(0))
+    >>> batch.vertices.tolist(), batch.rounding.tolist()
+    ([[0.0, 0.0, 0.0], [0.0, 0.0, 0.0]], [1.0, 2.5])
+    """
+
+    def __init__(self, config: SphereConfig | None = None) -> None:
+        self.config = config or SphereConfig()
+
+    def generate(self, radius: FloatArray, rng: np.random.Generator) -> SolidBatch:
+        """One sphere per radius: the vertex ``(0, 0, 0)`` rounded by the radius."""
+        r = np.asarray(radius, dtype=np.float64)
+        if r.ndim != 1:
+            raise ValueError(f"radius must be one-dimensional, not of shape {r.shape}")
+        n = int(r.shape[0])
+        return SolidBatch(
+            vertices=np.zeros((n, 3)),
+            offsets=np.arange(n + 1, dtype=np.int64),
+            face_vertices=np.zeros(0, dtype=np.int64),
+            face_vertex_offsets=np.zeros(1, dtype=np.int64),
+            face_offsets=np.zeros(n + 1, dtype=np.int64),
+            normals=np.zeros((0, 3)),
+            support=np.zeros(0),
+            rotation=np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (n, 1)),
+            rounding=r.copy(),
+        )
+
+
+@hookimpl
+def regopack_shapes() -> Iterable[ShapeSpec]:
+    """Register the ``sphere`` shape."""
+    return [
+        ShapeSpec(
+            name="sphere",
+            config_model=SphereConfig,
+            factory=Sphere,
+            description="Exact sphere of the particle's equivalent radius (3D).",
+            dimension=3,
+        )
+    ]

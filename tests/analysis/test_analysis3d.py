@@ -1,0 +1,93 @@
+"""Analyses of 3D runs and packings: scenes, ``regopack analyze``, and what is refused."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from cli_helpers import one_error_line
+
+import regopack
+from regopack.base.errors import ConfigError
+from regopack.cli import main
+from regopack.testing import packing_from_polygons
+
+SCENE = {
+    "name": "small3d",
+    "seed": 2,
+    "count": "auto",
+    "domain": {"kind": "box", "width": 18.0, "height": 18.0, "depth": 18.0},
+    "size": {"kind": "uniform", "d_min": 3.0, "d_max": 5.0},
+    "phases": [
+        {"name": "pyroxene", "fraction": 0.5, "shape": {"kind": "polyhedron", "psi": 0.5}},
+        {"name": "glass", "fraction": 0.5, "shape": {"kind": "polyhedron", "psi": 2.0}},
+    ],
+    "insertion": {"kind": "available-surface"},
+    "density": {"kind": "eta"},
+    "outputs": {"analyses": ["density3d", {"kind": "coordination3d", "tols": [0.05, 0.2]}]},
+}
+
+
+@pytest.fixture(scope="module")
+def run3d(tmp_path_factory):
+    out = tmp_path_factory.mktemp("run3d") / "run"
+    return regopack.pack_and_summarise(SCENE, out=out, verify=False)
+
+
+def test_a_3d_run_reports_its_analyses_as_a_2d_run(run3d) -> None:
+    summary = json.loads(run3d.summary_path.read_text(encoding="utf-8"))
+    assert list(summary["analyses"]) == ["density3d", "coordination3d"]
+    coordination = summary["analyses"]["coordination3d"]
+    # the sweep asked for, and the contact tolerance d_min / 40 (d_min = 3)
+    assert coordination["tol_sweep"] == pytest.approx([0.05, 0.075, 0.2], rel=1e-12)
+    assert coordination["rattler_min_contacts"] == 4
+    assert summary["analyses"]["density3d"]["phi_domain"] == pytest.approx(summary["phi_domain"])
+    files = run3d.analysis
+    data = json.loads(files.results.read_text(encoding="utf-8"))
+    assert data["dimension"] == 3
+    assert data["analyses"] == ["density3d", "contacts3d", "coordination3d"]
+    assert files.report.read_text(encoding="utf-8").count("Z interior") == 1
+    assert (
+        (files.out_dir / "particles.csv")
+        .read_text()
+        .startswith("particle,mineral,x,y,z,radius,interior,contacts,rattler,contacts_mechanical")
+    )
+
+
+def test_regopack_analyze_takes_a_3d_packing(run3d, tmp_path, capsys) -> None:
+    out = tmp_path / "analysis"
+    argv = ["analyze", str(run3d.packing_path), "--tol", "0.1", "--out", str(out)]
+    assert main([*argv, "--no-figures"]) == 0
+    text = capsys.readouterr().out
+    for label in ("φ domain", "median contact volume V_c", "Z interior", "fabric anisotropy"):
+        assert label in text
+    data = json.loads((out / "analysis.json").read_text(encoding="utf-8"))
+    assert data["analyses"] == ["density3d", "contacts3d", "coordination3d", "rdf3d", "network3d"]
+    assert data["tol"] == 0.1 and data["contacts3d"]["tol"] == 0.1
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        (["--only", "contacts"], "analyzer 'contacts' analyses 2D packings, not 3D ones; "),
+        (["--set", "contacts3d.tol=-1"], "contacts3d.tol = -1"),
+        # tol_max defaults to d_min / 4 = 0.75 (d_min = 3)
+        (["--set", "coordination3d.tols=[0.1, 0.9]"], "0.9 exceeds contacts3d.tol_max = 0.75"),
+        (["--only", "rdf3d", "--set", "rdf3d.near=[5, 1]"], "rdf3d: near must be a range"),
+        (["--set", "contacts3d"], "expected NAME.FIELD=VALUE"),
+    ],
+)
+def test_mistakes_get_one_line(run3d, tmp_path, capsys, args, expected) -> None:
+    path = str(run3d.packing_path)
+    assert main(["analyze", path, "--no-figures", "--out", str(tmp_path / "a"), *args]) != 0
+    line = one_error_line(capsys)
+    assert expected in line
+    if "'contacts'" in expected:
+        assert line.startswith(f"regopack: error: {path}: ") and "contacts3d" in line
+
+
+def test_a_3d_analyzer_is_refused_on_a_2d_packing() -> None:
+    square = [[(0, 0), (1, 0), (1, 1), (0, 1)]]
+    packing = packing_from_polygons(square, domain=(0, 2, 0, 2))
+    with pytest.raises(ConfigError, match="analyses 3D packings, not 2D ones; analyzers of 2D"):
+        regopack.analyze(packing, "rdf3d")

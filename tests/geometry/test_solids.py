@@ -1,0 +1,103 @@
+"""Solid batches: consistency checks, volumes, circumradii and interleaving by phase."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.spatial import ConvexHull
+
+from regopack.geometry.solids import SolidBatch, concat_solids, sphere_volume
+
+
+def _cube(half: float, rot: tuple[float, float, float, float] = (1.0, 0, 0, 0)) -> SolidBatch:
+    """An axis-aligned cube of half-side ``half`` about the origin, as one solid."""
+    v = np.array([[x, y, z] for x in (-half, half) for y in (-half, half) for z in (-half, half)])
+    faces, normals = [], []
+    for axis in range(3):
+        for sign in (-1.0, 1.0):
+            idx = np.flatnonzero(v[:, axis] * sign > 0)
+            n = np.zeros(3)
+            n[axis] = sign
+            # order the face's corners counter-clockwise seen from outside
+            c = v[idx].mean(axis=0)
+            u = np.cross(n, [1.0, 0, 0] if axis != 0 else [0, 1.0, 0])
+            w = np.cross(n, u)
+            ang = np.arctan2((v[idx] - c) @ w, (v[idx] - c) @ u)
+            loop = idx[np.argsort(ang)]
+            p = v[loop]
+            if np.dot(np.cross(p[1] - p[0], p[2] - p[0]), n) < 0:
+                loop = loop[::-1]
+            faces.append(loop)
+            normals.append(n)
+    fvo = np.concatenate([[0], np.cumsum([len(f) for f in faces])]).astype(np.int64)
+    return SolidBatch(
+        vertices=v,
+        offsets=np.array([0, 8]),
+        face_vertices=np.concatenate(faces).astype(np.int64),
+        face_vertex_offsets=fvo,
+        face_offsets=np.array([0, 6]),
+        normals=np.array(normals),
+        support=np.full(6, half),
+        rotation=np.array([rot]),
+    )
+
+
+def _spheres(r: list[float]) -> SolidBatch:
+    n = len(r)
+    return SolidBatch(
+        vertices=np.zeros((n, 3)),
+        offsets=np.arange(n + 1),
+        face_vertices=np.zeros(0, dtype=np.int64),
+        face_vertex_offsets=np.zeros(1, dtype=np.int64),
+        face_offsets=np.zeros(n + 1, dtype=np.int64),
+        normals=np.zeros((0, 3)),
+        support=np.zeros(0),
+        rotation=np.tile([1.0, 0, 0, 0], (n, 1)),
+        rounding=np.array(r, dtype=float),
+    )
+
+
+def test_cube_volume_and_circumradius() -> None:
+    cube = _cube(0.5)
+    assert cube.volume[0] == pytest.approx(1.0, rel=1e-12)
+    assert cube.circumradius[0] == pytest.approx(np.sqrt(3) / 2)
+    verts, loops = cube.solid(0)
+    assert verts.shape == (8, 3) and len(loops) == 6
+    assert ConvexHull(verts).volume == pytest.approx(cube.volume[0])
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_volume_scales_as_the_cube_of_length(scale: float) -> None:
+    assert _cube(0.5 * scale).volume[0] == pytest.approx(scale**3, rel=1e-12)
+
+
+def test_sphere_volume_and_radius() -> None:
+    s = _spheres([1.0, 2.0])
+    assert s.volume.tolist() == pytest.approx(sphere_volume(np.array([1.0, 2.0])).tolist())
+    assert s.circumradius.tolist() == [1.0, 2.0]
+
+
+def test_inconsistent_arrays_are_refused() -> None:
+    cube = _cube(0.5)
+    with pytest.raises(ValueError, match="rotation"):
+        SolidBatch(**{**cube.__dict__, "rotation": np.zeros((2, 4))})
+    with pytest.raises(ValueError, match="vertices"):
+        SolidBatch(**{**cube.__dict__, "vertices": np.zeros((8, 2))})
+    with pytest.raises(ValueError, match="normals"):
+        SolidBatch(**{**cube.__dict__, "support": np.zeros(5)})
+
+
+def test_concat_interleaves_phases_back_into_particle_order() -> None:
+    a = _cube(0.5)
+    b = _spheres([3.0, 4.0])
+    merged = concat_solids([(np.array([1]), a), (np.array([0, 2]), b)], 3)
+    assert len(merged) == 3
+    assert merged.rounding is not None
+    assert merged.rounding.tolist() == [3.0, 0.0, 4.0]
+    assert merged.volume[1] == pytest.approx(1.0)
+    assert merged.volume[[0, 2]].tolist() == pytest.approx(
+        sphere_volume(np.array([3.0, 4.0])).tolist()
+    )
+    verts, loops = merged.solid(1)
+    assert np.array_equal(verts, a.vertices) and len(loops) == 6
+    assert merged.solid(0)[1] == [] and merged.solid(2)[1] == []

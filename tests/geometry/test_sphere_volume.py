@@ -1,0 +1,42 @@
+"""The volume of a sphere inside a box, against exact cases and Monte Carlo."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from regopack.geometry.sphere_volume import disk_in_rectangle, sphere_in_box
+
+
+@pytest.mark.parametrize(
+    ("lo", "fraction"),
+    [((-5, -5, -5), 1.0), ((0, -5, -5), 0.5), ((0, 0, -5), 0.25), ((0, 0, 0), 0.125)],
+)
+def test_whole_half_quarter_and_eighth_spheres(lo: tuple[float, ...], fraction: float) -> None:
+    v = sphere_in_box([0, 0, 0], 2.0, lo, (5, 5, 5))
+    assert v == pytest.approx(fraction * 4 / 3 * math.pi * 8, rel=1e-9)
+
+
+def test_a_disk_in_a_rectangle_matches_its_quadrants() -> None:
+    assert disk_in_rectangle(1.0, 0, 1, 0, 1) == pytest.approx(math.pi / 4, rel=1e-12)
+    assert disk_in_rectangle(1.0, -1, 1, 0.5, 2) == pytest.approx(
+        math.acos(0.5) - 0.5 * math.sqrt(0.75), rel=1e-12
+    )
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_random_cuts_agree_with_monte_carlo(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    c = rng.uniform(-1, 1, 3)
+    r = rng.uniform(0.5, 1.5)
+    lo = c + rng.uniform(-1.2 * r, 0.2 * r, 3)
+    hi = lo + rng.uniform(0.5 * r, 2.0 * r, 3)
+    v = sphere_in_box(c, r, lo, hi)
+    n = 400_000
+    p = rng.uniform(c - r, c + r, (n, 3))
+    inside = (np.sum((p - c) ** 2, axis=1) < r * r) & np.all((p >= lo) & (p <= hi), axis=1)
+    share = inside.mean()
+    sigma = math.sqrt(share * (1 - share) / n) * (2 * r) ** 3
+    assert abs(v - share * (2 * r) ** 3) < 5 * sigma + 1e-12

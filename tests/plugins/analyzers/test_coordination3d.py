@@ -1,0 +1,69 @@
+"""Coordination numbers of 3D packings: a lattice of cubes with known Z(tol), and rattlers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from lattices3d import cube_lattice
+
+from regopack.plugins.analyzers.contacts3d import Contacts3D, Contacts3DConfig
+from regopack.plugins.analyzers.coordination3d import Coordination3D, Coordination3DConfig
+
+GAPS = (1 / 64, 2 / 64, 3 / 64)
+
+
+def _coordination(packing, tol: float, tols: list[float], **kw) -> Coordination3D:
+    contacts = Contacts3D(Contacts3DConfig(tol=tol, margin=1.5)).compute(packing, {})
+    config = Coordination3DConfig(tols=tols, **kw)
+    return Coordination3D(config).compute(packing, {"contacts3d": contacts})
+
+
+@pytest.fixture(scope="module")
+def lattice():
+    return cube_lattice((3, 3, 3), GAPS, minerals=2)
+
+
+def test_the_centre_of_a_cube_lattice_has_the_known_z_at_every_tolerance(lattice) -> None:
+    # faces along x, y, z close at the gaps 1/64, 2/64, 3/64; an edge or a corner closes at
+    # the largest gap it spans: 2 contacts, then 2 + 2 + 4 (x, y and the xy edges), then 26
+    c = _coordination(lattice, 0.0625, [0.02, 0.04, 0.05])
+    r = c.results()
+    assert r["n_interior"] == 1  # the margin of 1.5 leaves only the centre cube
+    assert r["tol_sweep"] == [0.02, 0.04, 0.05, 0.0625]
+    assert r["z_interior_sweep"] == [2.0, 8.0, 26.0, 26.0]
+    assert r["z_interior"] == 26.0 and r["z_distribution"] == [0] * 26 + [1]
+    # 27 cubes: 54 face, 3 x 24 edge and 32 corner pairs at tol
+    assert r["z_domain"] == pytest.approx(2 * (54 + 72 + 32) / 27)
+    # two minerals alternate; the centre cube (index 13) is of mineral 1
+    assert r["z_per_mineral"] == {"pyroxene": None, "glass": 26.0}
+    assert r["n_per_mineral"] == {"pyroxene": 0, "glass": 1}
+
+
+def test_rattlers_need_four_contacts_in_3d(lattice) -> None:
+    # at tol 0.02 only the x faces touch: chains of three cubes, all rattlers with 4 (d + 1)
+    chains = _coordination(lattice, 0.02, [0.02]).results()
+    assert chains["rattler_min_contacts"] == 4
+    assert chains["rattlers"] == 27 and chains["z_mechanical"] is None
+    # with 2 the chains' ends go first, and then their middles: still none is left
+    assert _coordination(lattice, 0.02, [0.02], rattler_min_contacts=2).results()["rattlers"] == 27
+    # at 0.04 the x and y faces and the xy edges touch: each layer is a 3 x 3 king's graph,
+    # whose corners have 3 contacts; removing them takes the rest, round after round
+    layers = _coordination(lattice, 0.04, [0.04]).results()
+    assert layers["rattlers"] == 27 and layers["rattler_rounds"] == 3
+    # with 3 every cube stays: 20 contacts in each layer of 9
+    held = _coordination(lattice, 0.04, [0.04], rattler_min_contacts=3).results()
+    assert held["rattlers"] == 0 and held["z_mechanical"] == pytest.approx(40 / 9)
+
+
+def test_the_particle_table_has_3d_columns(packing3d, analysed3d) -> None:
+    table = analysed3d["coordination3d"].tables["particles"]
+    assert list(table.dtype.names) == [
+        "particle", "mineral", "x", "y", "z", "radius", "interior", "contacts", "rattler",
+        "contacts_mechanical",
+    ]  # fmt: skip
+    placed = np.flatnonzero(packing3d.placed)
+    np.testing.assert_array_equal(table["particle"], placed)
+    np.testing.assert_array_equal(table["z"], packing3d.centre[placed, 2])
+    r = analysed3d["coordination3d"]
+    assert r["z_interior"] == pytest.approx(table["contacts"][table["interior"] == 1].mean())
+    assert sum(r["z_distribution"]) == r["n_interior"] > 10

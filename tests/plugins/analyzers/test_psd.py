@@ -1,0 +1,207 @@
+"""The psd analyzer and the sieve classes: placed against requested sizes."""
+
+from __future__ import annotations
+
+import doctest
+import json
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+from scipy import stats
+
+pytest.importorskip("regopack.plugins.inserters.available_arc")
+
+from regopack.analysis.pipeline import run_analyses, write_analysis
+from regopack.packing import sieve
+from regopack.packing.sieve import class_of, sieve_edges
+from regopack.plugins.analyzers.psd import Psd, PsdConfig, ks_distance, unplaced_per_class
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import run_scene
+from regopack.scenes.model import load_scene, resolve_scene
+from regopack.testing import packing_from_polygons
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return default_registry(autoload=False)
+
+
+def sized(diameter, placed, size=None):
+    """A packing of squares with the given equivalent diameters, ``placed`` as given."""
+    d = np.asarray(diameter, dtype=np.float64)
+    side = np.sqrt(np.pi) * d / 2
+    x = 50.0 * np.arange(len(d))
+    polys = [[(x0, 0), (x0 + s, 0), (x0 + s, s), (x0, s)] for x0, s in zip(x, side, strict=True)]
+    p = packing_from_polygons(polys, (-10, 50.0 * len(d) + 10, -10, 60), placed=placed)
+    scene = {"name": "test"} if size is None else {"name": "test", "size": size}
+    return replace(p, radius=d / 2, scene=scene)
+
+
+def analyse(packing, **params):
+    return Psd(PsdConfig(**params)).compute(packing, {})
+
+
+def test_sieve_edges_and_classes():
+    edges = sieve_edges([2.0, 31.9], d_ref=2.0)
+    assert np.allclose(edges, 2.0 * np.sqrt(2.0) ** np.arange(9))
+    assert class_of([2.0, 2.82, 2.83, 31.9, 32.0], edges).tolist() == [0, 0, 1, 7, 7]
+    # anchored at d_ref, covering only the drawn range
+    assert np.allclose(sieve_edges([5.0, 7.0], d_ref=1.0), [4.0, 5.656854249492381, 8.0])
+    assert np.allclose(sieve_edges([3.0, 3.0]), [3.0, 3.0 * math.sqrt(2.0)])
+    with pytest.raises(ValueError, match="at least one"):
+        sieve_edges([])
+    assert doctest.testmod(sieve).failed == 0
+
+
+def test_known_distribution_with_a_known_unplaced_subset():
+    rng = np.random.default_rng(5)
+    d = np.exp(rng.uniform(math.log(2.0), math.log(32.0), 3000))  # log-uniform on [2, 32]
+    placed = ~((d > 16.0) | (np.arange(len(d)) % 10 == 0))
+    psd = analyse(sized(d, placed), min_class_count=100, d_ref=2.0)
+    c, res = psd.classes, psd.results()
+    edges = 2.0 * np.sqrt(2.0) ** np.arange(9)
+    assert np.allclose(np.r_[c["d_lo"], c["d_hi"][-1]], edges)
+    drawn, _ = np.histogram(d, bins=edges)
+    done, _ = np.histogram(d[placed], bins=edges)
+    assert c["drawn"].tolist() == drawn.tolist()
+    assert c["placed"].tolist() == done.tolist()
+    assert c["not_placed"].tolist() == (drawn - done).tolist()
+    assert c["placed"][6:].tolist() == [0, 0]  # d > 16 is never placed
+    assert np.allclose(c["number_share_drawn"], drawn / len(d))
+    assert np.allclose(c["number_share_placed"], done / placed.sum())
+    area = np.pi * d**2 / 4
+    mass_drawn, _ = np.histogram(d, bins=edges, weights=area)
+    mass_done, _ = np.histogram(d[placed], bins=edges, weights=area[placed])
+    assert np.allclose(c["mass_share_drawn"], mass_drawn / area.sum())
+    assert np.allclose(c["mass_share_placed"], mass_done / area[placed].sum())
+    assert np.allclose(c["number_rel_error"], (done / placed.sum()) / (drawn / len(d)) - 1)
+    assert np.allclose(c["passing_number_drawn"], 100 * np.cumsum(drawn) / len(d))
+    # KS by number: scipy's two-sample statistic, and its p-value from placed vs not placed
+    ks = stats.ks_2samp(d[placed], d)
+    assert res["ks_number"] == pytest.approx(ks.statistic, abs=1e-12)
+    assert res["ks_number_pvalue"] == pytest.approx(stats.ks_2samp(d[placed], d[~placed]).pvalue)
+    # KS by mass: largest gap between the area-weighted CDFs, at every diameter
+    grid = np.sort(d)
+    f_all = np.array([area[d <= g].sum() for g in grid]) / area.sum()
+    f_sub = np.array([area[placed & (d <= g)].sum() for g in grid]) / area[placed].sum()
+    assert res["ks_mass"] == pytest.approx(np.max(np.abs(f_sub - f_all)), abs=1e-12)
+    # the worst class with at least 100 drawn particles
+    rel = c["number_rel_error"]
+    ok = drawn >= 100
+    j = int(np.flatnonzero(ok)[np.argmax(np.abs(rel[ok]))])
+    assert res["worst_number_rel_error"] == pytest.approx(rel[j])
+    assert res["worst_number_class"] == pytest.approx([edges[j], edges[j + 1]])
+    assert res["worst_number_rel_error"] == pytest.approx(-1.0)
+    assert (res["n_drawn"], res["n_placed"]) == (3000, int(placed.sum()))
+    assert res["analytic"] is None and res["notes"] == ["the scene has no size section"]
+
+
+def test_everything_placed_gives_ks_zero():
+    d = np.random.default_rng(1).uniform(2, 20, 500)
+    res = analyse(sized(d, None)).results()
+    assert res["ks_number"] == 0.0 and res["ks_mass"] == 0.0
+    assert res["ks_number_pvalue"] == 1.0
+    assert res["worst_number_rel_error"] == 0.0 and res["worst_mass_rel_error"] == 0.0
+    assert res["n_not_placed"] == 0
+
+
+def test_a_class_with_every_particle_unplaced_has_share_zero():
+    d = np.array([2.1, 2.2, 2.5, 3.0, 3.5, 4.5, 5.0])
+    placed = np.array([True, True, True, False, False, True, True])
+    psd = analyse(sized(d, placed, {"kind": "uniform", "d_min": 2.0, "d_max": 6.0}), d_ref=2.0)
+    c = psd.classes
+    assert c["drawn"].tolist() == [3, 2, 2]
+    assert c["placed"].tolist() == [3, 0, 2]
+    assert c["number_share_placed"][1] == 0.0 and c["mass_share_placed"][1] == 0.0
+    assert c["number_rel_error"][1] == -1.0 and c["placed_fraction"][1] == 0.0
+    assert c["number_share_placed"].tolist() == pytest.approx([0.6, 0.0, 0.4])
+
+
+def test_ks_distance_with_ties():
+    d = np.array([1.0, 1.0, 2.0, 2.0, 3.0])
+    sub = np.array([True, True, False, False, False])
+    assert ks_distance(d, sub, np.ones(5)) == pytest.approx(0.6)
+    assert math.isnan(ks_distance(d, np.zeros(5, bool), np.ones(5)))
+
+
+def test_against_the_analytic_distribution():
+    rng = np.random.default_rng(3)
+    d = rng.uniform(2.0, 32.0, 4000)
+    placed = d < 24.0
+    psd = analyse(sized(d, placed, {"kind": "uniform", "d_min": 2.0, "d_max": 32.0}))
+    c, res = psd.classes, psd.results()
+    assert res["analytic"] == "uniform" and res["notes"] == []
+    lo, hi = c["d_lo"], c["d_hi"]
+    assert np.allclose(c["number_share_analytic"], (hi - lo) / 30.0)
+    assert np.allclose(c["mass_share_analytic"], (hi**3 - lo**3) / (32.0**3 - 2.0**3), rtol=1e-5)
+    ks = stats.kstest(d, stats.uniform(2.0, 30.0).cdf)
+    assert res["ks_drawn_vs_analytic"] == pytest.approx(ks.statistic)
+    assert res["ks_drawn_vs_analytic_pvalue"] == pytest.approx(ks.pvalue)
+    assert res["ks_drawn_vs_analytic_pvalue"] > 0.01
+    assert res["ks_placed_vs_analytic"] > 0.1  # the coarse end was not placed
+    with np.errstate(divide="ignore", invalid="ignore"):
+        rel = c["number_share_placed"] / c["number_share_analytic"] - 1
+    j = int(np.argmax(np.abs(rel)))
+    assert (lo[j], hi[j]) == pytest.approx((16 * math.sqrt(2), 32.0))  # partly placed
+    assert res["worst_analytic_number_rel_error"] == pytest.approx(rel[j])
+
+
+def test_a_size_distribution_that_cannot_be_rebuilt_is_noted():
+    d = np.array([2.0, 3.0, 4.0])
+    res = analyse(sized(d, None, {"kind": "no-such-size"})).results()
+    assert res["analytic"] is None
+    assert res["notes"][0].startswith("size distribution 'no-such-size' not rebuilt")
+    res = analyse(sized(d, None, {"kind": "monodisperse", "d": 3.0})).results()
+    assert res["notes"] == ["the size distribution gives no continuous CDF"]
+
+
+def test_unplaced_per_class_of_a_packing_and_of_arrays():
+    d = np.array([2.0, 2.5, 3.0, 5.0, 7.9, 8.0])
+    placed = np.array([True, False, True, False, False, True])
+    rows = unplaced_per_class(sized(d, placed, {"kind": "uniform", "d_min": 2.0, "d_max": 8.0}))
+    assert [r["drawn"] for r in rows] == [2, 1, 1, 2]  # 8.0 closes the last class
+    assert [r["not_placed"] for r in rows] == [1, 0, 1, 1]
+    assert [r["placed"] for r in rows] == [1, 1, 0, 1]
+    assert rows[0]["d_lo"] == 2.0 and rows[-1]["d_hi"] == pytest.approx(8.0)
+    assert unplaced_per_class((d, placed), d_ref=2.0) == rows
+    assert unplaced_per_class((np.zeros(0), np.zeros(0, bool))) == []
+
+
+@pytest.fixture(scope="module")
+def small(registry):
+    return run_scene(resolve_scene(load_scene("small"), registry)).packing
+
+
+def test_small_scene(small, registry, tmp_path):
+    done = run_analyses(small, registry, [("psd", {})])
+    psd = done["psd"]
+    res = psd.results()
+    assert res["analytic"] == "change5"
+    assert res["d_ref"] == 2.0 and res["n_classes"] == 9
+    assert res["n_drawn"] == small.n_particles and res["n_placed"] == small.n_placed
+    assert int(psd.classes["not_placed"].sum()) == small.n_particles - small.n_placed
+    assert res["ks_drawn_vs_analytic_pvalue"] > 0.01
+    assert [r["not_placed"] for r in unplaced_per_class(small)] == list(psd.classes["not_placed"])
+    files_ = write_analysis(tmp_path, small, done)
+    assert set(files_.tables) == {"psd_classes"}
+    header = files_.tables["psd_classes"].read_text(encoding="utf-8").splitlines()[0]
+    assert header.startswith("class,d_lo,d_hi,drawn,placed,not_placed,placed_fraction,")
+    assert [p.name for p in files_.figures] == ["psd.png", "psd.svg"]
+    svg = (tmp_path / "figures" / "psd.svg").read_text(encoding="utf-8")
+    assert "percent finer than d (%)" in svg
+
+
+def test_cli_only_psd(small, tmp_path):
+    from regopack.cli import main
+    from regopack.packing.core import save
+
+    path = tmp_path / "packing.npz"
+    save(small, path)
+    argv = ["analyze", str(path), "--only", "psd", "--set", "psd.min_class_count=50"]
+    assert main([*argv, "--no-figures"]) == 0
+    data = json.loads((tmp_path / "analysis" / "analysis.json").read_text(encoding="utf-8"))
+    assert data["analyses"] == ["psd"]
+    assert data["psd"]["min_class_count"] == 50
+    assert (tmp_path / "analysis" / "psd_classes.csv").exists()

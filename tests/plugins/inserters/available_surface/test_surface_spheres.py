@@ -1,0 +1,172 @@
+"""Spheres in the available-surface inserter: the free part of a sphere, uniform centres on it."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+
+import regopack
+from regopack.base.errors import ConfigError
+from regopack.packing.core3d import Packing3D
+from regopack.plugins.inserters.available_surface.spheres import free_arcs, is_free, sample_free
+
+
+def _caps(rows: list[tuple[float, float, float, float]]) -> np.ndarray:
+    caps = np.array(rows, dtype=np.float64).reshape(-1, 4)
+    caps[:, :3] /= np.linalg.norm(caps[:, :3], axis=1, keepdims=True)
+    return caps
+
+
+def test_a_hemisphere_cap_leaves_free_arcs_and_uniform_points_on_the_rest() -> None:
+    caps = _caps([(0, 0, 1, 0.0)])  # covers z > 0 on the unit sphere
+    arcs = free_arcs(caps, 1, 1.0, 1e-12)
+    assert arcs.shape == (1, 3) and arcs[0, 2] - arcs[0, 1] == pytest.approx(2 * math.pi)
+    rng = np.random.default_rng(5)
+    z = np.array([sample_free(caps, 1, arcs, 1.0, 1e-12, rng)[2] for _ in range(4000)])
+    assert np.all(z <= 1e-12)
+    # uniform by area on a sphere: the height is uniform (Archimedes), here on [-1, 0]
+    counts, _ = np.histogram(z, bins=10, range=(-1.0, 0.0))
+    chi2 = float(((counts - 400.0) ** 2 / 400.0).sum())
+    assert chi2 < 40.0  # 9 degrees of freedom: far beyond the 0.9999 quantile only if biased
+
+
+def test_caps_that_cover_the_sphere_leave_no_arc_and_a_gap_is_found() -> None:
+    # the six walls of a cube of admissible centres just inside the sphere: covered
+    h = 1.0 / math.sqrt(3.0) * 0.999
+    walls = [(s * (a == 0), s * (a == 1), s * (a == 2), h) for a in range(3) for s in (-1, 1)]
+    assert free_arcs(_caps(walls), 6, 1.0, 1e-12).shape[0] == 0
+    # a cube a little larger leaves its eight corners free
+    h = 1.0 / math.sqrt(3.0) * 1.001
+    walls = [(s * (a == 0), s * (a == 1), s * (a == 2), h) for a in range(3) for s in (-1, 1)]
+    caps = _caps(walls)
+    arcs = free_arcs(caps, 6, 1.0, 1e-12)
+    assert arcs.shape[0] > 0
+    rng = np.random.default_rng(1)
+    for _ in range(20):
+        u = sample_free(caps, 6, arcs, 1.0, 1e-12, rng)
+        assert is_free(caps, 6, *u, 1e-12)
+        assert abs(abs(u[0]) - abs(u[1])) < 0.1 and abs(abs(u[1]) - abs(u[2])) < 0.1  # a corner
+
+
+def test_a_tangent_point_is_no_free_surface() -> None:
+    # two opposite hemispheres leave only the equator circle, which counts as nothing
+    caps = _caps([(0, 0, 1, 0.0), (0, 0, -1, 0.0)])
+    assert free_arcs(caps, 2, 1.0, 1e-12).shape[0] == 0
+
+
+def test_a_free_set_pinched_at_the_middle_of_every_free_arc_is_found() -> None:
+    # four caps of 60 degrees about the equator of u and the hemisphere opposite u leave a
+    # rounded square about u; a cap about u inscribed in it touches each side at its middle,
+    # and so does it the middle of its own circle (angle pi of its frame, u chosen for that):
+    # four lobes remain, about 2 % of the sphere, though every free arc is pinched mid-way
+    from regopack.plugins.inserters.available_surface.spheres import _frame
+
+    u = np.array([0.7415052, 0.53854712, -0.40017126])
+    u /= np.linalg.norm(u)
+    e1x, e1y, e1z, e2x, e2y, e2z = _frame(*u)
+    e1, e2 = np.array([e1x, e1y, e1z]), np.array([e2x, e2y, e2z])
+    rows = []
+    for i in range(4):
+        b = math.pi + i * math.pi / 2
+        rows.append((*(math.cos(b) * e1 + math.sin(b) * e2), 0.5))
+    rows += [(*u, math.cos(math.pi / 6)), (*(-u), 0.0)]
+    caps = np.array(rows)
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(200_000, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    assert np.mean(np.all(x @ caps[:, :3].T <= caps[:, 3] - 1e-6, axis=1)) > 0.01
+    arcs = free_arcs(caps, 6, 1.0, 1e-12)
+    assert arcs.shape[0] > 0
+    for _ in range(20):
+        assert is_free(caps, 6, *sample_free(caps, 6, arcs, 1.0, 1e-12, rng), 1e-12)
+
+
+def scene(**changes: Any) -> dict[str, Any]:
+    data: dict[str, Any] = {
+        "name": "spheres",
+        "seed": 2,
+        "count": 120,
+        "domain": {"kind": "box", "width": 16.0, "height": 16.0, "depth": 16.0},
+        "size": {"kind": "uniform", "d_min": 2.0, "d_max": 5.0},
+        "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}],
+        "insertion": {"kind": "available-surface"},
+        "density": {"kind": "eta"},
+    }
+    data.update(changes)
+    return data
+
+
+@pytest.mark.parametrize(
+    ("kind", "order"), [("box", "paper"), ("periodic-box", "paper"), ("box", "sweep")]
+)
+def test_spheres_touch_their_candidate_and_pass_the_oracle(kind: str, order: str) -> None:
+    out = regopack.pack_and_summarise(
+        scene(
+            domain={"kind": kind, "width": 16.0, "height": 16.0, "depth": 16.0},
+            insertion={"kind": "available-surface", "order": order},
+        ),
+        verify=True,
+    )
+    packing = out.packing
+    assert isinstance(packing, Packing3D)
+    assert out.summary["verify"]["ok"], out.summary["verify"]
+    assert packing.n_placed >= 60
+    assert math.isfinite(out.summary["phi_interior"])
+    order_ = packing.placed_in_order()
+    c = packing.centre[order_]
+    r = packing.radius[order_]
+    period = np.array(packing.domain.size) if kind == "periodic-box" else None
+    for a in range(1, len(order_)):
+        d = c[:a] - c[a]
+        if period is not None:
+            d -= period * np.round(d / period)
+        gap = np.linalg.norm(d, axis=1) - r[:a] - r[a]
+        assert gap.min() == pytest.approx(0.0, abs=1e-9 * r[a])  # touches one
+        assert gap.min() >= -1e-9 * r[a]  # overlaps none
+
+
+def test_eta_keeps_each_sphere_its_margin_from_spheres_beyond_the_circumradius_test() -> None:
+    # a sphere j with |c_j - c_k| >= r_k + r_j + 2 r cannot overlap the new sphere, but it
+    # can come closer to it than the margin: it interferes when the margin is added
+    eta = 30.0
+    packing = regopack.pack(scene(count=150, density={"kind": "eta", "eta": eta}), verify=False)
+    assert isinstance(packing, Packing3D)
+    order_ = packing.placed_in_order()
+    c = packing.centre[order_]
+    r = packing.radius[order_]
+    assert len(order_) >= 40
+    for a in range(1, len(order_)):
+        gap = np.sort(np.linalg.norm(c[:a] - c[a], axis=1) - r[:a] - r[a])
+        margin = (eta - 1.0) / 100.0 * 2.0 * r[a]  # xi >= 0
+        assert gap[0] == pytest.approx(0.0, abs=1e-9 * r[a])  # touches its candidate
+        if a > 1:
+            assert gap[1] >= margin * (1 - 1e-9)  # keeps the margin from every other
+
+
+def test_a_sphere_wider_than_a_periodic_box_is_not_placed() -> None:
+    # it would overlap its own images wherever it went
+    out = regopack.pack_and_summarise(
+        scene(
+            count=3,
+            domain={"kind": "periodic-box", "width": 1.7, "height": 1.7, "depth": 1.7},
+            size={"kind": "uniform", "d_min": 2.0, "d_max": 2.02},
+        ),
+        verify=True,
+    )
+    assert out.packing.n_placed == 0
+    assert out.summary["verify"]["ok"]
+
+
+def test_spheres_and_polyhedra_together_are_refused_in_one_line() -> None:
+    phases = [
+        {"name": "glass", "fraction": 0.5, "shape": {"kind": "sphere"}},
+        {"name": "ilmenite", "fraction": 0.5, "shape": {"kind": "polyhedron", "psi": 15.0}},
+    ]
+    with pytest.raises(ConfigError) as err:
+        regopack.pack(scene(count=5, phases=phases))
+    text = str(err.value)
+    assert "phases.1.shape.kind: 'polyhedron' beside 'sphere' in phase 0" in text
+    assert "spheres or polyhedra, not both" in text and "\n" not in text

@@ -1,0 +1,282 @@
+from __future__ import annotations
+
+import sys
+import types
+
+import pluggy
+import pytest
+from fakes import FakePlugin, ShapeConfig, SizeConfig, UniformDiameter, fake_registry
+
+from regopack.base.errors import PluginError
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.manager import (
+    BUILTIN_PLUGINS,
+    DISABLE_AUTOLOAD_ENV,
+    HOOK_OF_KIND,
+    Registry,
+    build_plugin_manager,
+    default_registry,
+)
+from regopack.registry.plugin_types import KINDS, PluginSpec, ShapeSpec, SizeDistributionSpec
+
+
+class OtherSizes:
+    @hookimpl
+    def regopack_size_distributions(self):
+        return [SizeDistributionSpec("change5", SizeConfig, UniformDiameter)]
+
+
+def test_builtin_plugins_are_the_plugin_modules():
+    assert BUILTIN_PLUGINS == (
+        "regopack.plugins.sizes.change5",
+        "regopack.plugins.shapes.octagon",
+        "regopack.plugins.inserters.available_arc",
+        "regopack.plugins.density.eta",
+        "regopack.plugins.analyzers",
+        "regopack.plugins.sizes.distributions",
+        "regopack.plugins.shapes.polygons",
+        "regopack.plugins.shapes.disk",
+        "regopack.plugins.shapes.sphere",
+        "regopack.plugins.shapes.polyhedra.shape",
+        "regopack.plugins.shapes.solid_templates.shape",
+        "regopack.plugins.inserters.available_surface.inserter",
+        "regopack.plugins.inserters.rsa",
+        "regopack.plugins.exporters",
+        "regopack.plugins.exporters.image_export",
+        "regopack.plugins.exporters.gsd_export",
+        "regopack.plugins.exporters.exporters3d",
+    )
+
+
+def test_hooks_cover_every_kind():
+    assert set(HOOK_OF_KIND) == set(KINDS)
+
+
+def test_registry_collects_fake_plugin():
+    reg = fake_registry()
+    assert reg.names("size") == ["change5"]
+    assert reg.names("shape") == ["octagon"]
+    assert reg.names("insertion") == ["available-arc"]
+    assert reg.names("density") == ["eta"]
+    assert reg.names("analysis") == []
+    assert isinstance(reg.get("shape", "octagon"), ShapeSpec)
+    assert ("shape", "octagon") in reg
+    assert ("shape", "nope") not in reg
+
+
+def test_origin_names_the_plugin():
+    pm = build_plugin_manager(autoload=False, builtins=())
+    plugin = FakePlugin()
+    pm.register(plugin, name="my-plugin")
+    reg = Registry.from_manager(pm)
+    assert reg.origin("shape", "octagon") == "my-plugin"
+
+
+def test_duplicate_name_names_both_plugins():
+    pm = build_plugin_manager(autoload=False, builtins=())
+    pm.register(FakePlugin(), name="first-plugin")
+    pm.register(OtherSizes(), name="second-plugin")
+    with pytest.raises(PluginError) as info:
+        Registry.from_manager(pm)
+    msg = str(info.value)
+    assert "'change5'" in msg
+    assert "first-plugin" in msg
+    assert "second-plugin" in msg
+    assert "\n" not in msg
+
+
+def test_unknown_name_lists_known_sorted():
+    class MoreShapes:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("zigzag", ShapeConfig, lambda c: None)]
+
+    reg = fake_registry(MoreShapes())
+    with pytest.raises(PluginError) as info:
+        reg.get("shape", "octagn")
+    assert (
+        str(info.value)
+        == "unknown shape kind 'octagn'; did you mean 'octagon'? known kinds: octagon, zigzag"
+    )
+
+
+def test_unknown_name_with_nothing_registered():
+    reg = Registry.from_manager(build_plugin_manager(autoload=False, builtins=()))
+    with pytest.raises(PluginError, match=r"known kinds: \(none\)"):
+        reg.get("analysis", "rdf")
+
+
+def test_unknown_plugin_kind():
+    with pytest.raises(PluginError, match="unknown plugin kind 'colour'"):
+        fake_registry().names("colour")
+
+
+def test_wrong_record_type_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [SizeDistributionSpec("square", SizeConfig, UniformDiameter)]
+
+    with pytest.raises(PluginError, match="returned a SizeDistributionSpec, expected ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_plain_plugin_spec_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [PluginSpec("square", ShapeConfig, lambda c: None)]
+
+    with pytest.raises(PluginError, match="expected ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_non_iterable_result_is_rejected():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return ShapeSpec("square", ShapeConfig, lambda c: None)
+
+    with pytest.raises(PluginError, match="must return an iterable of ShapeSpec"):
+        fake_registry(Wrong())
+
+
+def test_config_model_must_be_pydantic():
+    class Wrong:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("square", dict, lambda c: None)]  # type: ignore[arg-type]
+
+    with pytest.raises(PluginError, match="not a pydantic model"):
+        fake_registry(Wrong())
+
+
+def test_none_result_is_empty():
+    class Nothing:
+        @hookimpl
+        def regopack_shapes(self):
+            return None
+
+    assert fake_registry(Nothing()).names("shape") == ["octagon"]
+
+
+def test_unknown_hook_is_rejected():
+    class Typo:
+        @hookimpl
+        def regopack_shape(self):
+            return []
+
+    with pytest.raises(PluginError, match="regopack_shape"):
+        build_plugin_manager(autoload=False, builtins=(), extra=[Typo()])
+
+
+def test_registering_twice_is_an_error():
+    plugin = FakePlugin()
+    with pytest.raises(PluginError):
+        build_plugin_manager(autoload=False, builtins=(), extra=[plugin, plugin])
+
+
+def test_builtins_are_imported_by_module_name(monkeypatch):
+    module = types.ModuleType("fake_builtin_module")
+
+    @hookimpl
+    def regopack_shapes():
+        return [ShapeSpec("hexagon", ShapeConfig, lambda c: None)]
+
+    module.regopack_shapes = regopack_shapes  # type: ignore[attr-defined]
+    monkeypatch.setitem(sys.modules, "fake_builtin_module", module)
+    pm = build_plugin_manager(autoload=False, builtins=("fake_builtin_module",))
+    reg = Registry.from_manager(pm)
+    assert reg.names("shape") == ["hexagon"]
+    assert reg.origin("shape", "hexagon") == "fake_builtin_module"
+
+
+@pytest.mark.parametrize(
+    ("env", "autoload", "expected"),
+    [
+        (None, None, True),
+        ("", None, True),
+        ("1", None, False),
+        (None, False, False),
+        ("1", True, True),
+    ],
+)
+def test_entry_point_autoload(monkeypatch, env, autoload, expected):
+    calls = []
+    monkeypatch.setattr(
+        pluggy.PluginManager, "load_setuptools_entrypoints", lambda self, group: calls.append(group)
+    )
+    if env is None:
+        monkeypatch.delenv(DISABLE_AUTOLOAD_ENV, raising=False)
+    else:
+        monkeypatch.setenv(DISABLE_AUTOLOAD_ENV, env)
+    build_plugin_manager(autoload=autoload, builtins=())
+    assert calls == (["regopack"] if expected else [])
+
+
+def test_info_of_builtin_plugins_names_regopack():
+    import regopack
+    from regopack.registry.manager import PluginInfo
+
+    reg = Registry.from_manager(
+        build_plugin_manager(autoload=False, builtins=("regopack.plugins.density.eta",))
+    )
+    assert reg.info("density", "eta") == PluginInfo(
+        plugin="regopack.plugins.density.eta",
+        module="regopack.plugins.density.eta",
+        distribution="regopack",
+        version=regopack.__version__,
+    )
+    assert reg.info("density", "eta").package == f"regopack {regopack.__version__}"
+
+
+def test_info_of_a_plugin_object_without_a_distribution():
+    reg = fake_registry()
+    info = reg.info("shape", "octagon")
+    assert (info.module, info.distribution, info.version, info.package) == (
+        "fakes",
+        None,
+        None,
+        "-",
+    )
+    with pytest.raises(PluginError, match="unknown shape kind 'nope'"):
+        reg.info("shape", "nope")
+
+
+def test_info_defaults_to_the_origin_for_a_hand_made_registry():
+    spec = ShapeSpec("hexagon", ShapeConfig, lambda c: None)
+    reg = Registry({"shape": {"hexagon": (spec, "my-plugin")}})
+    info = reg.info("shape", "hexagon")
+    assert (info.plugin, info.module, info.distribution) == ("my-plugin", "my-plugin", None)
+
+
+def test_the_builtin_figure_specs_follow_the_analyzers():
+    reg = default_registry(autoload=False)
+    assert [f.analyzer for f in reg.figures()] == [
+        "density",
+        "network",
+        "contacts",
+        "coordination",
+        "rdf",
+        "homogeneity",
+        "psd",
+        "local_fraction",
+        "contacts3d",
+        "coordination3d",
+        "rdf3d",
+        "psd3d",
+        "homogeneity3d",
+    ]
+    assert {f.analyzer for f in reg.figures()} <= set(reg.names("analysis"))
+    assert reg.figures("coordination")[0].captions.keys() == {"z-vs-tol", "z-per-mineral"}
+    assert reg.figures("nothing") == ()
+
+
+def test_a_figure_hook_returning_other_records_is_refused():
+    class BadFigures:
+        @hookimpl
+        def regopack_analysis_figures(self):
+            return [ShapeSpec("zigzag", ShapeConfig, lambda c: None)]
+
+    with pytest.raises(PluginError, match="returned a ShapeSpec, expected FigureSpec"):
+        fake_registry(BadFigures())

@@ -1,0 +1,82 @@
+"""``outputs.exports`` of 3D scenes: 3D exporters write beside the packing, 2D ones are refused."""
+
+from __future__ import annotations
+
+import pytest
+from cli_helpers import one_error_line
+from packings3d import scene3d
+
+import regopack
+from regopack.base.errors import ConfigError
+from regopack.cli import main
+from regopack.packing.core import load
+
+SCENE_TOML = """\
+name = "box3d"
+seed = 1
+count = "auto"
+
+[domain]
+kind = "box"
+width = 15.0
+height = 15.0
+depth = 15.0
+
+[size]
+kind = "change5"
+d_min = 2.0
+d_max = 12.0
+
+[[phases]]
+name = "plagioclase"
+fraction = 1.0
+shape = { kind = "polyhedron", psi = 1.0 }
+
+[insertion]
+kind = "available-surface"
+
+[density]
+kind = "eta"
+
+[outputs]
+exports = ["stl", { kind = "svg", width_px = 300 }]
+"""
+
+
+def test_a_3d_run_writes_every_3d_export_beside_its_packing(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    exports = ["vtk3d", "stl", "gsd3d", "lammps3d", {"kind": "slice", "axis": "x"}]
+    scene = {**scene3d(15.0), "outputs": {"exports": exports}}
+    outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=False)
+    run = tmp_path / "run"
+    names = ["packing.vtu", "packing.stl", "packing.gsd", "packing.data", "packing.slice.npz"]
+    assert [p.name for p in outcome.exports] == names
+    assert all(p.parent == run and p.stat().st_size > 0 for p in outcome.exports)
+    assert (run / "packing.in").exists() and (run / "packing.slice.png").exists()
+    section = load(run / "packing.slice.npz")
+    assert section.scene["slice"]["axis"] == "x" and section.n_placed > 0
+    assert not list(tmp_path.glob("run.tmp*"))
+
+
+def test_a_2d_exporter_in_a_3d_scene_file_is_one_line(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "box.toml"
+    path.write_text(SCENE_TOML, encoding="utf-8")
+    assert main(["run", str(path), "--out", str(tmp_path / "run")]) != 0
+    assert one_error_line(capsys) == (
+        f"regopack: error: {path}: outputs.exports.1.kind = 'svg' is a 2D exporter, but "
+        "domain.kind = 'box' makes the scene 3D; 3D exporters: gsd3d, lammps3d, slice, stl, vtk3d"
+    )
+    assert not (tmp_path / "run").exists()
+
+
+def test_a_2d_exporter_set_on_the_command_line_is_blamed_on_it(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
+    path = tmp_path / "box.toml"
+    path.write_text(SCENE_TOML.replace('"stl", { kind = "svg", width_px = 300 }', ""), "utf-8")
+    args = ["run", str(path), "--set", 'outputs.exports=["vtk"]', "--out", str(tmp_path / "r")]
+    assert main(args) != 0
+    line = one_error_line(capsys)
+    assert line.startswith("regopack: error: --set: outputs.exports.0 = 'vtk' is a 2D exporter")
+
+
+def test_a_3d_exporter_in_a_2d_scene_is_refused() -> None:
+    with pytest.raises(ConfigError, match=r"outputs\.exports\.0 = 'stl' is a 3D exporter, but "):
+        regopack.scene("small", outputs__exports=["stl"])
