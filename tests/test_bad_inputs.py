@@ -462,7 +462,12 @@ def _disk_full(*args: object, **kwargs: object) -> None:
 @pytest.mark.parametrize(
     ("module", "writer", "argv", "out"),
     [
-        (regopack.run.pipeline, "save", ["run", "small", "--set", "count=5", "--quiet"], "runs/x"),
+        (
+            regopack.run.pipeline,
+            "save_packing",
+            ["run", "small", "--set", "count=5", "--quiet"],
+            "runs/x",
+        ),
         (
             regopack.analysis.pipeline,
             "write_json_atomic",

@@ -73,7 +73,8 @@ def _imports_of(old: str) -> re.Pattern[str]:
     parent, _, child = old.rpartition(".")
     name = re.escape(old)
     return re.compile(
-        rf"\b(?:import|from)\s+{name}\b|\bfrom\s+{re.escape(parent)}\s+import\s+[^\n]*\b{child}\b"
+        rf"\b(?:import|from)\s+{name}\b"
+        rf"|\bfrom\s+{re.escape(parent)}\s+import\s+(?:\([^)]*|[^\n]*)\b{child}\b"
     )
 
 

@@ -175,5 +175,6 @@ def test_every_sampled_scene_error_names_its_source(tmp_path, monkeypatch, capsy
 def test_a_box_set_too_small_names_set_not_the_scene(capsys):
     assert main(["config", "table1-3d", "--set", "domain.width=1e-300"]) == 2
     assert one_error_line(capsys).startswith(
-        "regopack: error: --set: domain: the smallest particle (diameter 2) is larger than the box"
+        "regopack: error: --set: domain: the smallest particle (diameter 2, volume 4.18879) is "
+        "larger than the domain (volume 2.25e-296)"
     )

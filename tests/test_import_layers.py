@@ -48,10 +48,6 @@ PLUGIN_LAYER = 4.5
 KNOWN: set[tuple[str, str]] = {
     # the packing draws itself (plot, notebook display): drawing joins the packing's layer
     ("regopack.packing.core", "regopack.packing.drawing"),
-    # the 3D run borrows the 2D run's steps: one run pipeline for both dimensions ends these
-    ("regopack.analysis.pipeline3d", "regopack.run.pipeline"),
-    ("regopack.run.pipeline", "regopack.run.pipeline3d"),
-    ("regopack.run.pipeline3d", "regopack.run.pipeline"),
     # the figure modules share their style helpers through figures.py
     ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures"),
     ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures3d"),

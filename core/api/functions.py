@@ -41,7 +41,6 @@ if TYPE_CHECKING:
     from regopack.experiments.api import SweepTable
     from regopack.registry.manager import Registry
     from regopack.run.pipeline import RunOutcome
-    from regopack.run.pipeline3d import RunOutcome3D
     from regopack.scenes.model import ResolvedScene
     from regopack.verification.polygons import VerifyReport
     from regopack.verification.polyhedra import Report3D
@@ -188,7 +187,7 @@ def pack_and_summarise(
     figures: bool = True,
     registry: Registry | None = None,
     **overrides: Any,
-) -> RunOutcome | RunOutcome3D:
+) -> RunOutcome:
     """Pack a scene and summarise the run, as ``regopack run`` does.
 
     Takes the arguments of :func:`pack`, plus ``figures`` (draw the figures
@@ -213,11 +212,6 @@ def pack_and_summarise(
             refuse_inside(Path(source), folder, "scene file")
         check_replaceable(folder, RUN_FOLDER)
     check_runnable(resolved)
-    if resolved.scene.domain.dimension == 3:
-        from regopack.run.pipeline3d import run_scene3d
-
-        with _progress(progress, f"packing {resolved.name}") as callback:
-            return run_scene3d(resolved, folder, progress=callback, verify=verify, figures=figures)
     with _progress(progress, f"packing {resolved.name}") as callback:
         return run_scene(
             resolved,
@@ -490,7 +484,7 @@ def verify(
     >>> bool(report), report.worst_overlap
     (True, None)
     """
-    from regopack.verification.polygons import verify as check
+    from regopack.verification.summary import verify_packing
 
     if isinstance(rel_tol, bool) or not isinstance(rel_tol, int | float) or not rel_tol >= 0:
         raise ConfigError(f"rel_tol = {rel_tol!r}: expected a number >= 0")
@@ -498,11 +492,9 @@ def verify(
         from regopack.packing.core3d import load_packing
 
         packing = load_packing(Path(packing))
-    if isinstance(packing, Packing3D):
-        from regopack.run.pipeline3d import verify_packing3d
-
-        return verify_packing3d(packing, rel_tol=float(rel_tol))
-    return check(_packing(packing), rel_tol=float(rel_tol))
+    if not isinstance(packing, Packing3D):
+        packing = _packing(packing)
+    return verify_packing(packing, rel_tol=float(rel_tol))
 
 
 def export(

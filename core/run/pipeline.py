@@ -1,4 +1,10 @@
-"""Running a scene: draw the population, insert it, summarise, write the files."""
+"""Running a scene: draw the population, insert it, summarise, write the files.
+
+One pipeline for both dimensions: the scene's domain says which. What differs
+by dimension is small and named where it happens: the particles' measure
+(area or volume) in the checks, the shape generators' batches (outlines or
+solids), the solid fractions and the exporters' interface.
+"""
 
 from __future__ import annotations
 
@@ -11,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from regopack._compat import warn_moved
 from regopack.analysis.pipeline import AnalysisFiles, write_analysis_files
 from regopack.base import toml as _toml
 from regopack.base.errors import ConfigError, ExportError, GeometryError, PluginError
@@ -31,11 +38,14 @@ from regopack.base.outdir import (
     rebase,
     replace_folder,
 )
-from regopack.geometry.domain import PlaneDomain
-from regopack.geometry.population import FloatArray, IntArray, Population, ShapeBatch, concat_shapes
-from regopack.packing.core import Packing, save, write_json_atomic
+from regopack.exports.pipeline import run_exports
+from regopack.geometry.domain import Box
+from regopack.geometry.population import FloatArray, IntArray, Population, concat_shapes
+from regopack.geometry.solids import SolidBatch, concat_solids
+from regopack.packing.core import Packing, write_json_atomic
+from regopack.packing.core3d import Packing3D, save_packing
 from regopack.packing.sieve import unplaced_per_class
-from regopack.packing.solid_fraction import phi_in_window
+from regopack.packing.solid_fraction import phi_in_box, phi_in_window
 from regopack.registry.interfaces import (
     Analyzer,
     DensityController,
@@ -45,10 +55,12 @@ from regopack.registry.interfaces import (
     ProgressCallback,
     ShapeGenerator,
     SizeDistribution,
+    SolidGenerator,
 )
 from regopack.run.compilation import CompileTime, compile_timer
-from regopack.scenes.analysis_plan import run_analyses
+from regopack.scenes.analysis_plan import check_dimension, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
+from regopack.verification.summary import verify_summary
 
 __all__ = [
     "BYTES_PER_PARTICLE",
@@ -83,7 +95,7 @@ figure of each kind of run.
 """
 
 MIN_AREA = 1e-300
-"""Smallest area of a particle of a 2D scene (as :mod:`regopack.run.pipeline3d` bounds a volume).
+"""Smallest area (2D) or volume (3D) of a particle of a scene.
 
 Below it, squared lengths leave 64-bit floats' normal range: they lose their
 precision, then become zero (a scene written with ``d_min = 2e-200`` once
@@ -129,7 +141,7 @@ class RunOutcome:
         Files written by the exporters of ``outputs.exports``, in scene order.
     """
 
-    packing: Packing
+    packing: Packing | Packing3D
     summary: dict[str, Any]
     packing_path: Path | None = None
     summary_path: Path | None = None
@@ -151,7 +163,7 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
     """Return the number of particles to draw.
 
     This is the scene's ``count``, or ``round(domain area / size_dist.mean_area)``
-    for ``count = "auto"``.
+    for ``count = "auto"`` (volumes in 3D: ``size_dist.mean_volume``).
 
     Raises
     ------
@@ -160,19 +172,30 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
     """
     count = scene.scene.count
     if count == "auto":
-        area, mean = scene.domain.measure, float(size_dist.mean_area)
-        auto = area / mean if mean > 0 else math.inf
+        word = _MEASURE[scene.scene.domain.dimension]
+        measure = scene.domain.measure
+        mean = float(getattr(size_dist, f"mean_{word}"))
+        auto = measure / mean if mean > 0 else math.inf
         if not math.isfinite(auto):
             raise ConfigError(
                 _located(
                     scene,
                     "count",
-                    f"domain area / mean particle area = {area:g} / {mean:g} is not a finite "
-                    "number of particles; give a count or larger particles",
+                    f"domain {word} / mean particle {word} = {measure:g} / {mean:g} is not a "
+                    "finite number of particles; give a count or larger particles",
                 )
             )
         return round(auto)
     return int(count)
+
+
+_MEASURE = {2: "area", 3: "volume"}
+"""What a particle's and a domain's measure is called, by dimension."""
+
+
+def _measure(r: float, dimension: int) -> float:
+    """Area of the disk or volume of the ball of radius ``r``."""
+    return math.pi * r * r if dimension == 2 else 4.0 / 3.0 * math.pi * r * r * r
 
 
 def _bytes(n: float) -> str:
@@ -303,10 +326,6 @@ def check_runnable(scene: ResolvedScene) -> int:
         One line naming the source (scene file or ``--set``), the field, the
         value and what is allowed.
     """
-    if scene.scene.domain.dimension == 3:
-        from regopack.run.pipeline3d import check_scene3d
-
-        return check_scene3d(scene)
     return check_scene(scene)
 
 
@@ -351,29 +370,31 @@ def check_scene(scene: ResolvedScene) -> int:
         One line naming the scene file (or ``--set``), the field and the limit.
     """
     check_inserter(scene)
+    dimension = scene.scene.domain.dimension
+    word = _MEASURE[dimension]
     size_dist: SizeDistribution = _build(scene.size, SizeDistribution, "size")
     r_min, r_max = float(size_dist.r_min), float(size_dist.r_max)
-    area_max, area_min = math.pi * r_max * r_max, math.pi * r_min * r_min
-    if not math.isfinite(area_max):
+    largest, smallest = _measure(r_max, dimension), _measure(r_min, dimension)
+    if not math.isfinite(largest):
         raise ConfigError(
             _located(
                 scene,
                 "size",
-                f"the largest particle (diameter {2 * r_max:g}) has an area of {area_max:g}: "
-                "its size overflows 64-bit floats; give smaller sizes",
+                f"the largest particle (diameter {2 * r_max:g}) has {_a(word)} {word} of "
+                f"{largest:g}: its size overflows 64-bit floats; give smaller sizes",
             )
         )
-    if not area_min >= MIN_AREA:
+    if not smallest >= MIN_AREA:
         raise ConfigError(
             _located(
                 scene,
                 "size",
-                f"the smallest particle (diameter {2 * r_min:g}) has an area of {area_min:g}: "
-                "its size underflows 64-bit floats; give larger sizes",
+                f"the smallest particle (diameter {2 * r_min:g}) has {_a(word)} {word} of "
+                f"{smallest:g}: its size underflows 64-bit floats; give larger sizes",
             )
         )
-    domain_area = scene.domain.measure
-    if area_min > domain_area:
+    domain_measure = scene.domain.measure
+    if smallest > domain_measure:
         domain_set = scene.scene.origin("domain") != scene.scene.source
         raise ConfigError(
             _located(
@@ -381,21 +402,26 @@ def check_scene(scene: ResolvedScene) -> int:
                 "domain"
                 if domain_set and scene.scene.origin("size") == scene.scene.source
                 else "size",
-                f"the smallest particle (diameter {2 * r_min:g}, area {area_min:g}) is larger "
-                f"than the domain (area {domain_area:g}), so no particle can be placed; "
-                "give smaller sizes or a larger domain",
+                f"the smallest particle (diameter {2 * r_min:g}, {word} {smallest:g}) is "
+                f"larger than the domain ({word} {domain_measure:g}), so no particle can be "
+                "placed; give smaller sizes or a larger domain",
             )
         )
     check_extents(scene, domain_extents(scene), 2.0 * r_min)
     check_shapes(scene, r_min)
     n = particle_count(scene, size_dist)
     auto = (
-        f"domain area {domain_area:g} / mean particle area {float(size_dist.mean_area):g}"
+        f"domain {word} {domain_measure:g} / mean particle {word} "
+        f"{float(getattr(size_dist, f'mean_{word}')):g}"
         if scene.scene.count == "auto"
         else ""
     )
     check_particle_memory(scene, n, auto)
     return n
+
+
+def _a(word: str) -> str:
+    return "an" if word[0] in "aeiou" else "a"
 
 
 def draw_sizes_and_minerals(
@@ -422,23 +448,28 @@ def draw_sizes_and_minerals(
 def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
     """Draw every particle of ``scene`` up front, in insertion order.
 
-    The random draws happen in exactly this order: the radii
-    (``size.sample(N, rng)``); the minerals (``rng.choice`` over the phases
-    with the normalised fractions); then, for each phase in scene order, the
-    shapes of that phase's particles (``shape.generate(radii[idx], rng)``).
+    The random draws happen in exactly this order, in both dimensions: the
+    radii (``size.sample(N, rng)``); the minerals (``rng.choice`` over the
+    phases with the normalised fractions); then, for each phase in scene
+    order, the shapes of that phase's particles
+    (``shape.generate(radii[idx], rng)``): outlines in 2D, solids in 3D.
     """
     n = check_scene(scene)
     radii, minerals = draw_sizes_and_minerals(scene, rng, n)
-    parts: list[tuple[IntArray, ShapeBatch]] = []
+    solid = scene.scene.domain.dimension == 3
+    interface = SolidGenerator if solid else ShapeGenerator
+    parts: list[tuple[IntArray, Any]] = []
     for p, phase in enumerate(scene.phases):
-        generator: ShapeGenerator = _build(phase.shape, ShapeGenerator, "shape")
+        generator = _build(phase.shape, interface, "shape")
         idx = np.flatnonzero(minerals == p).astype(np.int64)
         with np.errstate(over="ignore", invalid="ignore"):  # refused just below
             batch = generator.generate(radii[idx], rng)
-        if len(batch) != len(idx):
+        noun = "solids" if solid else "outlines"
+        if (solid and not isinstance(batch, SolidBatch)) or len(batch) != len(idx):
+            got = f"a {type(batch).__name__}" if solid and not isinstance(batch, SolidBatch) else ""
             raise PluginError(
-                f"shape plugin {phase.shape.kind!r} returned {len(batch)} outlines "
-                f"for {len(idx)} radii (phase {phase.name!r})"
+                f"shape plugin {phase.shape.kind!r} returned {got or len(batch)} {noun} "
+                f"for {len(idx)} radii (phase {phase.name!r}); expected one per radius"
             )
         finite = np.isfinite(batch.vertices).all(axis=1)
         if not finite.all():
@@ -447,15 +478,18 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
                 _located(
                     scene,
                     f"phases.{p}.shape",
-                    f"the {phase.shape.kind!r} outline of a particle of diameter "
-                    f"{2 * radii[idx][j]:g} (phase {phase.name!r}) has non-finite vertices "
-                    "(64-bit float overflow); give smaller sizes",
+                    f"the {phase.shape.kind!r} {'solid' if solid else 'outline'} of a particle "
+                    f"of diameter {2 * radii[idx][j]:g} (phase {phase.name!r}) has non-finite "
+                    "vertices (64-bit float overflow); give smaller sizes",
                 )
             )
         parts.append((idx, batch))
-    shapes = concat_shapes(parts, n)
+    shapes = concat_solids(parts, n) if solid else concat_shapes(parts, n)
     return Population(
-        radius=radii, mineral=minerals, mineral_names=scene.phase_names, shapes=shapes
+        radius=radii,
+        mineral=minerals,
+        mineral_names=scene.phase_names,
+        shapes=shapes,  # type: ignore[arg-type]
     )
 
 
@@ -470,7 +504,7 @@ def run_scene(
     progress: ProgressCallback | None = None,
     *,
     figures: bool = True,
-    summary_extras: Callable[[Packing], Mapping[str, Any]] | None = None,
+    summary_extras: Callable[[Any], Mapping[str, Any]] | None = None,
     verify: bool | None = None,
     extra_files: Mapping[str, str] | None = None,
 ) -> RunOutcome:
@@ -529,6 +563,7 @@ def run_scene(
     interrupted or killed run leaves the previous run untouched, and a rerun
     leaves nothing of the previous one (no stale analysis or exports).
     """
+    check_analyses(resolved)
     if out_dir is not None:
         check_replaceable(out_dir, RUN_FOLDER)
         _check_extra_files(resolved, extra_files or {})
@@ -543,7 +578,7 @@ def _run(
     out_dir: str | Path | None,
     progress: ProgressCallback | None,
     figures: bool,
-    summary_extras: Callable[[Packing], Mapping[str, Any]] | None,
+    summary_extras: Callable[[Any], Mapping[str, Any]] | None,
     verify: bool | None,
     extra_files: Mapping[str, str] | None,
     compiling: CompileTime,
@@ -554,7 +589,6 @@ def _run(
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
     controller: DensityController = _build(resolved.density, DensityController, "density")
     domain = resolved.domain
-    assert isinstance(domain, PlaneDomain), "run_scene hands 3D scenes to run_scene3d"
     try:
         result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
     except LimitError as err:  # a size the inserter derived from the scene, refused
@@ -563,29 +597,32 @@ def _run(
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
 
     scene_dict = resolved.to_dict()
-    packing = Packing.from_parts(
-        population, result, domain, scene_dict, resolved.seed, result.stats
+    kind = Packing3D if isinstance(domain, Box) else Packing
+    packing = kind.from_parts(
+        population,
+        result,
+        domain,  # type: ignore[arg-type]
+        scene_dict,
+        resolved.seed,
+        result.stats,
     )
     n_placed = packing.n_placed
     margin = 2.0 * float(size_dist.r_max)
-    phi_domain = float(packing.area()[packing.placed].sum()) / domain.area
-    phi_interior = phi_in_window(packing, domain.interior(margin))
-
+    phi_interior, note = _phi_interior(packing, margin)
     summary: dict[str, Any] = {
         "scene": resolved.name,
         "seed": resolved.seed,
+        **({"dimension": 3} if isinstance(packing, Packing3D) else {}),
         "tried": packing.n_particles,
         "placed": n_placed,
         "not_placed": packing.n_particles - n_placed,
-        "phi_domain": phi_domain,
+        "phi_domain": packing.phi,
         "phi_interior": phi_interior,
         "interior_margin": margin,
         **times,
     }
-    if math.isnan(phi_interior):
-        summary["phi_interior_note"] = (
-            f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
-        )
+    if note:
+        summary["phi_interior_note"] = note
     if n_placed < packing.n_particles:
         summary["not_placed_by_class"] = [
             row for row in unplaced_per_class(packing) if row["not_placed"] > 0
@@ -600,8 +637,7 @@ def _run(
     analyzers: dict[str, Analyzer] = {}
     if resolved.analyses:
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
-        origin = resolved.scene.origin("outputs.analyses")
-        analyzers = run_analyses(packing, resolved.registry, requests, source=origin)
+        analyzers = run_analyses(packing, resolved.registry, requests, source=_analyses(resolved))
         summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
     summary["compile_time_s"] = compiling.seconds
     if summary_extras is not None:
@@ -614,23 +650,37 @@ def _run(
     )
 
 
-def verify_summary(packing: Packing) -> dict[str, Any]:
-    """Return the ``verify`` entry of a run's summary.
+def _phi_interior(packing: Packing | Packing3D, margin: float) -> tuple[float, str]:
+    """Return the solid fraction inside the walls by ``margin``, and a note when there is none.
 
-    ``ok``, ``overlap_pairs`` (pairs overlapping by more than 1e-9 of the
-    smaller area), ``worst_overlap`` (the largest overlap as a fraction of the
-    smaller area, 0 when none) and ``outside`` (particles leaving the domain).
+    A periodic box has no walls: its whole cell is interior. A solid that
+    crosses the faces of the interior window of a box of polyhedra is not
+    cut yet (``NaN``, as :func:`regopack.packing.solid_fraction.phi_in_box` says).
     """
-    from regopack.verification.polygons import verify
+    empty = f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
+    if isinstance(packing, Packing):
+        phi = phi_in_window(packing, packing.domain.interior(margin))
+        return phi, empty if math.isnan(phi) else ""
+    box = packing.domain
+    if box.periodic:
+        return packing.phi, ""
+    try:
+        return phi_in_box(packing, box.interior(margin)), ""
+    except NotImplementedError:
+        return math.nan, ""
 
-    report = verify(packing)
-    worst = report.worst_overlap[2] if report.worst_overlap is not None else 0.0
-    return {
-        "ok": bool(report.ok),
-        "overlap_pairs": int(report.n_overlapping_pairs),
-        "worst_overlap": float(worst),
-        "outside": int(report.n_outside),
-    }
+
+def _analyses(resolved: ResolvedScene) -> str:
+    """Where the scene's ``outputs.analyses`` come from and the field, for messages."""
+    where = resolved.scene.origin("outputs")
+    return f"{where}: outputs.analyses" if where else "outputs.analyses"
+
+
+def check_analyses(resolved: ResolvedScene) -> None:
+    """Refuse, before anything is packed, an analyzer of the scene that its dimension lacks."""
+    names = [p.kind for p in resolved.analyses]
+    dimension = resolved.scene.domain.dimension
+    check_dimension(resolved.registry, names, dimension, _analyses(resolved))
 
 
 def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) -> None:
@@ -647,7 +697,7 @@ def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) 
 def _write_run(
     resolved: ResolvedScene,
     out: Path,
-    packing: Packing,
+    packing: Packing | Packing3D,
     summary: dict[str, Any],
     analyzers: Mapping[str, Analyzer],
     figures: bool,
@@ -662,7 +712,7 @@ def _write_run(
     with replace_folder(out, RUN_FOLDER) as tmp:
         try:
             checkpoint("packing")
-            save(packing, tmp / outputs.packing)
+            save_packing(packing, tmp / outputs.packing)
             checkpoint("summary")
             write_json_atomic(tmp / outputs.summary, summary)
             for name, text in extra_files.items():
@@ -681,10 +731,13 @@ def _write_run(
             )
         if resolved.exports:
             checkpoint("exports")
-        exports = tuple(
-            _export(packing, plugin, tmp / outputs.packing, packing_path, analyzers)
-            for plugin in resolved.exports
-        )
+        if isinstance(packing, Packing3D):
+            exports = run_exports(packing, resolved.exports, tmp / outputs.packing, packing_path)
+        else:
+            exports = tuple(
+                _export(packing, plugin, tmp / outputs.packing, packing_path, analyzers)
+                for plugin in resolved.exports
+            )
     if analysis is not None:
         analysis = analysis.moved(tmp, out)
     exports = tuple(rebase(p, tmp, out) for p in exports)
@@ -762,3 +815,21 @@ def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
             )
         )
     return rows
+
+
+_MOVED_3D = {
+    "RunOutcome3D": "RunOutcome",
+    "run_scene3d": "run_scene",
+    "check_scene3d": "check_scene",
+    "draw_population3d": "draw_population",
+}
+"""Names of the former 3D run module, now the names of this one for both dimensions."""
+
+
+def __getattr__(name: str) -> Any:
+    """Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""
+    if name in _MOVED_3D:
+        new = _MOVED_3D[name]
+        warn_moved(f"{__name__}.{name}", f"{__name__}.{new}")
+        return globals()[new]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -14,10 +14,17 @@ if TYPE_CHECKING:
     from regopack.verification.polygons import VerifyReport as VerifyReport
     from regopack.verification.polygons import assert_valid_packing as assert_valid_packing
     from regopack.verification.polygons import verify as verify
+    from regopack.verification.summary import verify_packing as verify_packing
+    from regopack.verification.summary import verify_summary as verify_summary
 
 __all__ = ["CONFIRM_GRID", "VerifyReport", "assert_valid_packing", "verify"]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.verification.polygons")
+_SOURCES = {
+    **dict.fromkeys(__all__, "regopack.verification.polygons"),
+    "verify_packing": "regopack.verification.summary",
+    "verify_summary": "regopack.verification.summary",
+}
+__all__ += ["verify_packing", "verify_summary"]
 
 
 def __getattr__(name: str) -> Any:

@@ -77,7 +77,7 @@ def registry():  # type: ignore[no-untyped-def]
 
 def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> None:  # type: ignore[no-untyped-def]
     scene = regopack.scene(SCENE, registry=registry)
-    outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run")
+    outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=True)
     packing = outcome.packing
     assert isinstance(packing, Packing3D)
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
@@ -100,7 +100,7 @@ def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> N
 
 def test_overlaps_are_reported_by_the_oracle(registry) -> None:  # type: ignore[no-untyped-def]
     scene = regopack.scene(SCENE, registry=registry, insertion__spacing=3.0)
-    outcome = regopack.pack_and_summarise(scene)
+    outcome = regopack.pack_and_summarise(scene, verify=True)
     assert outcome.summary["verify"]["ok"] is False
     assert outcome.summary["verify"]["overlap_pairs"] > 0
 

@@ -134,6 +134,15 @@ class AvailableSurface(InsertionStrategy):
     def __init__(self, config: AvailableSurfaceConfig | None = None) -> None:
         self.config = config or AvailableSurfaceConfig()
 
+    def may_overlap(self) -> bool:
+        """Say yes, so that every 3D run is checked by the independent oracle.
+
+        The envelopes are exact up to a tolerance scaled by the particles; a
+        run of solids checks its packing with Qhull and HiGHS
+        (:mod:`regopack.verification.polyhedra`) unless told not to.
+        """
+        return True
+
     def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
         """Refuse a non-``eta`` density controller and spheres mixed with polyhedra."""
         if density != "eta":

@@ -268,9 +268,9 @@ def test_a_packing_with_nothing_placed(kind, registry, tmp_path):
 
 
 def test_the_plugin_registers_each_format_module_under_its_name():
-    from regopack.plugins import (
+    from regopack.plugins import exporters
+    from regopack.plugins.exporters import (
         csv_export,
-        exporters,
         json_export,
         lammps_export,
         svg_export,
