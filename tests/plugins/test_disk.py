@@ -338,9 +338,11 @@ def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, sc
     w = (np.array([0.0, hair]), np.zeros(2), np.array([1.0, -1.0]), np.zeros(2))
     common = (nf, slot, odx, ody, ox, oy)
     fast = disk_arcs(rho, pc[0], pc[1], nf, odx, ody, orho, mode, walls, box, woff, q, q, 0.0)
+    # the envelope's vertex count is unsigned, as analyze_candidate passes it (an int64
+    # here would compile a second specialization of the kernel for this test alone)
     general = rounded_arcs(
-        *w, 2, rho, pc[0], pc[1], *common, oex, oey, on, orad, orho, mode, walls, box, woff,
-        q, q, 1, 0.0,
+        *w, np.uint64(2), rho, pc[0], pc[1], *common, oex, oey, on, orad, orho, mode, walls,
+        box, woff, q, q, 1, 0.0,
     )  # fmt: skip
     phi = np.linspace(0, 2 * np.pi, 3001, endpoint=False)
     ends = np.concatenate([fast.ravel(), general.ravel()]) % (2 * np.pi)
