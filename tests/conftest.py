@@ -4,6 +4,7 @@ import importlib.metadata
 import os
 import subprocess
 import sys
+import time
 from fnmatch import fnmatchcase
 from pathlib import Path
 
@@ -12,7 +13,16 @@ import pytest
 WARMUP_MIN_TESTS = 500
 """Sessions with fewer tests compile only what they use, in the test process."""
 
+WARMUP_WAIT_MAX = 600.0
+"""Seconds the first test of a stage waits at most for the warm-up to finish the stage."""
+
 _warmup: list[subprocess.Popen[bytes]] = []
+_progress: list[Path] = []
+"""The file into which the running warm-up writes the last stage it has finished."""
+_waited: dict[int, float] = {}
+"""Seconds the tests waited for the warm-up, by stage."""
+_staged: list[bool] = []
+"""Set when the session runs in stages (:func:`pytest_collection_modifyitems`)."""
 
 
 def _version(dist: str) -> str:
@@ -34,16 +44,35 @@ def registry():
     return fake_registry()
 
 
-WARMUP_DONE = "test-warmup.done"
-"""File that ``kernel_warmup.py`` writes into the kernel cache folder when it has run to its end."""
+WARMUP_DONE = "test-warmup-{install}.done"
+"""File that ``kernel_warmup.py`` writes into the kernel cache folder when it has run to its end.
+
+``{install}`` is a hash of the folder the kernels are installed in: the cache
+folder is named after the kernel sources only, but numba files each
+function's machine code by the path of its source file, so a second install
+of the same sources (another clone, a fresh virtual environment) starts with
+a cold cache in a folder that another install has warmed.
+"""
+
+WARMUP_LOG = "test-warmup.log"
+"""File in the kernel cache folder that receives the warm-up's output (a failing warm-up
+only makes the suite slower: its traceback is kept there)."""
 
 
 def _warmup_marker() -> Path | None:
-    """Return where the warm-up marks the kernel cache of the current sources as warm."""
+    """Return where the warm-up marks the kernel cache of the current install as warm."""
+    import hashlib
+    import importlib.util
+
     import regopack.base.jit  # noqa: F401  (sets NUMBA_CACHE_DIR)
 
     folder = os.environ.get("NUMBA_CACHE_DIR")
-    return Path(folder) / WARMUP_DONE if folder else None
+    if not folder:
+        return None
+    spec = importlib.util.find_spec("regopack.plugins")
+    where = str(spec.origin if spec is not None else None)
+    install = hashlib.sha256(where.encode()).hexdigest()[:12]
+    return Path(folder) / WARMUP_DONE.format(install=install)
 
 
 def _usable_cpus() -> int:
@@ -63,14 +92,43 @@ def _start_warmup() -> None:
     if marker is None or marker.exists():
         return
     script = Path(__file__).with_name("kernel_warmup.py")
-    _warmup.append(
-        subprocess.Popen(
-            [sys.executable, str(script), str(os.getpid()), str(marker)],
-            stdin=subprocess.DEVNULL,
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
+    progress = marker.with_name(f"{marker.name}.{os.getpid()}.stage")
+    with open(marker.with_name(WARMUP_LOG), "wb") as log:
+        _warmup.append(
+            subprocess.Popen(
+                [sys.executable, str(script), str(os.getpid()), str(marker), str(progress)],
+                stdin=subprocess.DEVNULL,
+                stdout=log,
+                stderr=subprocess.STDOUT,
+            )
         )
-    )
+    _progress.append(progress)
+
+
+def _warmed_stage() -> int:
+    """Return the last stage the warm-up has finished (-1: none yet)."""
+    try:
+        return int(_progress[0].read_text())
+    except (IndexError, OSError, ValueError):
+        return -1
+
+
+def _wait_for_warmup(stage: int) -> None:
+    """Wait while the warm-up runs and has not finished ``stage`` (at most ``WARMUP_WAIT_MAX``).
+
+    Compiling the kernels the warm-up is compiling would take the test process
+    longer than waiting for them (the warm-up is part way through), and would
+    slow both on a machine with two cores.
+    """
+    if not _warmup or stage in _waited:
+        return
+    start = time.monotonic()
+    proc = _warmup[0]
+    while proc.poll() is None and _warmed_stage() < stage:
+        if time.monotonic() - start > WARMUP_WAIT_MAX:
+            break
+        time.sleep(0.1)
+    _waited[stage] = time.monotonic() - start
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -100,6 +158,19 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "plugins/exporters/test_image_export.py",
         "cli/test_cli_domains.py",
     ),
+    # three dimensions
+    (
+        "plugins/inserters/available_surface/test_*.py",
+        "plugins/shapes/polyhedra/test_*.py",
+        "plugins/analyzers/test_*3d.py",
+        "plugins/analyzers/test_scale.py",
+        "plugins/exporters/test_slice_export.py",
+        "plugins/exporters/test_solid_export_common.py",
+        "plugins/exporters/test_stl_export.py",
+        "plugins/shapes/solid_templates/test_*.py",
+        "*/test_*3d*.py",
+        "geometry/test_solids.py",
+    ),
     # the sweep (sharp and rounded, one thread and several), exact refusals, RSA
     (
         "plugins/inserters/available_arc/test_batches.py",
@@ -114,18 +185,10 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "plugins/inserters/test_rsa.py",
         "run/test_summary_counts.py",
         "test_doctests.py",
+        "base/test_jit.py",
     ),
-    # three dimensions (and the modules that run every kind of scene)
+    # the modules that run every kind of scene
     (
-        "plugins/inserters/available_surface/test_*.py",
-        "plugins/shapes/polyhedra/test_*.py",
-        "plugins/analyzers/test_*3d.py",
-        "plugins/exporters/test_slice_export.py",
-        "plugins/exporters/test_solid_export_common.py",
-        "plugins/exporters/test_stl_export.py",
-        "plugins/shapes/solid_templates/test_*.py",
-        "*/test_*3d*.py",
-        "geometry/test_solids.py",
         "cli/test_cli_end_to_end.py",
         "run/test_compilation.py",
         "test_howto_export.py",
@@ -137,12 +200,14 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
 Patterns are matched against the whole path below ``tests/`` (``fnmatch``). A
 session of at least ``WARMUP_MIN_TESTS`` tests runs the other modules first
 (they need the paper's loop for sharp polygons, which the test process
-compiles itself, and the analyses), then each stage in turn: by the time a
-stage starts, ``kernel_warmup.py`` is expected to have compiled its kernels in
-the second process (nothing waits for it: a kernel not yet in the cache is
-compiled by the test that needs it, with the same result). Within a stage,
-and among the other modules, the tests keep their order; a smaller session
-keeps the order it was given.
+compiles itself, and the analyses), then each stage in turn. ``kernel_warmup.py``
+compiles the kernels of each stage in the second process (its ``STAGE_STEPS``),
+in this order; the first test of a stage waits for it to finish them while it
+runs, so that the two processes never compile the same kernel at once (a
+kernel not in the cache is compiled by the test that needs it, with the same
+result). The sweep comes after the 3D stage: its kernels take the warm-up the
+longest. Within a stage, and among the other modules, the tests keep their
+order; a smaller session keeps the order it was given.
 """
 
 
@@ -162,6 +227,22 @@ def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.It
     if len(items) >= WARMUP_MIN_TESTS:
         here = Path(__file__).resolve().parent
         items.sort(key=lambda item: _stage(item.path, here))
+        _staged.append(True)
+
+
+def pytest_runtest_setup(item: pytest.Item) -> None:
+    """Let the first test of a stage wait for the warm-up to finish that stage's kernels."""
+    if _staged and _warmup:
+        stage = _stage(item.path, Path(__file__).resolve().parent)
+        if stage > 0:
+            _wait_for_warmup(stage)
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """Say how long the tests waited for the warm-up, when it ran."""
+    if _warmup and _staged:
+        waits = ", ".join(f"stage {n} {s:.1f} s" for n, s in sorted(_waited.items()))
+        terminalreporter.write_line(f"kernel warm-up: the tests waited for it: {waits or 'never'}")
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
@@ -174,3 +255,5 @@ def pytest_unconfigure(config: pytest.Config) -> None:
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
+    for progress in _progress:
+        progress.unlink(missing_ok=True)

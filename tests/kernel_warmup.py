@@ -1,22 +1,34 @@
-"""Compile the kernels of the suite's later stages in a second process while it runs.
+"""Compile the kernels of the suite's stages in a second process while it runs.
 
 ``conftest.py`` starts this script when a large test session meets a cold
 kernel cache (a fresh clone, as in CI). The test process compiles what its
-first tests need (the paper's loop for sharp polygons, the analyses) while this
-one compiles, in the order of the suite's later stages (``KERNEL_STAGES`` in
-``conftest.py``), the paper's loop for disks, the four variants of the sweep
-(sharp polygons or rounded particles, on one thread or several), the loops of
-exact refusals and RSA, then the 3D scan and analyses. Both processes write the
-same on-disk cache (:mod:`regopack.base.jit`); a test that reaches a kernel first
-compiles it itself, with the same result. Between steps the script stops once the process named by
-its first argument (the test session) has gone; at the end it creates the file
-named by its second argument, which tells later sessions that the cache is warm.
+first tests need (the paper's loop for sharp polygons on several threads, the
+contacts) while this one compiles, stage by stage (:data:`STAGE_STEPS`, in
+the order of ``KERNEL_STAGES`` in ``conftest.py``), the paper's loop for
+sharp polygons on one thread (what worker processes run) with the other 2D
+analyses and the exports, the paper's loop for disks, the 3D scan and
+analyses, then the loops of exact refusals and RSA and the four variants of
+the sweep (sharp polygons or rounded particles, on one thread or several).
+Both processes write the same on-disk cache (:mod:`regopack.base.jit`).
+
+After each stage the script writes the stage's number into the file named by
+its third argument; the first test of a stage waits for that number while
+this process runs (``conftest.py``), rather than compiling the same kernels
+at the same time. Between steps the script stops once the process named by
+its first argument (the test session) has gone; at the end it creates the
+file named by its second argument, which tells later sessions that the cache
+is warm.
+
+The imports are made here, not in :func:`main`: the suite imports this module
+(``tests/test_kernel_warmup.py``), so that a name that moves fails a test
+rather than the warm-up, whose output only a log file keeps.
 """
 
 from __future__ import annotations
 
 import os
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -24,45 +36,86 @@ import numba
 
 import regopack
 from regopack.api.warmup import TINY, VARIANTS
+from regopack.exports.pipeline import exporter_dimensions
+from regopack.packing.core import Packing
+from regopack.registry.manager import default_registry
+from regopack.scenes.analysis_plan import dimensions_of
 
 DISKS: dict[str, Any] = {"phases.0.shape": {"kind": "disk"}}
-
-STEPS: tuple[tuple[dict[str, Any], int], ...] = (
-    (DISKS, 2),
-    (DISKS, 1),
-    ({"insertion.order": "sweep", **DISKS}, 2),
-    ({"insertion.order": "sweep", **DISKS}, 1),
-    ({"insertion.order": "sweep"}, 2),
-    ({"insertion.order": "sweep"}, 1),
-    ({"insertion.screening": "exact"}, 1),
-    ({"insertion": {"kind": "rsa"}}, 1),
-)
-"""Scene changes and thread counts, in the order of the suite's stages
-(``KERNEL_STAGES`` in ``conftest.py``): the paper's loop for disks, the sweep,
-exact refusals and RSA."""
-
+SWEEP: dict[str, Any] = {"insertion.order": "sweep"}
 BOX: dict[str, Any] = next(c for label, c in VARIANTS if label.endswith("(3D)"))
-"""The last step: a tiny 3D packing, packed and given every 3D analysis (the last
-stage of the suite)."""
+"""A tiny 3D packing (given every 3D analysis)."""
+
+Step = tuple[dict[str, Any], int, bool]
+"""Changes to the tiny ``small`` scene, numba's threads, and whether the packing is
+also analysed (every analysis of its dimension) and, in 2D, written by every exporter."""
+
+STAGE_STEPS: tuple[tuple[Step, ...], ...] = (
+    # before the stages: the paper's loop for sharp polygons on one thread, the analyses
+    # and the exports (the test process compiles the loop on several threads itself)
+    (({}, 1, True),),
+    # 1: the paper's loop for disks
+    ((DISKS, 2, False), (DISKS, 1, True)),
+    # 2: three dimensions
+    ((BOX, 1, True),),
+    # 3: exact refusals, RSA and the sweep (sharp or rounded, on threads or one)
+    (
+        ({"insertion.screening": "exact"}, 1, False),
+        ({"insertion": {"kind": "rsa"}}, 1, False),
+        (SWEEP, 2, False),
+        (SWEEP, 1, False),
+        ({**SWEEP, **DISKS}, 2, False),
+        ({**SWEEP, **DISKS}, 1, False),
+    ),
+    # 4: the modules that run every kind of scene need nothing more
+    (),
+)
+"""The steps of each stage: index ``n`` holds what the modules of stage ``n`` of
+``KERNEL_STAGES`` (``conftest.py``) compile first; index 0 what the unlisted modules
+compile after their first tests."""
+
+
+def _finish(packing: Any) -> None:
+    """Give ``packing`` every analysis of its dimension and, in 2D, write it with every
+    exporter (some kernels have a signature per particle kind)."""
+    registry = default_registry()
+    dim = 2 if isinstance(packing, Packing) else 3
+    names = [n for n in sorted(registry.names("analysis")) if dim in dimensions_of(registry, n)]
+    results = regopack.analyze(packing, names, registry=registry)
+    if dim == 3:
+        return
+    exporters = sorted(registry.names("export"))
+    exporters = [n for n in exporters if 2 in exporter_dimensions(registry, n)]
+    with tempfile.TemporaryDirectory(prefix="regopack-warmup-") as folder:
+        for name in exporters:
+            target = Path(folder) / name
+            target.mkdir()
+            regopack.export(packing, name, target, analyses=results, registry=registry)
+
+
+def _record(progress: Path | None, stage: int) -> None:
+    """Write ``stage`` into ``progress`` at once (a reader never sees half a number)."""
+    if progress is None:
+        return
+    part = progress.with_name(progress.name + ".part")
+    part.write_text(str(stage))
+    part.replace(progress)
 
 
 def main() -> None:
     """Pack each step's tiny scene once (compiling or loading its kernels)."""
-    from regopack.analysis.pipeline import dimensions_of
-    from regopack.registry.manager import default_registry
-
     parent = int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid()
+    progress = Path(sys.argv[3]) if len(sys.argv) > 3 else None
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
-    for changes, threads in STEPS:
-        if os.getppid() != parent:
-            return
-        numba.set_num_threads(min(threads, most))
-        regopack.pack("small", **{**TINY, **changes})
-    if os.getppid() != parent:
-        return
-    registry = default_registry()
-    names = [n for n in sorted(registry.names("analysis")) if 3 in dimensions_of(registry, n)]
-    regopack.analyze(regopack.pack("small", **{**TINY, **BOX}), names)
+    for stage, steps in enumerate(STAGE_STEPS):
+        for changes, threads, finish in steps:
+            if os.getppid() != parent:
+                return
+            numba.set_num_threads(min(threads, most))
+            packing = regopack.pack("small", **{**TINY, **changes})
+            if finish:
+                _finish(packing)
+        _record(progress, stage)
     if len(sys.argv) > 2:
         Path(sys.argv[2]).touch()
 

@@ -13,15 +13,21 @@ import regopack
 
 
 def test_every_warmup_step_is_a_valid_scene() -> None:
-    # the warm-up runs with its output discarded: a step broken by a renamed
-    # field would only make the suite slower, so it is checked here
+    # the warm-up's output goes to a log file nobody reads: a step broken by a
+    # renamed field would only make the suite slower, so it is checked here
     kinds = set()
-    for changes, threads in kernel_warmup.STEPS:
-        resolved = regopack.scene("small", **{**kernel_warmup.TINY, **changes})
-        kinds.add((resolved.insertion.kind, threads))
+    for steps in kernel_warmup.STAGE_STEPS:
+        for changes, threads, _ in steps:
+            resolved = regopack.scene("small", **{**kernel_warmup.TINY, **changes})
+            kinds.add((resolved.insertion.kind, threads))
     assert ("available-arc", 2) in kinds and ("rsa", 1) in kinds
-    box = regopack.scene("small", **{**kernel_warmup.TINY, **kernel_warmup.BOX})
-    assert box.insertion.kind == "available-surface"
+    assert ("available-surface", 1) in kinds
+
+
+def test_the_warmup_has_the_steps_of_every_stage() -> None:
+    # index 0 of STAGE_STEPS precedes the stages; the tests of stage n wait for index n
+    conftest = _suite_conftest()
+    assert len(kernel_warmup.STAGE_STEPS) == len(conftest.KERNEL_STAGES) + 1
 
 
 def _suite_conftest() -> ModuleType:
@@ -57,6 +63,6 @@ def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
         "plugins/analyzers/test_common.py",
         "plugins/analyzers/test_rdf.py",
         "plugins/analyzers/test_contacts3d.py",
-        "plugins/shapes/test_octagon.py",
+        "plugins/shapes/polygons/test_octagon.py",
     ]
-    assert [conftest._stage(here / n, here) for n in names] == [3, 2, 0, 1, 0, 3, 0]
+    assert [conftest._stage(here / n, here) for n in names] == [4, 3, 0, 1, 0, 2, 0]

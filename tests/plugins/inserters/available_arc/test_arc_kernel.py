@@ -15,6 +15,8 @@ from regopack.geometry.domain import PeriodicRectangle, Rectangle
 from regopack.plugins.inserters.available_arc import kernel
 from regopack.plugins.inserters.available_arc.state import ArcState, envelope_cache
 
+# analyze_candidate is called with ``rounded=None`` spelt out, as the packing loops call it:
+# leaving it to its default would compile a specialization of the kernel for these tests alone
 MARGIN = 1e-3  # radians kept away from arc ends, where the oracle is ambiguous
 OVERLAP = 1e-12  # relative overlap area the oracle counts as interference
 
@@ -35,7 +37,7 @@ def _setup(seed: int, n_neighbours: int, domain: Rectangle, ratio: float = 1.0, 
         st_.insert(j, cx + d * math.cos(ang), cy + d * math.sin(ang))
     i = n_neighbours + 1
     mq = st_.begin_particle(i)
-    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work)
+    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work, None)
     return pop, st_, i, arcs
 
 
@@ -151,7 +153,7 @@ def test_arc_through_the_first_vertex_is_one_interval() -> None:
     )
     first = math.atan2(st_.work.wy[0], st_.work.wx[0])
     st_.insert(1, 5.0 * math.cos(first + np.pi), 5.0 * math.sin(first + np.pi))
-    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work)
+    arcs = kernel.analyze_candidate(0, i, mq, st_.outlines, st_.packed, st_.work, None)
     assert arcs.shape == (1, 2)
     assert arcs[0, 0] < first < arcs[0, 1]
     assert arcs[0, 1] - arcs[0, 0] < 2 * np.pi
@@ -169,7 +171,7 @@ def test_fully_covered_candidate_has_no_arcs() -> None:
             j, 2.2 * math.cos(a), 2.2 * math.sin(a)
         )  # a ring overlapping the candidate's surroundings
     mq = st_.begin_particle(13)
-    arcs = kernel.analyze_candidate(0, 13, mq, st_.outlines, st_.packed, st_.work)
+    arcs = kernel.analyze_candidate(0, 13, mq, st_.outlines, st_.packed, st_.work, None)
     assert arcs.shape == (0, 2)
 
 
@@ -195,14 +197,14 @@ def test_cached_envelopes_give_the_arcs_of_fresh_ones(slots: int) -> None:
     fresh = []
     for k in range(i):
         mq = st_.begin_particle(i)  # a new generation: nothing cached
-        fresh.append(kernel.analyze_candidate(k, i, mq, g, s, st_.work))
+        fresh.append(kernel.analyze_candidate(k, i, mq, g, s, st_.work, None))
     w0 = st_.work
     width = w0.cache_x.shape[1]
     w = w0._replace(ckey=np.full_like(w0.ckey, -1), **envelope_cache(slots, width))
     mq = kernel.begin_particle(i, g, s, w)
     order = np.random.default_rng(slots).permutation(np.tile(np.arange(i), 3))
     for k in order:
-        arcs = kernel.analyze_candidate(k, i, mq, g, s, w)
+        arcs = kernel.analyze_candidate(k, i, mq, g, s, w, None)
         assert arcs.tobytes() == fresh[k].tobytes(), k
         assert s.ipar[kernel.I_CUSED] <= slots  # no slot beyond the cache
     gen = s.ipar[kernel.I_GEN]
@@ -274,9 +276,9 @@ def test_scratch_and_allocated_arrays_give_the_same_arcs(name: str) -> None:
     for k in range(i):
         mq = st_.begin_particle(i)
         w.fs[:4] = np.nan  # rows the scratch analysis must write before it reads them
-        scratch = kernel.analyze_candidate(k, i, mq, g, s, w).copy()
+        scratch = kernel.analyze_candidate(k, i, mq, g, s, w, None).copy()
         mq = kernel.begin_particle(i, g, s, own)
-        allocated = kernel.analyze_candidate(k, i, mq, g, s, own)
+        allocated = kernel.analyze_candidate(k, i, mq, g, s, own, None)
         assert scratch.shape[1:] == allocated.shape[1:] == (2,)
         assert scratch.tobytes() == allocated.tobytes(), k
         seen_arcs += scratch.shape[0] > 0
@@ -291,7 +293,7 @@ def test_the_scratch_holds_the_offsets_and_slots() -> None:
     g, s, w = st_.outlines, st_.packed, st_.work
     mq = st_.begin_particle(i)
     w.found_q[:] = -7
-    kernel.analyze_candidate(0, i, mq, g, s, w)
+    kernel.analyze_candidate(0, i, mq, g, s, w, None)
     nf = 62
     assert sorted(w.found_q[:nf]) == list(range(nf))  # a fresh cache: slots 0 .. nf - 1
     assert np.all(w.found_q[nf:] == -7)
@@ -309,7 +311,9 @@ def test_the_periodic_block_meets_its_images() -> None:
         arcs = []
         for st_ in (wrapped, walled):
             mq = st_.begin_particle(i)
-            arcs.append(kernel.analyze_candidate(k, i, mq, st_.outlines, st_.packed, st_.work))
+            arcs.append(
+                kernel.analyze_candidate(k, i, mq, st_.outlines, st_.packed, st_.work, None)
+            )
         differ += arcs[0].tobytes() != arcs[1].tobytes()
     assert differ > 0
 
