@@ -12,16 +12,16 @@ from hypothesis import strategies as st
 
 from regopack.geometry.domain import Circle, ConvexPolygon, Domain, PeriodicRectangle, Rectangle
 from regopack.geometry.population import Population, concat_shapes
-from regopack.packing.core.core import FORMAT_VERSION, Packing, load, save
+from regopack.packing.core import FORMAT_VERSION, Packing, load, save
 from regopack.plugins.analyzers import Contacts, ContactsConfig
 from regopack.plugins.density.eta import EtaConfig, EtaController
 from regopack.plugins.inserters.available_arc import AvailableArc, AvailableArcConfig
 from regopack.plugins.inserters.rsa import RandomSequentialAddition, RsaConfig
-from regopack.plugins.shapes.polygons.disk import Disk
-from regopack.plugins.shapes.polygons.octagon import OctagonConfig, RandomPolygon
+from regopack.plugins.shapes.disk import Disk
+from regopack.plugins.shapes.octagon import OctagonConfig, RandomPolygon
 from regopack.plugins.sizes.change5 import Change5, Change5Config
 from regopack.testing import check_shape_generator, extreme_radii
-from regopack.verification.polygons.polygons import verify
+from regopack.verification.polygons import verify
 
 DOMAINS: dict[str, Domain] = {
     "rectangle": Rectangle.centred(120.0, 100.0, (3.0, -2.0)),
@@ -168,7 +168,7 @@ def _two(centres, radii, domain=None) -> Packing:
     [(0.0, True), (1e-6, True), (-1e-7, True), (-1e-5, False), (-0.5, False)],
 )
 def test_verify_measures_disks_exactly(gap, ok) -> None:
-    from regopack.verification.polygons.polygons import segment_fraction
+    from regopack.verification.polygons import segment_fraction
 
     packing = _two([[0.0, 0.0], [3.0 + gap, 0.0]], [1.0, 2.0])
     report = verify(packing)
