@@ -175,7 +175,16 @@ def particle_count(scene: ResolvedScene, size_dist: SizeDistribution) -> int:
         word = _MEASURE[scene.scene.domain.dimension]
         measure = scene.domain.measure
         mean = float(getattr(size_dist, f"mean_{word}"))
-        auto = measure / mean if mean > 0 else math.inf
+        if not (math.isfinite(mean) and mean > 0):
+            raise ConfigError(
+                _located(
+                    scene,
+                    "count",
+                    f"count = 'auto' needs the mean particle {word}, which the "
+                    f"{scene.size.kind!r} size distribution does not give; give a count",
+                )
+            )
+        auto = measure / mean
         if not math.isfinite(auto):
             raise ConfigError(
                 _located(
@@ -464,12 +473,16 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
         idx = np.flatnonzero(minerals == p).astype(np.int64)
         with np.errstate(over="ignore", invalid="ignore"):  # refused just below
             batch = generator.generate(radii[idx], rng)
-        noun = "solids" if solid else "outlines"
-        if (solid and not isinstance(batch, SolidBatch)) or len(batch) != len(idx):
-            got = f"a {type(batch).__name__}" if solid and not isinstance(batch, SolidBatch) else ""
+        if solid and not isinstance(batch, SolidBatch):
             raise PluginError(
-                f"shape plugin {phase.shape.kind!r} returned {got or len(batch)} {noun} "
-                f"for {len(idx)} radii (phase {phase.name!r}); expected one per radius"
+                f"shape plugin {phase.shape.kind!r} returned {type(batch).__name__} for "
+                f"{len(idx)} radii (phase {phase.name!r}); expected a SolidBatch of one solid "
+                "per radius"
+            )
+        if len(batch) != len(idx):
+            raise PluginError(
+                f"shape plugin {phase.shape.kind!r} returned {len(batch)} "
+                f"{'solids' if solid else 'outlines'} for {len(idx)} radii (phase {phase.name!r})"
             )
         finite = np.isfinite(batch.vertices).all(axis=1)
         if not finite.all():
@@ -528,7 +541,7 @@ def run_scene(
         added to the summary before anything is written.
     verify
         Check the packing for overlaps and wall violations
-        (:func:`regopack.verification.polygons.verify`) and add the ``verify`` entry to the
+        (:func:`regopack.verification.summary.verify_packing`) and add the ``verify`` entry to the
         summary. ``None`` (the default) verifies when the insertion strategy
         says its settings may overlap (:meth:`InsertionStrategy.may_overlap`).
     extra_files
@@ -672,7 +685,7 @@ def _phi_interior(packing: Packing | Packing3D, margin: float) -> tuple[float, s
 
 def _analyses(resolved: ResolvedScene) -> str:
     """Where the scene's ``outputs.analyses`` come from and the field, for messages."""
-    where = resolved.scene.origin("outputs")
+    where = resolved.scene.origin("outputs.analyses")
     return f"{where}: outputs.analyses" if where else "outputs.analyses"
 
 
