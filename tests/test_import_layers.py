@@ -52,13 +52,6 @@ KNOWN: set[tuple[str, str]] = {
     ("regopack.analysis.pipeline3d", "regopack.run.pipeline"),
     ("regopack.run.pipeline", "regopack.run.pipeline3d"),
     ("regopack.run.pipeline3d", "regopack.run.pipeline"),
-    # the figure modules share their style helpers through figures.py
-    ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures"),
-    ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures3d"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.homogeneity_figure"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.local_fraction_figure"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.psd_figure"),
-    ("regopack.plugins.analyzers.figures3d", "regopack.plugins.analyzers.psd_figure"),
 }
 """Imports that break the layering or close a cycle, still to be removed."""
 

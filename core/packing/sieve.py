@@ -10,12 +10,15 @@ its upper bound. Diameters are equivalent diameters, ``d = 2 r`` with
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from regopack.packing.core import Packing
+
+if TYPE_CHECKING:
+    from regopack.packing.core3d import Packing3D
 
 __all__ = ["SIEVE_RATIO", "class_of", "reference_diameter", "sieve_edges", "unplaced_per_class"]
 
@@ -26,8 +29,8 @@ SIEVE_RATIO = math.sqrt(2.0)
 """Ratio of the upper to the lower bound of every class."""
 
 
-def reference_diameter(packing: Packing) -> float | None:
-    """Return the scene's ``size.d_min``, when it has one."""
+def reference_diameter(packing: Packing | Packing3D) -> float | None:
+    """Return the scene's ``size.d_min`` of a 2D or 3D packing, when it has one."""
     size = packing.scene.get("size") if isinstance(packing.scene, dict) else None
     value = size.get("d_min") if isinstance(size, dict) else None
     return float(value) if isinstance(value, int | float) and value > 0 else None
