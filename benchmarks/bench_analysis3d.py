@@ -2,8 +2,8 @@
 
 Packs cubes of side L of Table-1-like polyhedra (the population of the asv
 suite's 3D benchmarks: sizes 2-12 µm, psi per mineral as in Table 2), then
-times each default 3D analyzer (density3d, contacts3d, coordination3d,
-rdf3d, network3d) on it, after a warm-up on a small box that loads the
+times each default analyzer (density, contacts, coordination, rdf, network)
+on it, after a warm-up on a small box that loads the
 compiled kernels and imports everything. Each size runs in its own process.
 Prints one row per L and the exponent of the total time against N, with the
 extrapolation to 10^4 particles. ``--figure`` copies the contact histograms
@@ -29,7 +29,7 @@ CHILD = r"""
 import json, shutil, sys, tempfile, time
 from pathlib import Path
 import regopack
-from regopack.analysis.pipeline import DEFAULT_ANALYSES_3D, run_analyses, write_analysis
+from regopack.analysis.pipeline import DEFAULT_ANALYSES, run_analyses, write_analysis
 from regopack.registry.manager import default_registry
 size = float(sys.argv[1]); seed = int(sys.argv[2]); figure = sys.argv[3]
 phases = [
@@ -47,29 +47,29 @@ def scene(side, count="auto"):
     }
 registry = default_registry()
 small = regopack.pack(scene(30.0), verify=False)
-run_analyses(small, registry, [(n, {}) for n in DEFAULT_ANALYSES_3D])  # kernels and imports
+run_analyses(small, registry, [(n, {}) for n in DEFAULT_ANALYSES])  # kernels and imports
 t = time.perf_counter()
 packing = regopack.pack(scene(size), verify=False)
 pack_s = time.perf_counter() - t
 times = {}
 done = {}
-for name in DEFAULT_ANALYSES_3D:  # in the order of their requirements
+for name in DEFAULT_ANALYSES:  # in the order of their requirements
     spec = registry.get("analysis", name)
     analyzer = spec.factory(spec.config_model())
     t = time.perf_counter()
     done[name] = analyzer.compute(packing, {r: done[r] for r in analyzer.requires})
     times[name] = time.perf_counter() - t
 t = time.perf_counter()
-analyzers = run_analyses(packing, registry, [(n, {}) for n in DEFAULT_ANALYSES_3D])
+analyzers = run_analyses(packing, registry, [(n, {}) for n in DEFAULT_ANALYSES])
 total = time.perf_counter() - t
 if figure != "-":
     with tempfile.TemporaryDirectory() as tmp:
         files = write_analysis(Path(tmp) / "a", packing, analyzers, registry=registry)
         shutil.copy(Path(tmp) / "a" / "figures" / "contact-histograms-3d.png", figure)
-c = analyzers["coordination3d"].results()
+c = analyzers["coordination"].results()
 print(json.dumps({"L": size, "placed": packing.n_placed, "pack_s": pack_s, "total_s": total,
-    "times": times, "contacts": analyzers["contacts3d"].results()["n_contacts"],
-    "pairs": analyzers["contacts3d"].results()["n_candidate_pairs"],
+    "times": times, "contacts": analyzers["contacts"].results()["n_contacts"],
+    "pairs": analyzers["contacts"].results()["n_candidate_pairs"],
     "z_interior": c["z_interior"], "rattler_fraction": c["rattler_fraction"],
     "n_interior": c["n_interior"]}))
 """
@@ -77,10 +77,10 @@ print(json.dumps({"L": size, "placed": packing.n_placed, "pack_s": pack_s, "tota
 COMPILE = r"""
 import time
 t = time.perf_counter()
-from regopack.plugins.analyzers.contacts3d import Contacts3D
+from regopack.plugins.analyzers.contacts import Contacts
 import sys; sys.path.insert(0, "tests/plugins/analyzers")
 from lattices3d import cube_lattice
-Contacts3D().compute(cube_lattice((2, 1, 1), (0.0, 0.0, 0.0)), {})
+Contacts().compute(cube_lattice((2, 1, 1), (0.0, 0.0, 0.0)), {})
 print(time.perf_counter() - t)
 """
 

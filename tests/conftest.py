@@ -162,7 +162,10 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
     (
         "plugins/inserters/available_surface/test_*.py",
         "plugins/shapes/polyhedra/test_*.py",
-        "plugins/analyzers/test_*3d.py",
+        "plugins/analyzers/test_contacts.py",
+        "plugins/analyzers/test_coordination.py",
+        "plugins/analyzers/test_density.py",
+        "plugins/analyzers/test_network.py",
         "plugins/analyzers/test_scale.py",
         "plugins/exporters/test_slice_export.py",
         "plugins/exporters/test_solid_export_common.py",

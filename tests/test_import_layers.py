@@ -48,13 +48,6 @@ PLUGIN_LAYER = 4.5
 KNOWN: set[tuple[str, str]] = {
     # the packing draws itself (plot, notebook display): drawing joins the packing's layer
     ("regopack.packing.core", "regopack.packing.drawing"),
-    # the figure modules share their style helpers through figures.py
-    ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures"),
-    ("regopack.plugins.analyzers.figure_specs", "regopack.plugins.analyzers.figures3d"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.homogeneity_figure"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.local_fraction_figure"),
-    ("regopack.plugins.analyzers.figures", "regopack.plugins.analyzers.psd_figure"),
-    ("regopack.plugins.analyzers.figures3d", "regopack.plugins.analyzers.psd_figure"),
 }
 """Imports that break the layering or close a cycle, still to be removed."""
 

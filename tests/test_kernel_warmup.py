@@ -62,7 +62,7 @@ def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
         "scene/test_schema.py",
         "plugins/analyzers/test_common.py",
         "plugins/analyzers/test_rdf.py",
-        "plugins/analyzers/test_contacts3d.py",
-        "plugins/shapes/polygons/test_octagon.py",
+        "plugins/analyzers/test_contacts.py",
+        "plugins/shapes/test_octagon.py",
     ]
     assert [conftest._stage(here / n, here) for n in names] == [4, 3, 0, 1, 0, 2, 0]

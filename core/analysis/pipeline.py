@@ -436,7 +436,7 @@ def _fmt(value: Any, spec: str = ".4g") -> str:
 
 
 def _either(summary: Mapping[str, Any], name: str) -> Any:
-    """Results of the analyzer ``name``, or of its 3D counterpart ``name + "3d"``."""
+    """Results of the analyzer ``name``, or of it filed under its old 3D name ``name + "3d"``."""
     value = summary.get(name)
     return value if value is not None else summary.get(f"{name}3d")
 
@@ -467,8 +467,8 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     Rows appear for the built-in analyzers that were run: packing density,
     contacts, coordination numbers (overall, interior, per mineral), the first
     peak of g(r) (or its plateau, when the top is no distinct peak) and the
-    fabric anisotropy (of 2D packings, or of 3D ones from the analyzers whose
-    names end in ``3d``).
+    fabric anisotropy, of either dimension, under the analyzers' names or
+    their old 3D names (``contacts3d``, ...).
     """
     rows: list[tuple[str, str]] = []
     u = str(summary.get("length_unit") or DEFAULT_LENGTH_UNIT)

@@ -446,6 +446,7 @@ def analyze(
         params=merged,
         source=source,
         params_source=params_source,
+        warn=only is not None,
     )
     results = AnalysisResults(analyzers)
     if folder is not None:

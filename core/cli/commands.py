@@ -159,8 +159,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--tol",
         type=float,
         metavar="X",
-        help="contact tolerance in the packing's length unit (sets contacts.tol, or "
-        "contacts3d.tol for a 3D packing; default d_min / 40, 0.05 for the built-in scenes)",
+        help="contact tolerance in the packing's length unit (sets contacts.tol; "
+        "default d_min / 40, 0.05 for the built-in scenes)",
     )
     analyze.add_argument(
         "--set",
@@ -400,9 +400,7 @@ def _analyzer_names(only: Sequence[str]) -> list[str]:
     return names
 
 
-def _analyzer_params(
-    overrides: Sequence[str], tol: float | None, contacts: str = "contacts"
-) -> dict[str, dict[str, Any]]:
+def _analyzer_params(overrides: Sequence[str], tol: float | None) -> dict[str, dict[str, Any]]:
     """Parameters by analyzer from ``--set NAME.FIELD=VALUE`` and ``--tol`` (of ``contacts``)."""
     params: dict[str, dict[str, Any]] = {}
     for text in overrides:
@@ -416,7 +414,7 @@ def _analyzer_params(
             value = raw.strip()
         params.setdefault(name.strip(), {})[field.strip()] = value
     if tol is not None:
-        params.setdefault(contacts, {})["tol"] = tol
+        params.setdefault("contacts", {})["tol"] = tol
     return params
 
 
@@ -425,13 +423,7 @@ def _cmd_analyze(args: argparse.Namespace, out: Console, err: Console) -> int:
     from regopack.api.functions import analyze
 
     names = _analyzer_names(args.only) or None
-    contacts = "contacts"
-    if args.tol is not None:
-        from regopack.packing.core3d import load_packing
-
-        if getattr(load_packing(args.packing), "dimension", 2) == 3:
-            contacts = "contacts3d"
-    params = _analyzer_params(args.overrides, args.tol, contacts)
+    params = _analyzer_params(args.overrides, args.tol)
     out_dir = args.out if args.out is not None else args.packing.parent / "analysis"
     with err.status(f"analysing {args.packing}"):
         results = analyze(

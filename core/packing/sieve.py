@@ -28,7 +28,7 @@ SIEVE_RATIO = math.sqrt(2.0)
 
 
 def reference_diameter(packing: Packing | Packing3D) -> float | None:
-    """Return the scene's ``size.d_min``, when it has one."""
+    """Return the scene's ``size.d_min`` of a 2D or 3D packing, when it has one."""
     size = packing.scene.get("size") if isinstance(packing.scene, dict) else None
     value = size.get("d_min") if isinstance(size, dict) else None
     return float(value) if isinstance(value, int | float) and value > 0 else None

@@ -184,9 +184,12 @@ class Analyzer(ABC):
     ``compute`` returns ``self``; results are properties or :meth:`results`.
     Analyzers declare the names of the analyzers whose results they need in
     ``requires``; the runner computes those first and passes them in ``context``.
+    ``name`` is the registered name; the runner sets it, on the analyzers it
+    builds, to the name their results are filed under (an old name, when
+    they were asked for by one), for the analyzer's messages.
     """
 
-    name: ClassVar[str] = ""
+    name: str = ""
     requires: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod

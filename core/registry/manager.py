@@ -9,7 +9,8 @@ hook specification.
 :class:`Registry` calls every hook once and flattens the spec records by plugin
 kind (``"size"``, ``"shape"``, ``"insertion"``, ``"density"``, ``"analysis"``,
 ``"export"``); the figure specs of the analyses, which belong to no kind, are
-kept in order beside them (:meth:`Registry.figures`).
+kept in order beside them (:meth:`Registry.figures`). A spec's old names
+(its ``aliases``) still select it, with a deprecation warning (:meth:`Registry.get`).
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ import importlib
 import importlib.metadata
 import os
 import types
+import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -292,6 +294,8 @@ class Registry:
             kind: dict((infos or {}).get(kind, {})) for kind in KINDS
         }
         self._figures: tuple[FigureSpec, ...] = tuple(figures)
+        self._aliases = {kind: _aliases_of(kind, self._specs[kind]) for kind in KINDS}
+        self._warned: set[tuple[str, str]] = set()
 
     @classmethod
     def from_manager(cls, pm: pluggy.PluginManager) -> Registry:
@@ -300,8 +304,9 @@ class Registry:
         Raises
         ------
         PluginError
-            If two plugins claim the same name within a kind (the message names
-            both), or a hook returns something other than that kind's spec records.
+            If two plugins claim the same name (or old name) within a kind (the
+            message names both), or a hook returns something other than that
+            kind's spec records.
         """
         origins = _origins(pm)
         plugin_infos = _plugin_infos(pm)
@@ -375,6 +380,12 @@ class Registry:
             raise PluginError(
                 f"plugin {origin!r}: {record_type.__name__} {record.name!r} has no callable factory"
             )
+        aliases = record.aliases
+        if not isinstance(aliases, tuple) or not all(isinstance(a, str) and a for a in aliases):
+            raise PluginError(
+                f"plugin {origin!r}: the aliases of {record_type.__name__} {record.name!r} "
+                "must be a tuple of names"
+            )
 
     def _kind(self, kind: str) -> dict[str, tuple[PluginSpec[Any], str]]:
         try:
@@ -387,29 +398,60 @@ class Registry:
     def get(self, kind: str, name: str) -> PluginSpec[Any]:
         """Return the spec registered as ``name`` for ``kind``.
 
+        An old name of a spec (see :attr:`PluginSpec.aliases
+        <regopack.registry.plugin_types.PluginSpec.aliases>`) gives that spec and
+        warns, once per registry, with a :class:`DeprecationWarning` naming the new name.
+
         Raises
         ------
         PluginError
             One line naming the unknown name and the known ones, e.g.
             ``unknown shape kind 'octagn'; did you mean 'octagon'? known kinds: octagon``.
         """
+        new = self.canonical(kind, name)
+        if new != name and (kind, name) not in self._warned:
+            self._warned.add((kind, name))
+            warnings.warn(
+                f"the {kind} kind {name!r} is deprecated and will be removed in the next "
+                f"release; use {new!r}",
+                DeprecationWarning,
+                stacklevel=2,
+            )
+        return self._specs[kind][new][0]
+
+    def canonical(self, kind: str, name: str) -> str:
+        """Return the name registered for ``name``: ``name`` itself, or the new name of an old one.
+
+        Unlike :meth:`get` it does not warn. Raises :class:`PluginError` as :meth:`get` does.
+
+        Examples
+        --------
+        >>> default_registry(autoload=False).canonical("analysis", "contacts3d")
+        'contacts'
+        """
         specs = self._kind(kind)
-        try:
-            return specs[name][0]
-        except KeyError:
-            known = ", ".join(sorted(specs)) or "(none)"
-            guess = closest(name, sorted(specs))
-            hint = f" did you mean {guess!r}?" if guess is not None else ""
-            raise PluginError(f"unknown {kind} kind {name!r};{hint} known kinds: {known}") from None
+        if name in specs:
+            return name
+        new = self._aliases[kind].get(name)
+        if new is not None:
+            return new
+        known = ", ".join(sorted(specs)) or "(none)"
+        guess = closest(name, sorted(specs))
+        hint = f" did you mean {guess!r}?" if guess is not None else ""
+        raise PluginError(f"unknown {kind} kind {name!r};{hint} known kinds: {known}")
 
     def names(self, kind: str) -> list[str]:
-        """Sorted names registered for ``kind``."""
+        """Sorted names registered for ``kind`` (without the old names, see :meth:`aliases`)."""
         return sorted(self._kind(kind))
+
+    def aliases(self, kind: str) -> dict[str, str]:
+        """Return the old names of ``kind`` that still work, each with the name that replaced it."""
+        self._kind(kind)
+        return dict(sorted(self._aliases[kind].items()))
 
     def origin(self, kind: str, name: str) -> str:
         """Name of the plugin (or the distribution that installed it) providing ``name``."""
-        self.get(kind, name)
-        return self._kind(kind)[name][1]
+        return self._kind(kind)[self.canonical(kind, name)][1]
 
     def info(self, kind: str, name: str) -> PluginInfo:
         """Where the implementation ``name`` of ``kind`` comes from.
@@ -420,7 +462,7 @@ class Registry:
         >>> info.module, info.distribution
         ('regopack.plugins.shapes.octagon', 'regopack')
         """
-        self.get(kind, name)
+        name = self.canonical(kind, name)
         found = self._infos[kind].get(name)
         if found is None:
             origin = self._specs[kind][name][1]
@@ -440,15 +482,36 @@ class Registry:
         return tuple(f for f in self._figures if f.analyzer == analyzer)
 
     def __contains__(self, item: object) -> bool:
-        """Whether ``(kind, name)`` is registered."""
+        """Whether ``(kind, name)`` is registered, under that name or as an old name."""
         if not (isinstance(item, tuple) and len(item) == 2):
             return False
         kind, name = item
-        return kind in self._specs and name in self._specs[kind]
+        return kind in self._specs and (name in self._specs[kind] or name in self._aliases[kind])
 
     def __repr__(self) -> str:
         parts = (f"{kind}={sorted(names)}" for kind, names in self._specs.items())
         return f"Registry({', '.join(parts)})"
+
+
+def _aliases_of(kind: str, specs: Mapping[str, tuple[PluginSpec[Any], str]]) -> dict[str, str]:
+    """Map every old name of a spec of ``kind`` to the spec's name.
+
+    Raises
+    ------
+    PluginError
+        When an old name is also a name, or the old name of two specs (naming both plugins).
+    """
+    out: dict[str, str] = {}
+    for name, (spec, origin) in specs.items():
+        for alias in getattr(spec, "aliases", ()):
+            taken = specs.get(alias) or (specs[out[alias]] if alias in out else None)
+            if taken is not None:
+                raise PluginError(
+                    f"{kind} kind {alias!r} is an old name of {name!r} ({origin!r}) "
+                    f"and also names {taken[0].name!r} ({taken[1]!r})"
+                )
+            out[alias] = name
+    return out
 
 
 def default_registry(*, autoload: bool | None = None) -> Registry:

@@ -45,12 +45,17 @@ class PluginSpec(Generic[T]):
         Builds the implementation from a validated ``config_model`` instance.
     description
         One sentence shown by the command line and the docs.
+    aliases
+        Old names that still select this implementation, for one release:
+        :meth:`regopack.registry.manager.Registry.get` warns with a
+        :class:`DeprecationWarning` naming :attr:`name` (keyword only).
     """
 
     name: str
     config_model: type[BaseModel]
     factory: Callable[[Any], T]
     description: str = ""
+    aliases: tuple[str, ...] = field(default=(), kw_only=True)
 
     def build(self, params: dict[str, Any]) -> T:
         """Validate ``params`` with :attr:`config_model` and build the implementation."""

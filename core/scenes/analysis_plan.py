@@ -43,7 +43,11 @@ DEFAULT_ANALYSES_3D: tuple[str, ...] = (
     "rdf3d",
     "network3d",
 )
-"""Analyzers that ``regopack analyze`` runs on a 3D packing when ``--only`` is not given."""
+"""Analyzers that ``regopack analyze`` runs on a 3D packing when ``--only`` is not given.
+
+The analyzers of :data:`DEFAULT_ANALYSES`, under their old 3D names, so that
+their results keep those names until the names go (requested without a warning).
+"""
 
 
 def default_analyses(packing: Packing | Packing3D) -> tuple[str, ...]:
@@ -55,33 +59,39 @@ def _known(registry: Registry) -> str:
     return ", ".join(registry.names("analysis")) or "(none)"
 
 
+def _registered(registry: Registry, name: str, warn: bool = True) -> str:
+    """Return the registered name of the analyzer ``name`` (an old name warns, see ``warn``)."""
+    if ("analysis", name) not in registry:
+        raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
+    if warn:
+        registry.get("analysis", name)  # an old name warns
+    return registry.canonical("analysis", name)
+
+
 def _build(
     registry: Registry,
     name: str,
+    filed: str,
     params: Mapping[str, Any],
-    needed_by: str | None,
+    prefix: str,
     params_source: str | None = None,
 ) -> Analyzer:
-    """Validate ``params`` with the analyzer's config model and build it.
+    """Validate ``params`` with the config model of the analyzer ``name`` and build it.
 
-    ``params_source`` (e.g. ``--set``) starts the message refusing a parameter.
+    The analyzer's :attr:`~regopack.registry.interfaces.Analyzer.name` becomes
+    ``filed``, the name its results are filed under. ``prefix`` (the name the
+    parameters were given for) and ``params_source`` (e.g. ``--set``) start the
+    message refusing a parameter.
     """
     from regopack.scenes.model import _describe_validation_error
 
-    if ("analysis", name) not in registry:
-        if needed_by is not None:
-            raise PluginError(
-                f"analyzer {needed_by!r} requires {name!r}, which is not registered; "
-                f"known analyzers: {_known(registry)}"
-            )
-        raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
     spec = registry.get("analysis", name)
     try:
         config = spec.config_model.model_validate(dict(params))
     except ValidationError as err:
         raise ConfigError(
             _describe_validation_error(
-                err, source=params_source, prefix=(name,), model=spec.config_model
+                err, source=params_source, prefix=(prefix,), model=spec.config_model
             )
         ) from err
     analyzer = spec.factory(config)
@@ -91,12 +101,13 @@ def _build(
             f"analysis plugin {name!r} ({origin}) built a {type(analyzer).__name__}, "
             "not an Analyzer"
         )
+    analyzer.name = filed
     return analyzer
 
 
 def dimensions_of(registry: Registry, name: str) -> tuple[int, ...]:
-    """Dimensions of the packings that the analyzer ``name`` analyses (2D by default)."""
-    spec = registry.get("analysis", name)
+    """Dimensions of the packings that the analyzer ``name`` (or an old name) analyses."""
+    spec = registry.get("analysis", registry.canonical("analysis", name))
     dims = spec.dimensions if isinstance(spec, AnalyzerSpec) else (2,)
     return tuple(dims)
 
@@ -127,6 +138,18 @@ def check_dimension(
             )
 
 
+def _filed_requirement(registry: Registry, requirement: str, needed_by: str, asked: str) -> str:
+    """Name a requirement is filed under: its first old name when ``asked`` is an old name.
+
+    An analyzer asked for by its old name (``coordination3d``) files what it
+    requires under the old name too (``contacts3d``), as before the names merged.
+    """
+    if asked == needed_by:
+        return requirement
+    spec = registry.get("analysis", requirement)
+    return spec.aliases[0] if spec.aliases else requirement
+
+
 def _plan(
     registry: Registry,
     requests: Sequence[tuple[str, Mapping[str, Any]]],
@@ -134,34 +157,59 @@ def _plan(
     dimension: int = 2,
     source: str | None = None,
     params_source: str | None = None,
+    warn: bool = True,
 ) -> dict[str, Analyzer]:
-    """Build every analyzer to run, requirements before the analyzers needing them."""
+    """Build every analyzer to run, requirements before the analyzers needing them.
+
+    Analyzers are known by their registered names; each is filed under the
+    name it was asked for (see :func:`_filed_requirement` for the others).
+    """
+    asked: dict[str, str] = {}
     wanted: dict[str, dict[str, Any]] = {}
     for name, request_params in requests:
-        wanted.setdefault(name, {}).update(request_params)
-    for name in params:
-        if ("analysis", name) not in registry:
-            raise ConfigError(f"unknown analyzer {name!r}; known analyzers: {_known(registry)}")
-    check_dimension(registry, [*wanted, *params], dimension, source)
+        new = _registered(registry, name, warn)
+        first = asked.setdefault(new, name)
+        if first != name:
+            raise ConfigError(
+                f"analyzers {first!r} and {name!r} are one analyzer ({new!r}); ask for it once"
+            )
+        wanted.setdefault(new, {}).update(request_params)
+    given: dict[str, dict[str, Any]] = {}
+    given_as: dict[str, str] = {}
+    for name, fields in params.items():
+        new = _registered(registry, name)
+        given.setdefault(new, {}).update(fields)
+        given_as.setdefault(new, name)
+    check_dimension(registry, [*asked.values(), *params], dimension, source)
 
     planned: dict[str, Analyzer] = {}
+    filed_as: dict[str, str] = {}
 
-    def visit(name: str, chain: tuple[str, ...]) -> None:
-        if name in planned:
+    def visit(name: str, filed: str, chain: tuple[str, ...]) -> None:
+        if name in filed_as:
             return
         if name in chain:
             cycle = " -> ".join((*chain, name))
             raise PluginError(f"analyzers require each other in a cycle: {cycle}")
-        merged = {**wanted.get(name, {}), **params.get(name, {})}
         check_dimension(registry, [name], dimension, source)
-        analyzer = _build(registry, name, merged, chain[-1] if chain else None, params_source)
+        merged = {**wanted.get(name, {}), **given.get(name, {})}
+        prefix = given_as.get(name, filed)
+        analyzer = _build(registry, name, filed, merged, prefix, params_source)
         for requirement in analyzer.requires:
-            visit(requirement, (*chain, name))
-        planned[name] = analyzer
+            if ("analysis", requirement) not in registry:
+                raise PluginError(
+                    f"analyzer {filed!r} requires {requirement!r}, which is not registered; "
+                    f"known analyzers: {_known(registry)}"
+                )
+            new = registry.canonical("analysis", requirement)
+            required_as = asked.get(new) or _filed_requirement(registry, new, name, filed)
+            visit(new, required_as, (*chain, name))
+        planned[filed] = analyzer
+        filed_as[name] = filed
 
-    for name in wanted:
-        visit(name, ())
-    unused = [name for name in params if name not in planned]
+    for name, filed in asked.items():
+        visit(name, filed, ())
+    unused = [given_as[name] for name in given if name not in filed_as]
     if unused:
         raise ConfigError(
             f"parameters given for analyzer {unused[0]!r}, which is not run "
@@ -178,6 +226,7 @@ def run_analyses(
     params: Mapping[str, Mapping[str, Any]] | None = None,
     source: str | None = None,
     params_source: str | None = None,
+    warn: bool = True,
 ) -> dict[str, Analyzer]:
     """Compute the requested analyzers and those they require, requirements first.
 
@@ -191,9 +240,11 @@ def run_analyses(
         ``(name, parameters)`` pairs. An analyzer that another one requires is
         computed once; when it is also requested, it keeps the requested
         parameters, and otherwise it uses its defaults. A name requested twice
-        gets the parameters of both requests (the later wins).
+        gets the parameters of both requests (the later wins). An old name of
+        an analyzer (``contacts3d``) warns and files the results under it, and
+        what that analyzer requires under their old names too.
     params
-        Parameters by analyzer name, applied over ``requests``; they also reach
+        Parameters by analyzer name (or old name), applied over ``requests``; they also reach
         analyzers that run only as a requirement (``{"contacts": {"tol": 0.1}}``
         with ``requests=[("coordination", {})]``). Naming an analyzer that is
         not run is an error.
@@ -203,17 +254,21 @@ def run_analyses(
     params_source
         Where ``params`` come from (e.g. ``--set``); it starts the message
         that refuses a parameter.
+    warn
+        Warn about old names among ``requests``; regopack's own default
+        requests (:func:`default_analyses`) pass ``False``.
 
     Returns
     -------
     dict
-        Every computed analyzer by name, in the order of computation (the
-        requested ones and their requirements).
+        Every computed analyzer by the name its results are filed under, in
+        the order of computation (the requested ones and their requirements).
 
     Raises
     ------
     ConfigError
         One line: an unknown analyzer (listing the known ones), an analyzer
+        asked for by two names, an analyzer
         of another dimension than the packing's (listing those that fit), a bad parameter
         (naming the field, e.g. ``contacts.tol = -1: ...``), parameters
         for an analyzer that is not run, or a parameter that implies more work
@@ -238,10 +293,13 @@ def run_analyses(
     """
     packing.validate()  # the arrays may have changed in place since the packing was built
     dimension = int(getattr(packing, "dimension", 2))
-    planned = _plan(registry, requests, params or {}, dimension, source, params_source)
+    planned = _plan(registry, requests, params or {}, dimension, source, params_source, warn)
     done: dict[str, Analyzer] = {}
+    by_name = {registry.canonical("analysis", name): name for name in planned}
     for name, analyzer in planned.items():
-        context = {req: done[req] for req in analyzer.requires}
+        context = {
+            req: done[by_name[registry.canonical("analysis", req)]] for req in analyzer.requires
+        }
         try:
             result = analyzer.compute(packing, context)  # type: ignore[arg-type]
         except LimitError as err:  # a size a parameter implies on this packing

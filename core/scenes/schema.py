@@ -171,6 +171,13 @@ def _section(kind: str, registry: Registry, defs: JsonObject) -> JsonObject:
         defs.update(extra)
         defs[_def_name(kind, name)] = branch
         branches.append({"$ref": f"#/$defs/{_pointer(_def_name(kind, name))}"})
+    for old, name in registry.aliases(kind).items():  # old names: the same branch, deprecated
+        branch = copy.deepcopy(defs[_def_name(kind, name)])
+        branch["properties"]["kind"]["const"] = old
+        branch.update(title=f"{old} (old name of {name})", deprecated=True)
+        defs[_def_name(kind, old)] = branch
+        branches.append({"$ref": f"#/$defs/{_pointer(_def_name(kind, old))}"})
+    names = [*names, *registry.aliases(kind)]
     return {
         "title": f"{what} plugin",
         "description": (
@@ -232,7 +239,7 @@ def scene_schema(registry: Registry) -> JsonObject:
     phase = defs["Phase"]["properties"]
     phase["shape"] = _described(sections["shape"], phase["shape"])
     analyses = defs["Outputs"]["properties"]["analyses"]
-    names = registry.names("analysis")
+    names = [*registry.names("analysis"), *registry.aliases("analysis")]
     by_name: JsonObject = {
         "type": "string",
         "description": "Name of an analyzer, run with its default parameters.",
@@ -243,7 +250,7 @@ def scene_schema(registry: Registry) -> JsonObject:
     exporter_by_name: JsonObject = {
         "type": "string",
         "description": "Name of an exporter, run with its default parameters.",
-        "enum": registry.names("export"),
+        "enum": [*registry.names("export"), *registry.aliases("export")],
     }
     exports["items"] = {"anyOf": [exporter_by_name, sections["export"]]}
 

@@ -1,11 +1,11 @@
-"""Helpers shared by the analyzers: interior window, particle selection."""
+"""Helpers shared by the analyzers of both dimensions: interior window, tolerances, results."""
 
 from __future__ import annotations
 
 import math
 from collections.abc import Mapping
 from dataclasses import replace
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,8 +13,12 @@ from pydantic import BaseModel
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_scale
-from regopack.geometry.domain import PlaneDomain
 from regopack.packing.core import Packing
+from regopack.packing.core3d import Packing3D
+from regopack.registry.interfaces import Analyzer
+
+AnyPacking = Packing | Packing3D
+"""A packing of either dimension."""
 
 DEFAULT_TOL = 0.05
 """Default contact tolerance at the built-in scale (``d_min = 2``): ``tol = d_min / 40``."""
@@ -47,7 +51,7 @@ def contact_tolerances(
     return t, t_max
 
 
-def interior_margin(packing: Packing, margin: float | None = None) -> float:
+def interior_margin(packing: AnyPacking, margin: float | None = None) -> float:
     """Exclusion margin from the walls: ``margin`` if given, else the scene's d_max.
 
     The paper excludes particles within one maximum particle diameter of a wall.
@@ -65,22 +69,68 @@ def interior_margin(packing: Packing, margin: float | None = None) -> float:
     return 2.0 * float(np.max(packing.radius)) if packing.n_particles else 0.0
 
 
-def interior_window(packing: Packing, margin: float) -> PlaneDomain:
-    """Return the domain inset by ``margin`` from every wall (a periodic domain: all of it)."""
+def interior_window(packing: AnyPacking, margin: float) -> Any:
+    """Return the domain inset by ``margin`` from every wall (a periodic domain: all of it).
+
+    A :class:`~regopack.geometry.domain.PlaneDomain` in 2D, a
+    :class:`~regopack.geometry.domain.Box` in 3D.
+    """
     return packing.domain.interior(margin)
 
 
-def interior_mask(packing: Packing, margin: float) -> NDArray[np.bool_]:
+def interior_mask(packing: AnyPacking, margin: float) -> NDArray[np.bool_]:
     """Placed particles whose centre lies farther than ``margin`` from every wall."""
     inside = interior_window(packing, margin).contains(packing.centre)
-    return inside & packing.placed
+    return np.asarray(inside & packing.placed, dtype=np.bool_)
 
 
-def eta_of(packing: Packing) -> float | None:
+def eta_of(packing: AnyPacking) -> float | None:
     """Return the packing control coefficient of the run, when the scene used one."""
     density = packing.scene.get("density", {}) if isinstance(packing.scene, dict) else {}
     value = density.get("eta") if isinstance(density, dict) else None
     return float(value) if value is not None else None
+
+
+class FoundContacts(NamedTuple):
+    """What a contact search finds in a packing of one dimension ``d``.
+
+    Attributes
+    ----------
+    pairs, threshold
+        Every pair ``(i, j)`` of particle indices, ``i < j``, in contact at
+        ``tol_max``, and the tolerance above which each is in contact.
+    columns
+        The columns of the table ``contacts`` for the contacts at ``tol``
+        (``i``, ``j``, ``area``, ``width``, ``depth`` and those of the
+        dimension), without ``normal_*`` and ``point_*``.
+    normal, point
+        ``(n, d)``: unit normal (from ``i`` to ``j``) and point of each contact at ``tol``.
+    pair_normal
+        ``(m, d)`` unit normal of every pair, where the search gives it (3D).
+    """
+
+    pairs: NDArray[np.int64]
+    threshold: NDArray[np.float64]
+    columns: dict[str, NDArray[Any]]
+    normal: NDArray[np.float64]
+    point: NDArray[np.float64]
+    pair_normal: NDArray[np.float64] | None = None
+
+
+class Measured(Analyzer):
+    """An analyzer whose :meth:`compute` keeps its scalars in ``_results``."""
+
+    _results: dict[str, Any] | None = None
+
+    def _need(self) -> dict[str, Any]:
+        """Return the scalars of the last :meth:`compute`; refuse before it."""
+        if self._results is None:
+            raise RuntimeError("call compute() first")
+        return self._results
+
+    def results(self) -> dict[str, Any]:
+        """Scalars of the last :meth:`compute` (see the class)."""
+        return dict(self._need())
 
 
 def periodic_images(packing: Packing, pad: float) -> tuple[Packing, NDArray[np.int64]]:
@@ -204,3 +254,31 @@ def scaled_defaults(config: _Config, packing: Any, defaults: Mapping[str, Any]) 
         else:
             update[key] = float(value) * scale
     return config.model_copy(update=update)
+
+
+def solid_volumes(packing: Packing3D) -> NDArray[np.float64]:
+    """Volume of every solid, all faces at once (as ``SolidBatch.volume``).
+
+    Each face contributes the cone from the centre over it, ``(A_f . n_f) b_f / 3``,
+    with the area vector ``A_f = 1/2 sum_k p_k x p_(k+1)`` of its vertex loop;
+    a sphere has ``4/3 pi r^3``. Rounded polyhedra raise ``NotImplementedError``.
+    """
+    n = packing.n_particles
+    rho = packing.solids.rounding_radius
+    faces = np.diff(packing.face_offsets)
+    if np.any((faces > 0) & (rho > 0)):
+        raise NotImplementedError("the volume of a rounded polyhedron")
+    out = (4.0 / 3.0) * np.pi * rho**3
+    n_faces = packing.normals.shape[0]
+    if n_faces == 0:
+        return np.asarray(out, dtype=np.float64)
+    sizes = np.diff(packing.face_vertex_offsets)
+    owner = np.repeat(np.repeat(np.arange(n), faces), sizes)
+    v = packing.vertices[packing.offsets[owner] + packing.face_vertices]
+    nxt = np.arange(v.shape[0]) + 1
+    nxt[packing.face_vertex_offsets[1:] - 1] = packing.face_vertex_offsets[:-1]
+    area = 0.5 * np.add.reduceat(np.cross(v, v[nxt]), packing.face_vertex_offsets[:-1])
+    cone = np.einsum("ij,ij->i", area, packing.normals) * packing.support / 3.0
+    face_owner = np.repeat(np.arange(n), faces)
+    out = out + np.bincount(face_owner, weights=cone, minlength=n)
+    return np.asarray(out, dtype=np.float64)

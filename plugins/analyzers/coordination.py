@@ -1,9 +1,16 @@
-"""Coordination numbers: overall, interior, per mineral, and against the tolerance (SPEC §5–6)."""
+"""Coordination numbers: overall, interior, per mineral, and against the tolerance (SPEC §5–6).
+
+The counting is the same in 2D and 3D, on the contacts of
+:class:`~regopack.plugins.analyzers.contacts.Contacts`. Rattlers are removed
+with ``d + 1`` contacts in 3D by default: a particle is held in place by
+compressive contact forces only if its contact normals do not all lie in one
+closed half-space, which takes at least four of them in three dimensions.
+"""
 
 from __future__ import annotations
 
 from collections.abc import Mapping
-from typing import Any, Protocol, Self
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,37 +18,13 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_scale
-from regopack.packing.core import Packing
-from regopack.plugins.analyzers.common import eta_of
+from regopack.plugins.analyzers.common import AnyPacking, Measured, eta_of
+from regopack.plugins.analyzers.contacts import Contacts
 from regopack.registry.interfaces import Analyzer
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 BoolArray = NDArray[np.bool_]
-
-
-class _Tolerances(Protocol):
-    tol: float
-    tol_max: float
-
-
-class ContactCounts(Protocol):
-    """What the coordination analyzer reads of a contact analyzer (2D or 3D)."""
-
-    config: _Tolerances
-    margin: float
-    interior: BoolArray
-
-    @property
-    def i(self) -> IntArray:
-        """First particle of each contact at ``tol``."""
-
-    @property
-    def j(self) -> IntArray:
-        """Second particle of each contact at ``tol``."""
-
-    def count_per_particle(self, tol: float | None = None) -> IntArray:
-        """Contacts of every particle at ``tol``."""
 
 
 def default_sweep(scale: float = 1.0) -> list[float]:
@@ -68,13 +51,14 @@ class CoordinationConfig(BaseModel):
             "d_min = 2), those above tol_max left out."
         ),
     )
-    rattler_min_contacts: int = Field(
-        2,
+    rattler_min_contacts: int | None = Field(
+        None,
         ge=1,
         le=100,
         description=(
             "A particle with fewer contacts (counting only non-rattlers, removed in turn) is "
-            "a rattler: 2 for frictional particles in 2D, 3 for frictionless ones."
+            "a rattler; default: 2 in 2D (frictional particles; 3 for frictionless ones), "
+            "4 (d + 1) in 3D."
         ),
     )
 
@@ -144,7 +128,11 @@ def remove_rattlers(
     return members & ~alive, z.astype(np.int64), rounds
 
 
-class Coordination(Analyzer):
+RATTLER_MIN_CONTACTS = {2: 2, 3: 4}
+"""Default contacts (among non-rattlers) that a particle needs not to be a rattler, by dimension."""
+
+
+class Coordination(Measured):
     """Z = 2 contacts / particles, over the domain and the interior; per mineral; Z(tol).
 
     Interior statistics count, for every particle whose centre is farther than
@@ -172,11 +160,12 @@ class Coordination(Analyzer):
 
     def __init__(self, config: CoordinationConfig | None = None) -> None:
         self.config = config or CoordinationConfig()
-        self._results: dict[str, Any] | None = None
 
-    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
         """Count contacts per particle at the contact tolerance and over the sweep."""
-        contacts: ContactCounts = context[self.requires[0]]  # type: ignore[assignment]
+        contacts = context["contacts"]
+        assert isinstance(contacts, Contacts)
+        self._dimension = packing.domain.dimension
         placed = packing.placed
         interior = contacts.interior
         z = contacts.count_per_particle()
@@ -195,18 +184,18 @@ class Coordination(Analyzer):
             counts[name] = int(sel.sum())
             per_mineral[name] = float(z[sel].mean()) if sel.any() else None
             dist[name] = np.bincount(z[sel], minlength=1).tolist() if sel.any() else []
-        tol_max = contacts.config.tol_max
+        tol_max = contacts.tol_max
         asked = self.config.tols
         sweep = set(default_sweep(length_scale(packing)) if asked is None else asked)
         above = sorted(t for t in sweep if t > tol_max)
         if above and asked is not None:
-            source = self.requires[0]
+            source = contacts.name
             raise ConfigError(
                 f"{self.name}.tols: {above[0]:g} exceeds {source}.tol_max = {tol_max:g}; "
                 f"raise {source}.tol_max or drop the larger tolerances"
             )
         # the default sweep stops at the contacts analyzer's tol_max
-        tols = sorted({t for t in sweep if t <= tol_max} | {contacts.config.tol})
+        tols = sorted({t for t in sweep if t <= tol_max} | {contacts.tol})
         sweep_domain: list[float] = []
         sweep_interior: list[float] = []
         for tol in tols:
@@ -216,7 +205,7 @@ class Coordination(Analyzer):
         self.tols = np.asarray(tols)
         self.z_tol_domain = np.asarray(sweep_domain)
         self.z_tol_interior = np.asarray(sweep_interior)
-        k = self.config.rattler_min_contacts
+        k = self.config.rattler_min_contacts or RATTLER_MIN_CONTACTS[self._dimension]
         rattler, zm, rounds = remove_rattlers(contacts.i, contacts.j, placed, k)
         self.rattler = rattler
         self.z_mechanical = zm
@@ -224,7 +213,7 @@ class Coordination(Analyzer):
         solid_in = interior & ~rattler
         self._z_counts = self._count_table(z, zm, placed, interior, solid_in, names)
         self._results = {
-            "tol": contacts.config.tol,
+            "tol": contacts.tol,
             "eta": eta_of(packing),
             "interior_margin": contacts.margin,
             "z_domain": float(z[placed].mean()) if placed.any() else None,
@@ -281,36 +270,33 @@ class Coordination(Analyzer):
             table[f"n_interior_{name}"] = counts(z, interior & (self._mineral == m))
         return table
 
-    def results(self) -> dict[str, Any]:
-        """Scalars and small lists (JSON): Z overall, interior, per mineral, and Z(tol)."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)
-
     def tables(self) -> dict[str, dict[str, Any]]:
         """Per-particle table and the Z(tol) sweep.
 
         ``particles`` has one row per placed particle: its index in the packing,
         mineral index, centre, equivalent radius, whether it is interior, its
         contact count ``z`` at the contact tolerance, whether it is a rattler
-        and its contacts with non-rattlers ``z_mechanical``. ``z_tol`` has the
-        columns ``tol, z_domain, z_interior``; ``z_counts`` one row per
-        contact count ``z``, with the number of particles that have it.
+        and its contacts with non-rattlers ``z_mechanical`` (in 3D, where ``z``
+        is the centre's third coordinate, the counts are ``contacts`` and
+        ``contacts_mechanical``). ``z_tol`` has the columns ``tol, z_domain,
+        z_interior``; ``z_counts`` one row per contact count ``z``, with the
+        number of particles that have it.
         """
-        if self._results is None:
-            raise RuntimeError("call compute() first")
+        self._need()
         idx = self._placed_idx
+        count, mechanical = (
+            ("z", "z_mechanical") if self._dimension == 2 else ("contacts", "contacts_mechanical")
+        )
         return {
             "particles": {
                 "particle": idx,
                 "mineral": self._mineral[idx],
-                "x": self._centre[idx, 0],
-                "y": self._centre[idx, 1],
+                **{axis: self._centre[idx, a] for a, axis in enumerate("xyz"[: self._dimension])},
                 "radius": self._radius[idx],
                 "interior": self.interior[idx],
-                "z": self.per_particle[idx],
+                count: self.per_particle[idx],
                 "rattler": self.rattler[idx],
-                "z_mechanical": self.z_mechanical[idx],
+                mechanical: self.z_mechanical[idx],
             },
             "z_tol": {
                 "tol": self.tols,

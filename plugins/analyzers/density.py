@@ -1,4 +1,10 @@
-"""Packing density over the domain and over the interior window (SPEC §6)."""
+"""Packing density over the domain and over the interior window (SPEC §6), in 2D and 3D.
+
+The area fraction of a 2D packing, the volume fraction of a 3D one; particles
+that cross the window are clipped exactly to it
+(:func:`~regopack.packing.solid_fraction.phi_in_window`,
+:func:`~regopack.packing.solid_fraction.phi_in_box`).
+"""
 
 from __future__ import annotations
 
@@ -6,10 +12,19 @@ import math
 from collections.abc import Mapping
 from typing import Any, Self
 
+import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.packing.core import Packing
-from regopack.plugins.analyzers.common import eta_of, interior_margin, interior_window
+from regopack.packing.core3d import Packing3D
+from regopack.plugins.analyzers.common import (
+    AnyPacking,
+    Measured,
+    eta_of,
+    interior_margin,
+    interior_window,
+    solid_volumes,
+)
 from regopack.registry.interfaces import Analyzer
 
 
@@ -24,7 +39,7 @@ class DensityConfig(BaseModel):
 
 
 def void_ratio(phi: float | None) -> float | None:
-    """Void ratio ``e = (1 - phi) / phi``: void area over solid area (``None`` without solid).
+    """Void ratio ``e = (1 - phi) / phi``: void over solid area or volume (``None`` without solid).
 
     Examples
     --------
@@ -36,40 +51,59 @@ def void_ratio(phi: float | None) -> float | None:
     return (1.0 - phi) / phi
 
 
-class Density(Analyzer):
-    """Area fraction of the particles, over the domain and over the interior window.
+def _volume_fraction_in(
+    p3: Packing3D, window: Any, solid: NDArray[np.float64], phi_domain: float
+) -> float | None:
+    """Volume fraction of the interior window (``None``: empty, or a rounded solid crosses it).
 
-    Also the void ratio ``e = (1 - phi) / phi`` of both.
+    A periodic box has no walls: its interior is the whole cell.
+    """
+    from regopack.packing.solid_fraction import phi_in_box
+
+    if p3.domain.periodic:
+        return phi_domain
+    try:
+        phi = phi_in_box(p3, window, solid)
+    except NotImplementedError:  # a rounded polyhedron crossing the window's faces
+        return None
+    return None if math.isnan(phi) else phi
+
+
+class Density(Measured):
+    """Area (2D) or volume (3D) fraction of the particles, over the domain and the interior.
+
+    Scalars: ``phi_domain``, ``phi_interior``, the void ratios
+    ``e = (1 - phi) / phi`` of both, ``interior_margin``, in 3D the
+    ``window``'s sides, ``n_placed`` and ``eta``.
     """
 
     name = "density"
 
     def __init__(self, config: DensityConfig | None = None) -> None:
         self.config = config or DensityConfig()
-        self._results: dict[str, Any] | None = None
 
-    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
-        """Measure the area fractions; particles are clipped exactly to the window."""
+    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+        """Measure the fractions; particles are clipped exactly to the window."""
         from regopack.packing.solid_fraction import phi_in_window
 
         margin = interior_margin(packing, self.config.margin)
         window = interior_window(packing, margin)
-        area = packing.area()[packing.placed]
-        phi_domain = float(area.sum()) / packing.domain.area
-        phi_interior = phi_in_window(packing, window)
-        self._results = {
+        if isinstance(packing, Packing3D):
+            solid = solid_volumes(packing)
+            phi_domain = float(solid[packing.placed].sum()) / packing.domain.volume
+            phi_interior = _volume_fraction_in(packing, window, solid, phi_domain)
+        else:
+            area = packing.area()[packing.placed]
+            phi_domain = float(area.sum()) / packing.domain.area
+            phi_interior = phi_in_window(packing, window)
+        res: dict[str, Any] = {
             "phi_domain": phi_domain,
             "phi_interior": phi_interior,
             "void_ratio_domain": void_ratio(phi_domain),
             "void_ratio_interior": void_ratio(phi_interior),
             "interior_margin": margin,
-            "n_placed": packing.n_placed,
-            "eta": eta_of(packing),
         }
+        if isinstance(packing, Packing3D):
+            res["window"] = list(window.size)
+        self._results = {**res, "n_placed": packing.n_placed, "eta": eta_of(packing)}
         return self
-
-    def results(self) -> dict[str, Any]:
-        """Scalars: phi and void ratio of the domain and the interior, margin, n_placed, eta."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)

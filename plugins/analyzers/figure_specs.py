@@ -4,7 +4,10 @@
 analyzer that has figures, in the order the figures are drawn; the plugin
 returns them from :func:`regopack.registry.hookspecs.regopack_analysis_figures`. The
 drawing itself lives in :mod:`regopack.plugins.analyzers.figures`, which is
-imported (with matplotlib) only when a figure is drawn.
+imported (with matplotlib) only when a figure is drawn. An analyzer draws
+the figures of :data:`STEMS` for a 2D packing and those of :data:`STEMS3D`
+for a 3D one; the old 3D names (``contacts3d``, ...) keep figure specs of
+their own, after the others, for as long as they are accepted.
 """
 
 from __future__ import annotations
@@ -54,45 +57,38 @@ STEMS: dict[str, tuple[str, ...]] = {
 """File stems of the figures of each analyzer, in drawing order."""
 
 STEMS3D: dict[str, tuple[str, ...]] = {
-    "contacts3d": ("contact-histograms-3d",),
-    "coordination3d": ("z-vs-tol-3d", "z-per-mineral-3d"),
-    "rdf3d": ("rdf-3d",),
-    "psd3d": ("psd-3d",),
-    "homogeneity3d": ("homogeneity-3d",),
+    "contacts": ("contact-histograms-3d",),
+    "coordination": ("z-vs-tol-3d", "z-per-mineral-3d"),
+    "rdf": ("rdf-3d",),
+    "psd": ("psd-3d",),
+    "homogeneity": ("homogeneity-3d",),
 }
-"""File stems of the figures of each 3D analyzer, in drawing order."""
+"""File stems of the figures of each analyzer of a 3D packing, in drawing order."""
 
 
-def _maker(analyzer: str) -> FigureMaker:
+def _maker(stems: tuple[str, ...]) -> FigureMaker:
     def draw(packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path) -> Sequence[Path]:
         from regopack.plugins.analyzers.figures import figures_for
 
-        return figures_for(packing, analyzers, out_dir, of=analyzer)
+        return figures_for(packing, analyzers, out_dir, stems=stems)
 
     return draw
 
 
-def _maker3d(analyzer: str) -> FigureMaker:
-    def draw(packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path) -> Sequence[Path]:
-        from regopack.plugins.analyzers.figures3d import figures3d_for
-
-        return figures3d_for(packing, analyzers, out_dir, of=analyzer)
-
-    return draw
+def _spec(name: str, stems: tuple[str, ...]) -> FigureSpec:
+    captions = {stem: {**CAPTIONS, **CAPTIONS3D}[stem] for stem in stems}
+    return FigureSpec(name, _maker(stems), captions)
 
 
 def figure_specs() -> list[FigureSpec]:
-    """One figure spec per analyzer of :data:`STEMS`, then of :data:`STEMS3D`, in drawing order.
+    """One figure spec per analyzer of :data:`STEMS`, then per old 3D name, in drawing order.
 
     Examples
     --------
     >>> [(f.analyzer, list(f.captions)) for f in figure_specs()][3]
-    ('coordination', ['z-vs-tol', 'z-per-mineral'])
+    ('coordination', ['z-vs-tol', 'z-per-mineral', 'z-vs-tol-3d', 'z-per-mineral-3d'])
+    >>> [f.analyzer for f in figure_specs()][-5:]
+    ['contacts3d', 'coordination3d', 'rdf3d', 'psd3d', 'homogeneity3d']
     """
-    return [
-        FigureSpec(name, _maker(name), {stem: CAPTIONS[stem] for stem in stems})
-        for name, stems in STEMS.items()
-    ] + [
-        FigureSpec(name, _maker3d(name), {stem: CAPTIONS3D[stem] for stem in stems})
-        for name, stems in STEMS3D.items()
-    ]
+    both = [_spec(name, stems + STEMS3D.get(name, ())) for name, stems in STEMS.items()]
+    return both + [_spec(f"{name}3d", stems) for name, stems in STEMS3D.items()]

@@ -1,24 +1,28 @@
 """Figures of the structure analysis, drawn with matplotlib off screen.
 
 :func:`figures_for` draws the figures whose analyzers were computed and saves
-each as PNG (300 dpi) and SVG:
+each as PNG (300 dpi) and SVG; those of a 3D packing end in ``-3d``:
 
-========================  ======================  ==========================================
-file stem                 needs                   shows (figure of the paper)
-========================  ======================  ==========================================
-``packing``               ``density``             particles coloured by mineral, zoom (10)
-``contact-network``       ``network``             centre-to-centre edges, width ∝ A_c (12)
-``contact-histograms``    ``contacts``            A_c, b_c, R_c, δ on log axes (13)
-``z-vs-tol``              ``coordination``        Z against tol, full range and zoom (14)
-``z-per-mineral``         ``coordination``        distribution of Z per mineral (15)
-``rdf``                   ``rdf``                 g(r) per mineral, near and far field (16)
-``homogeneity``           ``homogeneity``         ring profiles with trends, tile maps
-``psd``                   ``psd``                 percent passing, class shares
-``local-fraction``        ``local_fraction``      map of local φ per particle, histogram
-========================  ======================  ==========================================
+==========================  ==================  ==============================================
+file stem                   needs               shows (figure of the paper)
+==========================  ==================  ==============================================
+``packing``                 ``density``         particles coloured by mineral, zoom (10)
+``contact-network``         ``network``         centre-to-centre edges, width ∝ A_c (12)
+``contact-histograms[-3d]`` ``contacts``        A_c, b_c, R_c, δ on log axes (13); 3D: A_c, V_c,
+                                                b_c and the cap height δ
+``z-vs-tol[-3d]``           ``coordination``    Z against tol, full range and zoom (14)
+``z-per-mineral[-3d]``      ``coordination``    distribution of Z per mineral (15)
+``rdf[-3d]``                ``rdf``             g(r) per mineral, near and far field (16); 3D:
+                                                each mineral with itself
+``homogeneity[-3d]``        ``homogeneity``     ring profiles with trends, tile maps; 3D:
+                                                layers and shells
+``psd[-3d]``                ``psd``             percent passing, class shares
+``local-fraction``          ``local_fraction``  map of local φ per particle, histogram
+==========================  ==================  ==============================================
 
-Figures are sized for a journal page (7 in wide, 8 pt text) and colour the
-minerals by name from one colour-blind-safe palette (Okabe and Ito; see
+Figures are sized for a journal page (7 in wide, 8 pt text, see
+:mod:`~regopack.plugins.analyzers.figure_style`) and colour the minerals by
+name from one colour-blind-safe palette (Okabe and Ito; see
 :mod:`regopack.base.colours`), so a mineral keeps its colour in every scene.
 Lengths are labelled in the scene's ``length_unit`` (micrometres by default).
 Collections with many items are rasterised inside the SVG files to keep them
@@ -27,89 +31,74 @@ small; axes and text stay vector.
 
 from __future__ import annotations
 
-import math
 import textwrap
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Collection, Mapping, Sequence
 from pathlib import Path
-from typing import Any, cast
+from typing import Any, TypeVar
 
-import matplotlib
 import numpy as np
 from matplotlib.axes import Axes
 from matplotlib.collections import LineCollection, PolyCollection
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
-from matplotlib.patches import ConnectionPatch, Patch, Rectangle
-from matplotlib.ticker import FuncFormatter, LogLocator, MaxNLocator, NullFormatter
+from matplotlib.patches import Patch
+from matplotlib.ticker import LogLocator, MaxNLocator, NullFormatter
 from numpy.typing import NDArray
 
 from regopack.base.colours import PALETTE, mineral_colours
 from regopack.base.units import decimals, length_scale, length_unit
-from regopack.packing.core import Packing, _atomic_file
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.contacts import Contacts
 from regopack.plugins.analyzers.coordination import Coordination
-from regopack.plugins.analyzers.figure_specs import CAPTIONS, STEMS
+from regopack.plugins.analyzers.density import Density
+from regopack.plugins.analyzers.figure_style import (
+    DPI,
+    RASTERISE_ABOVE,
+    TOTAL,
+    WIDTH,
+    frame,
+    in_window,
+    length_text,
+    link_zoom,
+    nice_length,
+    note,
+    save,
+    style,
+    zoom_size,
+    zoom_window,
+)
 from regopack.plugins.analyzers.homogeneity import Homogeneity
 from regopack.plugins.analyzers.local_fraction import LocalFraction
+from regopack.plugins.analyzers.network import Network
 from regopack.plugins.analyzers.psd import Psd
 from regopack.plugins.analyzers.rdf import Rdf
 from regopack.plugins.analyzers.rdf_peak import BinnedCurve, PeakFit, count_bins, merge_bins
 from regopack.registry.interfaces import Analyzer
 
 __all__ = [
-    "CAPTIONS",
+    "DPI",
     "PALETTE",
+    "WIDTH",
     "draw_binned",
     "figures_for",
     "legend_entries",
+    "length_text",
     "mark_first_peak",
     "mineral_colours",
+    "nice_length",
 ]
 
 FloatArray = NDArray[np.float64]
 
 
-WIDTH = 7.0
-"""Width of the figures in inches (a two-column journal page)."""
-
-DPI = 300
-"""Resolution of the PNG files."""
-
 MAX_LINE_PT = 2.5
 """Line width, in points, of the contact with the largest A_c in the network figure."""
-
-RASTERISE_ABOVE = 2000
-"""Collections with more items than this are rasterised inside the SVG files."""
 
 ZOOM_TOL = (0.02, 0.1)
 """Range of tol of the zoom of ``z-vs-tol`` at the built-in scale (``d_min = 2``): ``d_min / 100``
 to ``d_min / 20``, times :func:`~regopack.base.units.length_scale` for other packings."""
 
-_STYLE: dict[str, Any] = {
-    "font.size": 8,
-    "axes.titlesize": 8,
-    "axes.labelsize": 8,
-    "xtick.labelsize": 7,
-    "ytick.labelsize": 7,
-    "legend.fontsize": 7,
-    "legend.frameon": False,
-    "axes.linewidth": 0.6,
-    "xtick.major.width": 0.6,
-    "ytick.major.width": 0.6,
-    "xtick.minor.width": 0.4,
-    "ytick.minor.width": 0.4,
-    "lines.linewidth": 1.0,
-    "lines.markersize": 3.5,
-    "svg.fonttype": "none",
-    "svg.hashsalt": "regopack",
-    "figure.constrained_layout.use": True,
-}
-
 _AC = r"$A_\mathrm{c}$"
-
-TOTAL = "#000000"
-"""Colour of whole-packing curves (all minerals together)."""
 
 NOTE_WIDTH = 36
 """Characters per line of the notes written inside a panel."""
@@ -122,24 +111,6 @@ Z_BARS_WIDTH = 0.8
 # helpers
 
 
-@contextmanager
-def _style() -> Iterator[None]:
-    with matplotlib.rc_context(cast(Any, _STYLE)):
-        yield
-
-
-def _save(fig: Figure, out_dir: Path, stem: str, formats: Sequence[str]) -> list[Path]:
-    """Write ``fig`` as ``stem.<format>`` for every format, each atomically."""
-    paths = []
-    for fmt in formats:
-        path = out_dir / f"{stem}.{fmt}"
-        metadata = {"Date": None} if fmt == "svg" else {}
-        with _atomic_file(path) as fh:
-            fig.savefig(fh, format=fmt, dpi=DPI, metadata=metadata)
-        paths.append(path)
-    return paths
-
-
 def _polygons(
     packing: Packing, idx: NDArray[np.int64], colours: Sequence[str], **kwargs: Any
 ) -> PolyCollection:
@@ -147,157 +118,6 @@ def _polygons(
     coll = PolyCollection(packing.polygons(idx), closed=True, facecolors=list(faces), **kwargs)
     coll.set_rasterized(len(idx) > RASTERISE_ABOVE)
     return coll
-
-
-DENSITY_DECADES = 3
-"""A number density is drawn in 10⁻³ length unit⁻² at the built-in scale."""
-
-_SUPERSCRIPT = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
-
-
-def axis_unit(power: int, unit: str, scale: float) -> tuple[str, float]:
-    """Return the axis unit of a quantity of length dimension ``power``, and its factor.
-
-    The values are drawn in decades of ``unit`` chosen so that they read as at
-    the built-in scale (``scale``, :func:`~regopack.base.units.length_scale`, is 1):
-    a packing in millimetres draws its coordinates and mean diameter in
-    10⁻³ mm and its number density in 10³ mm⁻², the same numbers as µm and
-    10⁻³ µm⁻².
-
-    Examples
-    --------
-    >>> axis_unit(-2, "µm", 1.0), axis_unit(-2, "mm", 1e-3), axis_unit(1, "mm", 1e-3)
-    (('10⁻³ µm⁻²', 1000.0), ('10³ mm⁻²', 0.001), ('10⁻³ mm', 1000.0))
-    >>> axis_unit(1, "µm", 1.0), axis_unit(0, "µm", 1.0)
-    (('µm', 1.0), ('', 1.0))
-    """
-    if power == 0:
-        return "", 1.0
-    decade = round(-math.log10(scale)) if math.isfinite(scale) and scale > 0 else 0
-    exponent = decade * power + (DENSITY_DECADES if power == -2 else 0)
-    text = unit if power == 1 else f"{unit}{str(power).translate(_SUPERSCRIPT)}"
-    if exponent == 0:
-        return text, 1.0
-    return f"10{str(-exponent).translate(_SUPERSCRIPT)} {text}", float(10.0**exponent)
-
-
-def length_ticks(ax: Axes, unit: str, scale: float) -> str:
-    """Write the x and y ticks of a map in the decade of ``unit`` of :func:`axis_unit`.
-
-    Returns the unit text of the axis labels (``unit`` itself at the built-in
-    scale, where the ticks are left as matplotlib writes them).
-    """
-    text, factor = axis_unit(1, unit, scale)
-    if factor != 1.0:
-        ticks = FuncFormatter(lambda v, _: f"{v * factor:.6g}".replace("-", "\N{MINUS SIGN}"))
-        ax.xaxis.set_major_formatter(ticks)
-        ax.yaxis.set_major_formatter(ticks)
-    return text
-
-
-def _frame(ax: Axes, bounds: Sequence[float], unit: str = "µm", scale: float = 1.0) -> None:
-    """Set the limits, equal aspect and labels of a map of the packing.
-
-    Lengths are in ``unit`` at the ``scale`` of the packing (:func:`axis_unit`:
-    coordinates of a packing in mm are labelled in 10⁻³ mm).
-    """
-    xmin, xmax, ymin, ymax = (float(b) for b in bounds)
-    ax.set_xlim(xmin, xmax)
-    ax.set_ylim(ymin, ymax)
-    ax.set_aspect("equal")
-    text = length_ticks(ax, unit, scale)
-    ax.set_xlabel(f"x ({text})")
-    ax.set_ylabel(f"y ({text})")
-
-
-NICE_STEPS = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0, 10.0)
-"""Mantissas of the round lengths that zoom windows take."""
-
-
-def nice_length(length: float, most: float | None = None) -> float:
-    """Round ``length`` to the nearest (in ratio) of 1, 1.2, 1.5, 2, 2.5, 3, 4, 5, 6, 8 × 10^k.
-
-    With ``most``, the result is the largest such length not above ``most``
-    when the nearest one is (and ``most`` itself when no round length is).
-
-    Examples
-    --------
-    >>> nice_length(128.447), nice_length(100.0), nice_length(0.0173)
-    (120.0, 100.0, 0.015)
-    >>> nice_length(128.447, most=110.0)
-    100.0
-    """
-    if not (length > 0 and np.isfinite(length)):
-        return length
-    exponent = 10.0 ** np.floor(np.log10(length))
-    candidates = [float(f"{m * exponent * s:.6g}") for s in (0.1, 1.0) for m in NICE_STEPS]
-    if most is not None:
-        below = [c for c in candidates if c <= most]
-        if not below:
-            return most
-        if min(candidates, key=lambda c: abs(np.log(c / length))) > most:
-            return max(below)
-        candidates = below
-    return min(candidates, key=lambda c: abs(np.log(c / length)))
-
-
-def length_text(value: float) -> str:
-    """Format a length for a title: three significant digits, no exponent below 10^6.
-
-    Examples
-    --------
-    >>> length_text(128.447), length_text(1600.0), length_text(0.012345)
-    ('128', '1600', '0.0123')
-    """
-    return f"{float(f'{value:.3g}'):g}"
-
-
-def _zoom_window(packing: Packing) -> tuple[float, float, float, float]:
-    """Square window at the domain's centre: an eighth of its size, at least 20 mean radii.
-
-    The side is rounded to a round length (:func:`nice_length`), at most the
-    domain's shorter side.
-    """
-    dom = packing.domain
-    short = min(dom.width, dom.height)
-    placed = packing.placed
-    mean_r = float(packing.radius[placed].mean()) if placed.any() else short / 40
-    side = nice_length(min(short, max(short / 8, 20.0 * mean_r)), most=short)
-    cx, cy = dom.center
-    return cx - side / 2, cx + side / 2, cy - side / 2, cy + side / 2
-
-
-def _zoom_size(window: Sequence[float], unit: str = "µm") -> str:
-    """``"120 × 120 µm"`` for a window ``(x0, x1, y0, y1)`` (lengths in ``unit``)."""
-    x0, x1, y0, y1 = window
-    return f"{length_text(x1 - x0)} × {length_text(y1 - y0)} {unit}"
-
-
-def _in_window(packing: Packing, window: Sequence[float]) -> NDArray[np.int64]:
-    """Placed particles that may reach into ``window``."""
-    x0, x1, y0, y1 = window
-    idx = np.flatnonzero(packing.placed)
-    c = packing.centre[idx]
-    r = packing.circumradius[idx]
-    near = (c[:, 0] + r > x0) & (c[:, 0] - r < x1) & (c[:, 1] + r > y0) & (c[:, 1] - r < y1)
-    return idx[near].astype(np.int64)
-
-
-def _link_zoom(fig: Figure, ax: Axes, zoom: Axes, window: Sequence[float], colour: str) -> None:
-    """Outline ``window`` on ``ax`` and join its right corners to the left side of ``zoom``."""
-    x0, x1, y0, y1 = window
-    ax.add_patch(Rectangle((x0, y0), x1 - x0, y1 - y0, fill=False, edgecolor=colour, linewidth=0.9))
-    for y_data, y_axes in ((y1, 1.0), (y0, 0.0)):
-        fig.add_artist(
-            ConnectionPatch(
-                xyA=(x1, y_data),
-                coordsA=ax.transData,
-                xyB=(0.0, y_axes),
-                coordsB=zoom.transAxes,
-                color=colour,
-                linewidth=0.7,
-            )
-        )
 
 
 def _mineral_legend(fig: Figure, packing: Packing, colours: Sequence[str]) -> None:
@@ -313,10 +133,6 @@ def _mineral_legend(fig: Figure, packing: Packing, colours: Sequence[str]) -> No
         handlelength=1.2,
         columnspacing=1.2,
     )
-
-
-def _note(ax: Axes, text: str) -> None:
-    ax.text(0.5, 0.5, text, transform=ax.transAxes, ha="center", va="center", color="#555555")
 
 
 def _title(packing: Packing) -> str:
@@ -341,14 +157,14 @@ def draw_packing(packing: Packing) -> Figure:
     ax, zoom = fig.subplots(1, 2)
     placed = np.flatnonzero(packing.placed).astype(np.int64)
     ax.add_collection(_polygons(packing, placed, colours, linewidths=0.0))
-    _frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
+    frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
     ax.set_title(_title(packing))
-    window = _zoom_window(packing)
-    near = _in_window(packing, window)
+    window = zoom_window(packing)
+    near = in_window(packing, window)
     zoom.add_collection(_polygons(packing, near, colours, edgecolors="#222222", linewidths=0.3))
-    _frame(zoom, window, unit, length_scale(packing))
-    zoom.set_title(f"zoom: {_zoom_size(window, unit)} at the centre")
-    _link_zoom(fig, ax, zoom, window, "black")
+    frame(zoom, window, unit, length_scale(packing))
+    zoom.set_title(f"zoom: {zoom_size(window, unit)} at the centre")
+    link_zoom(fig, ax, zoom, window, "black")
     _mineral_legend(fig, packing, colours)
     return fig
 
@@ -367,11 +183,11 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
     i, j, area = contacts.i, contacts.j, contacts.area
     segments = np.stack([packing.centre[i], packing.centre[j]], axis=1)
     widths = _edge_widths(area)
-    window = _zoom_window(packing)
+    window = zoom_window(packing)
     x0, x1, y0, y1 = window
     mid = 0.5 * (segments[:, 0] + segments[:, 1])
     inside = (mid[:, 0] > x0) & (mid[:, 0] < x1) & (mid[:, 1] > y0) & (mid[:, 1] < y1)
-    near = _in_window(packing, window)
+    near = in_window(packing, window)
     zoom.add_collection(
         PolyCollection(
             packing.polygons(near),
@@ -396,12 +212,12 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
         )
         lines.set_rasterized(int(sel.sum()) > RASTERISE_ABOVE)
         target.add_collection(lines)
-    _frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
-    _frame(zoom, window, unit, length_scale(packing))
+    frame(ax, dom.bounds().tolist(), unit, length_scale(packing))
+    frame(zoom, window, unit, length_scale(packing))
     ax.set_title(f"{len(area):,} contacts at tol = {contacts.tol:g} {unit}")
     widths_note = f" (widths × {factor:.2g})" if factor > 1.05 else ""
-    zoom.set_title(f"zoom, {_zoom_size(window, unit)} at the centre{widths_note}")
-    _link_zoom(fig, ax, zoom, window, "#D55E00")
+    zoom.set_title(f"zoom, {zoom_size(window, unit)} at the centre{widths_note}")
+    link_zoom(fig, ax, zoom, window, "#D55E00")
     if len(area):
         top = float(area.max())
         handles = [
@@ -423,14 +239,14 @@ def draw_network(packing: Packing, contacts: Contacts) -> Figure:
             title_fontsize=7,
         )
     else:
-        _note(ax, "no contacts")
+        note(ax, "no contacts")
     return fig
 
 
 def _log_hist(ax: Axes, values: FloatArray, label: str, unit: str, colour: str = "#0072B2") -> None:
     v = values[np.isfinite(values) & (values > 0)]
     if v.size == 0:
-        _note(ax, "no contacts")
+        note(ax, "no contacts")
         ax.set_xlabel(label)
         return
     lo, hi = float(v.min()), float(v.max())
@@ -454,24 +270,41 @@ def _log_hist(ax: Axes, values: FloatArray, label: str, unit: str, colour: str =
 
 
 def draw_contact_histograms(contacts: Contacts) -> Figure:
-    """Fig. 13: histograms of A_c, b_c, R_c and δ with log-spaced bins on log axes."""
+    """Fig. 13: histograms of the contact sizes, with log-spaced bins on log axes.
+
+    A_c, b_c, R_c and δ of 2D contacts; A_c, V_c, b_c and the cap height δ of 3D ones.
+    """
     fig = Figure(figsize=(WIDTH, 4.6))
     axes = fig.subplots(2, 2)
     tol = contacts.tol
     u = length_unit(contacts.packing)
-    panels = (
-        (contacts.area, f"contact area {_AC} ({u}²)", f"{u}²"),
-        (contacts.width, rf"contact width $b_\mathrm{{c}}$ ({u})", u),
-        (contacts.radius, rf"segment radius $R_\mathrm{{c}}$ ({u})", u),
-        (contacts.depth, rf"segment depth $\delta$ ({u})", u),
-    )
+    solid = contacts.packing.domain.dimension == 3
+    if solid:
+        panels = (
+            (contacts.area, rf"contact area $A_\mathrm{{c}}$ ({u}², projected)", f"{u}²"),
+            (contacts.volume, rf"contact volume $V_\mathrm{{c}}$ ({u}³)", f"{u}³"),
+            (contacts.width, rf"contact width $b_\mathrm{{c}}$ ({u})", u),
+            (contacts.depth, rf"cap height $\delta$ ({u})", u),
+        )
+    else:
+        panels = (
+            (contacts.area, f"contact area {_AC} ({u}²)", f"{u}²"),
+            (contacts.width, rf"contact width $b_\mathrm{{c}}$ ({u})", u),
+            (contacts.radius, rf"segment radius $R_\mathrm{{c}}$ ({u})", u),
+            (contacts.depth, rf"segment depth $\delta$ ({u})", u),
+        )
     for ax, (values, label, unit) in zip(axes.ravel(), panels, strict=True):
         _log_hist(ax, values, label, unit)
-    ax_d = axes[1, 1]
     if contacts.depth.size:
+        face = 2 if solid else 1.5  # the depth of two faces touching at tol
+        ax_d = axes[1, 1]
         ax_d.axvline(tol, color="#D55E00", linewidth=0.9, label=f"tol = {tol:g} {u}")
         ax_d.axvline(
-            1.5 * tol, color="#D55E00", linestyle=":", linewidth=0.9, label="1.5 tol (face to face)"
+            face * tol,
+            color="#D55E00",
+            linestyle=":",
+            linewidth=0.9,
+            label=f"{face:g} tol (face to face)",
         )
     for ax in axes.ravel():
         if ax.get_legend_handles_labels()[0]:
@@ -725,41 +558,69 @@ def mark_first_peak(ax: Axes, peak: PeakFit | None, unit: str, places: int) -> N
     ax.text(x, 0.04, text, transform=ax.get_xaxis_transform(), fontsize=6.5)
 
 
-def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
-    """Fig. 16: g(r) of all centres, and around the particles of each mineral; near and far."""
+def _mineral_centred_curves(
+    ax: Axes, packing: Packing, rdf: Rdf, key: str, colours: Sequence[str], step: float
+) -> list[str]:
+    """Draw g(r) around the particles of each mineral (2D); return the minerals left out."""
     from regopack.plugins.analyzers.common import interior_mask
 
+    names = packing.mineral_names
+    sel = interior_mask(packing, float(rdf.results()["interior_margin"]))
+    counts = np.bincount(packing.mineral[sel], minlength=len(names)).tolist()
+    r = rdf.curves[key]["r"]
+    edges = rdf.edges[key]
+    per = mineral_centred_rdf(rdf.curves_fine[key], names, counts) if len(names) > 1 else {}
+    shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
+    n_all = max(float(sum(counts)), 1.0)
+    single = []
+    for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
+        if name in per:
+            # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
+            per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
+            factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
+            merged = merge_bins(edges, per[name], shell, factor)
+            if not draw_binned(ax, merged, step, color=colour, linewidth=0.8, label=name):
+                single.append(name)
+    return single
+
+
+def _self_pair_curves(
+    ax: Axes, packing: Any, rdf: Rdf, key: str, colours: Sequence[str], step: float
+) -> list[str]:
+    """Draw g(r) of each mineral with itself (3D); return the curves left out."""
+    pairs = rdf.pair_curves.get(key, {})
+    single = []
+    for name, colour in zip(packing.mineral_names, colours, strict=True):
+        curve = pairs.get(f"{name}-{name}")
+        label = f"{name}–{name}"
+        if curve is not None and not draw_binned(
+            ax, curve, step, color=colour, linewidth=0.8, label=label
+        ):
+            single.append(label)
+    return single
+
+
+def draw_rdf(packing: Any, rdf: Rdf) -> Figure:
+    """Fig. 16: g(r) of all centres and of each mineral; near and far field.
+
+    Around the particles of each mineral in 2D, of each mineral with itself in 3D.
+    """
     names = packing.mineral_names
     colours = mineral_colours(names)
     unit = length_unit(packing)
     places = decimals(length_scale(packing), 2)
-    res = rdf.results()
-    sel = interior_mask(packing, float(res["interior_margin"]))
-    counts = np.bincount(packing.mineral[sel], minlength=len(names)).tolist()
+    solid = packing.domain.dimension == 3
+    minerals = _self_pair_curves if solid else _mineral_centred_curves
     fig = Figure(figsize=(WIDTH, 3.0))
     axes = fig.subplots(1, 2)
     for ax, key, title in zip(axes, ("near", "far"), ("near field", "far field"), strict=True):
         curves = rdf.curves.get(key)
         if curves is None:
-            _note(ax, f"no {title} (window too small)")
+            note(ax, f"no {title} (window too small)")
             continue
         r = curves["r"]
         step = float(r[1] - r[0]) if len(r) > 1 else 0.0
-        edges = rdf.edges[key]
-        fine = rdf.curves_fine[key]
-        per = mineral_centred_rdf(fine, names, counts) if len(names) > 1 else {}
-        shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-        n_all = max(float(sum(counts)), 1.0)
-        single = []
-        for m, (name, colour) in enumerate(zip(names, colours, strict=True)):
-            if name in per:
-                # bins merged as for the pair curves: N_A (N - 1) pairs around mineral A
-                per_bin = 2.0 * counts[m] / n_all * float(rdf.expected[key][len(r) // 2])
-                factor = count_bins(per_bin, rdf.config.min_pairs_per_bin, len(r))
-                merged = merge_bins(edges, per[name], shell, factor)
-                if not draw_binned(ax, merged, step, color=colour, linewidth=0.8, label=name):
-                    single.append(name)
-        note_single_bins(ax, single)
+        note_single_bins(ax, minerals(ax, packing, rdf, key, colours, step))
         ax.plot(r, curves["total"], color=TOTAL, linewidth=1.2, label="all particles")
         ax.axhline(1.0, color="#777777", linestyle=":", linewidth=0.7)
         mark_first_peak(ax, rdf.peak if key == "near" else None, unit, places)
@@ -767,15 +628,22 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
         ax.set_xlabel(f"centre distance r ({unit})")
         ax.set_ylabel("g(r)")
         ax.set_title(f"{title}, bins of {step:g} {unit}")
-    handles, labels = legend_entries(axes, [*names, "all particles"])
+    merged = "(a rare mineral's bins merged: steps over the merged bins)"
+    if solid:
+        res = rdf.results()
+        window = " × ".join(f"{s:g}" for s in res["window"])
+        labels = [f"{n}–{n}" for n in names]
+        title = f"{res['n_points']:,} interior centres; window {window} {unit} {merged}"
+    else:
+        labels, title = list(names), f"centres around the particles of {merged}"
+    handles, order = legend_entries(axes, [*labels, "all particles"])
     if handles:
         fig.legend(
             handles,
-            labels,
+            order,
             loc="outside lower center",
-            ncol=min(len(handles), 7),
-            title="centres around the particles of (a rare mineral's bins merged: steps over "
-            "the merged bins)",
+            ncol=min(len(handles), 4 if solid else 7),
+            title=title,
             title_fontsize=7,
         )
     return fig
@@ -783,32 +651,40 @@ def draw_rdf(packing: Packing, rdf: Rdf) -> Figure:
 
 # ---------------------------------------------------------------------------
 
+_A = TypeVar("_A", bound=Analyzer)
+
+
+def _computed(analyzers: Mapping[str, Analyzer], kind: type[_A]) -> _A | None:
+    """Return the computed analyzer of type ``kind``, under whichever name it was filed."""
+    return next((a for a in analyzers.values() if isinstance(a, kind)), None)
+
 
 def figures_for(
-    packing: Packing,
+    packing: Any,
     analyzers: Mapping[str, Analyzer],
     out_dir: str | Path,
     *,
     formats: Sequence[str] = ("png", "svg"),
-    of: str | None = None,
+    stems: Collection[str] | None = None,
 ) -> list[Path]:
     """Draw the figures whose analyzers were computed; return the files written.
 
     Parameters
     ----------
     packing
-        The analysed packing.
+        The analysed packing, 2D or 3D.
     analyzers
         Computed analyzers by name (as :func:`regopack.analysis.pipeline.run_analyses`
-        returns them). Figures are drawn for ``density`` (the packing),
-        ``network``, ``contacts``, ``coordination``, ``rdf``, ``homogeneity``
-        ``psd`` and ``local_fraction``; other analyzers are ignored.
+        returns them, under new or old names). Figures are drawn for ``density``
+        (the packing), ``network``, ``contacts``, ``coordination``, ``rdf``,
+        ``homogeneity``, ``psd`` and ``local_fraction``; other analyzers are
+        ignored. A 3D packing has no packing and network figures.
     out_dir
         Directory of the figures (created if needed).
     formats
         File formats to write, among those matplotlib supports (``"pdf"`` too).
-    of
-        Draw only the figures of this analyzer (see
+    stems
+        Draw only the figures of these file stems (see
         :data:`~regopack.plugins.analyzers.figure_specs.STEMS`); by default all.
 
     Returns
@@ -817,45 +693,46 @@ def figures_for(
         ``<stem>.<format>`` of every figure drawn, figure by figure.
     """
     out = Path(out_dir)
-    contacts = analyzers.get("contacts")
-    contacts = contacts if isinstance(contacts, Contacts) else None
-    coordination = analyzers.get("coordination")
-    rdf = analyzers.get("rdf")
+    solid = packing.domain.dimension == 3
+    end = "-3d" if solid else ""
+    contacts = _computed(analyzers, Contacts)
+    coordination = _computed(analyzers, Coordination)
+    rdf = _computed(analyzers, Rdf)
     jobs: list[tuple[str, Callable[[], Figure]]] = []
-    if "density" in analyzers:
+    if not solid and _computed(analyzers, Density) is not None:
         jobs.append(("packing", lambda: draw_packing(packing)))
-    if "network" in analyzers and contacts is not None:
+    if not solid and _computed(analyzers, Network) is not None and contacts is not None:
         jobs.append(("contact-network", lambda: draw_network(packing, contacts)))
     if contacts is not None:
-        jobs.append(("contact-histograms", lambda: draw_contact_histograms(contacts)))
-    if isinstance(coordination, Coordination):
-        jobs.append(("z-vs-tol", lambda: draw_z_vs_tol(packing, coordination, contacts)))
-        jobs.append(("z-per-mineral", lambda: draw_z_per_mineral(packing, coordination)))
-    if isinstance(rdf, Rdf):
-        jobs.append(("rdf", lambda: draw_rdf(packing, rdf)))
-    homogeneity = analyzers.get("homogeneity")
-    if isinstance(homogeneity, Homogeneity):
+        jobs.append((f"contact-histograms{end}", lambda: draw_contact_histograms(contacts)))
+    if coordination is not None:
+        jobs.append((f"z-vs-tol{end}", lambda: draw_z_vs_tol(packing, coordination, contacts)))
+        jobs.append((f"z-per-mineral{end}", lambda: draw_z_per_mineral(packing, coordination)))
+    if rdf is not None:
+        jobs.append((f"rdf{end}", lambda: draw_rdf(packing, rdf)))
+    homogeneity = _computed(analyzers, Homogeneity)
+    if homogeneity is not None:
         from regopack.plugins.analyzers.homogeneity_figure import draw_homogeneity
 
-        jobs.append(("homogeneity", lambda: draw_homogeneity(packing, homogeneity)))
-    psd = analyzers.get("psd")
-    if isinstance(psd, Psd):
+        jobs.append((f"homogeneity{end}", lambda: draw_homogeneity(packing, homogeneity)))
+    psd = _computed(analyzers, Psd)
+    if psd is not None:
         from regopack.plugins.analyzers.psd_figure import draw_psd
 
-        jobs.append(("psd", lambda: draw_psd(psd, length_unit(packing))))
-    local_fraction = analyzers.get("local_fraction")
-    if isinstance(local_fraction, LocalFraction):
+        jobs.append((f"psd{end}", lambda: draw_psd(psd, length_unit(packing))))
+    local_fraction = _computed(analyzers, LocalFraction)
+    if local_fraction is not None and not solid:
         from regopack.plugins.analyzers.local_fraction_figure import draw_local_fraction
 
         lf = local_fraction
         jobs.append(("local-fraction", lambda: draw_local_fraction(packing, lf)))
-    if of is not None:
-        jobs = [(stem, draw) for stem, draw in jobs if stem in STEMS.get(of, ())]
+    if stems is not None:
+        jobs = [(stem, draw) for stem, draw in jobs if stem in stems]
     if not jobs:
         return []
     out.mkdir(parents=True, exist_ok=True)
     paths: list[Path] = []
-    with _style():
+    with style():
         for stem, draw in jobs:
-            paths += _save(draw(), out, stem, formats)
+            paths += save(draw(), out, stem, formats)
     return paths

@@ -1,5 +1,7 @@
-"""Spatial homogeneity: density, area fraction, size and minerals over rings and tiles.
+"""Spatial homogeneity: density, solid fraction, size (and minerals) over regions.
 
+A 3D packing is cut into horizontal layers and nested boxes
+(:mod:`~regopack.plugins.analyzers.homogeneity_boxes`); a 2D one as follows.
 The interior window (see :func:`~regopack.plugins.analyzers.common.interior_window`)
 is cut into rings about the domain centre and into a grid of tiles. In each
 region: the number density of the particle centres, the area fraction φ of the
@@ -41,11 +43,20 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from regopack.base.errors import ConfigError
 from regopack.base.limits import derived_count
 from regopack.base.units import length_scale
 from regopack.geometry.domain import PlaneDomain
 from regopack.packing.core import Packing
-from regopack.plugins.analyzers.common import eta_of, interior_margin, interior_window
+from regopack.packing.core3d import Packing3D
+from regopack.plugins.analyzers.common import (
+    AnyPacking,
+    Measured,
+    eta_of,
+    interior_margin,
+    interior_window,
+)
+from regopack.plugins.analyzers.homogeneity_boxes import layers_and_shells
 from regopack.plugins.analyzers.regions import (
     Tiles,
     ring_edges,
@@ -95,6 +106,10 @@ TILE_SPLIT = 3
 """Each tile is cut into this many by this many equal cells for the error of its φ."""
 
 
+DEFAULT_REGIONS: dict[str, Any] = {"tiles": (4, 4), "layers": 6, "shells": 4}
+"""Regions of the window when the config leaves them out."""
+
+
 class HomogeneityConfig(BaseModel):
     """Parameters of the homogeneity analyzer."""
 
@@ -119,10 +134,16 @@ class HomogeneityConfig(BaseModel):
             "centre to the farthest window point over rings."
         ),
     )
-    tiles: tuple[int, int] = Field(
-        (4, 4),
+    tiles: tuple[int, int] | None = Field(
+        None,
         strict=False,
-        description="Tiles along x and y over the interior window's bounding box.",
+        description="Tiles along x and y over the interior window's bounding box; default: [4, 4].",
+    )
+    layers: int | None = Field(
+        None, ge=1, le=1000, description="Horizontal layers of a 3D window along z; default: 6."
+    )
+    shells: int | None = Field(
+        None, ge=1, le=1000, description="Nested boxes about a 3D window's centre; default: 4."
     )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."
@@ -132,7 +153,7 @@ class HomogeneityConfig(BaseModel):
     def _check(self) -> HomogeneityConfig:
         if self.ring_width is not None and self.rings is not None:
             raise ValueError("give at most one of ring_width and rings")
-        nx, ny = self.tiles
+        nx, ny = self.tiles or DEFAULT_REGIONS["tiles"]
         if not (1 <= nx <= 100 and 1 <= ny <= 100):
             raise ValueError(f"tiles must be two counts from 1 to 100, got [{nx}, {ny}]")
         return self
@@ -276,20 +297,26 @@ def _none(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
-class Homogeneity(Analyzer):
-    """Number density, φ, mean diameter and mineral fractions over rings and tiles.
+PLANE_FIELDS = ("ring_width", "rings", "tiles")
+"""Parameters that cut a 2D window; ``layers`` and ``shells`` cut a 3D one."""
 
-    After :meth:`compute`, :attr:`rings` and :attr:`tiles_table` hold the
-    tables, :attr:`trends` the fitted lines (by quantity prefix, in length
-    units, not per 100), :attr:`overall` the values over the whole window,
-    :attr:`window` the interior window and :attr:`centre` the ring centre.
+
+class Homogeneity(Measured):
+    """Number density, φ, mean diameter (and mineral fractions) over the regions of the window.
+
+    In 2D, over rings and tiles: after :meth:`compute`, :attr:`rings` and
+    :attr:`tiles_table` hold the tables, :attr:`trends` the fitted lines (by
+    quantity prefix, in length units, not per 100), :attr:`overall` the
+    values over the whole window, :attr:`window` the interior window and
+    :attr:`centre` the ring centre. In 3D, over horizontal layers and nested
+    boxes: :attr:`layers` and :attr:`shells` hold the tables.
     """
 
     name = "homogeneity"
 
     def __init__(self, config: HomogeneityConfig | None = None) -> None:
         self.config = config or HomogeneityConfig()
-        self._results: dict[str, Any] | None = None
+        self._tables: dict[str, dict[str, Any]] = {}
         self.rings: dict[str, Any] = {}
         self.tiles_table: dict[str, Any] = {}
         self.trends: dict[str, Trend] = {}
@@ -308,11 +335,26 @@ class Homogeneity(Analyzer):
         quarter = near / 4 if near > 0 else far / 4
         return min(2.0 * d_max, quarter) if d_max > 0 else quarter
 
-    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
-        """Cut the window into rings and tiles and measure each; fit the radial trends."""
+    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+        """Cut the window into regions and measure each; in 2D, fit the radial trends."""
+        own = ("layers", "shells") if isinstance(packing, Packing3D) else PLANE_FIELDS
+        other = set(PLANE_FIELDS + ("layers", "shells")) - set(own)
+        given = sorted(f for f in other if getattr(self.config, f) is not None)
+        if given:
+            raise ConfigError(
+                f"{self.name}.{given[0]} has no meaning for a {packing.domain.dimension}D "
+                f"packing; its regions are set by {', '.join(own)}"
+            )
         margin = interior_margin(packing, self.config.margin)
         window = interior_window(packing, margin)
         self.window = window
+        if isinstance(packing, Packing3D):
+            layers = self.config.layers or DEFAULT_REGIONS["layers"]
+            shells = self.config.shells or DEFAULT_REGIONS["shells"]
+            self._tables, self._results = layers_and_shells(packing, window, margin, layers, shells)
+            self.layers = self._tables["homogeneity_layers"]
+            self.shells = self._tables["homogeneity_shells"]
+            return self
         self.centre = packing.domain.center
         names = packing.mineral_names
         idx = np.flatnonzero(packing.placed).astype(np.int64)
@@ -346,7 +388,7 @@ class Homogeneity(Analyzer):
         }
 
         # tiles
-        nx, ny = self.config.tiles
+        nx, ny = self.config.tiles or DEFAULT_REGIONS["tiles"]
         tiles: Tiles = tile_grid(window, nx, ny)
         tile_of = self._tile_of(centre_xy, inside, tiles, window, nx, ny)
         tile_stats = region_stats(
@@ -432,6 +474,7 @@ class Homogeneity(Analyzer):
             notes.append(f"only {k} ring(s): no trend error without 3 rings or more")
         res["notes"] = notes
         self._results = res
+        self._tables = {"homogeneity_rings": self.rings, "homogeneity_tiles": self.tiles_table}
         return self
 
     @staticmethod
@@ -456,14 +499,7 @@ class Homogeneity(Analyzer):
         out[ok] = cell[(iy[ok] * nx + ix[ok]).astype(np.int64)]
         return out
 
-    def results(self) -> dict[str, Any]:
-        """Scalars: the window's values, the ring trends and spreads, the tile spreads."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)
-
     def tables(self) -> dict[str, dict[str, Any]]:
-        """Tables ``homogeneity_rings`` and ``homogeneity_tiles``."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return {"homogeneity_rings": dict(self.rings), "homogeneity_tiles": dict(self.tiles_table)}
+        """Tables ``homogeneity_rings`` and ``homogeneity_tiles`` (3D: ``_layers``, ``_shells``)."""
+        self._need()
+        return {name: dict(table) for name, table in self._tables.items()}

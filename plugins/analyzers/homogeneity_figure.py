@@ -1,4 +1,4 @@
-"""Figure of the homogeneity analyzer: radial profiles with their trends, and tile maps."""
+"""Figures of the homogeneity analyzer: rings and tiles (2D), layers and shells (3D)."""
 
 from __future__ import annotations
 
@@ -15,11 +15,10 @@ from matplotlib.patches import Rectangle
 from numpy.typing import NDArray
 
 from regopack.base.units import length_scale, length_unit
-from regopack.packing.core import Packing
-from regopack.plugins.analyzers.figures import WIDTH, _note, axis_unit, length_ticks
+from regopack.plugins.analyzers.figure_style import WIDTH, axis_unit, length_ticks, note
 from regopack.plugins.analyzers.homogeneity import SECTORS, Homogeneity
 
-__all__ = ["draw_homogeneity"]
+__all__ = ["draw_homogeneity", "draw_layers_and_shells"]
 
 PANELS: tuple[tuple[str, str, str, str, int], ...] = (
     ("density", "number_density", "number density ({unit})", "number density", -2),
@@ -44,7 +43,7 @@ def _profile(
     y = scale * np.asarray(rings[column])
     err = scale * np.asarray(rings[f"{column}_err"])
     if len(r) == 0:
-        _note(ax, "no rings (empty window)")
+        note(ax, "no rings (empty window)")
         return
     lo, hi = np.asarray(rings["r_inner"]), np.asarray(rings["r_outer"])
     ax.errorbar(
@@ -143,8 +142,13 @@ def _tile_map(
     bar.set_label("tile / window value − 1 (%)")
 
 
-def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
-    """Ring profiles of number density, φ and mean diameter with their trends; tile maps."""
+def draw_homogeneity(packing: Any, h: Homogeneity) -> Figure:
+    """Ring profiles of number density, φ and mean diameter with their trends; tile maps.
+
+    A 3D packing gets :func:`draw_layers_and_shells`.
+    """
+    if packing.domain.dimension == 3:
+        return draw_layers_and_shells(h, length_unit(packing))
     res = h.results()
     unit = length_unit(packing)
     shown = [axis_unit(power, unit, length_scale(packing)) for *_, power in PANELS]
@@ -155,7 +159,7 @@ def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
     nx, ny = res["tiles"]
     for ax, (_, column, _, short, _), (_, scale) in zip(axes[1], PANELS, shown, strict=True):
         if len(h.tiles_table.get("tile", [])) == 0:
-            _note(ax, "no tiles (empty window)")
+            note(ax, "no tiles (empty window)")
             continue
         _tile_map(ax, fig, h, column, scale, unit, length_scale(packing))
         ax.set_title(f"{short}, {nx} × {ny} tiles")
@@ -170,5 +174,46 @@ def draw_homogeneity(packing: Packing, h: Homogeneity) -> Figure:
         f"(margin {res['interior_margin']:g} {unit}); rings of {res['ring_width']:.3g} {unit} "
         f"about the centre; tile values labelled",
         fontsize=8,
+    )
+    return fig
+
+
+def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figure:
+    """Draw number density, φ and mean diameter over the layers (top) and shells (bottom).
+
+    Each region is drawn at its middle (the layer's height, the shell's mean
+    half width), with a dashed line at the mean over the regions; lengths are
+    labelled in ``unit``.
+    """
+    fig = Figure(figsize=(WIDTH, 4.4))
+    axes = fig.subplots(2, 3)
+    rows = (
+        (homogeneity.layers, "z_lo", "z_hi", f"height z of the layer ({unit})"),
+        (homogeneity.shells, "half_lo", "half_hi", f"half width of the shell ({unit})"),
+    )
+    columns = (
+        ("density", f"number density (1/{unit}³)"),
+        ("phi", "volume fraction φ"),
+        ("mean_diameter", f"mean diameter ({unit})"),
+    )
+    for row, (table, lo, hi, xlabel) in enumerate(rows):
+        x = 0.5 * (np.asarray(table[lo]) + np.asarray(table[hi]))
+        for col, (key, ylabel) in enumerate(columns):
+            ax = axes[row, col]
+            y = np.asarray(table[key], dtype=float)
+            if x.size:
+                ax.plot(x, y, marker="o", markersize=3, linewidth=0.9, color="#0072B2")
+                finite = y[np.isfinite(y)]
+                if finite.size:
+                    mean = float(finite.mean())
+                    ax.axhline(mean, color="0.4", linestyle="--", linewidth=0.7)
+                    spread = float(finite.std() / mean) if mean else float("nan")
+                    ax.set_title(f"mean {mean:.4g}, spread {100 * spread:.1f} %", fontsize=7)
+            else:
+                note(ax, "no interior window")
+            ax.set_xlabel(xlabel)
+            ax.set_ylabel(ylabel)
+    fig.suptitle(
+        "Homogeneity of the interior window: layers along z, shells about the centre", fontsize=8
     )
     return fig

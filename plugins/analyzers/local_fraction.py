@@ -27,11 +27,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.geometry.domain import Circle, PeriodicRectangle, PlaneDomain
 from regopack.packing.core import Packing
-from regopack.plugins.analyzers.common import (
-    eta_of,
-    interior_margin,
-    interior_mask,
-)
+from regopack.plugins.analyzers.common import Measured, eta_of, interior_margin, interior_mask
 from regopack.registry.interfaces import Analyzer
 
 __all__ = [
@@ -407,7 +403,7 @@ def histogram_edges(values: FloatArray, bins: int, step: float = 0.02) -> FloatA
     return np.round(np.linspace(lo, hi, bins + 1), 12)
 
 
-class LocalFraction(Analyzer):
+class LocalFraction(Measured):
     """Local packing fraction of every particle: the solid share of its cell.
 
     ``phi_i = s_i / A_i``, with ``A_i`` the area of particle ``i``'s cell and
@@ -415,14 +411,14 @@ class LocalFraction(Analyzer):
     ``phi_local``, ``cell_area``, ``solid_area`` and ``outside_area`` (the part
     of a particle outside its own cell) hold one value per drawn particle (NaN
     for the particles not placed); ``cells`` the clipped cell of every placed
-    particle, in the order of ``idx = np.flatnonzero(placed)``.
+    particle, in the order of ``idx = np.flatnonzero(placed)``. Scalars:
+    statistics of phi_i over the domain and the interior, and the area check.
     """
 
     name = "local_fraction"
 
     def __init__(self, config: LocalFractionConfig | None = None) -> None:
         self.config = config or LocalFractionConfig()
-        self._results: dict[str, Any] | None = None
 
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Build and clip the cells; measure the particle area inside each."""
@@ -525,16 +521,9 @@ class LocalFraction(Analyzer):
         # the first len(idx) shapes are the cells' own particles
         return solid_in_cells(cells, shapes)
 
-    def results(self) -> dict[str, Any]:
-        """Scalars: statistics of phi_i over the domain and the interior; the area check."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)
-
     def tables(self) -> dict[str, dict[str, Any]]:
         """Per-particle table ``local_fraction`` and the histogram ``local_fraction_hist``."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
+        self._need()
         p, idx = self._packing, self.idx
         return {
             "local_fraction": {

@@ -14,15 +14,15 @@ from numpy.typing import NDArray
 
 from regopack.base.units import length_scale, length_unit
 from regopack.packing.core import Packing
-from regopack.plugins.analyzers.figures import (
+from regopack.plugins.analyzers.figure_style import (
     RASTERISE_ABOVE,
     WIDTH,
-    _frame,
-    _in_window,
-    _link_zoom,
-    _note,
-    _zoom_size,
-    _zoom_window,
+    frame,
+    in_window,
+    link_zoom,
+    note,
+    zoom_size,
+    zoom_window,
 )
 from regopack.plugins.analyzers.local_fraction import LocalFraction
 
@@ -104,13 +104,13 @@ def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
     norm = _norm(phi)
     kind = LABEL[res["cells"]]
     if len(idx) == 0:
-        _note(ax, "no placed particles")
+        note(ax, "no placed particles")
     else:
         _colour(_particles(ax, packing, idx, phi, linewidths=0.0), phi, norm)
-    _frame(ax, packing.domain.bounds().tolist(), unit, length_scale(packing))
+    frame(ax, packing.domain.bounds().tolist(), unit, length_scale(packing))
     ax.set_title(f"{packing.n_placed:,} particles, {kind} cells")
-    window = _zoom_window(packing)
-    near = _in_window(packing, window)
+    window = zoom_window(packing)
+    near = in_window(packing, window)
     coll = _particles(zoom, packing, near, lf.phi_local[near], edgecolors="none")
     _colour(coll, lf.phi_local[near], norm)
     pos = np.searchsorted(idx, near)
@@ -119,9 +119,9 @@ def draw_local_fraction(packing: Packing, lf: LocalFraction) -> Figure:
     edges = PolyCollection(rings, closed=True, facecolors="none", edgecolors="white")
     edges.set_linewidth(0.5)
     zoom.add_collection(edges)
-    _frame(zoom, window, unit, length_scale(packing))
-    zoom.set_title(f"zoom {_zoom_size(window, unit)}; cells white")
-    _link_zoom(fig, ax, zoom, window, "black")
+    frame(zoom, window, unit, length_scale(packing))
+    zoom.set_title(f"zoom {zoom_size(window, unit)}; cells white")
+    link_zoom(fig, ax, zoom, window, "black")
     _histogram(hist, lf)
     hist.set_title(f"σ(φᵢ) = {res['phi_std_interior'] or float('nan'):.3f} (interior)")
     bar = fig.colorbar(

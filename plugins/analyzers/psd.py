@@ -3,8 +3,9 @@
 "Requested" are all drawn particles of the packing, placed or not. The
 distribution is counted in √2 sieve classes of the equivalent diameter
 ``d = 2 r`` (:mod:`~regopack.plugins.analyzers.sieve`), by number and by mass.
-In two dimensions a particle's mass is taken as its area ``π r²`` (every
-mineral at the same density); nothing else weights the mass.
+A particle's mass is taken as its area ``π r²`` in two dimensions and its
+volume ``4/3 π r³`` in three (every mineral at the same density); nothing
+else weights the mass.
 
 When the scene's size distribution has a method ``cdf(d)`` (the probability
 that a diameter is at most ``d``, as every built-in one has), the classes
@@ -15,13 +16,12 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping
-from typing import Any, ClassVar, Self
+from typing import Any, Self
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.packing.core import Packing
 from regopack.packing.sieve import (
     SIEVE_RATIO,
     class_of,
@@ -29,6 +29,7 @@ from regopack.packing.sieve import (
     sieve_edges,
     unplaced_per_class,
 )
+from regopack.plugins.analyzers.common import AnyPacking, Measured
 from regopack.registry.interfaces import Analyzer
 
 __all__ = [
@@ -36,6 +37,7 @@ __all__ = [
     "PsdConfig",
     "analytic_shares",
     "ks_distance",
+    "masses",
     "scene_size_distribution",
     "unplaced_per_class",
 ]
@@ -87,7 +89,7 @@ def ks_distance(diameter: FloatArray, subset: NDArray[np.bool_], weight: FloatAr
     return float(np.max(np.abs(f_sub - f_all)))
 
 
-def scene_size_distribution(packing: Packing) -> tuple[Any, str | None]:
+def scene_size_distribution(packing: AnyPacking) -> tuple[Any, str | None]:
     """Build the scene's size distribution again; ``(distribution, None)`` or ``(None, why)``."""
     from pydantic import ValidationError
 
@@ -146,6 +148,12 @@ def analytic_shares(
     return number, mass / total if total > 0 else np.full_like(mass, np.nan)
 
 
+def masses(radius: FloatArray, dimension: int = 2) -> FloatArray:
+    """Mass of particles of equivalent radius ``radius``: area ``pi r^2``, or volume in 3D."""
+    out: FloatArray = np.pi * radius**2 if dimension == 2 else 4.0 / 3.0 * np.pi * radius**3
+    return out
+
+
 def _weighted_median(d: FloatArray, w: FloatArray) -> float | None:
     if d.size == 0 or not w.sum() > 0:
         return None
@@ -166,31 +174,33 @@ def _none(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
 
-class Psd(Analyzer):
+class Psd(Measured):
     """Size distribution of the placed particles against all drawn ones, per √2 class.
 
-    After :meth:`compute`, :attr:`classes` holds the class table,
-    :attr:`diameter`, :attr:`mass` and :attr:`placed` the particles, and
-    :attr:`cdf` the analytic CDF (or ``None``).
+    Scalars: counts, medians, KS distances, worst class errors and the
+    analytic comparison. After :meth:`compute`, :attr:`classes` holds the
+    class table, :attr:`diameter`, :attr:`mass` and :attr:`placed` the
+    particles, :attr:`mass_power` the power of the diameter the mass goes
+    with (2: areas in 2D, 3: volumes in 3D) and :attr:`cdf` the analytic CDF
+    (or ``None``).
     """
 
     name = "psd"
-    mass_power: ClassVar[int] = 2
-    """Power of the diameter that a particle's mass is proportional to: 2 (area) in 2D."""
 
     def __init__(self, config: PsdConfig | None = None) -> None:
         self.config = config or PsdConfig()
-        self._results: dict[str, Any] | None = None
         self.classes: dict[str, Any] = {}
         self.cdf: Cdf | None = None
+        self.mass_power = 2
 
-    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
         """Count the drawn and placed particles per class; the KS distances."""
         from scipy import stats
 
         d = 2.0 * packing.radius
         placed = packing.placed
-        mass = self.masses(packing.radius)
+        self.mass_power = packing.domain.dimension
+        mass = masses(packing.radius, self.mass_power)
         self.diameter, self.mass, self.placed = d, mass, placed
         n, n_placed = len(d), int(placed.sum())
         notes: list[str] = []
@@ -276,7 +286,7 @@ class Psd(Analyzer):
 
     def _compare(
         self,
-        packing: Packing,
+        packing: AnyPacking,
         edges: FloatArray,
         placed_share: FloatArray,
         drawn: NDArray[np.int64],
@@ -325,20 +335,7 @@ class Psd(Analyzer):
         res["worst_analytic_number_rel_error"], res["worst_analytic_number_class"] = worst
         return number, mass, res
 
-    @staticmethod
-    def masses(radius: FloatArray) -> FloatArray:
-        """Mass of particles of equivalent radius ``radius``: their area ``pi r^2``."""
-        out: FloatArray = np.pi * radius**2
-        return out
-
-    def results(self) -> dict[str, Any]:
-        """Scalars: counts, medians, KS distances, worst class errors, the analytic comparison."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)
-
     def tables(self) -> dict[str, dict[str, Any]]:
         """Table ``psd_classes``: one row per sieve class."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
+        self._need()
         return {"psd_classes": dict(self.classes)}

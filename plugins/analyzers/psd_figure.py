@@ -8,7 +8,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import LogLocator, NullFormatter, ScalarFormatter
 
-from regopack.plugins.analyzers.figures import TOTAL, WIDTH
+from regopack.plugins.analyzers.figure_style import TOTAL, WIDTH
 from regopack.plugins.analyzers.psd import Psd
 
 __all__ = ["draw_psd"]

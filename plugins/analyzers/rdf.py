@@ -1,19 +1,25 @@
-"""Radial distribution function of particle centres (SPEC §6).
+"""Radial distribution function of particle centres (SPEC §6), in 2D and 3D.
 
 ``g(r)`` over the interior window ``W`` with an edge correction, so that
-``g -> 1`` for an uncorrelated pattern at every ``r`` the window admits:
+``g -> 1`` for an uncorrelated pattern at every ``r`` the window admits
+(:mod:`~regopack.plugins.analyzers.rdf_histogram`):
 
-- a rectangle ``a x b``: the translation correction, every pair at separation
-  ``(dx, dy)`` weighted by ``|W| / ((a - |dx|)(b - |dy|))`` (``r < min(a, b)``);
+- a rectangle ``a x b`` (a box ``a x b x c``): the translation correction,
+  every pair at separation ``(dx, dy)`` weighted by ``|W| / ((a - |dx|)(b - |dy|))``
+  (``|W| / ((a - |dx|)(b - |dy|)(c - |dz|))``), the measure of ``W ∩ (W + d)``
+  in which a pair at that separation can lie whole (``r < min(a, b)``);
 - a circle or convex polygon: the isotropic covariogram correction, every pair
   at distance ``r`` weighted by ``|W| / gamma(r)``, with ``gamma(r)`` the mean
   area of ``W ∩ (W + r u)`` over directions ``u`` (exact for the circle;
-  :data:`COVARIOGRAM_DIRECTIONS` directions for a polygon);
-- a periodic rectangle: no edges; pairs are counted through the nearest
-  periodic image (``r < min(a, b) / 2``).
+  :data:`~regopack.plugins.analyzers.rdf_histogram.COVARIOGRAM_DIRECTIONS`
+  directions for a polygon);
+- a periodic rectangle or box: no edges; pairs are counted through the
+  nearest periodic image (``r`` below half the shortest side).
 
-Per mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
-(``N_A (N_A - 1)`` when ``A = B``); a pair's bins are merged until each holds
+``g(r) = |W|^2 / (N (N - 1) / 2) * H(r) / S(r)``, with ``H`` the weighted
+count of pairs in the bin and ``S`` the area (volume) of its shell. Per
+mineral pair ``(A, B)`` the normalisation uses ``N_A N_B``
+(``N_A (N_A - 1) / 2`` when ``A = B``); a pair's bins are merged until each holds
 enough pairs (:func:`regopack.plugins.analyzers.rdf_peak.count_bins`), and its
 curve is tabled over its merged bins, each with its own edges ``r_lo``,
 ``r_hi`` (table ``rdf_<field>_pairs``). The top of the near-field curve is
@@ -24,7 +30,6 @@ is a distinct peak; otherwise as a plateau
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any, Self
 
@@ -33,9 +38,10 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validator, model_validator
 
 from regopack.base.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
-from regopack.geometry.domain import Circle, ConvexPolygon, PeriodicRectangle, PlaneDomain
-from regopack.packing.core import Packing
+from regopack.geometry.domain import Circle, ConvexPolygon, PeriodicRectangle
 from regopack.plugins.analyzers.common import (
+    AnyPacking,
+    Measured,
     eta_of,
     interior_margin,
     interior_mask,
@@ -43,6 +49,7 @@ from regopack.plugins.analyzers.common import (
     periodic_images,
     scaled_defaults,
 )
+from regopack.plugins.analyzers.rdf_histogram import rdf3d_histogram, rdf_histogram, shells
 from regopack.plugins.analyzers.rdf_peak import (
     BinnedCurve,
     first_peak,
@@ -54,18 +61,13 @@ from regopack.plugins.analyzers.rdf_peak import (
 from regopack.registry.interfaces import Analyzer
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
-COVARIOGRAM_DIRECTIONS = 90
-"""Directions over which a polygon window's covariogram is averaged."""
-
-
-RDF_DEFAULTS: dict[str, Any] = {
-    "near": (0.0, 10.0),
-    "near_bin": 0.1,
-    "far": (100.0, 340.0),
-    "far_bin": 2.0,
+RDF_DEFAULTS: dict[int, dict[str, Any]] = {
+    2: {"near": (0.0, 10.0), "near_bin": 0.1, "far": (100.0, 340.0), "far_bin": 2.0},
+    3: {"near": (0.0, 10.0), "near_bin": 0.1, "far": (10.0, 60.0), "far_bin": 0.5},
 }
-"""Default ranges and bin widths of r at the built-in scale (``d_min = 2``); for
+"""Default ranges and bin widths of r by dimension, at the built-in scale (``d_min = 2``); for
 another packing each is times :func:`~regopack.base.units.length_scale` (``d_min / 2``)."""
 
 
@@ -91,14 +93,15 @@ class RdfConfig(BaseModel):
         None,
         strict=False,
         description=(
-            "Far-field range of r (length unit); default: [50, 170] d_min "
-            "([100, 340] at d_min = 2)."
+            "Far-field range of r (length unit); default: [50, 170] d_min ([100, 340] at "
+            "d_min = 2) in 2D, [5, 30] d_min ([10, 60]) in 3D."
         ),
     )
     far_bin: float | None = Field(
         None,
         gt=0,
-        description="Bin width in the far field; default: d_min (2.0 at d_min = 2).",
+        description="Bin width in the far field; default: d_min (2.0 at d_min = 2) in 2D, "
+        "d_min / 4 (0.5) in 3D.",
     )
     per_mineral: bool = Field(True, description="Also compute g(r) for every pair of minerals.")
     min_pairs_per_bin: float = Field(
@@ -155,149 +158,15 @@ def _bins(span: float, width: float, cut: bool) -> int:
     return max(1, int(np.floor(ratio)))
 
 
-def rdf_histogram(
-    x: FloatArray,
-    y: FloatArray,
-    kind: NDArray[np.int64],
-    n_kinds: int,
-    r_lo: float,
-    width: float,
-    bins: int,
-    a: float,
-    b: float,
-    window: PlaneDomain | None = None,
-    n_real: int | None = None,
-) -> tuple[FloatArray, FloatArray]:
-    """Edge-corrected ``g(r)`` of the points in ``window``, total and per kind pair.
-
-    ``window`` defaults to the ``a x b`` rectangle (translation correction).
-    For a periodic window the points from index ``n_real`` on are ghost
-    images of the first ``n_real`` (see :func:`periodic_images`).
-
-    Returns
-    -------
-    total, per_kind
-        ``(bins,)`` and ``(n_kinds, n_kinds, bins)`` (symmetric) curves; NaN where
-        a kind pair has no pairs to normalise by.
-
-    Raises
-    ------
-    ValueError
-        When the arguments would make the compiled kernel index out of bounds:
-        a kind outside ``[0, n_kinds)``, arrays of different lengths, a
-        coordinate that is not finite, no bins, a bin width that is not
-        positive, or ``n_real`` beyond the points.
-    """
-    kind = _checked_kinds(x, y, kind, n_kinds, r_lo, width, bins, n_real)
-    from regopack.plugins.analyzers.rdf_kernel import weighted_pair_histogram
-
-    edges = r_lo + width * np.arange(bins + 1)
-    if isinstance(window, PeriodicRectangle):
-        assert n_real is not None
-        hist = weighted_pair_histogram(
-            x, y, kind, n_kinds, r_lo, width, bins, a, b, False, n_real
-        ) / (a * b)
-        area = a * b
-        x, kind = x[:n_real], kind[:n_real]
-    elif isinstance(window, Circle | ConvexPolygon):
-        counts_r = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b, False)
-        gamma = covariogram(window, 0.5 * (edges[:-1] + edges[1:]))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            hist = np.where(gamma > 0, counts_r / gamma, np.nan)
-        area = window.area
-    else:
-        hist = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b)
-        area = a * b
-    shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-    counts = np.bincount(kind, minlength=n_kinds).astype(np.float64)
-    area2 = area**2
-    n = float(len(x))
-    total = hist.sum(axis=(0, 1)) * area2 / (max(n * (n - 1.0) / 2.0, 1e-300) * shell)
-    per = np.full_like(hist, np.nan)
-    for p in range(n_kinds):
-        for q in range(p, n_kinds):
-            norm = counts[p] * (counts[p] - 1.0) / 2.0 if p == q else counts[p] * counts[q]
-            if norm > 0:
-                per[p, q] = hist[p, q] * area2 / (norm * shell)
-                per[q, p] = per[p, q]
-    return total, per
-
-
-def _checked_kinds(
-    x: FloatArray,
-    y: FloatArray,
-    kind: NDArray[np.int64],
-    n_kinds: int,
-    r_lo: float,
-    width: float,
-    bins: int,
-    n_real: int | None,
-) -> NDArray[np.int64]:
-    """Return ``kind`` as int64 after checking what the compiled kernel indexes without checks.
-
-    The kernel writes ``out[kind[p], kind[q], k]`` with numba's unchecked
-    indexing: a kind out of range, or a bin ``k`` from a NaN distance, would
-    write outside the histogram.
-    """
-    kind = np.asarray(kind)
-    if kind.dtype.kind not in "iu":
-        raise ValueError(f"kind must be an integer array, not {kind.dtype}")
-    kind = kind.astype(np.int64, copy=False)
-    n = x.shape[0]
-    if x.ndim != 1 or y.shape != x.shape or kind.shape != x.shape:
-        raise ValueError(
-            f"x, y and kind must be 1-D arrays of one length, not {x.shape}, {y.shape} and "
-            f"{kind.shape}"
-        )
-    if n_kinds < 1:
-        raise ValueError(f"n_kinds must be >= 1, not {n_kinds}")
-    if n and (int(kind.min()) < 0 or int(kind.max()) >= n_kinds):
-        raise ValueError(
-            f"every kind must lie in [0, {n_kinds}); got kinds from {int(kind.min())} "
-            f"to {int(kind.max())}"
-        )
-    if not (np.isfinite(x).all() and np.isfinite(y).all()):
-        raise ValueError("the coordinates x and y must be finite")
-    if not (bins >= 1 and math.isfinite(width) and width > 0 and math.isfinite(r_lo) and r_lo >= 0):
-        raise ValueError(
-            f"bins ({bins}) must be >= 1, width ({width}) > 0 and r_lo ({r_lo}) >= 0, finite"
-        )
-    if n_real is not None and not 0 <= n_real <= n:
-        raise ValueError(f"n_real must lie in [0, {n}], not {n_real}")
-    return kind
-
-
-def covariogram(window: PlaneDomain, r: FloatArray) -> FloatArray:
-    """Isotropised set covariogram: mean area of ``W ∩ (W + r u)`` over directions ``u``.
-
-    Exact for a circle; for a polygon the mean over
-    :data:`COVARIOGRAM_DIRECTIONS` directions in ``[0, pi)`` (the area is even in ``u``).
-    """
-    r = np.asarray(r, dtype=np.float64)
-    if isinstance(window, Circle):
-        big = window.radius
-        q = np.clip(r / (2.0 * big), 0.0, 1.0)
-        return np.asarray(
-            2.0 * big * big * (np.arccos(q) - q * np.sqrt(1.0 - q * q)), dtype=np.float64
-        )
-    import shapely
-
-    poly = shapely.Polygon(window.outline())
-    t = (np.arange(COVARIOGRAM_DIRECTIONS) + 0.5) * np.pi / COVARIOGRAM_DIRECTIONS
-    out = np.empty(r.shape[0])
-    for k, rk in enumerate(r):
-        moved = [shapely.affinity.translate(poly, rk * np.cos(a), rk * np.sin(a)) for a in t]
-        out[k] = float(np.mean(shapely.area(shapely.intersection(poly, moved))))
-    return out
-
-
-class Rdf(Analyzer):
+class Rdf(Measured):
     """Radial distribution function, total and per mineral pair, near and far field.
 
-    After :meth:`compute`, by field (``"near"``, ``"far"``): :attr:`curves`
-    holds ``r`` (bin centres) and ``total``; :attr:`curves_fine` those and
-    every pair ``"A-B"`` at the same bins; :attr:`pair_curves` every pair over
-    its merged bins (a :class:`~regopack.plugins.analyzers.rdf_peak.BinnedCurve`);
+    Scalars: the first peak (or plateau), the far-field mean of g, the points
+    used, the window and the bin widths of the mineral pairs. After
+    :meth:`compute`, by field (``"near"``, ``"far"``): :attr:`curves` holds
+    ``r`` (bin centres) and ``total``; :attr:`curves_fine` those and every
+    pair ``"A-B"`` at the same bins; :attr:`pair_curves` every pair over its
+    merged bins (a :class:`~regopack.plugins.analyzers.rdf_peak.BinnedCurve`);
     :attr:`edges` the bin edges and :attr:`expected` the pairs an uncorrelated
     pattern puts into each bin. :attr:`pair_kinds` gives the indices of the
     minerals of each pair and :attr:`peak` the top of the near field.
@@ -308,30 +177,37 @@ class Rdf(Analyzer):
     def __init__(self, config: RdfConfig | None = None) -> None:
         self._asked = config or RdfConfig()
         self.config = self._asked
-        self._results: dict[str, Any] | None = None
 
-    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
         """Histogram the centre pairs inside the interior window."""
+        dimension = packing.domain.dimension
         # after compute, the config holds the ranges and bin widths used
-        self.config = cfg = scaled_defaults(self._asked, packing, RDF_DEFAULTS)
+        self.config = cfg = scaled_defaults(self._asked, packing, RDF_DEFAULTS[dimension])
         assert cfg.near is not None and cfg.far is not None
         assert cfg.near_bin is not None and cfg.far_bin is not None
         margin = interior_margin(packing, cfg.margin)
         w = interior_window(packing, margin)
-        a, b = w.width, w.height
+        sides = [w.width, w.height] if dimension == 2 else [float(s) for s in w.size]
         sel = interior_mask(packing, margin)
         pts = packing.centre[sel]
         kinds = packing.mineral[sel].astype(np.int64)
+        n_pts = len(pts)
         n_real: int | None = None
-        limit = min(a, b)
-        if isinstance(w, PeriodicRectangle):
-            limit = 0.5 * min(a, b)
+        limit = 0.5 * min(sides) if w.periodic else min(sides)
+        if isinstance(w, PeriodicRectangle):  # the 3D kernel takes the nearest image itself
             reach = min(limit, max(cfg.near[1], cfg.far[1]))
-            ext, origin = periodic_images(packing, reach)
+            ext, origin = periodic_images(packing, reach)  # type: ignore[arg-type]
             ghosts = np.arange(packing.n_particles, len(origin))
-            n_real = len(pts)
+            n_real = n_pts
             pts = np.concatenate([pts, ext.centre[ghosts]])
             kinds = np.concatenate([kinds, packing.mineral[origin[ghosts]]]).astype(np.int64)
+        if dimension == 3:
+            measure = w.volume
+        else:
+            measure = w.area if isinstance(w, Circle | ConvexPolygon) else sides[0] * sides[1]
+        names = packing.mineral_names
+        n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
+        kind_counts = np.bincount(kinds[:n_pts], minlength=len(names))
         self.curves: dict[str, dict[str, FloatArray]] = {}
         self.curves_fine: dict[str, dict[str, FloatArray]] = {}
         self.pair_curves: dict[str, dict[str, BinnedCurve]] = {}
@@ -339,9 +215,6 @@ class Rdf(Analyzer):
         self.expected: dict[str, FloatArray] = {}
         self.edges: dict[str, FloatArray] = {}
         pair_bins: dict[str, dict[str, float]] = {}
-        n_pts = len(pts) if n_real is None else n_real
-        kind_counts = np.bincount(kinds[:n_pts], minlength=len(packing.mineral_names))
-        area = w.area if isinstance(w, Circle | ConvexPolygon) else a * b
         notes = []
         for field_name, (lo, hi), width in (
             ("near", cfg.near, cfg.near_bin),
@@ -349,9 +222,10 @@ class Rdf(Analyzer):
         ):
             cut_from = hi
             if hi >= limit:
-                notes.append(f"{field_name} field cut at {limit:g}: the window is {a:g} x {b:g}")
-                hi = np.nextafter(limit, 0.0)
-            if lo >= hi:
+                dims = " x ".join(f"{s:g}" for s in sides)
+                notes.append(f"{field_name} field cut at {limit:g}: the window is {dims}")
+                hi = float(np.nextafter(limit, 0.0))
+            if lo >= hi or not measure > 0:
                 continue
             # the range as set (or by default), before the window cuts it: the same bound
             # as the settings' own check, which cannot see a default range
@@ -359,49 +233,44 @@ class Rdf(Analyzer):
                 float(lo),
                 float(cut_from),
                 width,
-                field=f"rdf.{field_name}_bin",
+                field=f"{self.name}.{field_name}_bin",
                 range_name=field_name,
             )
             bins = _bins(hi - lo, width, cut=hi < cut_from)
-            names = packing.mineral_names
-            n_kinds = len(names) if cfg.per_mineral and len(names) > 1 else 1
             pairs = n_kinds * n_kinds
             check_memory(
                 BIN_BYTES * bins * pairs,
                 f"{bins:,} bins x {pairs:,} mineral pairs",
-                field=f"rdf.{field_name}_bin",
+                field=f"{self.name}.{field_name}_bin",
                 given=width,
             )
-            total, per = rdf_histogram(
-                np.ascontiguousarray(pts[:, 0]),
-                np.ascontiguousarray(pts[:, 1]),
-                kinds if n_kinds > 1 else np.zeros(len(pts), dtype=np.int64),
-                n_kinds,
-                lo,
-                width,
-                bins,
-                a,
-                b,
-                window=w,
-                n_real=n_real,
-            )
+            by_kind = kinds if n_kinds > 1 else np.zeros(len(pts), dtype=np.int64)
+            if dimension == 3:
+                total, per = rdf3d_histogram(pts, by_kind, n_kinds, lo, width, bins, w)
+            else:
+                x, y = np.ascontiguousarray(pts[:, 0]), np.ascontiguousarray(pts[:, 1])
+                a, b = sides
+                total, per = rdf_histogram(
+                    x, y, by_kind, n_kinds, lo, width, bins, a, b, window=w, n_real=n_real
+                )
             centres = np.asarray(lo + width * (np.arange(bins) + 0.5), dtype=np.float64)
             edges = np.asarray(lo + width * np.arange(bins + 1), dtype=np.float64)
-            shell = np.pi * (edges[1:] ** 2 - edges[:-1] ** 2)
-            self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / area
+            shell = shells(edges, dimension)
+            self.expected[field_name] = 0.5 * n_pts * (n_pts - 1.0) * shell / measure
             self.edges[field_name] = edges
             self.curves[field_name] = {"r": centres, "total": total}
             fine: dict[str, FloatArray] = {"r": centres, "total": total}
             merged: dict[str, BinnedCurve] = {}
             if n_kinds > 1:
                 r_mid = 0.5 * (lo + hi)
+                sphere = 2.0 * np.pi * r_mid if dimension == 2 else 4.0 * np.pi * r_mid * r_mid
                 merged, self.pair_kinds = pair_curves(
                     per,
                     names,
                     kind_counts.tolist(),
                     edges,
                     shell,
-                    2.0 * np.pi * r_mid * width / area,
+                    sphere * width / measure,
                     cfg.min_pairs_per_bin,
                 )
                 fine.update({key: per[p, q] for key, (p, q) in self.pair_kinds.items()})
@@ -409,33 +278,27 @@ class Rdf(Analyzer):
             self.pair_curves[field_name] = merged
             pair_bins[field_name] = {key: merged_width(c, width) for key, c in merged.items()}
         near = self.curves.get("near")
-        peak = None
-        if near is not None:
-            peak = first_peak(near["r"], near["total"], self.expected["near"])
-        self.peak = peak
+        self.peak = peak = None
+        if near is not None and n_pts > 1:
+            self.peak = peak = first_peak(near["r"], near["total"], self.expected["near"])
         far = self.curves.get("far")
-        self._results = {
+        far_mean = None
+        if far is not None and np.isfinite(far["total"]).any():
+            far_mean = float(np.nanmean(far["total"]))
+        res: dict[str, Any] = {
             "eta": eta_of(packing),
             "interior_margin": margin,
-            "n_points": int(sel.sum()),
+            "n_points": n_pts,
             "window_kind": w.kind,
-            "window": [a, b],
+            "window": sides,
             **peak_results(peak),
-            "first_peak_highest_bin_r": None if peak is None else peak.highest_bin_r,
-            "pair_bins": pair_bins,
-            "far_mean": float(np.nanmean(far["total"])) if far is not None else None,
-            "notes": notes,
         }
+        if dimension == 2:
+            res["first_peak_highest_bin_r"] = None if peak is None else peak.highest_bin_r
+        self._results = {**res, "pair_bins": pair_bins, "far_mean": far_mean, "notes": notes}
         return self
-
-    def results(self) -> dict[str, Any]:
-        """Scalars: the first peak (or plateau), far-field mean of g, points used, bin widths."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
-        return dict(self._results)
 
     def tables(self) -> dict[str, dict[str, Any]]:
         """g(r) per field: ``rdf_<field>`` (r, total) and ``rdf_<field>_pairs`` (merged bins)."""
-        if self._results is None:
-            raise RuntimeError("call compute() first")
+        self._need()
         return rdf_tables(self.curves, self.pair_curves, self.pair_kinds)

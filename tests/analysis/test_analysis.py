@@ -110,9 +110,8 @@ def test_unknown_analyzer_is_one_line_listing_the_known_ones(packing, registry):
     with pytest.raises(ConfigError) as info:
         run_analyses(packing, registry, [("rdff", {})])
     assert str(info.value) == (
-        "unknown analyzer 'rdff'; known analyzers: contacts, contacts3d, coordination, "
-        "coordination3d, density, density3d, homogeneity, homogeneity3d, local_fraction, "
-        "network, network3d, psd, psd3d, rdf, rdf3d"
+        "unknown analyzer 'rdff'; known analyzers: contacts, coordination, density, "
+        "homogeneity, local_fraction, network, psd, rdf"
     )
 
 

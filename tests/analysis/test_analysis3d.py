@@ -10,7 +10,10 @@ from cli_helpers import one_error_line
 import regopack
 from regopack.base.errors import ConfigError
 from regopack.cli import main
-from regopack.testing import packing_from_polygons
+from regopack.plugins.analyzers.density import Density, DensityConfig
+from regopack.registry.hookspecs import hookimpl
+from regopack.registry.plugin_types import AnalyzerSpec
+from regopack.testing import make_registry, packing_from_polygons
 
 SCENE = {
     "name": "small3d",
@@ -28,10 +31,22 @@ SCENE = {
 }
 
 
+pytestmark = pytest.mark.filterwarnings("ignore:the analysis kind:DeprecationWarning")
+"""The scene and several tests ask for analyzers by their old 3D names, as scenes did."""
+
+BOTH = ("contacts", "coordination", "density", "homogeneity", "network", "psd", "rdf")
+"""The analyzers of 2D and 3D packings."""
+
+
 @pytest.fixture(scope="module")
 def run3d(tmp_path_factory):
     out = tmp_path_factory.mktemp("run3d") / "run"
     return regopack.pack_and_summarise(SCENE, out=out, verify=False)
+
+
+@pytest.fixture(scope="module")
+def packing3d(run3d):
+    return run3d.packing
 
 
 def test_a_3d_run_reports_its_analyses_as_a_2d_run(run3d) -> None:
@@ -69,7 +84,7 @@ def test_regopack_analyze_takes_a_3d_packing(run3d, tmp_path, capsys) -> None:
 @pytest.mark.parametrize(
     ("args", "expected"),
     [
-        (["--only", "contacts"], "analyzer 'contacts' analyses 2D packings, not 3D ones; "),
+        (["--only", "local_fraction"], "analyzer 'local_fraction' analyses 2D packings, not 3D "),
         (["--set", "contacts3d.tol=-1"], "contacts3d.tol = -1"),
         # tol_max defaults to d_min / 4 = 0.75 (d_min = 3)
         (["--set", "coordination3d.tols=[0.1, 0.9]"], "0.9 exceeds contacts3d.tol_max = 0.75"),
@@ -82,12 +97,76 @@ def test_mistakes_get_one_line(run3d, tmp_path, capsys, args, expected) -> None:
     assert main(["analyze", path, "--no-figures", "--out", str(tmp_path / "a"), *args]) != 0
     line = one_error_line(capsys)
     assert expected in line
-    if "'contacts'" in expected:
-        assert line.startswith(f"regopack: error: {path}: ") and "contacts3d" in line
+    if "'local_fraction'" in expected:
+        assert line.startswith(f"regopack: error: {path}: ")
+        assert line.endswith("analyzers of 3D packings: " + ", ".join(BOTH))
 
 
 def test_a_3d_analyzer_is_refused_on_a_2d_packing() -> None:
+    class Solid3D:
+        @hookimpl
+        def regopack_analyzers(self):
+            spec = AnalyzerSpec("solid", DensityConfig, Density, dimensions=(3,))
+            return [spec]
+
     square = [[(0, 0), (1, 0), (1, 1), (0, 1)]]
     packing = packing_from_polygons(square, domain=(0, 2, 0, 2))
     with pytest.raises(ConfigError, match="analyses 3D packings, not 2D ones; analyzers of 2D"):
-        regopack.analyze(packing, "rdf3d")
+        regopack.analyze(packing, "solid", registry=make_registry(Solid3D()))
+
+
+# ---------------------------------------------------------------------------
+# one analyzer per quantity, and the old 3D names
+
+
+def test_the_analyzers_of_both_dimensions_give_3d_results_under_their_names(packing3d) -> None:
+    res = regopack.analyze(packing3d, ["network", "psd"])
+    assert list(res) == ["contacts", "network", "psd"]
+    assert res["contacts"]["median_volume"] > 0 and len(res["network"]["fabric"]) == 3
+
+
+def test_an_old_name_warns_once_and_files_its_results_and_requirements_under_old_names(
+    packing3d,
+) -> None:
+    with pytest.warns(DeprecationWarning) as caught:
+        old = regopack.analyze(packing3d, "network3d", contacts3d__tol=0.1)
+    messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+    assert messages == [
+        "the analysis kind 'network3d' is deprecated and will be removed in the next release; "
+        "use 'network'",
+        "the analysis kind 'contacts3d' is deprecated and will be removed in the next release; "
+        "use 'contacts'",
+    ]
+    new = regopack.analyze(packing3d, "network", contacts__tol=0.1)
+    assert list(old) == ["contacts3d", "network3d"] and list(new) == ["contacts", "network"]
+    for a, b in (("contacts3d", "contacts"), ("network3d", "network")):
+        assert old[a].scalars == new[b].scalars
+        assert old[a].tables.keys() == new[b].tables.keys()
+        for table in old[a].tables:
+            assert old[a].tables[table].tobytes() == new[b].tables[table].tobytes()
+
+
+def test_the_default_3d_analyses_keep_their_old_names_without_a_warning(packing3d) -> None:
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        res = regopack.analyze(packing3d)
+    assert list(res) == ["density3d", "contacts3d", "coordination3d", "rdf3d", "network3d"]
+
+
+def test_an_analyzer_asked_for_by_both_names_is_refused_in_one_line(packing3d) -> None:
+    with pytest.warns(DeprecationWarning):
+        with pytest.raises(ConfigError) as err:
+            regopack.analyze(packing3d, ["rdf", "rdf3d"])
+    assert str(err.value) == "analyzers 'rdf' and 'rdf3d' are one analyzer ('rdf'); ask for it once"
+
+
+def test_what_has_no_meaning_in_3d_is_one_line(packing3d) -> None:
+    with pytest.raises(ConfigError) as err:
+        regopack.analyze(packing3d, "homogeneity", homogeneity__tiles=[2, 2])
+    assert str(err.value) == (
+        "homogeneity.tiles has no meaning for a 3D packing; its regions are set by layers, shells"
+    )
+    with pytest.raises(ConfigError, match=r"^analyzer 'local_fraction' analyses 2D packings, not"):
+        regopack.analyze(packing3d, "local_fraction")

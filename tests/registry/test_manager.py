@@ -2,6 +2,7 @@ from __future__ import annotations
 
 import sys
 import types
+import warnings
 
 import pluggy
 import pytest
@@ -267,8 +268,13 @@ def test_the_builtin_figure_specs_follow_the_analyzers():
         "psd3d",
         "homogeneity3d",
     ]
-    assert {f.analyzer for f in reg.figures()} <= set(reg.names("analysis"))
-    assert reg.figures("coordination")[0].captions.keys() == {"z-vs-tol", "z-per-mineral"}
+    assert {f.analyzer for f in reg.figures()} <= {*reg.names("analysis"), *reg.aliases("analysis")}
+    assert reg.figures("coordination")[0].captions.keys() == {
+        "z-vs-tol",
+        "z-per-mineral",
+        "z-vs-tol-3d",
+        "z-per-mineral-3d",
+    }
     assert reg.figures("nothing") == ()
 
 
@@ -280,3 +286,69 @@ def test_a_figure_hook_returning_other_records_is_refused():
 
     with pytest.raises(PluginError, match="returned a ShapeSpec, expected FigureSpec"):
         fake_registry(BadFigures())
+
+
+# ---------------------------------------------------------------------------
+# old names (aliases)
+
+
+class OldShapeNames:
+    @hookimpl
+    def regopack_shapes(self):
+        return [ShapeSpec("hexagon", ShapeConfig, lambda c: None, aliases=("hexagon2d", "hex"))]
+
+
+@pytest.mark.parametrize("kind", sorted(KINDS))
+def test_an_old_name_of_any_kind_gives_the_spec_and_warns_once(kind):
+    spec = KINDS[kind]("new", ShapeConfig, lambda c: None, "one", aliases=("old",))
+    reg = Registry({kind: {"new": (spec, "my-plugin")}})
+    with pytest.warns(
+        DeprecationWarning, match=rf"the {kind} kind 'old' is deprecated .*use 'new'"
+    ):
+        assert reg.get(kind, "old") is spec
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert reg.get(kind, "old") is spec  # once per registry
+        assert reg.get(kind, "new") is spec
+        assert reg.canonical(kind, "old") == "new" and reg.origin(kind, "old") == "my-plugin"
+    assert (kind, "old") in reg and reg.names(kind) == ["new"]
+    assert reg.aliases(kind) == {"old": "new"}
+
+
+def test_old_names_come_from_the_hooks_and_stay_out_of_the_listings():
+    reg = fake_registry(OldShapeNames())
+    assert reg.names("shape") == ["hexagon", "octagon"]
+    assert reg.aliases("shape") == {"hex": "hexagon", "hexagon2d": "hexagon"}
+    assert reg.info("shape", "hex") == reg.info("shape", "hexagon")
+    with pytest.raises(PluginError, match=r"^unknown shape kind 'hexagn'; did you mean 'hexagon'"):
+        reg.canonical("shape", "hexagn")
+
+
+def test_an_old_name_that_names_another_spec_is_refused():
+    class Taken:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("square", ShapeConfig, lambda c: None, aliases=("octagon",))]
+
+    with pytest.raises(PluginError, match=r"^shape kind 'octagon' is an old name of 'square' \("):
+        fake_registry(Taken())
+
+
+def test_aliases_must_be_a_tuple_of_names():
+    class Listed:
+        @hookimpl
+        def regopack_shapes(self):
+            return [ShapeSpec("square", ShapeConfig, lambda c: None, aliases=["box"])]
+
+    with pytest.raises(PluginError, match=r"the aliases of ShapeSpec 'square' must be a tuple"):
+        fake_registry(Listed())
+
+
+def test_the_builtin_3d_names_are_old_names_of_the_analyzers():
+    reg = default_registry(autoload=False)
+    assert reg.aliases("analysis") == {
+        f"{name}3d": name
+        for name in ("contacts", "coordination", "density", "homogeneity", "network", "psd", "rdf")
+    }
+    assert "local_fraction" in reg.names("analysis")
+    assert reg.get("analysis", "local_fraction").dimensions == (2,)

@@ -113,12 +113,16 @@ def test_count_auto_uses_the_mean_volume(registry) -> None:  # type: ignore[no-u
 
 
 def test_a_2d_analyzer_in_a_3d_scene_is_refused_before_packing(registry) -> None:  # type: ignore[no-untyped-def]
-    scene = regopack.scene({**SCENE, "outputs": {"analyses": ["density"]}}, registry=registry)
+    analyses = {"analyses": ["local_fraction"]}
+    scene = regopack.scene({**SCENE, "outputs": analyses}, registry=registry)
     with pytest.raises(ConfigError) as err:
         regopack.pack(scene)
     text = str(err.value)
-    assert text.startswith("scene dictionary: outputs.analyses: analyzer 'density' analyses 2D")
-    assert "density3d" in text and "contacts3d" in text and "\n" not in text
+    assert text.startswith(
+        "scene dictionary: outputs.analyses: analyzer 'local_fraction' analyses 2D"
+    )
+    assert "density" in text and "contacts" in text and "\n" not in text
+    assert "density3d" not in text  # the old names are not listed
 
 
 def _cube_packing(centres: list[list[float]], half: float) -> Packing3D:

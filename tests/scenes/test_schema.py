@@ -93,13 +93,13 @@ def test_header(schema):
 
 def test_every_plugin_section_is_a_one_of_over_the_registered_plugins(schema, registry):
     for kind, section in sections(schema).items():
-        names = registry.names(kind)
+        names = [*registry.names(kind), *registry.aliases(kind)]
         assert section["required"] == ["kind"]
         assert section["properties"]["kind"]["enum"] == names
         branches = [resolve(schema, b) for b in section["oneOf"]]
         assert [b["properties"]["kind"]["const"] for b in branches] == names, kind
         for name, branch in zip(names, branches, strict=True):
-            model = registry.get(kind, name).config_model
+            model = registry.get(kind, registry.canonical(kind, name)).config_model
             assert set(branch["properties"]) == {"kind", *model.model_fields}
             assert branch["required"][0] == "kind"
             assert branch["additionalProperties"] is False
@@ -111,7 +111,17 @@ def test_every_plugin_section_is_a_one_of_over_the_registered_plugins(schema, re
 def test_analyses_accept_a_name_or_a_table(schema, registry):
     items = schema["$defs"]["Outputs"]["properties"]["analyses"]["items"]["anyOf"]
     assert items[0]["type"] == "string"
-    assert items[0]["enum"] == registry.names("analysis")
+    assert items[0]["enum"] == [*registry.names("analysis"), *registry.aliases("analysis")]
+
+
+def test_an_old_name_is_accepted_and_marked_deprecated(schema, registry):
+    import jsonschema
+
+    branch = schema["$defs"]["analysis.contacts3d"]
+    assert branch["deprecated"] is True and branch["title"] == "contacts3d (old name of contacts)"
+    assert branch["properties"]["kind"]["const"] == "contacts3d"
+    outputs = {"analyses": ["density3d", {"kind": "contacts3d", "tol": 0.1}]}
+    jsonschema.validate(outputs, {**schema["$defs"]["Outputs"], "$defs": schema["$defs"]})
 
 
 def test_every_property_of_the_core_models_is_described(schema):

@@ -1,4 +1,4 @@
-"""Figures of the structure analysis."""
+"""Figures of the structure analysis, of 2D and 3D packings."""
 
 from __future__ import annotations
 
@@ -19,8 +19,10 @@ from regopack.plugins.analyzers import (
     ContactsConfig,
     Coordination,
     CoordinationConfig,
+    figure_style,
     figures,
 )
+from regopack.plugins.analyzers.figure_specs import CAPTIONS
 from regopack.registry.manager import default_registry
 from regopack.run.pipeline import run_scene
 from regopack.scenes.model import load_scene, resolve_scene
@@ -51,7 +53,7 @@ def test_every_figure_of_the_default_analyses_is_drawn(packing, analyzers, tmp_p
         assert path.stat().st_size > 1000
     image = imread(tmp_path / "figs" / "packing.png")
     assert image.shape[1] == pytest.approx(figures.WIDTH * figures.DPI, abs=2)
-    assert set(figures.CAPTIONS) == {*STEMS, "homogeneity", "psd", "local-fraction"}
+    assert set(CAPTIONS) == {*STEMS, "homogeneity", "psd", "local-fraction"}
 
 
 def test_only_the_figures_of_computed_analyzers(packing, registry, tmp_path):
@@ -113,6 +115,7 @@ def test_a_packing_without_contacts_still_draws(tmp_path):
 
 def test_docstring_examples():
     assert doctest.testmod(figures).failed == 0
+    assert doctest.testmod(figure_style).failed == 0
 
 
 def test_write_analysis_draws_what_figures_for_draws(packing, analyzers, tmp_path):
@@ -122,7 +125,7 @@ def test_write_analysis_draws_what_figures_for_draws(packing, analyzers, tmp_pat
     files = write_analysis(tmp_path / "analysis", packing, analyzers)
     pngs = [p.name for p in files.figures if p.suffix == ".png"]
     assert pngs == [p.name for p in drawn]
-    assert set(figures.CAPTIONS) == {s for stems in OF_ANALYZER.values() for s in stems}
+    assert set(CAPTIONS) == {s for stems in OF_ANALYZER.values() for s in stems}
 
 
 def test_zoom_titles_show_a_round_length(packing, analyzers):
@@ -243,3 +246,41 @@ def test_the_z_distribution_is_drawn_as_bars(packing, analyzers):
         centres = left + 0.5 * width
         # each bar sits within its integer's group of width Z_BARS_WIDTH
         assert np.all(np.abs(centres - np.round(centres)) < 0.5 * figures.Z_BARS_WIDTH)
+
+
+def test_the_3d_figures_are_written_and_embedded(packing3d, analysed3d, tmp_path) -> None:
+    from regopack.plugins.analyzers.figure_specs import STEMS3D
+    from regopack.plugins.analyzers.homogeneity import Homogeneity
+    from regopack.plugins.analyzers.psd import Psd
+
+    stems = [stem for stems in STEMS3D.values() for stem in stems]
+    analyzers = {
+        **analysed3d.analyzers,
+        "psd3d": Psd().compute(packing3d, {}),
+        "homogeneity3d": Homogeneity().compute(packing3d, {}),
+    }
+    files = write_analysis(tmp_path / "a", packing3d, analyzers)
+    names = sorted(p.name for p in files.figures)
+    assert names == sorted([f"{s}.png" for s in stems] + [f"{s}.svg" for s in stems])
+    report = files.report.read_text(encoding="utf-8")
+    for stem in stems:
+        image = imread(tmp_path / "a" / "figures" / f"{stem}.png")
+        assert image.shape[1] == round(figures.WIDTH * figures.DPI)  # 7 inches wide at 300 dpi
+        assert f"(figures/{stem}.png)" in report
+    assert "Coordination number per mineral (3D)" in report
+
+
+def test_the_3d_rdf_draws_merged_curves_as_steps(packing3d, analysed3d) -> None:
+    from matplotlib.patches import StepPatch
+
+    rdf = analysed3d["rdf3d"].analyzer
+    fig = figures.draw_rdf(packing3d, rdf)
+    near = fig.axes[0]
+    steps = [p for p in near.patches if isinstance(p, StepPatch)]
+    same = [c for k, c in rdf.pair_curves["near"].items() if k.split("-")[0] == k.split("-")[1]]
+    merged = [c for c in same if c.g.size > 1 and c.widest > 0.15]  # one bin: not drawn
+    assert len(steps) == len(merged) > 0
+    for step, curve in zip(steps, merged, strict=True):
+        np.testing.assert_allclose(step.get_data().edges, curve.edges)
+    texts = " ".join(t.get_text() for t in near.texts)
+    assert "no distinct first peak: plateau" in texts

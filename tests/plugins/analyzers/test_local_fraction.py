@@ -232,11 +232,11 @@ def test_a_periodic_packing_of_polygons_wraps(small):
 
 
 def test_the_figure_draws(small, tmp_path):
-    from regopack.plugins.analyzers.figures import _style
+    from regopack.plugins.analyzers.figure_style import style
     from regopack.plugins.analyzers.local_fraction_figure import draw_local_fraction
 
     packing, _ = small
-    with _style():
+    with style():
         fig = draw_local_fraction(packing, analyse(packing))
         fig.savefig(tmp_path / "local-fraction.png", dpi=60)
     assert (tmp_path / "local-fraction.png").stat().st_size > 0

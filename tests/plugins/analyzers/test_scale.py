@@ -30,7 +30,7 @@ SCENE2D: dict[str, Any] = {
 """A 60 × 60 µm packing of about 150 octagons of 2 to 10 µm (a 40 µm interior window)."""
 
 ANALYSES = ("density", "contacts", "coordination", "rdf", "homogeneity")
-ANALYSES_3D = ("density3d", "contacts3d", "coordination3d", "rdf3d")
+ANALYSES_3D = ("density", "contacts", "coordination", "rdf")
 
 SCALES = st.sampled_from([1e-6, 1e-3, 1e3, 1e6]) | st.floats(-6.0, 6.0).map(lambda e: 10.0**e)
 """Scale factors from 10⁻⁶ to 10⁶: the decades of the issue, and any factor between."""
@@ -53,33 +53,32 @@ def _close(a: Any, b: Any, s: float = 1.0, atol: float = 0.0) -> None:
     np.testing.assert_allclose(np.asarray(b, dtype=float), want, rtol=1e-9, atol=atol * s)
 
 
-def _same_analyses(done: dict[str, Any], scaled: dict[str, Any], s: float, c: str) -> None:
-    """``scaled`` is ``done`` with every length times ``s`` (``c``: the contacts analyzer)."""
-    base, other = done[c], scaled[c]
+def _same_analyses(done: dict[str, Any], scaled: dict[str, Any], s: float) -> None:
+    """``scaled`` is ``done`` with every length times ``s``."""
+    base, other = done["contacts"], scaled["contacts"]
     assert other.tol == pytest.approx(base.tol * s, rel=1e-12)
     assert other.tol_max == pytest.approx(base.tol_max * s, rel=1e-12)
     assert other.results()["n_contacts"] == base.results()["n_contacts"]
     np.testing.assert_array_equal(other.pairs, base.pairs)
     _close(base.threshold, other.threshold, s, atol=1e-12)  # touching pairs: 0 up to rounding
     _close(base.area, other.area, s * s, atol=1e-12)
-    coord = "coordination3d" if c == "contacts3d" else "coordination"
-    zb, zs = done[coord].results(), scaled[coord].results()
+    zb, zs = done["coordination"].results(), scaled["coordination"].results()
     for key in ("z_domain", "z_interior", "n_interior"):
         assert zs[key] == pytest.approx(zb[key], rel=1e-12), key
-    _close(done[coord].tols, scaled[coord].tols, s)  # Z(tol s) = Z(tol)
-    np.testing.assert_array_equal(scaled[coord].z_tol_interior, done[coord].z_tol_interior)
-    density = "density3d" if c == "contacts3d" else "density"
-    for key, value in done[density].results().items():
+    _close(done["coordination"].tols, scaled["coordination"].tols, s)  # Z(tol s) = Z(tol)
+    np.testing.assert_array_equal(
+        scaled["coordination"].z_tol_interior, done["coordination"].z_tol_interior
+    )
+    for key, value in done["density"].results().items():
         if isinstance(value, float) and key.startswith("phi"):
-            assert scaled[density].results()[key] == pytest.approx(value, rel=1e-9), key
-    rdf = "rdf3d" if c == "contacts3d" else "rdf"
+            assert scaled["density"].results()[key] == pytest.approx(value, rel=1e-9), key
     for field in ("near", "far"):
-        if field not in done[rdf].curves:
+        if field not in done["rdf"].curves:
             continue
-        a, b = done[rdf].curves[field], scaled[rdf].curves[field]
+        a, b = done["rdf"].curves[field], scaled["rdf"].curves[field]
         _close(a["r"], b["r"], s)  # g(r / s) = g(r)
         np.testing.assert_allclose(b["total"], a["total"], rtol=1e-9, equal_nan=True)
-    rb, rs = done[rdf].results(), scaled[rdf].results()
+    rb, rs = done["rdf"].results(), scaled["rdf"].results()
     assert rs["first_peak_distinct"] == rb["first_peak_distinct"]
     lo, hi = rb["first_peak_fit_range"]
     assert rs["first_peak_fit_range"] == pytest.approx([lo * s, hi * s], rel=1e-9)
@@ -94,7 +93,7 @@ def _same_analyses(done: dict[str, Any], scaled: dict[str, Any], s: float, c: st
 def test_a_scaled_packing_analyses_alike(base2d, s):
     packing, done = base2d
     scaled = _analyse(scaled_packing(packing, s), ANALYSES)
-    _same_analyses(done, scaled, s, "contacts")
+    _same_analyses(done, scaled, s)
     hb, hs = done["homogeneity"].results(), scaled["homogeneity"].results()
     assert hs["ring_width"] == pytest.approx(hb["ring_width"] * s, rel=1e-12)
     assert hs["slope_length"] == pytest.approx(hb["slope_length"] * s, rel=1e-12)
@@ -128,7 +127,7 @@ def base3d(packing3d: Any) -> tuple[Any, dict[str, Any]]:
 def test_a_scaled_3d_packing_analyses_alike(base3d, s):
     packing, done = base3d
     assert packing.scene["size"]["d_min"] == 3.0  # defaults at 1.5 times the built-in scale
-    _same_analyses(done, _analyse(scaled_packing(packing, s), ANALYSES_3D), s, "contacts3d")
+    _same_analyses(done, _analyse(scaled_packing(packing, s), ANALYSES_3D), s)
 
 
 def test_the_small_scene_in_millimetres_analyses_as_in_micrometres():

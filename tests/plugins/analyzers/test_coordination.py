@@ -6,16 +6,16 @@ import numpy as np
 import pytest
 from lattices3d import cube_lattice
 
-from regopack.plugins.analyzers.contacts3d import Contacts3D, Contacts3DConfig
-from regopack.plugins.analyzers.coordination3d import Coordination3D, Coordination3DConfig
+from regopack.plugins.analyzers.contacts import Contacts, ContactsConfig
+from regopack.plugins.analyzers.coordination import Coordination, CoordinationConfig
 
 GAPS = (1 / 64, 2 / 64, 3 / 64)
 
 
-def _coordination(packing, tol: float, tols: list[float], **kw) -> Coordination3D:
-    contacts = Contacts3D(Contacts3DConfig(tol=tol, margin=1.5)).compute(packing, {})
-    config = Coordination3DConfig(tols=tols, **kw)
-    return Coordination3D(config).compute(packing, {"contacts3d": contacts})
+def _coordination(packing, tol: float, tols: list[float], **kw) -> Coordination:
+    contacts = Contacts(ContactsConfig(tol=tol, margin=1.5)).compute(packing, {})
+    config = CoordinationConfig(tols=tols, **kw)
+    return Coordination(config).compute(packing, {"contacts": contacts})
 
 
 @pytest.fixture(scope="module")

@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from lattices3d import cube_lattice
 
-from regopack.plugins.analyzers.common3d import solid_volumes
-from regopack.plugins.analyzers.density3d import Density3D, Density3DConfig
+from regopack.plugins.analyzers.common import solid_volumes
+from regopack.plugins.analyzers.density import Density, DensityConfig
 
 
 def test_a_window_through_a_cube_lattice_has_the_volume_of_its_box_intersections() -> None:
     p = cube_lattice((3, 3, 3), (1 / 64, 2 / 64, 3 / 64))
-    r = Density3D(Density3DConfig(margin=1.2)).compute(p, {}).results()
+    r = Density(DensityConfig(margin=1.2)).compute(p, {}).results()
     lo = np.array([p.domain.xmin, p.domain.ymin, p.domain.zmin]) + 1.2
     hi = np.array([p.domain.xmax, p.domain.ymax, p.domain.zmax]) - 1.2
     inside = 0.0
@@ -41,5 +41,5 @@ def test_a_periodic_box_is_interior_throughout() -> None:
 
     p = cube_lattice((2, 2, 2), (0.0, 0.0, 0.0))
     periodic = dataclasses.replace(p, domain=PeriodicBox(*p.domain.bounds()))
-    r = Density3D().compute(periodic, {}).results()
+    r = Density().compute(periodic, {}).results()
     assert r["phi_interior"] == r["phi_domain"] == pytest.approx(8 / p.domain.volume)

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from lattices3d import cube_lattice
 
-from regopack.plugins.analyzers.contacts3d import Contacts3D, Contacts3DConfig
-from regopack.plugins.analyzers.network3d import Network3D, fabric_tensor
+from regopack.plugins.analyzers.contacts import Contacts, ContactsConfig
+from regopack.plugins.analyzers.network import Network, fabric_tensor
 
 
 def test_isotropic_normals_give_a_third_of_the_identity() -> None:
@@ -36,8 +36,8 @@ def test_aligned_and_axisymmetric_normals_have_the_known_anisotropy() -> None:
 
 def test_the_fabric_of_a_cube_lattice_follows_its_face_contacts() -> None:
     p = cube_lattice((3, 3, 3), (1 / 64, 2 / 64, 3 / 64))
-    contacts = Contacts3D(Contacts3DConfig(tol=0.02, margin=0.0)).compute(p, {})
-    net = Network3D().compute(p, {"contacts3d": contacts}).results()
+    contacts = Contacts(ContactsConfig(tol=0.02, margin=0.0)).compute(p, {})
+    net = Network().compute(p, {"contacts": contacts}).results()
     np.testing.assert_allclose(net["fabric"], np.diag([1.0, 0, 0]), atol=1e-15)
     assert net["anisotropy"] == pytest.approx(7.5) and net["n_edges"] == 18
     assert net["total_contact_area"] == pytest.approx(18 * 1.02**2)

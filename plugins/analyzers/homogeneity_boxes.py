@@ -1,0 +1,151 @@
+"""The regions of the homogeneity of a 3D packing: horizontal layers and nested boxes.
+
+The interior window is cut into ``layers`` horizontal slabs of equal height
+along z (the vertical: packings of the available-surface inserter grow from
+the box's centre, a deposit from its floor), and into ``shells``: the
+differences of nested boxes about the window's centre, whose half-sides grow
+in equal steps to the window's. Each region gets the number density of the
+centres in it, the mean volume-equivalent diameter of those particles, and
+the volume fraction of the solids clipped exactly to it
+(:func:`regopack.packing.solid_fraction.phi_in_box`; a shell's is the difference of its two
+boxes'). A homogeneous packing has the same values in every region, up to the
+noise of its particle count.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import itertools
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.geometry.domain import Box, PeriodicBox
+from regopack.packing.core3d import Packing3D
+from regopack.plugins.analyzers.common import solid_volumes
+
+FloatArray = NDArray[np.float64]
+
+
+def _region_stats(
+    packing: Packing3D, inside: NDArray[np.bool_], volume: float
+) -> tuple[int, float, float]:
+    """Centres inside, their number density and mean diameter (NaN when none)."""
+    n = int(inside.sum())
+    d = 2.0 * packing.radius[inside]
+    return n, n / volume if volume > 0 else math.nan, float(d.mean()) if n else math.nan
+
+
+def _images(p3: Packing3D) -> list[Packing3D]:
+    """Return the packing, and in a periodic box its 26 images about the cell too."""
+    if not p3.domain.periodic:
+        return [p3]
+    period = np.array(p3.domain.size)
+    shifts = [np.array(s, dtype=float) * period for s in itertools.product((-1, 0, 1), repeat=3)]
+    return [dataclasses.replace(p3, centre=p3.centre + shift) for shift in shifts]
+
+
+def _wrapped_centres(p3: Packing3D) -> FloatArray:
+    """Return the centres, wrapped into the cell in a periodic box."""
+    domain = p3.domain
+    if not isinstance(domain, PeriodicBox):
+        return p3.centre
+    return np.asarray(domain.wrap(p3.centre), dtype=np.float64)
+
+
+def _cv(values: list[float]) -> float | None:
+    v = np.asarray([x for x in values if math.isfinite(x)])
+    if v.size < 2 or not v.mean() > 0:
+        return None
+    return float(v.std(ddof=1) / v.mean())
+
+
+def layers_and_shells(
+    p3: Packing3D, w: Box, margin: float, n_layers: int, n_shells: int
+) -> tuple[dict[str, dict[str, FloatArray]], dict[str, Any]]:
+    """Measure every layer and shell of the interior window ``w``.
+
+    Returns the tables ``homogeneity_layers`` and ``homogeneity_shells`` (one
+    row per region, bottom to top and centre outwards) and the scalars: the
+    per-region lists and their coefficients of variation.
+    """
+    from regopack.packing.solid_fraction import phi_in_box as clip
+
+    volume = solid_volumes(p3)
+    images = _images(p3)
+
+    def phi_in_box(p: Packing3D, window: Box, vol: FloatArray) -> float:
+        # in a periodic box a solid that crosses a face fills the window in its images
+        return sum(clip(image, window, vol) for image in images)
+
+    centre = _wrapped_centres(p3)
+    placed = p3.placed
+    with np.errstate(invalid="ignore"):
+        layers: dict[str, list[float]] = {k: [] for k in ("z_lo", "z_hi", "n", "density")}
+        layers.update({"phi": [], "mean_diameter": []})
+        edges = np.linspace(w.zmin, w.zmax, n_layers + 1)
+        # a periodic cell holds its wrapped centres in [lo, hi)
+        low = np.greater_equal if p3.domain.periodic else np.greater
+        inside_xy = (
+            placed
+            & low(centre[:, 0], w.xmin)
+            & (centre[:, 0] < w.xmax)
+            & low(centre[:, 1], w.ymin)
+            & (centre[:, 1] < w.ymax)
+        )
+        # a margin that leaves no window leaves no regions
+        for lo, hi in itertools.pairwise(edges if w.volume > 0 else []):
+            slab = Box(w.xmin, w.xmax, w.ymin, w.ymax, float(lo), float(hi))
+            sel = inside_xy & (centre[:, 2] >= lo) & (centre[:, 2] < hi)
+            n, density, diameter = _region_stats(p3, sel, slab.volume)
+            for key, value in zip(
+                layers,
+                (lo, hi, n, density, phi_in_box(p3, slab, volume), diameter),
+                strict=True,
+            ):
+                layers[key].append(float(value))
+        shells: dict[str, list[float]] = {k: [] for k in ("half_lo", "half_hi", "n")}
+        shells.update({"density": [], "phi": [], "mean_diameter": []})
+        c = np.array(w.center)
+        half = 0.5 * np.array(w.size)
+        steps = np.linspace(0.0, 1.0, n_shells + 1)
+        inner_solid, inner_volume = 0.0, 0.0
+        reach = np.max(np.abs(centre - c) / np.where(half > 0, half, np.inf), axis=1)
+        for lo, hi in itertools.pairwise(steps if w.volume > 0 else []):
+            box = Box(*(v for a in range(3) for v in (c[a] - hi * half[a], c[a] + hi * half[a])))
+            solid = phi_in_box(p3, box, volume) * box.volume
+            sel = placed & (reach >= lo) & (reach < hi)
+            shell_volume = box.volume - inner_volume
+            n, density, diameter = _region_stats(p3, sel, shell_volume)
+            phi = (solid - inner_solid) / shell_volume if shell_volume > 0 else math.nan
+            for key, value in zip(
+                shells,
+                (lo * half.min(), hi * half.min(), n, density, phi, diameter),
+                strict=True,
+            ):
+                shells[key].append(float(value))
+            inner_solid, inner_volume = solid, box.volume
+
+    def clean(values: list[float]) -> list[float | None]:
+        return [float(v) if math.isfinite(v) else None for v in values]
+
+    results = {
+        "interior_margin": margin,
+        "window": [float(s) for s in w.size],
+        "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
+        "phi_layers": clean(layers["phi"]),
+        "density_layers": clean(layers["density"]),
+        "mean_diameter_layers": clean(layers["mean_diameter"]),
+        "phi_layers_cv": _cv(layers["phi"]),
+        "phi_shells": clean(shells["phi"]),
+        "density_shells": clean(shells["density"]),
+        "mean_diameter_shells": clean(shells["mean_diameter"]),
+        "phi_shells_cv": _cv(shells["phi"]),
+    }
+    tables = {
+        "homogeneity_layers": {k: np.asarray(v) for k, v in layers.items()},
+        "homogeneity_shells": {k: np.asarray(v) for k, v in shells.items()},
+    }
+    return tables, results
