@@ -73,7 +73,7 @@ def _simplex(tab: FloatArray, basis: IntArray, allowed: int, eps: float) -> bool
                 break
         if col < 0:
             return True
-        row = -1
+        row = int(np.int64(-1))  # not a literal -1 (a second compilation of _pivot)
         best = np.inf
         for r in range(rows):
             a = tab[r, col]
@@ -122,7 +122,7 @@ def _pair_threshold(
     # drive the artificial variables out of the basis where a structural column can replace them
     for r in range(rows):
         if basis[r] >= m:
-            best = -1
+            best = int(np.int64(-1))  # not a literal -1 (see _simplex)
             big = SIMPLEX_EPS
             for c in range(m):
                 if abs(tab[r, c]) > big:
@@ -475,7 +475,7 @@ def contact_regions(
         if not (lo[0] < hi[0] and lo[1] < hi[1] and lo[2] < hi[2]):
             continue
         # the box as six quadrilaterals, counter-clockwise seen from outside
-        nf = 6
+        nf = int(np.int64(6))  # not a literal 6 (a second compilation of _clip)
         corners = (
             (0, 1, 3, 2),
             (4, 6, 7, 5),

@@ -64,6 +64,8 @@ def rdf_histogram(
     from regopack.plugins.analyzers.rdf_kernel import weighted_pair_histogram
 
     edges = r_lo + width * np.arange(bins + 1)
+    # every call passes every argument (the defaults spelt out), so that the kernel is
+    # compiled once for all windows rather than once per set of omitted arguments
     if isinstance(window, PeriodicRectangle):
         assert n_real is not None
         hist = weighted_pair_histogram(
@@ -72,13 +74,13 @@ def rdf_histogram(
         area = a * b
         x, kind = x[:n_real], kind[:n_real]
     elif isinstance(window, Circle | ConvexPolygon):
-        counts_r = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b, False)
+        counts_r = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b, False, -1)
         gamma = covariogram(window, 0.5 * (edges[:-1] + edges[1:]))
         with np.errstate(divide="ignore", invalid="ignore"):
             hist = np.where(gamma > 0, counts_r / gamma, np.nan)
         area = window.area
     else:
-        hist = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b)
+        hist = weighted_pair_histogram(x, y, kind, n_kinds, r_lo, width, bins, a, b, True, -1)
         area = a * b
     return _normalised(hist, kind, n_kinds, area, shells(edges, 2))
 

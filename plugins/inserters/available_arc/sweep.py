@@ -458,7 +458,7 @@ def _raise(
     hi += 1
     sz[st, S_HI] = hi
     sz[st, S_RAISES] += 1
-    _thaw(st, hi, hi, True, s, bn)
+    _thaw(st, hi, hi, bool(np.bool_(True)), s, bn)  # a plain bool: one compilation of _thaw
     if hi - sz[st, S_LO] + 1 > zs[Z_NZONE]:
         _retire_bin(st, sz[st, S_LO], s, bn)
         sz[st, S_LO] += 1
@@ -676,7 +676,7 @@ def _offer(
     Returns the new insertion index, or -1 when the strip refuses it.
     """
     mq = K.begin_particle(i, g, s, w)
-    raises = 0
+    raises = int(np.int64(0))  # not a literal 0 (a second compilation of _roll_back)
     lo0 = sz[st, S_LO]
     hi0 = sz[st, S_HI]
     while True:
@@ -796,8 +796,11 @@ def _step(
     if k < 0:
         status[i] = STATUS_REFUSED
         zs[Z_REFUSED] += 1
+        # no particle and no strip searched (-1), no stay (0), as plain integers: numba
+        # would compile a second specialization of _choose for literal ones
+        unset, zero = int(np.int64(-1)), int(np.int64(0))
         if zs[Z_PROMPT] == 2:
-            if _choose(sz, tried, -1, -1, 0) < 0:
+            if _choose(sz, tried, unset, unset, zero) < 0:
                 # tail closing: the last open strip has just closed
                 zs[Z_DONE] = 1
         elif zs[Z_PROMPT] == 1 and not queued:
@@ -808,7 +811,7 @@ def _step(
             for t in range(sz.shape[0]):
                 if tried[t] == i and sz[t, S_CLOSED] == 0 and sz[t, S_FULL] == 1:
                     _retire_lowest(t, sz, s, bn)
-            if _choose(sz, tried, -1, -1, 0) < 0:
+            if _choose(sz, tried, unset, unset, zero) < 0:
                 zs[Z_DONE] = 1
         return 0
     status[i] = STATUS_PLACED

@@ -324,9 +324,12 @@ def _interferers(
     reach = circum[pk] + reach_max + 2.0 * circum[i] + margin
     near = np.empty(64, dtype=np.int64)
     at = np.empty((64, 3))
-    count = 0
+    # int(np.int64(0)), not 0: a literal 0 would compile a second specialization of _gather
+    count = int(np.int64(0))
     if period.shape[0] == 0:
-        return _gather(g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, 0, margin)
+        return _gather(
+            g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, count, margin
+        )
     shift = np.empty(3)
     for sx in (-1, 0, 1):
         for sy in (-1, 0, 1):
@@ -374,7 +377,7 @@ def analyse_sphere(
     tau = EPS * big_r
     count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
     caps = np.empty((count + 6, 4))
-    nc = 0
+    nc = int(np.int64(0))  # not a literal 0 (second compilations of free_arcs, sample_free)
     for m in range(count):
         dx = at[m, 0] - ck[0]
         dy = at[m, 1] - ck[1]

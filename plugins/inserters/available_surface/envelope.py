@@ -479,7 +479,9 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     kind = np.empty(cap, dtype=np.int64)  # 0: face of P, 1: face of -Q, 2: edge pair
     ca = np.empty(cap, dtype=np.int64)
     cb = np.empty(cap, dtype=np.int64)
-    nc = 0
+    # counters start as int(np.int64(0)), not 0: numba would type a literal 0 and compile
+    # a second specialization of the kernels they are passed to
+    nc = int(np.int64(0))
     for f in range(fp):
         cand[nc, 0] = p.normals[f, 0]
         cand[nc, 1] = p.normals[f, 1]
@@ -520,8 +522,8 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     plane = np.empty((4, kp + kq))  # their projections on a face's plane
     sums = np.empty((2, 64))  # pairwise sums of the projections
     hull = np.empty(129, dtype=np.int64)
-    nfaces = 0
-    c = 0
+    nfaces = int(np.int64(0))
+    c = int(np.int64(0))
     while c < nc:
         nfaces, c, need_keys, need_sums = _build_faces(
             c, nfaces, cand[:nc], kind, ca, cb, dp, dq, p, q, pa, pb, qa, qb, tau,

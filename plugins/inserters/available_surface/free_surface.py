@@ -566,8 +566,9 @@ def _face_pieces(
         pieces[1, i] = work[W_FY, i]
     poff[0, 0] = 0
     poff[0, 1] = n
-    gen = 0
-    ncur = 1
+    # not literals, which numba would compile a second specialization of _subtract for
+    gen = int(np.int64(0))
+    ncur = int(np.int64(1))
     for q in range(index.shape[1] - 1):
         cx = geom[fr, F_O] - shifts[q, 0]
         cy = geom[fr, F_O + 1] - shifts[q, 1]
@@ -652,8 +653,9 @@ def free_surface(
     out_area = np.empty(nf + 1)
     out_face = np.empty(nf + 1, dtype=np.int64)
     last = np.full(1, -1, dtype=np.int64)
-    npieces = 0
-    f = 0
+    # not literal 0s, which numba would compile second specializations of the callees for
+    npieces = int(np.int64(0))
+    f = int(np.int64(0))
     while f < nf:
         n = _face_polygon(envelope, f, blo, bhi, geom, work)
         if n < 3 or is_thin(work, W_FX, W_FY, n, thin):

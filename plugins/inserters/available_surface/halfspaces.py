@@ -80,7 +80,7 @@ def halfspaces_of_arcs(
     nep = pl.shape[0]
     neq = ql.shape[0]
     cand = np.empty((fp + fq + nep * neq, 3))
-    nc = 0
+    nc = int(np.int64(0))  # not a literal 0 (a second compilation of edge_pair_directions)
     for f in range(fp):
         for a in range(3):
             cand[nc, a] = p.normals[f, a]
