@@ -14,7 +14,8 @@ WARMUP_MIN_TESTS = 500
 """Sessions with fewer tests compile only what they use, in the test process."""
 
 WARMUP_WAIT_MAX = 600.0
-"""Seconds the first test of a stage waits at most for the warm-up to finish the stage."""
+"""Seconds the first test of a stage waits at most for the warm-up to finish the stage
+(after one wait that long, the tests wait no more)."""
 
 _warmup: list[subprocess.Popen[bytes]] = []
 _progress: list[Path] = []
@@ -120,12 +121,12 @@ def _wait_for_warmup(stage: int) -> None:
     longer than waiting for them (the warm-up is part way through), and would
     slow both on a machine with two cores.
     """
-    if not _warmup or stage in _waited:
+    if not _warmup or stage in _waited or any(s >= WARMUP_WAIT_MAX for s in _waited.values()):
         return
     start = time.monotonic()
     proc = _warmup[0]
     while proc.poll() is None and _warmed_stage() < stage:
-        if time.monotonic() - start > WARMUP_WAIT_MAX:
+        if time.monotonic() - start >= WARMUP_WAIT_MAX:
             break
         time.sleep(0.1)
     _waited[stage] = time.monotonic() - start

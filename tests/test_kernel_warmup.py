@@ -8,6 +8,7 @@ from pathlib import Path
 from types import ModuleType
 
 import kernel_warmup
+import pytest
 
 import regopack
 
@@ -66,3 +67,28 @@ def test_the_stages_follow_the_unlisted_modules_in_order() -> None:
         "plugins/shapes/test_octagon.py",
     ]
     assert [conftest._stage(here / n, here) for n in names] == [4, 3, 0, 1, 0, 2, 0]
+
+
+def test_a_stage_waits_for_the_warmup_only_while_it_compiles_that_stage(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    conftest = _suite_conftest()
+
+    class Compiling:
+        """A warm-up process that has not exited."""
+
+        def poll(self) -> None:
+            return None
+
+    progress = tmp_path / "progress"
+    progress.write_text("2")
+    monkeypatch.setattr(conftest, "_warmup", [Compiling()])
+    monkeypatch.setattr(conftest, "_progress", [progress])
+    monkeypatch.setattr(conftest, "_waited", {})
+    monkeypatch.setattr(conftest, "WARMUP_WAIT_MAX", 0.3)
+    conftest._wait_for_warmup(2)  # the warm-up has finished stage 2
+    assert conftest._waited[2] < 0.2
+    conftest._wait_for_warmup(3)  # still compiling stage 3: wait, at most WARMUP_WAIT_MAX
+    assert conftest._waited[3] >= 0.3
+    conftest._wait_for_warmup(4)  # after a wait that long the tests wait no more
+    assert 4 not in conftest._waited
