@@ -335,7 +335,9 @@ def check_runnable(scene: ResolvedScene) -> int:
         One line naming the source (scene file or ``--set``), the field, the
         value and what is allowed.
     """
-    return check_scene(scene)
+    count = check_scene(scene)
+    check_analyses(scene)
+    return count
 
 
 def _count(n: int) -> str:

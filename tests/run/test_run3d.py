@@ -125,6 +125,19 @@ def test_a_2d_analyzer_in_a_3d_scene_is_refused_before_packing(registry) -> None
     assert "density3d" not in text  # the old names are not listed
 
 
+def test_config_refuses_what_run_refuses(capsys) -> None:  # type: ignore[no-untyped-def]
+    # `regopack config` runs every check of `regopack run`, the analyzers' dimension too
+    from regopack.cli import main
+
+    argv = ["config", "table1-3d", "--set", 'outputs.analyses=["local_fraction"]']
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(
+        "regopack: error: --set: outputs.analyses: analyzer 'local_fraction' analyses 2D packings"
+    )
+    assert "\n" not in err
+
+
 def _cube_packing(centres: list[list[float]], half: float) -> Packing3D:
     from packings3d import cube_packing
 
