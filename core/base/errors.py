@@ -35,6 +35,15 @@ class ExportError(RegopackError):
     """A packing cannot be exported, or an exported file cannot be read back."""
 
 
+class DeprecatedNameWarning(FutureWarning):
+    """An old name of a plugin (e.g. the analyzer ``contacts3d``) was used; it goes next release.
+
+    A :class:`FutureWarning`, which Python shows by default, because such names
+    come from what users write (scenes, options, calls); the command line
+    prints it as one ``regopack: warning:`` line.
+    """
+
+
 class Terminated(KeyboardInterrupt):
     """The process received SIGTERM (what batch schedulers send at a time limit).
 

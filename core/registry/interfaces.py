@@ -184,12 +184,12 @@ class Analyzer(ABC):
     ``compute`` returns ``self``; results are properties or :meth:`results`.
     Analyzers declare the names of the analyzers whose results they need in
     ``requires``; the runner computes those first and passes them in ``context``.
-    ``name`` is the registered name; the runner sets it, on the analyzers it
-    builds, to the name their results are filed under (an old name, when
-    they were asked for by one), for the analyzer's messages.
+    ``name`` is the registered name; when an analyzer's results are filed
+    under another name (an old name it was asked for by), the runner sets
+    that name on the instance, for the analyzer's messages.
     """
 
-    name: str = ""
+    name: ClassVar[str] = ""
     requires: ClassVar[tuple[str, ...]] = ()
 
     @abstractmethod

@@ -27,7 +27,7 @@ from typing import Any
 import pluggy
 from pydantic import BaseModel
 
-from regopack.base.errors import PluginError
+from regopack.base.errors import DeprecatedNameWarning, PluginError
 from regopack.base.messages import closest
 from regopack.registry import hookspecs
 from regopack.registry.plugin_types import KINDS, FigureSpec, PluginSpec
@@ -386,6 +386,12 @@ class Registry:
                 f"plugin {origin!r}: the aliases of {record_type.__name__} {record.name!r} "
                 "must be a tuple of names"
             )
+        dims = getattr(record, "alias_dimensions", ())
+        if not isinstance(dims, tuple) or not all(d in (2, 3) for d in dims):
+            raise PluginError(
+                f"plugin {origin!r}: the alias_dimensions of {record_type.__name__} "
+                f"{record.name!r} must be a tuple of 2 and 3"
+            )
 
     def _kind(self, kind: str) -> dict[str, tuple[PluginSpec[Any], str]]:
         try:
@@ -400,7 +406,8 @@ class Registry:
 
         An old name of a spec (see :attr:`PluginSpec.aliases
         <regopack.registry.plugin_types.PluginSpec.aliases>`) gives that spec and
-        warns, once per registry, with a :class:`DeprecationWarning` naming the new name.
+        warns, once per registry, with a
+        :class:`~regopack.base.errors.DeprecatedNameWarning` naming the new name.
 
         Raises
         ------
@@ -414,7 +421,7 @@ class Registry:
             warnings.warn(
                 f"the {kind} kind {name!r} is deprecated and will be removed in the next "
                 f"release; use {new!r}",
-                DeprecationWarning,
+                DeprecatedNameWarning,
                 stacklevel=2,
             )
         return self._specs[kind][new][0]

@@ -48,7 +48,12 @@ class PluginSpec(Generic[T]):
     aliases
         Old names that still select this implementation, for one release:
         :meth:`regopack.registry.manager.Registry.get` warns with a
-        :class:`DeprecationWarning` naming :attr:`name` (keyword only).
+        :class:`~regopack.base.errors.DeprecatedNameWarning` naming :attr:`name`
+        (keyword only).
+    alias_dimensions
+        Dimensions the old names served, when fewer than the implementation's
+        (``contacts3d``: 3); an old name asked for in another dimension is
+        refused as it was before (keyword only; empty: no restriction).
     """
 
     name: str
@@ -56,6 +61,7 @@ class PluginSpec(Generic[T]):
     factory: Callable[[Any], T]
     description: str = ""
     aliases: tuple[str, ...] = field(default=(), kw_only=True)
+    alias_dimensions: tuple[int, ...] = field(default=(), kw_only=True)
 
     def build(self, params: dict[str, Any]) -> T:
         """Validate ``params`` with :attr:`config_model` and build the implementation."""
@@ -104,6 +110,42 @@ class ExporterSpec(PluginSpec[Exporter | SolidExporter]):
     """
 
     dimensions: tuple[int, ...] = (2,)
+
+
+def field_dimensions(model: type[BaseModel]) -> dict[str, tuple[int, ...]]:
+    """Return the parameters of ``model`` that have a meaning in some dimensions only.
+
+    A field declares them as ``Field(..., json_schema_extra={"dimensions": [2]})``
+    (``homogeneity.tiles``: 2D, ``homogeneity.layers``: 3D); the schema shows
+    them, and a scene or call that sets one for a packing of another dimension
+    is refused before anything is packed (:func:`misplaced_field`).
+    """
+    out: dict[str, tuple[int, ...]] = {}
+    for name, info in model.model_fields.items():
+        extra = info.json_schema_extra
+        dims = extra.get("dimensions") if isinstance(extra, dict) else None
+        if isinstance(dims, list | tuple):
+            out[name] = tuple(int(d) for d in dims if isinstance(d, int))
+    return out
+
+
+def misplaced_field(config: BaseModel, dimension: int) -> tuple[str, str] | None:
+    """Find the first parameter set in ``config`` that has no meaning in ``dimension``.
+
+    Returns the field's name and one line starting with it (the caller puts
+    where it was given before it); ``None`` when every set parameter fits.
+    """
+    dims = field_dimensions(type(config))
+    for name in sorted(config.model_fields_set):
+        own = dims.get(name)
+        if own and dimension not in own and getattr(config, name) is not None:
+            fitting = [f for f, d in dims.items() if dimension in d]
+            hint = f"; its {dimension}D parameters: {', '.join(fitting)}" if fitting else ""
+            return name, (
+                f"{name} = {getattr(config, name)!r}: has no meaning for a {dimension}D packing, "
+                f"only for {' or '.join(f'{d}D' for d in own)} ones{hint}"
+            )
+    return None
 
 
 KINDS: dict[str, type[PluginSpec[Any]]] = {

@@ -58,7 +58,7 @@ from regopack.registry.interfaces import (
     SolidGenerator,
 )
 from regopack.run.compilation import CompileTime, compile_timer
-from regopack.scenes.analysis_plan import check_dimension, run_analyses
+from regopack.scenes.analysis_plan import plan_analyses, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.verification.summary import verify_summary
 
@@ -692,10 +692,16 @@ def _analyses(resolved: ResolvedScene) -> str:
 
 
 def check_analyses(resolved: ResolvedScene) -> None:
-    """Refuse, before anything is packed, an analyzer of the scene that its dimension lacks."""
-    names = [p.kind for p in resolved.analyses]
-    dimension = resolved.scene.domain.dimension
-    check_dimension(resolved.registry, names, dimension, _analyses(resolved))
+    """Refuse, before anything is packed, what the scene's analyses would refuse after it.
+
+    An analyzer or a parameter that the scene's dimension lacks, one analyzer
+    asked for by two names, a requirement that is not registered: the plan of
+    the analyses is made (the analyzers built, none computed).
+    """
+    if resolved.analyses:
+        requests = [(p.kind, _params(p)) for p in resolved.analyses]
+        dimension = resolved.scene.domain.dimension
+        plan_analyses(resolved.registry, requests, {}, dimension, _analyses(resolved), warn=False)
 
 
 def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) -> None:

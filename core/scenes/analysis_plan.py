@@ -18,7 +18,7 @@ from regopack.base.errors import ConfigError, PluginError
 from regopack.base.limits import LimitError
 from regopack.registry.interfaces import Analyzer
 from regopack.registry.manager import Registry
-from regopack.registry.plugin_types import AnalyzerSpec
+from regopack.registry.plugin_types import AnalyzerSpec, misplaced_field
 
 if TYPE_CHECKING:
     from regopack.packing.core import Packing
@@ -30,6 +30,7 @@ __all__ = [
     "check_dimension",
     "default_analyses",
     "dimensions_of",
+    "plan_analyses",
     "run_analyses",
 ]
 
@@ -75,13 +76,19 @@ def _build(
     params: Mapping[str, Any],
     prefix: str,
     params_source: str | None = None,
+    dimension: int = 2,
+    source: str | None = None,
+    given: Iterable[str] = (),
 ) -> Analyzer:
     """Validate ``params`` with the config model of the analyzer ``name`` and build it.
 
     The analyzer's :attr:`~regopack.registry.interfaces.Analyzer.name` becomes
-    ``filed``, the name its results are filed under. ``prefix`` (the name the
-    parameters were given for) and ``params_source`` (e.g. ``--set``) start the
-    message refusing a parameter.
+    ``filed``, the name its results are filed under (when it differs from the
+    class's). ``prefix`` (the name the parameters were given for) and
+    ``params_source`` (e.g. ``--set``) start the message refusing a parameter;
+    a parameter of another dimension than ``dimension`` is refused too,
+    located by ``params_source`` when it is among ``given`` (the parameters
+    from there), by ``source`` otherwise.
     """
     from regopack.scenes.model import _describe_validation_error
 
@@ -94,6 +101,11 @@ def _build(
                 err, source=params_source, prefix=(prefix,), model=spec.config_model
             )
         ) from err
+    misplaced = misplaced_field(config, dimension)
+    if misplaced is not None:
+        field, line = misplaced
+        where = params_source if field in given else source
+        raise ConfigError(f"{where + ': ' if where else ''}{prefix}.{line}")
     analyzer = spec.factory(config)
     if not isinstance(analyzer, Analyzer):
         origin = registry.origin("analysis", name)
@@ -101,13 +113,21 @@ def _build(
             f"analysis plugin {name!r} ({origin}) built a {type(analyzer).__name__}, "
             "not an Analyzer"
         )
-    analyzer.name = filed
+    if analyzer.name != filed:
+        setattr(analyzer, "name", filed)  # noqa: B010 (a class variable, set on this instance)
     return analyzer
 
 
 def dimensions_of(registry: Registry, name: str) -> tuple[int, ...]:
-    """Dimensions of the packings that the analyzer ``name`` (or an old name) analyses."""
-    spec = registry.get("analysis", registry.canonical("analysis", name))
+    """Dimensions of the packings that the analyzer ``name`` (or an old name) analyses.
+
+    An old name serves the dimensions it served before (``contacts3d``: 3D),
+    when its spec says so (:attr:`~regopack.registry.plugin_types.PluginSpec.alias_dimensions`).
+    """
+    new = registry.canonical("analysis", name)
+    spec = registry.get("analysis", new)
+    if new != name and spec.alias_dimensions:
+        return tuple(spec.alias_dimensions)
     dims = spec.dimensions if isinstance(spec, AnalyzerSpec) else (2,)
     return tuple(dims)
 
@@ -150,7 +170,7 @@ def _filed_requirement(registry: Registry, requirement: str, needed_by: str, ask
     return spec.aliases[0] if spec.aliases else requirement
 
 
-def _plan(
+def plan_analyses(
     registry: Registry,
     requests: Sequence[tuple[str, Mapping[str, Any]]],
     params: Mapping[str, Mapping[str, Any]],
@@ -163,6 +183,9 @@ def _plan(
 
     Analyzers are known by their registered names; each is filed under the
     name it was asked for (see :func:`_filed_requirement` for the others).
+    Nothing is computed: a run makes the plan before packing, so that what the
+    analyses would refuse is refused first. Arguments and errors as
+    :func:`run_analyses`, with the packing's ``dimension``.
     """
     asked: dict[str, str] = {}
     wanted: dict[str, dict[str, Any]] = {}
@@ -170,16 +193,24 @@ def _plan(
         new = _registered(registry, name, warn)
         first = asked.setdefault(new, name)
         if first != name:
+            where = f"{source}: " if source else ""
             raise ConfigError(
-                f"analyzers {first!r} and {name!r} are one analyzer ({new!r}); ask for it once"
+                f"{where}analyzers {first!r} and {name!r} are one analyzer ({new!r}); "
+                "ask for it once"
             )
         wanted.setdefault(new, {}).update(request_params)
     given: dict[str, dict[str, Any]] = {}
     given_as: dict[str, str] = {}
     for name, fields in params.items():
         new = _registered(registry, name)
+        first = given_as.setdefault(new, name)
+        if first != name:
+            where = f"{params_source}: " if params_source else ""
+            raise ConfigError(
+                f"{where}parameters given for {first!r} and for {name!r}, which are one "
+                f"analyzer ({new!r}); give them under one name"
+            )
         given.setdefault(new, {}).update(fields)
-        given_as.setdefault(new, name)
     check_dimension(registry, [*asked.values(), *params], dimension, source)
 
     planned: dict[str, Analyzer] = {}
@@ -194,15 +225,29 @@ def _plan(
         check_dimension(registry, [name], dimension, source)
         merged = {**wanted.get(name, {}), **given.get(name, {})}
         prefix = given_as.get(name, filed)
-        analyzer = _build(registry, name, filed, merged, prefix, params_source)
+        analyzer = _build(
+            registry,
+            name,
+            filed,
+            merged,
+            prefix,
+            params_source,
+            dimension,
+            source,
+            given.get(name, {}),
+        )
         for requirement in analyzer.requires:
             if ("analysis", requirement) not in registry:
                 raise PluginError(
                     f"analyzer {filed!r} requires {requirement!r}, which is not registered; "
                     f"known analyzers: {_known(registry)}"
                 )
-            new = registry.canonical("analysis", requirement)
-            required_as = asked.get(new) or _filed_requirement(registry, new, name, filed)
+            new = _registered(registry, requirement)  # an old name here warns too
+            required_as = (
+                asked.get(new)
+                or (requirement if requirement != new else None)  # required by an old name
+                or _filed_requirement(registry, new, name, filed)
+            )
             visit(new, required_as, (*chain, name))
         planned[filed] = analyzer
         filed_as[name] = filed
@@ -293,7 +338,9 @@ def run_analyses(
     """
     packing.validate()  # the arrays may have changed in place since the packing was built
     dimension = int(getattr(packing, "dimension", 2))
-    planned = _plan(registry, requests, params or {}, dimension, source, params_source, warn)
+    planned = plan_analyses(
+        registry, requests, params or {}, dimension, source, params_source, warn
+    )
     done: dict[str, Analyzer] = {}
     by_name = {registry.canonical("analysis", name): name for name in planned}
     for name, analyzer in planned.items():

@@ -45,7 +45,7 @@ from regopack.base.units import _ALIASES, LENGTH_UNITS, _allowed
 from regopack.geometry.domain import DOMAIN_KINDS, Box, Circle, ConvexPolygon, Rectangle
 from regopack.geometry.domain import Domain as DomainGeometry
 from regopack.registry.manager import Registry
-from regopack.registry.plugin_types import PluginSpec
+from regopack.registry.plugin_types import PluginSpec, misplaced_field
 
 __all__ = [
     "ANALYSIS_FOLDER",
@@ -843,6 +843,13 @@ def _resolve_ref(
                 also=("kind",),
             )
         ) from err
+    if category in ("analysis", "export"):  # a parameter of another dimension than the scene's
+        misplaced = misplaced_field(config, scene.domain.dimension)
+        if misplaced is not None:
+            field, line = misplaced
+            text = f"{_dotted(loc)}.{line}"
+            source = _where(_dotted((*loc, field)), scene.source, scene._overridden)
+            raise ConfigError(f"{source}: {text}" if source else text)
     return ResolvedPlugin(kind=ref.kind, spec=spec, config=config, origin=origin)
 
 

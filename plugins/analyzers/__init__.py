@@ -36,6 +36,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Packing density (area or volume fraction) over the domain and the interior.",
             dimensions=BOTH,
             aliases=("density3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "contacts",
@@ -44,6 +45,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Contacts at tol: the bow-shaped model in 2D, area, volume and spherical cap in 3D.",
             dimensions=BOTH,
             aliases=("contacts3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "coordination",
@@ -52,6 +54,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Coordination numbers, Z(tol) and rattlers.",
             dimensions=BOTH,
             aliases=("coordination3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "rdf",
@@ -60,6 +63,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Radial distribution function, total and per mineral pair.",
             dimensions=BOTH,
             aliases=("rdf3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "network",
@@ -68,6 +72,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Contact network and fabric of the contact normals.",
             dimensions=BOTH,
             aliases=("network3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "homogeneity",
@@ -77,6 +82,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "and shells in 3D.",
             dimensions=BOTH,
             aliases=("homogeneity3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "psd",
@@ -85,6 +91,7 @@ def regopack_analyzers() -> Iterable[AnalyzerSpec]:
             "Size distribution of the placed particles against the requested one, by sieve class.",
             dimensions=BOTH,
             aliases=("psd3d",),
+            alias_dimensions=(3,),
         ),
         AnalyzerSpec(
             "local_fraction",

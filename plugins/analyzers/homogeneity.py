@@ -110,6 +110,11 @@ DEFAULT_REGIONS: dict[str, Any] = {"tiles": (4, 4), "layers": 6, "shells": 4}
 """Regions of the window when the config leaves them out."""
 
 
+PLANE: dict[str, Any] = {"dimensions": [2]}
+SOLID: dict[str, Any] = {"dimensions": [3]}
+"""Parameters of one dimension (see :func:`regopack.registry.plugin_types.field_dimensions`)."""
+
+
 class HomogeneityConfig(BaseModel):
     """Parameters of the homogeneity analyzer."""
 
@@ -118,6 +123,7 @@ class HomogeneityConfig(BaseModel):
     ring_width: float | None = Field(
         None,
         gt=0,
+        json_schema_extra=PLANE,
         allow_inf_nan=False,
         description=(
             "Width of the rings about the domain centre (length unit); default: "
@@ -129,6 +135,7 @@ class HomogeneityConfig(BaseModel):
         None,
         ge=1,
         le=MAX_RINGS,
+        json_schema_extra=PLANE,
         description=(
             "Number of rings instead of a width: the ring width is the distance from the "
             "centre to the farthest window point over rings."
@@ -137,13 +144,22 @@ class HomogeneityConfig(BaseModel):
     tiles: tuple[int, int] | None = Field(
         None,
         strict=False,
+        json_schema_extra=PLANE,
         description="Tiles along x and y over the interior window's bounding box; default: [4, 4].",
     )
     layers: int | None = Field(
-        None, ge=1, le=1000, description="Horizontal layers of a 3D window along z; default: 6."
+        None,
+        ge=1,
+        le=1000,
+        json_schema_extra=SOLID,
+        description="Horizontal layers of a 3D window along z; default: 6.",
     )
     shells: int | None = Field(
-        None, ge=1, le=1000, description="Nested boxes about a 3D window's centre; default: 4."
+        None,
+        ge=1,
+        le=1000,
+        json_schema_extra=SOLID,
+        description="Nested boxes about a 3D window's centre; default: 4.",
     )
     margin: float | None = Field(
         None, ge=0, description="Exclusion margin from the walls; default: the scene's d_max."

@@ -8,7 +8,7 @@ import pytest
 from cli_helpers import one_error_line
 
 import regopack
-from regopack.base.errors import ConfigError
+from regopack.base.errors import ConfigError, DeprecatedNameWarning
 from regopack.cli import main
 from regopack.plugins.analyzers.density import Density, DensityConfig
 from regopack.registry.hookspecs import hookimpl
@@ -31,7 +31,7 @@ SCENE = {
 }
 
 
-pytestmark = pytest.mark.filterwarnings("ignore:the analysis kind:DeprecationWarning")
+pytestmark = pytest.mark.filterwarnings("ignore:the analysis kind:FutureWarning")
 """The scene and several tests ask for analyzers by their old 3D names, as scenes did."""
 
 BOTH = ("contacts", "coordination", "density", "homogeneity", "network", "psd", "rdf")
@@ -128,9 +128,9 @@ def test_the_analyzers_of_both_dimensions_give_3d_results_under_their_names(pack
 def test_an_old_name_warns_once_and_files_its_results_and_requirements_under_old_names(
     packing3d,
 ) -> None:
-    with pytest.warns(DeprecationWarning) as caught:
+    with pytest.warns(DeprecatedNameWarning) as caught:
         old = regopack.analyze(packing3d, "network3d", contacts3d__tol=0.1)
-    messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+    messages = [str(w.message) for w in caught if w.category is DeprecatedNameWarning]
     assert messages == [
         "the analysis kind 'network3d' is deprecated and will be removed in the next release; "
         "use 'network'",
@@ -156,7 +156,7 @@ def test_the_default_3d_analyses_keep_their_old_names_without_a_warning(packing3
 
 
 def test_an_analyzer_asked_for_by_both_names_is_refused_in_one_line(packing3d) -> None:
-    with pytest.warns(DeprecationWarning):
+    with pytest.warns(DeprecatedNameWarning):
         with pytest.raises(ConfigError) as err:
             regopack.analyze(packing3d, ["rdf", "rdf3d"])
     assert str(err.value) == "analyzers 'rdf' and 'rdf3d' are one analyzer ('rdf'); ask for it once"
@@ -166,7 +166,97 @@ def test_what_has_no_meaning_in_3d_is_one_line(packing3d) -> None:
     with pytest.raises(ConfigError) as err:
         regopack.analyze(packing3d, "homogeneity", homogeneity__tiles=[2, 2])
     assert str(err.value) == (
-        "homogeneity.tiles has no meaning for a 3D packing; its regions are set by layers, shells"
+        "homogeneity.tiles = (2, 2): has no meaning for a 3D packing, only for 2D ones; "
+        "its 3D parameters: layers, shells"
     )
     with pytest.raises(ConfigError, match=r"^analyzer 'local_fraction' analyses 2D packings, not"):
         regopack.analyze(packing3d, "local_fraction")
+
+
+def _square_packing():  # type: ignore[no-untyped-def]
+    return packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
+
+
+def test_an_old_name_is_shown_to_users_by_default(run3d) -> None:
+    # a FutureWarning: Python shows it outside __main__, where a DeprecationWarning is hidden
+    import subprocess
+    import sys
+
+    code = "import regopack, sys; regopack.analyze(regopack.load(sys.argv[1]), 'density3d')"
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(run3d.packing_path)],
+        capture_output=True,
+        text=True,
+        check=True,
+        env={k: v for k, v in __import__("os").environ.items() if k != "PYTHONWARNINGS"},
+    )
+    assert "the analysis kind 'density3d' is deprecated" in done.stderr
+    assert "use 'density'" in done.stderr
+
+
+def test_an_old_3d_name_is_refused_on_a_2d_packing() -> None:
+    with pytest.raises(ConfigError, match=r"^analyzer 'density3d' analyses 3D packings, not 2D"):
+        regopack.analyze(_square_packing(), "density3d")
+
+
+def test_a_3d_parameter_of_a_2d_scene_is_refused_by_config(tmp_path, capsys) -> None:
+    argv = ["config", "small", "--set", 'outputs.analyses=[{kind = "homogeneity", layers = 3}]']
+    assert main(argv) == 2
+    assert one_error_line(capsys) == (
+        "regopack: error: --set: outputs.analyses.0.layers = 3: has no meaning for a 2D "
+        "packing, only for 3D ones; its 2D parameters: ring_width, rings, tiles"
+    )
+
+
+def test_one_analyzer_under_two_names_in_a_scene_is_refused_before_packing(capsys) -> None:
+    argv = ["config", "table1-3d", "--set", 'outputs.analyses=["density", "density3d"]']
+    assert main(argv) == 2
+    assert one_error_line(capsys) == (
+        "regopack: error: --set: outputs.analyses: analyzers 'density' and 'density3d' are "
+        "one analyzer ('density'); ask for it once"
+    )
+
+
+def test_parameters_under_both_names_are_refused(packing3d) -> None:
+    with pytest.raises(ConfigError) as err:
+        regopack.analyze(packing3d, "contacts3d", contacts__tol=0.1, contacts3d__tol=0.3)
+    assert "parameters given for 'contacts' and for 'contacts3d'" in str(err.value)
+
+
+class _NeedsOldName(Density):
+    name = "mine"  # type: ignore[assignment]
+    requires = ("coordination3d",)
+
+    def compute(self, packing, context):  # type: ignore[no-untyped-def]
+        self.z = context["coordination3d"].results()["z_domain"]
+        return self
+
+    def results(self):  # type: ignore[no-untyped-def]
+        return {"z": self.z}
+
+
+def test_a_requirement_named_by_its_old_name_is_filed_under_it(packing3d) -> None:
+    class Plugin:
+        @hookimpl
+        def regopack_analyzers(self):  # type: ignore[no-untyped-def]
+            return [AnalyzerSpec("mine", DensityConfig, _NeedsOldName, dimensions=(3,))]
+
+    with pytest.warns(DeprecatedNameWarning, match="'coordination3d' is deprecated"):
+        done = regopack.analyze(packing3d, "mine", registry=make_registry(Plugin()))
+    assert list(done) == ["contacts3d", "coordination3d", "mine"]
+
+
+class _ReadOnlyName(Density):
+    @property
+    def name(self) -> str:  # type: ignore[override]
+        return "mine"
+
+
+def test_an_analyzer_with_a_read_only_name_runs() -> None:
+    class Plugin:
+        @hookimpl
+        def regopack_analyzers(self):  # type: ignore[no-untyped-def]
+            return [AnalyzerSpec("mine", DensityConfig, _ReadOnlyName)]
+
+    done = regopack.analyze(_square_packing(), "mine", registry=make_registry(Plugin()))
+    assert list(done) == ["mine"]

@@ -8,7 +8,7 @@ import pluggy
 import pytest
 from fakes import FakePlugin, ShapeConfig, SizeConfig, UniformDiameter, fake_registry
 
-from regopack.base.errors import PluginError
+from regopack.base.errors import DeprecatedNameWarning, PluginError
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.manager import (
     BUILTIN_PLUGINS,
@@ -303,7 +303,7 @@ def test_an_old_name_of_any_kind_gives_the_spec_and_warns_once(kind):
     spec = KINDS[kind]("new", ShapeConfig, lambda c: None, "one", aliases=("old",))
     reg = Registry({kind: {"new": (spec, "my-plugin")}})
     with pytest.warns(
-        DeprecationWarning, match=rf"the {kind} kind 'old' is deprecated .*use 'new'"
+        DeprecatedNameWarning, match=rf"the {kind} kind 'old' is deprecated .*use 'new'"
     ):
         assert reg.get(kind, "old") is spec
     with warnings.catch_warnings():

@@ -337,17 +337,19 @@ def test_the_equivalent_cap_has_the_contact_volume_and_base() -> None:
     assert np.isfinite(h).all() and (h > 0).all()
 
 
-@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+@pytest.mark.filterwarnings("ignore::FutureWarning")
 def test_contacts3d_is_the_one_contacts_analyzer_and_refuses_a_bad_tolerance() -> None:
     p2 = packing_from_polygons([[(0, 0), (1, 0), (1, 1), (0, 1)]], domain=(0, 2, 0, 2))
-    old = regopack.analyze(p2, "contacts3d")["contacts3d"]
-    assert old.scalars == regopack.analyze(p2, "contacts")["contacts"].scalars
+    with pytest.raises(ConfigError, match=r"^analyzer 'contacts3d' analyses 3D packings, not 2D"):
+        regopack.analyze(p2, "contacts3d")  # the old name keeps its dimension
     p = cube_lattice((2, 1, 1), GAPS)
+    old = regopack.analyze(p, "contacts3d")["contacts3d"]
+    assert old.scalars == regopack.analyze(p, "contacts")["contacts"].scalars
     with pytest.raises(ConfigError, match=r"contacts3d.tol = -1"):
         regopack.analyze(p, "contacts3d", contacts3d__tol=-1.0)
 
 
-@pytest.mark.filterwarnings("ignore::DeprecationWarning")
+@pytest.mark.filterwarnings("ignore::FutureWarning")
 def test_every_3d_analyzer_runs_on_a_lone_particle_and_skips_the_unplaced() -> None:
     import dataclasses
 
