@@ -123,6 +123,10 @@ def _digest(value: Any) -> str:
     return h.hexdigest()[:16]
 
 
+ONE_DIMENSION = {2: ("orientation",), 3: ("face_offsets", "rotation")}
+"""Arrays of the dump that only packings of one dimension have, by that dimension."""
+
+
 def _packing_arrays(p: Any) -> dict[str, Any]:
     names = (
         "radius",
@@ -137,10 +141,13 @@ def _packing_arrays(p: Any) -> dict[str, Any]:
         "face_offsets",
         "rotation",
     )
+    # one packing type holds both dimensions: the other dimension's arrays are
+    # empty and left out, as when each dimension had its own type
+    other = ONE_DIMENSION[5 - getattr(p, "dimension", 2)]
     out = {}
     for n in names:
         v = getattr(p, n, None)
-        if isinstance(v, np.ndarray):
+        if isinstance(v, np.ndarray) and not (n in other and v.size == 0):
             out[n] = v
     return out
 

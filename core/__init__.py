@@ -20,10 +20,7 @@ from typing import TYPE_CHECKING, Any
 import regopack.base.threads  # noqa: F401  (numba's threading layer, before any kernel runs)
 from regopack import _compat
 from regopack._version import __version__
-from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
-from regopack.packing.core3d import load_packing as load
-from regopack.packing.core3d import save_packing as save
+from regopack.packing.core import Packing, load, save
 
 if TYPE_CHECKING:
     from regopack.api.functions import (
@@ -38,7 +35,6 @@ if TYPE_CHECKING:
 
 __all__ = [
     "Packing",
-    "Packing3D",
     "__version__",
     "analyze",
     "export",
@@ -57,7 +53,10 @@ _API = frozenset({"analyze", "export", "pack", "pack_and_summarise", "scene", "s
 
 
 def __getattr__(name: str) -> Any:
-    """Load the API functions on first use (PEP 562)."""
+    """Load the API functions on first use (PEP 562); ``Packing3D`` is deprecated."""
+    if name == "Packing3D":
+        _compat.warn_moved("regopack.Packing3D", "regopack.Packing")
+        return Packing
     if name in _API:
         from regopack.api import functions as api
 

@@ -37,7 +37,6 @@ import numba
 import regopack
 from regopack.api.warmup import TINY, VARIANTS
 from regopack.exports.pipeline import exporter_dimensions
-from regopack.packing.core import Packing
 from regopack.registry.manager import default_registry
 from regopack.scenes.analysis_plan import dimensions_of
 
@@ -79,7 +78,7 @@ def _finish(packing: Any) -> None:
     """Give ``packing`` every analysis of its dimension and, in 2D, write it with every
     exporter (some kernels have a signature per particle kind)."""
     registry = default_registry()
-    dim = 2 if isinstance(packing, Packing) else 3
+    dim = packing.dimension
     names = [n for n in sorted(registry.names("analysis")) if dim in dimensions_of(registry, n)]
     results = regopack.analyze(packing, names, registry=registry)
     if dim == 3:

@@ -8,7 +8,7 @@ import numpy as np
 
 import regopack
 from regopack.geometry.domain import Box
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 
 PHASES = (("plagioclase", 0.5, 1.0), ("pyroxene", 0.3, 3.0), ("glass", 0.2, 0.5))
 
@@ -35,10 +35,10 @@ def scene3d(side: float = 20.0, directions: str = "truncated-octahedron", seed: 
 
 
 @functools.cache
-def packing3d(side: float = 20.0, directions: str = "truncated-octahedron") -> Packing3D:
+def packing3d(side: float = 20.0, directions: str = "truncated-octahedron") -> Packing:
     """The packing of :func:`scene3d` (about 60 polyhedra in a 20 µm box); do not change it."""
     packing = regopack.pack(scene3d(side, directions), verify=False)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     return packing
 
 
@@ -46,7 +46,7 @@ CUBE_LOOPS = ([0, 1, 3, 2], [4, 6, 7, 5], [0, 4, 5, 1], [2, 3, 7, 6], [0, 2, 6, 
 """Faces of the cube whose vertex ``4x + 2y + z`` is ``(±1, ±1, ±1)``, outward."""
 
 
-def cube_and_sphere(rounded: bool = True) -> Packing3D:
+def cube_and_sphere(rounded: bool = True) -> Packing:
     """A cube of side 2 at (3, 3, 3) and a sphere of radius 1 at (7, 3, 3) in a 10 µm box."""
     import numpy as np
 
@@ -55,7 +55,7 @@ def cube_and_sphere(rounded: bool = True) -> Packing3D:
     cube = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], float)
     normals = np.array([cube[loop].mean(axis=0) for loop in CUBE_LOOPS])
     n = 2 if rounded else 1
-    return Packing3D(
+    return Packing(
         radius=np.array([(6 / np.pi) ** (1 / 3), 1.0][:n]),
         mineral=np.arange(n),
         mineral_names=("cube", "sphere")[:n],
@@ -75,13 +75,13 @@ def cube_and_sphere(rounded: bool = True) -> Packing3D:
 
 
 @functools.cache
-def spheres3d(side: float = 15.0) -> Packing3D:
+def spheres3d(side: float = 15.0) -> Packing:
     """Spheres of the sizes of :func:`scene3d` packed in a walled box; do not change it."""
     scene = scene3d(side)
     for phase in scene["phases"]:
         phase["shape"] = {"kind": "sphere"}
     packing = regopack.pack(scene, verify=False)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     return packing
 
 
@@ -106,7 +106,7 @@ def _cube_arrays(half: float) -> dict[str, np.ndarray]:
     }
 
 
-def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) -> Packing3D:
+def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) -> Packing:
     """Cubes at ``centres`` (NaN rows: not placed) in a 10-µm box."""
     n = len(centres)
     cube = _cube_arrays(half)
@@ -130,4 +130,4 @@ def cube_packing(centres: list[list[float]], half: float = 0.5, **kw: object) ->
         "domain": Box(0, 10, 0, 10, 0, 10),
     }
     args.update(kw)
-    return Packing3D(**args)  # type: ignore[arg-type]
+    return Packing(**args)  # type: ignore[arg-type]

@@ -464,7 +464,7 @@ def _disk_full(*args: object, **kwargs: object) -> None:
     [
         (
             regopack.run.pipeline,
-            "save_packing",
+            "save",
             ["run", "small", "--set", "count=5", "--quiet"],
             "runs/x",
         ),

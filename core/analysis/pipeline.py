@@ -33,7 +33,7 @@ import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -49,9 +49,6 @@ from regopack.scenes.analysis_plan import (
     DEFAULT_ANALYSES_3D,
     run_analyses,
 )
-
-if TYPE_CHECKING:
-    from regopack.packing.core3d import Packing3D
 
 __all__ = [
     "DEFAULT_ANALYSES",
@@ -142,7 +139,7 @@ def _first(results: Mapping[str, Mapping[str, Any]], key: str) -> Any:
 
 
 def analysis_summary(
-    packing: Packing | Packing3D,
+    packing: Packing,
     analyzers: Mapping[str, Analyzer],
     packing_path: str | Path | None = None,
 ) -> dict[str, Any]:
@@ -177,7 +174,7 @@ def analysis_summary(
         "interior_margin": _first(results, "interior_margin"),
         "analyses": list(results),
     }
-    if getattr(packing, "dimension", 2) == 3:
+    if packing.dimension == 3:
         summary["dimension"] = 3
     summary.update(results)
     return summary
@@ -241,7 +238,7 @@ def _write_tables(
 
 
 def _draw_figures(
-    packing: Packing | Packing3D,
+    packing: Packing,
     analyzers: Mapping[str, Analyzer],
     out_dir: Path,
     registry: Registry | None,
@@ -268,7 +265,7 @@ class FigureWarning(UserWarning):
 
 
 def _drawn_files(
-    spec: FigureSpec, packing: Packing | Packing3D, analyzers: Mapping[str, Analyzer], out_dir: Path
+    spec: FigureSpec, packing: Packing, analyzers: Mapping[str, Analyzer], out_dir: Path
 ) -> list[Path]:
     """Call ``spec.draw`` and return the files it wrote inside ``out_dir``.
 
@@ -279,7 +276,7 @@ def _drawn_files(
     """
     what = f"the figures of {spec.analyzer!r} ({getattr(spec.draw, '__module__', '?')})"
     try:
-        returned = spec.draw(packing, analyzers, out_dir)  # type: ignore[arg-type]
+        returned = spec.draw(packing, analyzers, out_dir)
     except Exception as exc:  # a plugin's own failure must not lose the analysis
         warnings.warn(f"{what} were not drawn: {exc}", FigureWarning, stacklevel=2)
         return []
@@ -309,7 +306,7 @@ def _drawn_files(
 
 def write_analysis(
     out_dir: str | Path,
-    packing: Packing | Packing3D,
+    packing: Packing,
     analyzers: Mapping[str, Analyzer],
     *,
     figures: bool = True,
@@ -374,7 +371,7 @@ def write_analysis(
 
 def write_analysis_files(
     out_dir: str | Path,
-    packing: Packing | Packing3D,
+    packing: Packing,
     analyzers: Mapping[str, Analyzer],
     *,
     figures: bool = True,

@@ -32,7 +32,6 @@ from typing import TYPE_CHECKING, Any
 from regopack.analysis.results import AnalysisResults
 from regopack.base.errors import ConfigError
 from regopack.packing.core import Packing, load
-from regopack.packing.core3d import Packing3D
 from regopack.registry.interfaces import ProgressCallback
 from regopack.scenes.model import dotted_name, make_scene, plain_value, registry_or_default
 
@@ -231,8 +230,8 @@ def pack(
     out: str | os.PathLike[str] | None = None,
     verify: bool | None = None,
     **overrides: Any,
-) -> Packing | Packing3D:
-    """Pack a scene, as ``regopack run`` does (a :class:`Packing3D` for a 3D scene).
+) -> Packing:
+    """Pack a scene, as ``regopack run`` does (a 3D packing for a 3D scene).
 
     Parameters
     ----------
@@ -283,18 +282,8 @@ def refuse_inside(path: Path, folder: Path, what: str) -> None:
         )
 
 
-def _packing_any(packing: Packing | Packing3D | str | os.PathLike[str]) -> Packing | Packing3D:
-    """Return the 2D or 3D packing given, or the one a file holds."""
-    if isinstance(packing, Packing3D):
-        return packing
-    if isinstance(packing, str | os.PathLike):
-        from regopack.packing.core3d import load_packing
-
-        return load_packing(Path(packing))
-    return _packing(packing)
-
-
 def _packing(packing: Packing | str | os.PathLike[str]) -> Packing:
+    """Return the packing given, or the one its file holds (2D or 3D)."""
     if isinstance(packing, Packing):
         return packing
     if isinstance(packing, str | os.PathLike):
@@ -302,19 +291,6 @@ def _packing(packing: Packing | str | os.PathLike[str]) -> Packing:
     raise ConfigError(
         f"packing: expected a Packing or the path of a packing file, not {type(packing).__name__}"
     )
-
-
-def _packing_any_dimension(
-    packing: Packing | Packing3D | str | os.PathLike[str],
-) -> Packing | Packing3D:
-    """Return the packing itself, or the 2D or 3D packing read from its file."""
-    if isinstance(packing, Packing3D):
-        return packing
-    if isinstance(packing, str | os.PathLike):
-        from regopack.packing.core3d import load_packing
-
-        return load_packing(Path(packing))
-    return _packing(packing)
 
 
 def analysis_params(
@@ -346,7 +322,7 @@ def analysis_params(
 
 
 def analyze(
-    packing: Packing | Packing3D | str | os.PathLike[str],
+    packing: Packing | str | os.PathLike[str],
     only: str | Sequence[str] | None = None,
     *,
     out: str | os.PathLike[str] | None = None,
@@ -405,10 +381,10 @@ def analyze(
     _flag(figures, "figures")
     if tables not in ("csv", "npz"):
         raise ConfigError(f'tables = {tables!r}: expected "csv" or "npz"')
-    loaded = _packing_any(packing)
+    loaded = _packing(packing)
     folder = None if out is None else _out_path(out, "out")
     if folder is not None:
-        if not isinstance(packing, Packing | Packing3D):
+        if not isinstance(packing, Packing):
             refuse_inside(Path(packing), folder, "packing file")
         check_replaceable(folder, ANALYSIS_KIND)
     if only is None:
@@ -438,7 +414,7 @@ def analyze(
     merged = analysis_params(params or {})
     for name, fields in analysis_params(kwargs).items():
         merged.setdefault(name, {}).update(fields)
-    source = None if isinstance(packing, Packing | Packing3D) else str(packing)
+    source = None if isinstance(packing, Packing) else str(packing)
     analyzers = run_analyses(
         loaded,
         reg,
@@ -450,7 +426,7 @@ def analyze(
     )
     results = AnalysisResults(analyzers)
     if folder is not None:
-        packing_path = None if isinstance(packing, Packing | Packing3D) else Path(packing)
+        packing_path = None if isinstance(packing, Packing) else Path(packing)
         results.files = write_analysis(
             folder,
             loaded,
@@ -464,7 +440,7 @@ def analyze(
 
 
 def verify(
-    packing: Packing | Packing3D | str | os.PathLike[str], rel_tol: float = 1e-9
+    packing: Packing | str | os.PathLike[str], rel_tol: float = 1e-9
 ) -> VerifyReport | Report3D:
     """Check a packing for overlaps and particles outside the domain, as ``regopack verify``.
 
@@ -489,17 +465,11 @@ def verify(
 
     if isinstance(rel_tol, bool) or not isinstance(rel_tol, int | float) or not rel_tol >= 0:
         raise ConfigError(f"rel_tol = {rel_tol!r}: expected a number >= 0")
-    if isinstance(packing, str | os.PathLike):
-        from regopack.packing.core3d import load_packing
-
-        packing = load_packing(Path(packing))
-    if not isinstance(packing, Packing3D):
-        packing = _packing(packing)
-    return verify_packing(packing, rel_tol=float(rel_tol))
+    return verify_packing(_packing(packing), rel_tol=float(rel_tol))
 
 
 def export(
-    packing: Packing | Packing3D | str | os.PathLike[str],
+    packing: Packing | str | os.PathLike[str],
     to: str,
     path: str | os.PathLike[str] | None = None,
     *,
@@ -560,10 +530,9 @@ def export(
     _flag(force, "force")
     merged = {**(params or {}), **{k: plain_value(v) for k, v in kwargs.items()}}
     exporter = build_exporter(reg, to, merged, source=params_source)
-    loaded = _packing_any_dimension(packing)
-    file = None if isinstance(packing, Packing | Packing3D) else Path(packing)
-    dimension = 3 if isinstance(loaded, Packing3D) else 2
-    check_exporter_dimension(reg, to, dimension, "packing" if file is None else str(file))
+    loaded = _packing(packing)
+    file = None if isinstance(packing, Packing) else Path(packing)
+    check_exporter_dimension(reg, to, loaded.dimension, "packing" if file is None else str(file))
     if path is None:
         if file is None:
             raise ConfigError("export: give the path to write (the packing has no file)")
@@ -573,7 +542,7 @@ def export(
         target = output_path(exporter, source, _out_path(path, "path"))
     if file is not None and os.path.realpath(target) == os.path.realpath(file):
         raise ConfigError(f"path {target}: is the packing file itself; give another file")
-    if isinstance(loaded, Packing3D):
+    if loaded.dimension == 3:
         if analyses:
             raise ConfigError(
                 "analyses: the 3D exporters carry no analysis results; leave them out"

@@ -16,7 +16,6 @@ from typing import Any
 from regopack.api import functions as api
 from regopack.base.errors import RegopackError
 from regopack.exports.pipeline import exporter_dimensions
-from regopack.packing.core import Packing
 from regopack.registry import manager
 from regopack.run import compilation
 from regopack.run.compilation import CompileTime
@@ -122,7 +121,7 @@ def compile_kernels(report: Callable[[str, float], None] | None = None) -> Compi
             except RegopackError:
                 continue  # a plugin of this variant is not installed
             packing = api.pack(resolved)
-            if not isinstance(packing, Packing):  # 3D packings have no exports yet
+            if packing.dimension == 3:  # 3D packings have no exports yet
                 api.analyze(packing, by_dimension[3], registry=registry)
                 if report is not None:
                     report(f"{label}: packed, analysed", time.perf_counter() - start)

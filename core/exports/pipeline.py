@@ -31,7 +31,6 @@ from pydantic import ValidationError
 from regopack.base.errors import ConfigError, ExportError, PluginError
 from regopack.base.messages import describe_validation_error
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 from regopack.registry.interfaces import Analyzer, Exporter, SolidExporter
 from regopack.registry.manager import Registry
 
@@ -175,7 +174,7 @@ def output_path(
 
 
 def export_packing(
-    packing: Packing | Packing3D,
+    packing: Packing,
     kind: str,
     path: Path,
     *,
@@ -220,16 +219,16 @@ def export_packing(
     ExportError
         One line, if the file cannot be written.
     """
-    check_exporter_dimension(registry, kind, 3 if isinstance(packing, Packing3D) else 2, source)
+    check_exporter_dimension(registry, kind, packing.dimension, source)
     exporter = build_exporter(registry, kind, params)
     if not force:
         _refuse_users_files(exporter, Path(path))
     try:
-        if isinstance(packing, Packing3D) and isinstance(exporter, SolidExporter):
+        if packing.dimension == 3 and isinstance(exporter, SolidExporter):
             return exporter.export(packing, Path(path), analyses=analyses)
-        if isinstance(packing, Packing) and isinstance(exporter, Exporter):
+        if packing.dimension == 2 and isinstance(exporter, Exporter):
             return exporter.export(packing, Path(path), analyses=analyses)
-        raise PluginError(f"export plugin {kind!r} cannot write a {type(packing).__name__}")
+        raise PluginError(f"export plugin {kind!r} cannot write a {packing.dimension}D packing")
     except OSError as err:
         why = err.strerror or type(err).__name__
         raise ExportError(f"cannot write {path}: {why}") from err
@@ -249,7 +248,7 @@ def _refuse_users_files(exporter: Any, path: Path) -> None:
 
 
 def run_exports(
-    packing: Packing3D,
+    packing: Packing,
     plugins: Sequence[Any],
     packing_path: Path,
     shown_path: Path,

@@ -1,8 +1,11 @@
 """The result of a run: every drawn particle, where it went, and how the run was set up.
 
-A :class:`Packing` is saved as an NPZ file (see ``docs/reference/packing-format.md``)
-with :func:`save` and read back with :func:`load`. Writes are atomic: a file
-is either the previous one or the complete new one, never a partial write.
+One :class:`Packing` holds a packing of either dimension: polygons in a plane
+domain or solids in a box (:attr:`Packing.dimension`, the domain's). It is
+saved as an NPZ file (see ``docs/reference/packing-format.md``) with
+:func:`save`, in format version 1 or 2 in 2D and 3 in 3D, and read back with
+:func:`load`. Writes are atomic: a file is either the previous one or the
+complete new one, never a partial write.
 """
 
 from __future__ import annotations
@@ -18,17 +21,19 @@ from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import IO, TYPE_CHECKING, Any
+from typing import IO, TYPE_CHECKING, Any, Generic, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from typing_extensions import TypeVar
 
+from regopack._compat import warn_moved
 from regopack.base.errors import GeometryError, PackingError, PackingFileError
-from regopack.geometry.domain import PlaneDomain, Rectangle, domain_from_dict
+from regopack.geometry.domain import Box, Domain, PlaneDomain, Rectangle, domain_from_dict
+from regopack.geometry.solids import SolidBatch
 
 if TYPE_CHECKING:
     from regopack.geometry.population import Population
-    from regopack.packing.core3d import Packing3D
     from regopack.packing.drawing import PackingArtists
     from regopack.registry.interfaces import InsertionResult
 
@@ -72,6 +77,35 @@ _ARRAYS: dict[str, tuple[type[np.generic], int]] = {
 
 _FINITE = ("radius", "vertices", "orientation")
 """Arrays whose every value must be finite (``centre`` is NaN where not placed)."""
+
+_ARRAYS3D: dict[str, tuple[type[np.generic], int]] = {
+    "radius": (np.float64, 1),
+    "mineral": (np.int64, 1),
+    "vertices": (np.float64, 2),
+    "offsets": (np.int64, 1),
+    "face_vertices": (np.int64, 1),
+    "face_vertex_offsets": (np.int64, 1),
+    "face_offsets": (np.int64, 1),
+    "normals": (np.float64, 2),
+    "support": (np.float64, 1),
+    "rotation": (np.float64, 2),
+    "centre": (np.float64, 2),
+    "insertion_index": (np.int64, 1),
+}
+"""Arrays of every 3D packing (and of its file): dtype and number of dimensions."""
+
+_ONLY = {2: ("orientation",), 3: tuple(k for k in _ARRAYS3D if k not in _ARRAYS)}
+"""Arrays of one dimension only, by that dimension: empty in a packing of the other."""
+
+_COLUMNS = {"vertices": 3, "normals": 3, "rotation": 4, "centre": 3}
+_FINITE3D = ("radius", "vertices", "normals", "support", "rotation")
+PLANE_TOLERANCE = 1e-9
+"""Largest distance of a face vertex from the face's plane, relative to its face's size."""
+UNIT_TOLERANCE = 1e-9
+"""Largest departure from length 1 of a face normal or a rotation quaternion."""
+
+D = TypeVar("D", bound=Domain, default=Any)
+"""The domain type of a :class:`Packing` (``Packing[Box]`` in 3D); a bare ``Packing`` has any."""
 
 
 def _as_array(name: str, value: Any, dtype: type[np.generic]) -> NDArray[Any]:
@@ -248,30 +282,72 @@ def check_array_types(obj: object, arrays: Mapping[str, tuple[type[np.generic], 
             raise PackingError(f"array {name!r} has shape {arr.shape}, expected a {ndim}-D array")
 
 
+def _check_offsets(name: str, offsets: IntArray, rows: int, total: int, least: int) -> None:
+    """``offsets`` has ``rows + 1`` entries from 0 to ``total``, each step at least ``least``."""
+    if offsets.shape[0] != rows + 1:
+        raise PackingError(f"array {name!r} has {offsets.shape[0]} entries, expected {rows + 1}")
+    if offsets[0] != 0:
+        raise PackingError(f"array {name!r} starts at {offsets[0]}, not 0")
+    if rows and (offsets.min() < 0 or offsets.max() > total):
+        j = _first((offsets < 0) | (offsets > total))
+        raise PackingError(
+            f"array {name!r} has the value {offsets[j]} at entry {j}, outside [0, {total}]"
+        )
+    steps = np.diff(offsets)
+    if rows and steps.min() < least:
+        j = _first(steps < least)
+        raise PackingError(
+            f"array {name!r} gives entry {j} {steps[j]} items "
+            f"({offsets[j]} to {offsets[j + 1]}); at least {least}"
+        )
+    if offsets[-1] != total:
+        raise PackingError(f"array {name!r} ends at {offsets[-1]}, expected {total}")
+
+
+def _no_ints() -> IntArray:
+    return np.zeros(0, dtype=np.int64)
+
+
+def _no_floats() -> FloatArray:
+    return np.zeros(0, dtype=np.float64)
+
+
+def _no_rows(columns: int) -> Callable[[], FloatArray]:
+    return lambda: np.zeros((0, columns), dtype=np.float64)
+
+
 @dataclass(frozen=True, eq=False)
-class Packing(PlacedParticles):
+class Packing(PlacedParticles, Generic[D]):
     """All drawn particles of a run, in draw order, and where each was placed.
+
+    A packing of polygons in a plane domain (2D) or of solids in a box (3D):
+    :attr:`dimension` is its domain's. The arrays of the other dimension are
+    empty (``orientation`` in 3D; the faces, ``normals``, ``support`` and
+    ``rotation`` in 2D), and they are keyword-only.
 
     Attributes
     ----------
     radius
-        ``(n,)`` equivalent radius of each particle (area = pi r^2).
+        ``(n,)`` equivalent radius of each particle (area = pi r^2 in 2D,
+        volume = 4/3 pi r^3 in 3D).
     mineral
         ``(n,)`` int64 index into :attr:`mineral_names`.
     mineral_names
         Phase names in scene order.
     vertices
-        ``(M, 2)`` counter-clockwise outline vertices relative to each particle's centre.
+        ``(M, d)`` vertices relative to each particle's centre: in 2D the
+        counter-clockwise outlines, in 3D the solids' corners.
     offsets
         ``(n + 1,)`` int64; particle ``j``'s vertices are ``vertices[offsets[j]:offsets[j+1]]``.
     orientation
-        ``(n,)`` orientation angle of each particle in radians.
+        ``(n,)`` orientation angle of each particle in radians (2D only).
     centre
-        ``(n, 2)`` position of each particle's centre (reference point); NaN where not placed.
+        ``(n, d)`` position of each particle's centre (reference point); NaN where not placed.
     insertion_index
         ``(n,)`` int64 order of placement, ``-1`` where not placed.
     domain
-        The container.
+        The container: a :class:`~regopack.geometry.domain.PlaneDomain` or a
+        :class:`~regopack.geometry.domain.Box`.
     scene
         The fully resolved scene.
     seed
@@ -281,9 +357,12 @@ class Packing(PlacedParticles):
     stats
         Counters and timings of the run.
     rounding
-        ``(n,)`` radius of the disk that rounds each outline (a disk is one
+        ``(n,)`` radius that rounds each particle (a disk or a sphere is one
         vertex at its centre rounded by its radius), or ``None`` when every
-        particle is a sharp polygon.
+        particle is a sharp polygon or polyhedron.
+    face_vertices, face_vertex_offsets, face_offsets, normals, support, rotation
+        The solids' faces and rotations (3D only), as in
+        :class:`regopack.geometry.solids.SolidBatch`.
     """
 
     radius: FloatArray
@@ -291,19 +370,25 @@ class Packing(PlacedParticles):
     mineral_names: tuple[str, ...]
     vertices: FloatArray
     offsets: IntArray
-    orientation: FloatArray
+    orientation: FloatArray = field(default_factory=_no_floats, kw_only=True)
     centre: FloatArray
     insertion_index: IntArray
-    domain: PlaneDomain
+    domain: D
     scene: dict[str, Any] = field(default_factory=dict)
     seed: int = 0
     version: str = "0.0.0"
     stats: dict[str, float] = field(default_factory=dict)
     rounding: FloatArray | None = None
+    face_vertices: IntArray = field(default_factory=_no_ints, kw_only=True)
+    face_vertex_offsets: IntArray = field(default_factory=_no_ints, kw_only=True)
+    face_offsets: IntArray = field(default_factory=_no_ints, kw_only=True)
+    normals: FloatArray = field(default_factory=_no_rows(3), kw_only=True)
+    support: FloatArray = field(default_factory=_no_floats, kw_only=True)
+    rotation: FloatArray = field(default_factory=_no_rows(4), kw_only=True)
 
     def __post_init__(self) -> None:
         """Convert the arrays to their dtypes (where no value changes) and :meth:`validate`."""
-        for name, (dtype, _) in _ARRAYS.items():
+        for name, (dtype, _) in (_ARRAYS | _ARRAYS3D).items():
             object.__setattr__(self, name, _as_array(name, getattr(self, name), dtype))
         if self.rounding is not None:
             object.__setattr__(self, "rounding", _as_array("rounding", self.rounding, np.float64))
@@ -312,12 +397,25 @@ class Packing(PlacedParticles):
             object.__setattr__(self, "mineral_names", tuple(names))
         self.validate()
 
+    @property
+    def dimension(self) -> int:
+        """Spatial dimension of the packing: 2 or 3, its domain's."""
+        return int(self.domain.dimension)
+
+    def _checked_dimension(self) -> int:
+        """Return the domain's dimension; for a domain that is none, the vertices' (to name it)."""
+        if isinstance(self.domain, Domain):
+            return int(self.domain.dimension)
+        v = self.vertices
+        return 3 if isinstance(v, np.ndarray) and v.ndim == 2 and v.shape[1] == 3 else 2
+
     def validate(self) -> None:
         """Check the packing against the packing format; raise if it breaks it.
 
         Every packing is checked when it is built, and :func:`load` and the
         analyses check again (the arrays can be changed in place), so that no
-        compiled kernel sees an index out of range. Checked, in this order:
+        compiled kernel sees an index out of range. The arrays of the other
+        dimension must be empty. Checked in 2D, in this order:
 
         - the arrays have their dtypes (``float64``, ``int64``), dimensions and
           lengths (``n`` rows; ``offsets`` ``n + 1``; ``centre`` and
@@ -337,11 +435,38 @@ class Packing(PlacedParticles):
         - the domain is a :class:`~regopack.geometry.domain.PlaneDomain` with finite bounds
           and a positive area.
 
+        In 3D (format version 3) the same, with the solids' arrays:
+        ``offsets`` gives every particle a vertex; ``face_offsets`` rises
+        (a sphere has no face) and ``face_vertex_offsets`` gives every face at
+        least three vertices; every face vertex indexes its own particle's
+        vertices; face normals and rotations are unit vectors; every face
+        vertex lies in its face's plane (within 1e-9 of the face's size), every
+        loop runs counter-clockwise seen from outside, every support value is
+        positive; a polyhedron is sharp with at least 4 faces and a solid
+        without faces is a sphere; the domain is a box of positive finite volume.
+
         Raises
         ------
         PackingError
             One line naming the array (or attribute) and what is wrong with it.
         """
+        dimension = self._checked_dimension()
+        for name in _ONLY[5 - dimension]:
+            arr = getattr(self, name)
+            if not isinstance(arr, np.ndarray) or arr.size:
+                what = f"shape {arr.shape}" if isinstance(arr, np.ndarray) else repr(arr)
+                kind = getattr(self.domain, "kind", type(self.domain).__name__)
+                raise PackingError(
+                    f"array {name!r} is set ({what}), but a {dimension}D packing (domain "
+                    f"{kind!r}) has none: it belongs to {5 - dimension}D packings"
+                )
+        if dimension == 3:
+            self._validate_solids()
+        else:
+            self._validate_outlines()
+
+    def _validate_outlines(self) -> None:
+        """Check a 2D packing (see :meth:`validate`)."""
         check_array_types(self, _ARRAYS)
         radius, mineral, vertices, offsets = self.radius, self.mineral, self.vertices, self.offsets
         centre, index = self.centre, self.insertion_index
@@ -403,41 +528,202 @@ class Packing(PlacedParticles):
         if not (np.isfinite(self.domain.bounds()).all() and math.isfinite(area) and area > 0):
             raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite area")
 
+    def _validate_solids(self) -> None:
+        """Check a 3D packing (see :meth:`validate`)."""
+        check_array_types(self, _ARRAYS3D)
+        for name, cols in _COLUMNS.items():
+            shape = getattr(self, name).shape
+            if shape[1] != cols:
+                raise PackingError(
+                    f"array {name!r} has shape {shape}, expected ({shape[0]}, {cols})"
+                )
+        n = self.radius.shape[0]
+        for name in ("mineral", "rotation", "centre", "insertion_index"):
+            rows = getattr(self, name).shape[0]
+            if rows != n:
+                raise PackingError(
+                    f"array {name!r} has {rows} rows, expected one per particle "
+                    f"({n}, the length of 'radius')"
+                )
+        faces = self.normals.shape[0]
+        if self.support.shape[0] != faces:
+            raise PackingError(
+                f"array 'support' has {self.support.shape[0]} entries, expected one per face "
+                f"({faces}, the rows of 'normals')"
+            )
+        _check_offsets("offsets", self.offsets, n, self.vertices.shape[0], 1)
+        _check_offsets("face_offsets", self.face_offsets, n, faces, 0)
+        _check_offsets(
+            "face_vertex_offsets", self.face_vertex_offsets, faces, self.face_vertices.shape[0], 3
+        )
+        if faces:
+            owner = np.repeat(np.arange(n), np.diff(self.face_offsets))
+            loop_owner = np.repeat(owner, np.diff(self.face_vertex_offsets))
+            count = np.diff(self.offsets)[loop_owner]
+            bad = (self.face_vertices < 0) | (self.face_vertices >= count)
+            if bad.any():
+                k = _first(bad)
+                raise PackingError(
+                    f"array 'face_vertices' has the value {self.face_vertices[k]} at entry {k} "
+                    f"(particle {loop_owner[k]}, which has {count[k]} vertices)"
+                )
+        for name in _FINITE3D:
+            arr = getattr(self, name)
+            finite = np.isfinite(arr)
+            if not finite.all():
+                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
+                raise PackingError(
+                    f"array {name!r} has the non-finite value {arr[row]} at row {row}"
+                )
+        for name in ("normals", "rotation"):
+            arr = getattr(self, name)
+            off = np.abs(np.sqrt(np.einsum("ij,ij->i", arr, arr)) - 1.0) > UNIT_TOLERANCE
+            if off.any():
+                row = _first(off)
+                raise PackingError(f"array {name!r} has the non-unit row {arr[row]} at row {row}")
+        self._check_faces()
+        check_particles(
+            self.radius,
+            self.mineral,
+            self.mineral_names,
+            self.insertion_index,
+            self.centre,
+            self.rounding,
+            self.stats,
+        )
+        if not isinstance(self.domain, Box):
+            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a 3D box")
+        volume = self.domain.volume
+        if not (math.isfinite(volume) and volume > 0):
+            raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite volume")
+
+    def _check_faces(self) -> None:
+        """Check that faces lie in their planes, run counter-clockwise, enclose the centre.
+
+        A solid without faces must be a sphere: one vertex at its centre, rounded.
+        """
+        n = self.radius.shape[0]
+        nfaces = np.diff(self.face_offsets)
+        nverts = np.diff(self.offsets)
+        rho = (
+            np.zeros(n)
+            if self.rounding is None
+            else np.asarray(self.rounding, dtype=np.float64).reshape(-1)
+        )
+        if rho.shape != (n,):
+            return  # check_particles names the shape of 'rounding'
+        first = self.vertices[self.offsets[:-1]] if n else np.zeros((0, 3))
+        sphere_ok = (nverts == 1) & (rho > 0) & np.all(first == 0.0, axis=1)
+        bad = (nfaces == 0) & ~sphere_ok
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"particle {j} has no faces but is not a sphere (a single vertex (0, 0, 0) "
+                "with a rounding radius > 0)"
+            )
+        bad = (nfaces > 0) & ((nfaces < 4) | (rho > 0))
+        if bad.any():
+            j = _first(bad)
+            what = "rounded" if rho[j] > 0 else f"has {nfaces[j]} faces"
+            raise PackingError(
+                f"particle {j} is a polyhedron that {what}: polyhedra are sharp and have "
+                "at least 4 faces"
+            )
+        faces = self.normals.shape[0]
+        if not faces:
+            return
+        sizes = np.diff(self.face_vertex_offsets)
+        face_of = np.repeat(np.arange(faces), sizes)
+        owner = np.repeat(np.repeat(np.arange(n), nfaces), sizes)
+        v = self.vertices[self.offsets[owner] + self.face_vertices]
+        scale = np.maximum(np.sqrt(np.einsum("ij,ij->i", v, v)), np.finfo(float).tiny)
+        size = np.maximum.reduceat(scale, self.face_vertex_offsets[:-1])[face_of]
+        off = np.abs(np.einsum("ij,ij->i", v, self.normals[face_of]) - self.support[face_of])
+        bad = off > PLANE_TOLERANCE * size
+        if bad.any():
+            k = _first(bad)
+            raise PackingError(
+                f"face {face_of[k]} (particle {owner[k]}) has a vertex {off[k]:.3g} off its "
+                "plane normals . x = support"
+            )
+        if np.any(self.support <= 0):
+            f = _first(self.support <= 0)
+            raise PackingError(
+                f"face {f} has the support value {self.support[f]}: every face plane lies "
+                "beyond the particle's centre (support > 0)"
+            )
+        nxt = np.arange(v.shape[0]) + 1
+        ends = self.face_vertex_offsets[1:] - 1
+        nxt[ends] = self.face_vertex_offsets[:-1]
+        twice_area = np.add.reduceat(np.cross(v, v[nxt]), self.face_vertex_offsets[:-1])
+        turn = np.einsum("ij,ij->i", twice_area, self.normals)
+        if np.any(turn <= 0):
+            f = _first(turn <= 0)
+            raise PackingError(
+                f"face {f} is not counter-clockwise seen from outside (or has no area)"
+            )
+
     @classmethod
     def from_parts(
         cls,
         population: Population,
         result: InsertionResult,
-        domain: PlaneDomain,
+        domain: D,
         scene_dict: Mapping[str, Any],
         seed: int,
         stats: Mapping[str, float] | None = None,
-    ) -> Packing:
-        """Combine a population and an insertion result into a packing.
+    ) -> Packing[D]:
+        """Combine a population and an insertion result into a packing of the domain's dimension.
 
         ``stats`` defaults to ``result.stats``.
         """
         from regopack._version import __version__
 
         n = len(population)
-        centre = np.asarray(result.centre, dtype=np.float64).reshape(n, 2)
         insertion_index = np.asarray(result.insertion_index, dtype=np.int64).reshape(n)
+        common: dict[str, Any] = {
+            "radius": np.asarray(population.radius, dtype=np.float64),
+            "mineral": np.asarray(population.mineral, dtype=np.int64),
+            "mineral_names": tuple(population.mineral_names),
+            "insertion_index": insertion_index,
+            "domain": domain,
+            "scene": dict(scene_dict),
+            "seed": int(seed),
+            "version": __version__,
+            "stats": dict(result.stats if stats is None else stats),
+            "rounding": population.shapes.rounding,
+        }
+        if domain.dimension == 3:
+            shapes = population.shapes
+            if not isinstance(shapes, SolidBatch):
+                raise PackingError("a 3D packing needs a population of solids")
+            return cls(
+                vertices=shapes.vertices,
+                offsets=shapes.offsets,
+                face_vertices=shapes.face_vertices,
+                face_vertex_offsets=shapes.face_vertex_offsets,
+                face_offsets=shapes.face_offsets,
+                normals=shapes.normals,
+                support=shapes.support,
+                rotation=shapes.rotation,
+                centre=np.asarray(result.centre, dtype=np.float64).reshape(n, 3),
+                **common,
+            )
+        shapes2 = cast(Any, population.shapes)
         return cls(
-            radius=np.asarray(population.radius, dtype=np.float64),
-            mineral=np.asarray(population.mineral, dtype=np.int64),
-            mineral_names=tuple(population.mineral_names),
-            vertices=np.asarray(population.shapes.vertices, dtype=np.float64).reshape(-1, 2),
-            offsets=np.asarray(population.shapes.offsets, dtype=np.int64),
-            orientation=np.asarray(population.shapes.orientation, dtype=np.float64),
-            centre=centre,
-            insertion_index=insertion_index,
-            domain=domain,
-            scene=dict(scene_dict),
-            seed=int(seed),
-            version=__version__,
-            stats=dict(result.stats if stats is None else stats),
-            rounding=population.shapes.rounding,
+            vertices=np.asarray(shapes2.vertices, dtype=np.float64).reshape(-1, 2),
+            offsets=np.asarray(shapes2.offsets, dtype=np.int64),
+            orientation=np.asarray(shapes2.orientation, dtype=np.float64),
+            centre=np.asarray(result.centre, dtype=np.float64).reshape(n, 2),
+            **common,
         )
+
+    def _plane_only(self, what: str, instead: str) -> None:
+        """Refuse a 3D packing in ``what``, which draws or measures polygons; name ``instead``."""
+        if self.dimension != 2:
+            raise PackingError(
+                f"Packing.{what} works on 2D packings (polygons); for this 3D packing use {instead}"
+            )
 
     # -- counts and masks ---------------------------------------------------
 
@@ -450,15 +736,46 @@ class Packing(PlacedParticles):
 
     @property
     def rounding_radius(self) -> FloatArray:
-        """Rounding radius of every particle (zeros for sharp polygons)."""
+        """Rounding radius of every particle (zeros for sharp polygons and polyhedra)."""
         if self.rounding is None:
             return np.zeros(self.n_particles, dtype=np.float64)
         return np.asarray(self.rounding, dtype=np.float64)
 
     @property
     def rounded(self) -> bool:
-        """True when some particle is rounded (a disk or a rounded polygon)."""
+        """True when some particle is rounded (a disk, a sphere, a rounded polygon)."""
         return self.rounding is not None and bool(np.any(self.rounding > 0))
+
+    @property
+    def solids(self) -> SolidBatch:
+        """The particles' solids, relative to their centres (3D).
+
+        Raises
+        ------
+        PackingError
+            For a 2D packing, whose outlines :meth:`polygons` and :meth:`to_shapely` give.
+        """
+        if self.dimension != 3:
+            raise PackingError(
+                "Packing.solids works on 3D packings; for this 2D packing use polygons() "
+                "or to_shapely()"
+            )
+        return SolidBatch(
+            vertices=self.vertices,
+            offsets=self.offsets,
+            face_vertices=self.face_vertices,
+            face_vertex_offsets=self.face_vertex_offsets,
+            face_offsets=self.face_offsets,
+            normals=self.normals,
+            support=self.support,
+            rotation=self.rotation,
+            rounding=self.rounding,
+        )
+
+    def world_vertices(self, j: int) -> FloatArray:
+        """Vertices of particle ``j`` in the packing's frame (NaN when not placed)."""
+        out: FloatArray = self.vertices[self.offsets[j] : self.offsets[j + 1]] + self.centre[j]
+        return out
 
     def _select(self, indices: ArrayLike | None) -> IntArray:
         if indices is None:
@@ -466,9 +783,9 @@ class Packing(PlacedParticles):
         return np.atleast_1d(np.asarray(indices, dtype=np.int64))
 
     def polygon(self, j: int) -> FloatArray:
-        """Absolute vertices ``(k, 2)`` of particle ``j`` (NaN if not placed)."""
-        out: FloatArray = self.vertices[self.offsets[j] : self.offsets[j + 1]] + self.centre[j]
-        return out
+        """Absolute vertices ``(k, 2)`` of particle ``j`` (NaN if not placed); 2D."""
+        self._plane_only("polygon", "world_vertices(j)")
+        return self.world_vertices(j)
 
     def _absolute(self, idx: IntArray) -> tuple[FloatArray, IntArray]:
         """Absolute vertices of the particles ``idx`` (flat) and their counts."""
@@ -482,7 +799,7 @@ class Packing(PlacedParticles):
         return coords, counts
 
     def polygons(self, indices: ArrayLike | None = None) -> list[FloatArray]:
-        """Absolute vertices of several particles.
+        """Absolute vertices of several particles (2D).
 
         Parameters
         ----------
@@ -490,6 +807,7 @@ class Packing(PlacedParticles):
             Particle indices; by default the placed particles in draw order
             (``np.flatnonzero(packing.placed)``).
         """
+        self._plane_only("polygons", "world_vertices(j) or solids")
         idx = self._select(indices)
         if self.rounded:
             geoms = self.to_shapely(idx)
@@ -498,7 +816,7 @@ class Packing(PlacedParticles):
         return np.split(coords, np.cumsum(counts)[:-1]) if len(idx) else []
 
     def to_shapely(self, indices: ArrayLike | None = None) -> NDArray[np.object_]:
-        """Shapely polygons of several particles (default: the placed ones, in draw order).
+        """Shapely polygons of several particles (default: the placed ones, in draw order); 2D.
 
         Examples
         --------
@@ -509,6 +827,7 @@ class Packing(PlacedParticles):
         """
         import shapely
 
+        self._plane_only("to_shapely", "solids")
         idx = self._select(indices)
         if len(idx) == 0:
             return np.empty(0, dtype=object)
@@ -527,7 +846,8 @@ class Packing(PlacedParticles):
         return out
 
     def area(self) -> FloatArray:
-        """Area of every particle, exactly (shoelace; plus the rounding's strips and disk)."""
+        """Area of every particle, exactly (shoelace; plus the rounding's strips and disk); 2D."""
+        self._plane_only("area", "measure() (the volume of every solid)")
         v = self.vertices
         if v.shape[0] == 0:
             return np.zeros(self.n_particles, dtype=np.float64)
@@ -544,14 +864,28 @@ class Packing(PlacedParticles):
             area = area + perimeter * rho + np.pi * rho * rho
         return area
 
+    def measure(self) -> FloatArray:
+        """Area (2D, :meth:`area`) or volume (3D) of every particle."""
+        return self.solids.volume if self.dimension == 3 else self.area()
+
     @property
     def circumradius(self) -> FloatArray:
-        """Largest distance from each particle's centre to its outline."""
-        d = np.hypot(self.vertices[:, 0], self.vertices[:, 1])
+        """Largest distance from each particle's centre to its outline or surface."""
+        v = self.vertices
+        if self.dimension == 3:
+            d = np.sqrt(np.einsum("ij,ij->i", v, v))
+        else:
+            d = np.hypot(v[:, 0], v[:, 1])
         out = _segment_reduce(np.maximum, d, self.offsets)
         return out + self.rounding_radius if self.rounded else out
 
     def __repr__(self) -> str:
+        if self.dimension == 3:
+            sx, sy, sz = cast(Box, self.domain).size
+            return (
+                f"<Packing: {self.n_placed} of {self.n_particles} placed in a "
+                f"{sx:g} × {sy:g} × {sz:g} {self.domain.kind}, phi {self.phi:.4f}>"
+            )
         return (
             f"Packing({self.n_placed}/{self.n_particles} placed, "
             f"scene={self.scene.get('name', '?')!r}, seed={self.seed})"
@@ -561,9 +895,17 @@ class Packing(PlacedParticles):
 
     @property
     def phi(self) -> float:
-        """Area fraction of the placed particles over the whole domain."""
+        """Area (2D) or volume (3D) fraction of the placed particles over the whole domain.
+
+        In a periodic domain every part of a particle lies in the domain once,
+        in some image.
+        """
+        if self.dimension == 3:
+            volume = self.solids.volume[self.placed].sum()
+            return float(volume / self.domain.measure)
         area = float(self.area()[self.placed].sum())
-        return area / self.domain.area if self.domain.area > 0 else float("nan")
+        whole = self.domain.measure
+        return area / whole if whole > 0 else float("nan")
 
     def plot(
         self,
@@ -571,7 +913,7 @@ class Packing(PlacedParticles):
         color_by: str | ArrayLike = "mineral",
         **kwargs: Any,
     ) -> PackingArtists:
-        """Draw the placed particles with matplotlib.
+        """Draw the placed particles with matplotlib (2D).
 
         Parameters
         ----------
@@ -592,6 +934,8 @@ class Packing(PlacedParticles):
         with ``layout="constrained"``, or save it with ``bbox_inches="tight"``
         (as notebooks do), to keep it inside the picture. In a periodic
         domain the particles that reach past a side are drawn on both sides.
+        A 3D packing is drawn by :func:`regopack.packing.drawing3d.draw_view`
+        and :func:`regopack.packing.drawing3d.draw_section`.
 
         Returns
         -------
@@ -601,17 +945,22 @@ class Packing(PlacedParticles):
         """
         from regopack.packing.drawing import draw_packing
 
+        self._plane_only("plot", "regopack.packing.drawing3d.draw_view or draw_section")
         return draw_packing(self, ax, color_by, **kwargs)
 
-    def _repr_png_(self) -> bytes:
+    def _repr_png_(self) -> bytes | None:
+        if self.dimension != 2:
+            return None  # no picture: the notebook shows the repr
         from regopack.packing.drawing import packing_png
 
         return packing_png(self)
 
-    def _repr_html_(self) -> str:
+    def _repr_html_(self) -> str | None:
         import base64
         import html
 
+        if self.dimension != 2:
+            return None
         from regopack.packing.drawing import packing_png, summary_line
 
         png = base64.b64encode(packing_png(self)).decode("ascii")
@@ -841,8 +1190,9 @@ def _check_outlines(
 def check_file_values(packing: Packing, version: int | None = None) -> None:
     """Check what a file's numbers mean, beyond :meth:`Packing.validate`, as :func:`load` does.
 
-    Every outline is a simple convex polygon, counter-clockwise around its
-    reference point (strictly inside; edges of zero length are allowed), or,
+    In 3D, as :func:`check_solid_values`. In 2D, every outline is a simple
+    convex polygon, counter-clockwise around its reference point (strictly
+    inside; edges of zero length are allowed), or,
     when rounded, a point or a segment; every radius is the equivalent radius
     of its outline's area within :data:`RADIUS_RTOL`; every placed particle
     lies within :data:`REACH` domain sizes of the domain's bounding box and its
@@ -857,8 +1207,87 @@ def check_file_values(packing: Packing, version: int | None = None) -> None:
     PackingError
         One line naming the particle, the array and the value, and what is allowed.
     """
+    if packing.dimension == 3:
+        check_solid_values(packing)
+        return
     with np.errstate(all="ignore"):  # outlines of 1e200 overflow: refused, without warnings
         _check_values(packing, version)
+
+
+def check_solid_values(packing: Packing[Box]) -> None:
+    """Check what a 3D file's numbers mean, beyond :meth:`Packing.validate`.
+
+    Every radius is the volume-equivalent radius of its solid within
+    :data:`RADIUS_RTOL` (the volume as the cones from the centre over the
+    faces, plus a sphere's; a flat or empty solid has none); every placed
+    particle lies within :data:`REACH` box sizes of the box and its radius is
+    at least :data:`MIN_RADIUS` of the box's largest side; in a periodic box
+    every centre lies in the cell. Relative tolerances only; vectorised.
+
+    Raises
+    ------
+    PackingError
+        One line naming the particle, the array and the value, and what is allowed.
+    """
+    n = packing.n_particles
+    if n == 0:
+        return
+    rho = (
+        np.zeros(n) if packing.rounding is None else np.asarray(packing.rounding, dtype=np.float64)
+    )
+    with np.errstate(over="ignore", invalid="ignore"):  # an overflow is refused below
+        volume = (4.0 / 3.0) * np.pi * rho**3
+    faces = packing.normals.shape[0]
+    if faces:
+        sizes = np.diff(packing.face_vertex_offsets)
+        owner = np.repeat(np.repeat(np.arange(n), np.diff(packing.face_offsets)), sizes)
+        v = packing.vertices[packing.offsets[owner] + packing.face_vertices]
+        nxt = np.arange(v.shape[0]) + 1
+        nxt[packing.face_vertex_offsets[1:] - 1] = packing.face_vertex_offsets[:-1]
+        twice_area = np.add.reduceat(np.cross(v, v[nxt]), packing.face_vertex_offsets[:-1])
+        cone = np.einsum("ij,ij->i", twice_area, packing.normals) * packing.support / 6.0
+        face_owner = np.repeat(np.arange(n), np.diff(packing.face_offsets))
+        volume = volume + np.bincount(face_owner, weights=cone, minlength=n)
+    check_equivalent_radius(packing.radius, volume, 3)
+    placed = packing.placed
+    b = packing.domain.bounds()
+    low, high = b[0::2], b[1::2]
+    size = float(np.max(high - low))
+    small = placed & (packing.radius < MIN_RADIUS * size)
+    if small.any():
+        j = _first(small)
+        raise PackingError(
+            f"array 'radius' has the value {packing.radius[j]} at placed particle {j}, less "
+            f"than {MIN_RADIUS:g} of the box's largest side {size:g}"
+        )
+    offsets = packing.offsets
+    far = np.abs(packing.vertices[:, 0])
+    for axis in (1, 2):
+        far = np.maximum(far, np.abs(packing.vertices[:, axis]))
+    reach = np.maximum.reduceat(far, offsets[:-1]) + rho
+    centre = np.where(placed[:, None], packing.centre, 0.5 * (low + high))
+    bad = placed & ~np.all(
+        (centre - reach[:, None] >= low - REACH * size)
+        & (centre + reach[:, None] <= high + REACH * size),
+        axis=1,
+    )
+    if bad.any():
+        j = _first(bad)
+        raise PackingError(
+            f"array 'centre' places particle {j} at {packing.centre[j]} (reaching "
+            f"{reach[j]:.6g} from it), more than the box's largest side ({size:g}) beyond "
+            f"its bounds {b.tolist()}"
+        )
+    if packing.domain.periodic:
+        c = packing.centre
+        top = np.maximum(high, low + (high - low))
+        bad = placed & ~np.all((c >= low) & (c < top), axis=1)
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"array 'centre' places particle {j} at {c[j]}, outside the periodic cell "
+                f"{b.tolist()} (each centre lies in [min, max) along every axis)"
+            )
 
 
 def _check_values(packing: Packing, version: int | None) -> None:
@@ -970,7 +1399,7 @@ def _scene_size_range(path: Path, size: Any) -> tuple[float, float] | None:
     return values["d_min"] / 2, values["d_max"] / 2
 
 
-def check_file_scene(path: Path, packing: Packing | Packing3D) -> None:
+def check_file_scene(path: Path, packing: Packing) -> None:
     """Check the scene a packing file holds against the file, without resolving a plugin.
 
     A run's scene (one with every section of :data:`RUN_SECTIONS`) is
@@ -1153,9 +1582,24 @@ def _meta(packing: Packing) -> dict[str, Any]:
     }
 
 
-def save(packing: Packing, path: str | Path) -> None:
-    """Write ``packing`` to ``path`` (NPZ), atomically.
+def _meta3d(packing: Packing) -> dict[str, Any]:
+    return {
+        "format": FILE_MAGIC,
+        "format_version": FORMAT_VERSION_3D,
+        "dimension": 3,
+        "version": packing.version,
+        "mineral_names": list(packing.mineral_names),
+        "domain": packing.domain.to_dict(),
+        "scene": packing.scene,
+        "seed": packing.seed,
+        "stats": packing.stats,
+    }
 
+
+def save(packing: Packing, path: str | Path) -> None:
+    """Write ``packing`` to ``path`` (NPZ) in the format of its dimension, atomically.
+
+    A 2D packing is written in format version 1 or 2, a 3D one in version 3.
     The file is written under a temporary name in the same directory, flushed
     to disk, then renamed over ``path``; an interrupted save leaves any
     previous file untouched. The name is used as given (no ``.npz`` is added).
@@ -1164,13 +1608,23 @@ def save(packing: Packing, path: str | Path) -> None:
     ------
     PackingError
         When the packing breaks the packing format (its arrays may have been
-        changed in place since it was built); nothing is written then.
+        changed in place since it was built), or is no packing; nothing is
+        written then.
     """
+    if not isinstance(packing, Packing):
+        raise PackingError(f"{type(packing).__name__} is not a packing")
     packing.validate()
-    arrays: dict[str, Any] = {name: getattr(packing, name) for name in _ARRAYS}
-    if packing.rounded:
-        arrays["rounding"] = packing.rounding_radius
-    meta = json.dumps(_meta(packing), default=_json_default)
+    arrays: dict[str, Any]
+    if packing.dimension == 3:
+        arrays = {name: getattr(packing, name) for name in _ARRAYS3D}
+        if packing.rounding is not None:
+            arrays["rounding"] = packing.rounding
+        meta = json.dumps(_meta3d(packing), default=_json_default)
+    else:
+        arrays = {name: getattr(packing, name) for name in _ARRAYS}
+        if packing.rounded:
+            arrays["rounding"] = packing.rounding_radius
+        meta = json.dumps(_meta(packing), default=_json_default)
     savez: Callable[..., None] = np.savez
     with _atomic_file(Path(path)) as fh:
         savez(fh, meta=np.array(meta), **arrays)
@@ -1187,10 +1641,10 @@ def _invalid(path: Path, why: str) -> PackingFileError:
 
 
 KNOWN_FORMAT_VERSIONS = (1, 2)
-"""Packing format versions that :func:`load` reads (2D)."""
+"""Packing format versions of 2D packing files, which :func:`load` reads."""
 
 FORMAT_VERSION_3D = 3
-"""Format version of 3D packing files (:mod:`regopack.packing.core3d`)."""
+"""Format version of 3D packing files."""
 
 
 def _is_int(value: Any) -> bool:
@@ -1309,6 +1763,16 @@ def _read_domain(path: Path, data: Any) -> PlaneDomain:
         why = f"no {err}" if isinstance(err, KeyError) else str(err)
         kind = _short(data.get("kind", "rectangle"))
         raise _invalid(path, f"meta 'domain' (kind {kind}): {why}") from err
+
+
+def _read_box(path: Path, data: Any) -> Box:
+    if not isinstance(data, dict):
+        raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
+    try:
+        return domain_from_dict(data, 3)
+    except (KeyError, TypeError, ValueError, GeometryError) as err:
+        why = f"no {err}" if isinstance(err, KeyError) else str(err)
+        raise _invalid(path, f"meta 'domain' (kind {_short(data.get('kind'))}): {why}") from err
 
 
 def _read_meta_keys(
@@ -1632,12 +2096,13 @@ def read_arrays(
 
 
 def load(path: str | Path) -> Packing:
-    """Read a 2D packing written by :func:`save`, checking it against the format.
+    """Read a 2D or 3D packing written by :func:`save`, checking it against its format.
 
-    Every array is checked (dtype, shape, finite values, index ranges, the
-    order of placement; see :meth:`Packing.validate`), and so is every
-    ``meta`` key (types, the domain's geometry), so that a damaged or crafted
-    file never reaches a compiled kernel. Nothing is unpickled.
+    A file of format version 1 or 2 holds a 2D packing, one of version 3 a 3D
+    packing. Every array is checked (dtype, shape, finite values, index
+    ranges, the order of placement; see :meth:`Packing.validate`), and so is
+    every ``meta`` key (types, the domain's geometry), so that a damaged or
+    crafted file never reaches a compiled kernel. Nothing is unpickled.
 
     Raises
     ------
@@ -1651,24 +2116,42 @@ def load(path: str | Path) -> Packing:
         with open_archive(path) as npz:
             path = npz.path
             meta = _read_meta(path, npz)
-            if meta["format_version"] == FORMAT_VERSION_3D:
-                raise PackingFileError(
-                    f"{path}: a 3D packing (format version {FORMAT_VERSION_3D}); only "
-                    "'regopack verify' reads 3D packings so far"
-                )
-            if meta.get("dimension", 2) != 2:
+            solid = meta["format_version"] == FORMAT_VERSION_3D
+            if solid and meta.get("dimension") != 3:
+                raise _invalid(path, f"meta 'dimension' is {_short(meta.get('dimension'))}, not 3")
+            if not solid and meta.get("dimension", 2) != 2:
                 raise _invalid(
                     path,
                     f"meta 'dimension' is {_short(meta.get('dimension'))} in a format "
                     f"version {meta['format_version']} file, which holds 2D packings",
                 )
-            arrays = read_arrays(path, npz, _ARRAYS)
+            arrays = read_arrays(path, npz, _ARRAYS3D if solid else _ARRAYS)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
         raise _bad(Path(path), " ".join(str(err).split()) or type(err).__name__) from err
+    keys = _read_meta_keys(path, meta, _read_box if solid else None)
     try:
-        packing = Packing(**arrays, **_read_meta_keys(path, meta))
+        packing: Packing = Packing(**arrays, **keys)
         check_file_values(packing, meta["format_version"])
     except PackingError as err:
         raise _invalid(path, str(err)) from err
     check_file_scene(path, packing)
     return packing
+
+
+_DEPRECATED = {
+    "Packing3D": "Packing",
+    "save3d": "save",
+    "save_packing": "save",
+    "load_packing": "load",
+    "check_file_values3d": "check_file_values",
+}
+"""Former names (of ``regopack.packing.core3d``), deprecated, and the names that replaced them."""
+
+
+def __getattr__(name: str) -> Any:
+    """Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""
+    if name in _DEPRECATED:
+        new = _DEPRECATED[name]
+        warn_moved(f"{__name__}.{name}", f"{__name__}.{new}")
+        return globals()[new]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -17,7 +17,8 @@ from numpy.typing import NDArray
 
 from regopack.base.colours import mineral_colours
 from regopack.base.units import length_unit
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -62,7 +63,7 @@ def _convex_hull_2d(points: FloatArray) -> FloatArray:
 
 
 def section_polygons(
-    packing: Packing3D, axis: int = 1, at: float | None = None
+    packing: Packing[Box], axis: int = 1, at: float | None = None
 ) -> tuple[list[FloatArray], NDArray[np.int64]]:
     """Outlines of the placed solids cut by the plane ``x[axis] = at``.
 
@@ -131,7 +132,7 @@ def section_polygons(
 
 
 def draw_section(
-    packing: Packing3D, ax: Axes, axis: int = 1, at: float | None = None, **style: Any
+    packing: Packing[Box], ax: Axes, axis: int = 1, at: float | None = None, **style: Any
 ) -> None:
     """Draw the section of ``packing`` by the plane ``x[axis] = at`` on ``ax``, by mineral."""
     from matplotlib.collections import PolyCollection
@@ -160,7 +161,7 @@ def draw_section(
     )
 
 
-def draw_view(packing: Packing3D, ax: Any, depth: float | None = None) -> int:
+def draw_view(packing: Packing[Box], ax: Any, depth: float | None = None) -> int:
     """Render the solids seen from outside the box on the 3D axes ``ax``; return how many.
 
     The solids within ``depth`` (default: the largest circumradius, twice)

@@ -16,7 +16,6 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 
 __all__ = ["SIEVE_RATIO", "class_of", "reference_diameter", "sieve_edges", "unplaced_per_class"]
 
@@ -27,7 +26,7 @@ SIEVE_RATIO = math.sqrt(2.0)
 """Ratio of the upper to the lower bound of every class."""
 
 
-def reference_diameter(packing: Packing | Packing3D) -> float | None:
+def reference_diameter(packing: Packing) -> float | None:
     """Return the scene's ``size.d_min`` of a 2D or 3D packing, when it has one."""
     size = packing.scene.get("size") if isinstance(packing.scene, dict) else None
     value = size.get("d_min") if isinstance(size, dict) else None
@@ -72,9 +71,9 @@ def class_of(diameter: ArrayLike, edges: FloatArray) -> IntArray:
 
 
 def _arrays(
-    source: Packing | Packing3D | tuple[ArrayLike, ArrayLike], d_ref: float | None
+    source: Packing | tuple[ArrayLike, ArrayLike], d_ref: float | None
 ) -> tuple[FloatArray, NDArray[np.bool_], float | None]:
-    if isinstance(source, Packing | Packing3D):
+    if isinstance(source, Packing):
         ref = d_ref if d_ref is not None else reference_diameter(source)
         return 2.0 * source.radius, source.placed, ref
     diameter, placed = source
@@ -82,7 +81,7 @@ def _arrays(
 
 
 def unplaced_per_class(
-    source: Packing | Packing3D | tuple[ArrayLike, ArrayLike], d_ref: float | None = None
+    source: Packing | tuple[ArrayLike, ArrayLike], d_ref: float | None = None
 ) -> list[dict[str, Any]]:
     """Drawn, placed and not placed particles of every sieve class.
 

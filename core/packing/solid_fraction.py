@@ -16,7 +16,6 @@ from regopack.geometry.domain import Box, Domain, PlaneDomain, Rectangle
 from regopack.geometry.population import FloatArray
 from regopack.geometry.sphere_volume import sphere_in_box
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 
 __all__ = ["fraction_in", "phi_in_box", "phi_in_window"]
 
@@ -80,7 +79,7 @@ def _clip(points: FloatArray, normal: FloatArray, offset: float) -> FloatArray:
     return np.vstack([inside, cross.reshape(-1, 3)])
 
 
-def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None) -> float:
+def phi_in_box(packing: Packing[Box], window: Box, volume: FloatArray | None = None) -> float:
     """Volume fraction of ``window`` covered by the placed solids, clipped exactly.
 
     A sharp polyhedron that crosses the window's faces is clipped by their
@@ -139,7 +138,7 @@ def phi_in_box(packing: Packing3D, window: Box, volume: FloatArray | None = None
 
 
 def fraction_in(
-    packing: Packing | Packing3D,
+    packing: Packing,
     window: Domain | tuple[float, ...],
     volume: FloatArray | None = None,
 ) -> float:
@@ -149,12 +148,12 @@ def fraction_in(
     (``(xmin, xmax, ymin, ymax)``, with ``zmin, zmax`` in 3D). ``volume``
     gives 3D solids' volumes when they are known already.
     """
-    dimension = 3 if isinstance(packing, Packing3D) else 2
+    dimension = packing.dimension
     if not isinstance(window, Domain):
         bounds = [float(v) for v in window]
         window = Box(*bounds) if dimension == 3 else Rectangle(*bounds)
-    if isinstance(packing, Packing3D) and isinstance(window, Box):
+    if dimension == 3 and isinstance(window, Box):
         return phi_in_box(packing, window, volume)
-    if isinstance(packing, Packing) and isinstance(window, PlaneDomain):
+    if dimension == 2 and isinstance(window, PlaneDomain):
         return phi_in_window(packing, window)
     raise TypeError(f"a {window.dimension}D window for a {dimension}D packing")

@@ -23,7 +23,6 @@ from regopack.geometry.solids import SolidBatch
 
 if TYPE_CHECKING:
     from regopack.packing.core import Packing
-    from regopack.packing.core3d import Packing3D
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -250,7 +249,7 @@ class Exporter(ABC):
 
 
 class SolidExporter(ABC):
-    """Writer of a 3D packing (:class:`~regopack.packing.core3d.Packing3D`) in another format.
+    """Writer of a 3D packing (a :class:`~regopack.packing.core.Packing` in a box) in a format.
 
     The 3D counterpart of :class:`Exporter`, with the same ``suffix`` and
     :meth:`companions`; its spec (:class:`~regopack.registry.plugin_types.ExporterSpec`)
@@ -262,7 +261,7 @@ class SolidExporter(ABC):
     @abstractmethod
     def export(
         self,
-        packing: Packing3D,
+        packing: Packing,
         path: Path,
         *,
         analyses: Mapping[str, Analyzer] | None = None,

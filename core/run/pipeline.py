@@ -39,11 +39,9 @@ from regopack.base.outdir import (
     replace_folder,
 )
 from regopack.exports.pipeline import run_exports
-from regopack.geometry.domain import Box
 from regopack.geometry.population import FloatArray, IntArray, Population, concat_shapes
 from regopack.geometry.solids import SolidBatch, concat_solids
-from regopack.packing.core import Packing, write_json_atomic
-from regopack.packing.core3d import Packing3D, save_packing
+from regopack.packing.core import Packing, save, write_json_atomic
 from regopack.packing.sieve import unplaced_per_class
 from regopack.packing.solid_fraction import phi_in_box, phi_in_window
 from regopack.registry.interfaces import (
@@ -141,7 +139,7 @@ class RunOutcome:
         Files written by the exporters of ``outputs.exports``, in scene order.
     """
 
-    packing: Packing | Packing3D
+    packing: Packing
     summary: dict[str, Any]
     packing_path: Path | None = None
     summary_path: Path | None = None
@@ -612,11 +610,10 @@ def _run(
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
 
     scene_dict = resolved.to_dict()
-    kind = Packing3D if isinstance(domain, Box) else Packing
-    packing = kind.from_parts(
+    packing: Packing = Packing.from_parts(
         population,
         result,
-        domain,  # type: ignore[arg-type]
+        domain,
         scene_dict,
         resolved.seed,
         result.stats,
@@ -627,7 +624,7 @@ def _run(
     summary: dict[str, Any] = {
         "scene": resolved.name,
         "seed": resolved.seed,
-        **({"dimension": 3} if isinstance(packing, Packing3D) else {}),
+        **({"dimension": 3} if packing.dimension == 3 else {}),
         "tried": packing.n_particles,
         "placed": n_placed,
         "not_placed": packing.n_particles - n_placed,
@@ -665,7 +662,7 @@ def _run(
     )
 
 
-def _phi_interior(packing: Packing | Packing3D, margin: float) -> tuple[float, str]:
+def _phi_interior(packing: Packing, margin: float) -> tuple[float, str]:
     """Return the solid fraction inside the walls by ``margin``, and a note when there is none.
 
     A periodic box has no walls: its whole cell is interior. A solid that
@@ -673,7 +670,7 @@ def _phi_interior(packing: Packing | Packing3D, margin: float) -> tuple[float, s
     cut yet (``NaN``, as :func:`regopack.packing.solid_fraction.phi_in_box` says).
     """
     empty = f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
-    if isinstance(packing, Packing):
+    if packing.dimension == 2:
         phi = phi_in_window(packing, packing.domain.interior(margin))
         return phi, empty if math.isnan(phi) else ""
     box = packing.domain
@@ -718,7 +715,7 @@ def _check_extra_files(resolved: ResolvedScene, extra_files: Mapping[str, str]) 
 def _write_run(
     resolved: ResolvedScene,
     out: Path,
-    packing: Packing | Packing3D,
+    packing: Packing,
     summary: dict[str, Any],
     analyzers: Mapping[str, Analyzer],
     figures: bool,
@@ -733,7 +730,7 @@ def _write_run(
     with replace_folder(out, RUN_FOLDER) as tmp:
         try:
             checkpoint("packing")
-            save_packing(packing, tmp / outputs.packing)
+            save(packing, tmp / outputs.packing)
             checkpoint("summary")
             write_json_atomic(tmp / outputs.summary, summary)
             for name, text in extra_files.items():
@@ -752,7 +749,7 @@ def _write_run(
             )
         if resolved.exports:
             checkpoint("exports")
-        if isinstance(packing, Packing3D):
+        if packing.dimension == 3:
             exports = run_exports(packing, resolved.exports, tmp / outputs.packing, packing_path)
         else:
             exports = tuple(

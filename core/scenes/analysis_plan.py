@@ -22,7 +22,6 @@ from regopack.registry.plugin_types import AnalyzerSpec, misplaced_field
 
 if TYPE_CHECKING:
     from regopack.packing.core import Packing
-    from regopack.packing.core3d import Packing3D
 
 __all__ = [
     "DEFAULT_ANALYSES",
@@ -51,9 +50,9 @@ their results keep those names until the names go (requested without a warning).
 """
 
 
-def default_analyses(packing: Packing | Packing3D) -> tuple[str, ...]:
+def default_analyses(packing: Packing) -> tuple[str, ...]:
     """Return the analyzers run by default on ``packing`` (2D or 3D defaults)."""
-    return DEFAULT_ANALYSES_3D if getattr(packing, "dimension", 2) == 3 else DEFAULT_ANALYSES
+    return DEFAULT_ANALYSES_3D if packing.dimension == 3 else DEFAULT_ANALYSES
 
 
 def _known(registry: Registry) -> str:
@@ -264,7 +263,7 @@ def plan_analyses(
 
 
 def run_analyses(
-    packing: Packing | Packing3D,
+    packing: Packing,
     registry: Registry,
     requests: Sequence[tuple[str, Mapping[str, Any]]],
     *,
@@ -337,7 +336,7 @@ def run_analyses(
     (['density'], 0.25)
     """
     packing.validate()  # the arrays may have changed in place since the packing was built
-    dimension = int(getattr(packing, "dimension", 2))
+    dimension = packing.dimension
     planned = plan_analyses(
         registry, requests, params or {}, dimension, source, params_source, warn
     )
@@ -348,7 +347,7 @@ def run_analyses(
             req: done[by_name[registry.canonical("analysis", req)]] for req in analyzer.requires
         }
         try:
-            result = analyzer.compute(packing, context)  # type: ignore[arg-type]
+            result = analyzer.compute(packing, context)
         except LimitError as err:  # a size a parameter implies on this packing
             field = err.field.removeprefix(f"{name}.")
             given = params_source if field in (params or {}).get(name, {}) else source

@@ -539,7 +539,7 @@ def _verify_rounded(
                 normal, offset = dom.halfplanes()
             else:
                 normal = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
-                offset = np.array([-dom.xmin, dom.xmax, -dom.ymin, dom.ymax])  # type: ignore[attr-defined]
+                offset = np.array([-dom.xmin, dom.xmax, -dom.ymin, dom.ymax])
             beyond = (pts @ normal.T - offset).max(axis=1) + r
         np.maximum.at(out, owner, beyond / scale)
         out = segment_fraction(out, req)

@@ -14,15 +14,15 @@ import dataclasses
 from typing import Any
 
 from regopack.base.errors import ConfigError
+from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 from regopack.verification.polygons import VerifyReport, verify
 from regopack.verification.polyhedra import Report3D, verify_polyhedra, verify_spheres
 
 __all__ = ["verify_packing", "verify_summary"]
 
 
-def verify_packing(packing: Packing | Packing3D, rel_tol: float = 1e-9) -> VerifyReport | Report3D:
+def verify_packing(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport | Report3D:
     """Check ``packing`` for overlaps and wall violations with its dimension's oracle.
 
     ``rel_tol`` is the overlap, as a fraction of the smaller particle's area
@@ -33,12 +33,12 @@ def verify_packing(packing: Packing | Packing3D, rel_tol: float = 1e-9) -> Verif
     ConfigError
         For rounded polyhedra, which the oracle does not check yet.
     """
-    if isinstance(packing, Packing3D):
+    if packing.dimension == 3:
         return _verify_solids(packing, rel_tol)
     return verify(packing, rel_tol=rel_tol)
 
 
-def _verify_solids(packing: Packing3D, rel_tol: float) -> Report3D:
+def _verify_solids(packing: Packing[Box], rel_tol: float) -> Report3D:
     placed = packing.placed_in_order()
     box = packing.domain
     solids = packing.solids
@@ -80,7 +80,7 @@ def _verify_solids(packing: Packing3D, rel_tol: float) -> Report3D:
     )
 
 
-def verify_summary(packing: Packing | Packing3D) -> dict[str, Any]:
+def verify_summary(packing: Packing) -> dict[str, Any]:
     """Return the ``verify`` entry of a run's summary.
 
     ``ok``, ``overlap_pairs`` (pairs overlapping by more than 1e-9 of the
@@ -89,7 +89,7 @@ def verify_summary(packing: Packing | Packing3D) -> dict[str, Any]:
     (particles leaving the domain); ``skipped`` with the reason instead for
     rounded polyhedra.
     """
-    if isinstance(packing, Packing3D):
+    if packing.dimension == 3:
         if packing.rounded and packing.solids.normals.shape[0] != 0:
             return {"skipped": "rounded polyhedra are not verified yet"}
         solid = _verify_solids(packing, 1e-9)

@@ -22,7 +22,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
 import regopack
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.packing.drawing3d import draw_section, draw_view
 
 HERE = Path(__file__).resolve().parent
@@ -37,7 +37,7 @@ PHASES = [
 ]
 
 
-def pack(side: float, seed: int) -> Packing3D:
+def pack(side: float, seed: int) -> Packing:
     """Pack a cube of side ``side`` with the Table-1 minerals as polyhedra."""
     scene = {
         "name": "box3d",
@@ -52,7 +52,7 @@ def pack(side: float, seed: int) -> Packing3D:
         "density": {"kind": "eta"},
     }
     packing = regopack.pack(scene)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     return packing
 
 
@@ -65,7 +65,7 @@ def main() -> None:
     parser.add_argument("--out", type=Path, default=DEFAULT_OUT)
     args = parser.parse_args()
     packing = regopack.load(args.packing) if args.packing else pack(args.side, args.seed)
-    if not isinstance(packing, Packing3D):
+    if packing.dimension != 3:
         raise SystemExit(f"{args.packing}: not a 3D packing")
     plt.rcParams.update({"font.size": 9})
     fig = plt.figure(figsize=(9.0, 3.9))

@@ -13,12 +13,9 @@ from pydantic import BaseModel
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_scale
+from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 from regopack.registry.interfaces import Analyzer
-
-AnyPacking = Packing | Packing3D
-"""A packing of either dimension."""
 
 DEFAULT_TOL = 0.05
 """Default contact tolerance at the built-in scale (``d_min = 2``): ``tol = d_min / 40``."""
@@ -51,7 +48,7 @@ def contact_tolerances(
     return t, t_max
 
 
-def interior_margin(packing: AnyPacking, margin: float | None = None) -> float:
+def interior_margin(packing: Packing, margin: float | None = None) -> float:
     """Exclusion margin from the walls: ``margin`` if given, else the scene's d_max.
 
     The paper excludes particles within one maximum particle diameter of a wall.
@@ -69,7 +66,7 @@ def interior_margin(packing: AnyPacking, margin: float | None = None) -> float:
     return 2.0 * float(np.max(packing.radius)) if packing.n_particles else 0.0
 
 
-def interior_window(packing: AnyPacking, margin: float) -> Any:
+def interior_window(packing: Packing, margin: float) -> Any:
     """Return the domain inset by ``margin`` from every wall (a periodic domain: all of it).
 
     A :class:`~regopack.geometry.domain.PlaneDomain` in 2D, a
@@ -78,13 +75,13 @@ def interior_window(packing: AnyPacking, margin: float) -> Any:
     return packing.domain.interior(margin)
 
 
-def interior_mask(packing: AnyPacking, margin: float) -> NDArray[np.bool_]:
+def interior_mask(packing: Packing, margin: float) -> NDArray[np.bool_]:
     """Placed particles whose centre lies farther than ``margin`` from every wall."""
     inside = interior_window(packing, margin).contains(packing.centre)
     return np.asarray(inside & packing.placed, dtype=np.bool_)
 
 
-def eta_of(packing: AnyPacking) -> float | None:
+def eta_of(packing: Packing) -> float | None:
     """Return the packing control coefficient of the run, when the scene used one."""
     density = packing.scene.get("density", {}) if isinstance(packing.scene, dict) else {}
     value = density.get("eta") if isinstance(density, dict) else None
@@ -256,7 +253,7 @@ def scaled_defaults(config: _Config, packing: Any, defaults: Mapping[str, Any]) 
     return config.model_copy(update=update)
 
 
-def solid_volumes(packing: Packing3D) -> NDArray[np.float64]:
+def solid_volumes(packing: Packing[Box]) -> NDArray[np.float64]:
     """Volume of every solid, all faces at once (as ``SolidBatch.volume``).
 
     Each face contributes the cone from the centre over it, ``(A_f . n_f) b_f / 3``,

@@ -17,9 +17,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import (
-    AnyPacking,
     FoundContacts,
     contact_tolerances,
     eta_of,
@@ -128,13 +127,13 @@ class Contacts(Analyzer):
         assert self.config.tol_max is not None
         return float(self.config.tol_max)
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Find the candidate pairs, their thresholds, and the regions at ``tol``."""
         tol, tol_max = contact_tolerances(self._asked.tol, self._asked.tol_max, packing, self.name)
         # after compute, the config holds the tolerances used
         self.config = self._asked.model_copy(update={"tol": tol, "tol_max": tol_max})
         self.packing = packing
-        if isinstance(packing, Packing3D):
+        if packing.dimension == 3:
             from regopack.plugins.analyzers.solid_contacts import find_contacts as find_solid
 
             self._found = find_solid(packing, tol, tol_max, self.name)
@@ -210,7 +209,7 @@ class Contacts(Analyzer):
             "n_candidate_pairs": int(self.pairs.shape[0]),
             "median_area": _median(self.area),
         }
-        if isinstance(self.packing, Packing3D):
+        if self.packing.dimension == 3:
             return out | {
                 "median_volume": _median(self.volume),
                 "median_width": _median(self.width),

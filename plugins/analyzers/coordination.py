@@ -18,7 +18,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_scale
-from regopack.plugins.analyzers.common import AnyPacking, Measured, eta_of
+from regopack.packing.core import Packing
+from regopack.plugins.analyzers.common import Measured, eta_of
 from regopack.plugins.analyzers.contacts import Contacts
 from regopack.registry.interfaces import Analyzer
 
@@ -161,7 +162,7 @@ class Coordination(Measured):
     def __init__(self, config: CoordinationConfig | None = None) -> None:
         self.config = config or CoordinationConfig()
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Count contacts per particle at the contact tolerance and over the sweep."""
         contacts = context["contacts"]
         assert isinstance(contacts, Contacts)

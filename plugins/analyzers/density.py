@@ -16,9 +16,9 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import (
-    AnyPacking,
     Measured,
     eta_of,
     interior_margin,
@@ -52,7 +52,7 @@ def void_ratio(phi: float | None) -> float | None:
 
 
 def _volume_fraction_in(
-    p3: Packing3D, window: Any, solid: NDArray[np.float64], phi_domain: float
+    p3: Packing[Box], window: Any, solid: NDArray[np.float64], phi_domain: float
 ) -> float | None:
     """Volume fraction of the interior window (``None``: empty, or a rounded solid crosses it).
 
@@ -82,13 +82,13 @@ class Density(Measured):
     def __init__(self, config: DensityConfig | None = None) -> None:
         self.config = config or DensityConfig()
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Measure the fractions; particles are clipped exactly to the window."""
         from regopack.packing.solid_fraction import phi_in_window
 
         margin = interior_margin(packing, self.config.margin)
         window = interior_window(packing, margin)
-        if isinstance(packing, Packing3D):
+        if packing.dimension == 3:
             solid = solid_volumes(packing)
             phi_domain = float(solid[packing.placed].sum()) / packing.domain.volume
             phi_interior = _volume_fraction_in(packing, window, solid, phi_domain)
@@ -103,7 +103,7 @@ class Density(Measured):
             "void_ratio_interior": void_ratio(phi_interior),
             "interior_margin": margin,
         }
-        if isinstance(packing, Packing3D):
+        if packing.dimension == 3:
             res["window"] = list(window.size)
         self._results = {**res, "n_placed": packing.n_placed, "eta": eta_of(packing)}
         return self

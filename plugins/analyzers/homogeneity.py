@@ -48,9 +48,7 @@ from regopack.base.limits import derived_count
 from regopack.base.units import length_scale
 from regopack.geometry.domain import PlaneDomain
 from regopack.packing.core import Packing
-from regopack.packing.core3d import Packing3D
 from regopack.plugins.analyzers.common import (
-    AnyPacking,
     Measured,
     eta_of,
     interior_margin,
@@ -351,9 +349,9 @@ class Homogeneity(Measured):
         quarter = near / 4 if near > 0 else far / 4
         return min(2.0 * d_max, quarter) if d_max > 0 else quarter
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Cut the window into regions and measure each; in 2D, fit the radial trends."""
-        own = ("layers", "shells") if isinstance(packing, Packing3D) else PLANE_FIELDS
+        own = ("layers", "shells") if packing.dimension == 3 else PLANE_FIELDS
         other = set(PLANE_FIELDS + ("layers", "shells")) - set(own)
         given = sorted(f for f in other if getattr(self.config, f) is not None)
         if given:
@@ -364,7 +362,7 @@ class Homogeneity(Measured):
         margin = interior_margin(packing, self.config.margin)
         window = interior_window(packing, margin)
         self.window = window
-        if isinstance(packing, Packing3D):
+        if packing.dimension == 3:
             layers = self.config.layers or DEFAULT_REGIONS["layers"]
             shells = self.config.shells or DEFAULT_REGIONS["shells"]
             self._tables, self._results = layers_and_shells(packing, window, margin, layers, shells)

@@ -23,14 +23,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.geometry.domain import Box, PeriodicBox
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import solid_volumes
 
 FloatArray = NDArray[np.float64]
 
 
 def _region_stats(
-    packing: Packing3D, inside: NDArray[np.bool_], volume: float
+    packing: Packing[Box], inside: NDArray[np.bool_], volume: float
 ) -> tuple[int, float, float]:
     """Centres inside, their number density and mean diameter (NaN when none)."""
     n = int(inside.sum())
@@ -38,7 +38,7 @@ def _region_stats(
     return n, n / volume if volume > 0 else math.nan, float(d.mean()) if n else math.nan
 
 
-def _images(p3: Packing3D) -> list[Packing3D]:
+def _images(p3: Packing[Box]) -> list[Packing[Box]]:
     """Return the packing, and in a periodic box its 26 images about the cell too."""
     if not p3.domain.periodic:
         return [p3]
@@ -47,7 +47,7 @@ def _images(p3: Packing3D) -> list[Packing3D]:
     return [dataclasses.replace(p3, centre=p3.centre + shift) for shift in shifts]
 
 
-def _wrapped_centres(p3: Packing3D) -> FloatArray:
+def _wrapped_centres(p3: Packing[Box]) -> FloatArray:
     """Return the centres, wrapped into the cell in a periodic box."""
     domain = p3.domain
     if not isinstance(domain, PeriodicBox):
@@ -63,7 +63,7 @@ def _cv(values: list[float]) -> float | None:
 
 
 def layers_and_shells(
-    p3: Packing3D, w: Box, margin: float, n_layers: int, n_shells: int
+    p3: Packing[Box], w: Box, margin: float, n_layers: int, n_shells: int
 ) -> tuple[dict[str, dict[str, FloatArray]], dict[str, Any]]:
     """Measure every layer and shell of the interior window ``w``.
 
@@ -76,7 +76,7 @@ def layers_and_shells(
     volume = solid_volumes(p3)
     images = _images(p3)
 
-    def phi_in_box(p: Packing3D, window: Box, vol: FloatArray) -> float:
+    def phi_in_box(p: Packing[Box], window: Box, vol: FloatArray) -> float:
         # in a periodic box a solid that crosses a face fills the window in its images
         return sum(clip(image, window, vol) for image in images)
 

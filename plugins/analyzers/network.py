@@ -9,7 +9,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict
 
-from regopack.plugins.analyzers.common import AnyPacking, Measured
+from regopack.packing.core import Packing
+from regopack.plugins.analyzers.common import Measured
 from regopack.plugins.analyzers.contacts import Contacts
 from regopack.registry.interfaces import Analyzer
 
@@ -86,7 +87,7 @@ class Network(Measured):
     def __init__(self, config: NetworkConfig | None = None) -> None:
         self.config = config or NetworkConfig()
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Build the edge list and the fabric tensor."""
         contacts = context["contacts"]
         assert isinstance(contacts, Contacts)

@@ -129,7 +129,7 @@ def find_contacts(packing: Packing, tol: float, tol_max: float) -> FoundContacts
         )
     ci, cj = origin[ci], origin[cj]
     if work is not sharp:
-        px, py = packing.domain.wrap(np.column_stack([px, py])).T  # type: ignore[attr-defined]
+        px, py = packing.domain.wrap(np.column_stack([px, py])).T
     ok = (area > 0.0) & (width > 0.0)
     theta = np.zeros_like(area)
     radius = np.zeros_like(area)

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack.packing.core import Packing
 from regopack.packing.sieve import (
     SIEVE_RATIO,
     class_of,
@@ -29,7 +30,7 @@ from regopack.packing.sieve import (
     sieve_edges,
     unplaced_per_class,
 )
-from regopack.plugins.analyzers.common import AnyPacking, Measured
+from regopack.plugins.analyzers.common import Measured
 from regopack.registry.interfaces import Analyzer
 
 __all__ = [
@@ -89,7 +90,7 @@ def ks_distance(diameter: FloatArray, subset: NDArray[np.bool_], weight: FloatAr
     return float(np.max(np.abs(f_sub - f_all)))
 
 
-def scene_size_distribution(packing: AnyPacking) -> tuple[Any, str | None]:
+def scene_size_distribution(packing: Packing) -> tuple[Any, str | None]:
     """Build the scene's size distribution again; ``(distribution, None)`` or ``(None, why)``."""
     from pydantic import ValidationError
 
@@ -193,7 +194,7 @@ class Psd(Measured):
         self.cdf: Cdf | None = None
         self.mass_power = 2
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Count the drawn and placed particles per class; the KS distances."""
         from scipy import stats
 
@@ -286,7 +287,7 @@ class Psd(Measured):
 
     def _compare(
         self,
-        packing: AnyPacking,
+        packing: Packing,
         edges: FloatArray,
         placed_share: FloatArray,
         drawn: NDArray[np.int64],

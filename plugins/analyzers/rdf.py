@@ -39,8 +39,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationInfo, field_validat
 
 from regopack.base.limits import BIN_BYTES, LimitError, check_memory, histogram_bins
 from regopack.geometry.domain import Circle, ConvexPolygon, PeriodicRectangle
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import (
-    AnyPacking,
     Measured,
     eta_of,
     interior_margin,
@@ -178,7 +178,7 @@ class Rdf(Measured):
         self._asked = config or RdfConfig()
         self.config = self._asked
 
-    def compute(self, packing: AnyPacking, context: Mapping[str, Analyzer]) -> Self:
+    def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Histogram the centre pairs inside the interior window."""
         dimension = packing.domain.dimension
         # after compute, the config holds the ranges and bin widths used
@@ -196,7 +196,7 @@ class Rdf(Measured):
         limit = 0.5 * min(sides) if w.periodic else min(sides)
         if isinstance(w, PeriodicRectangle):  # the 3D kernel takes the nearest image itself
             reach = min(limit, max(cfg.near[1], cfg.far[1]))
-            ext, origin = periodic_images(packing, reach)  # type: ignore[arg-type]
+            ext, origin = periodic_images(packing, reach)
             ghosts = np.arange(packing.n_particles, len(origin))
             n_real = n_pts
             pts = np.concatenate([pts, ext.centre[ghosts]])

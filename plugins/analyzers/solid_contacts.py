@@ -25,7 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.base.errors import ConfigError
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import FoundContacts
 from regopack.plugins.analyzers.spherical_cap import equivalent_cap
 
@@ -33,7 +34,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
-def _reach(packing: Packing3D, placed: IntArray, s_max: float) -> FloatArray:
+def _reach(packing: Packing[Box], placed: IntArray, s_max: float) -> FloatArray:
     """Radius about its centre of the ball that holds each solid ``placed`` grown by ``s_max``.
 
     A solid grown by ``s`` along its face normals lies in the ball of radius
@@ -49,7 +50,7 @@ def _reach(packing: Packing3D, placed: IntArray, s_max: float) -> FloatArray:
     return np.asarray(reach, dtype=np.float64)
 
 
-def candidate_pairs(packing: Packing3D, s_max: float) -> tuple[IntArray, IntArray]:
+def candidate_pairs(packing: Packing[Box], s_max: float) -> tuple[IntArray, IntArray]:
     """Pairs ``i < j`` of placed solids whose solids grown by ``s_max`` may meet.
 
     A solid grown by ``s`` along its face normals lies in the ball about its
@@ -76,7 +77,7 @@ def candidate_pairs(packing: Packing3D, s_max: float) -> tuple[IntArray, IntArra
     return lo[order].astype(np.int64), hi[order].astype(np.int64)
 
 
-def periodic_pairs(packing: Packing3D, s_max: float) -> tuple[IntArray, IntArray, FloatArray]:
+def periodic_pairs(packing: Packing[Box], s_max: float) -> tuple[IntArray, IntArray, FloatArray]:
     """:func:`candidate_pairs` in a periodic box: pairs ``(i, j)`` and the shift of ``j``.
 
     Every image ``centre[j] + shift`` (among the 27 about the cell) whose ball
@@ -138,7 +139,7 @@ class _Solids(NamedTuple):
     size: FloatArray
 
 
-def _own_solids(p3: Packing3D) -> _Solids:
+def _own_solids(p3: Packing[Box]) -> _Solids:
     """Return the packing's solids as the kernels read them."""
     return _Solids(
         np.ascontiguousarray(np.nan_to_num(p3.centre), dtype=np.float64),
@@ -151,7 +152,7 @@ def _own_solids(p3: Packing3D) -> _Solids:
     )
 
 
-def _with_ghosts(p3: Packing3D, pj: IntArray, shift: FloatArray) -> tuple[IntArray, _Solids]:
+def _with_ghosts(p3: Packing[Box], pj: IntArray, shift: FloatArray) -> tuple[IntArray, _Solids]:
     """Append copies of the solids ``pj``, moved by ``shift``, after the packing's own.
 
     Returns the copies' indices and the extended ``centre, vertices, offsets,
@@ -184,7 +185,7 @@ def _with_ghosts(p3: Packing3D, pj: IntArray, shift: FloatArray) -> tuple[IntArr
 
 
 def _fallback_threshold(
-    packing: Packing3D, i: int, j: int, shift: FloatArray | None = None, name: str = "contacts"
+    packing: Packing[Box], i: int, j: int, shift: FloatArray | None = None, name: str = "contacts"
 ) -> tuple[float, FloatArray]:
     """Threshold and normal of one pair by HiGHS, for a pair the compiled simplex gave up on."""
     from scipy.optimize import linprog
@@ -206,7 +207,7 @@ def _fallback_threshold(
     return float(res.fun), (w / norm if norm > 0 else np.zeros(3))
 
 
-def find_contacts(p3: Packing3D, tol: float, tol_max: float, name: str) -> FoundContacts:
+def find_contacts(p3: Packing[Box], tol: float, tol_max: float, name: str) -> FoundContacts:
     """Find the candidate pairs, their thresholds and normals, and the regions at ``tol``.
 
     ``name`` (the analyzer's) starts the messages refusing a packing.
@@ -271,7 +272,7 @@ def _cap_columns(
     }
 
 
-def _sphere_contacts(p3: Packing3D, tol: float, tol_max: float) -> FoundContacts:
+def _sphere_contacts(p3: Packing[Box], tol: float, tol_max: float) -> FoundContacts:
     """:func:`find_contacts` for spheres, in closed form.
 
     Two spheres grown by ``s`` each meet when their gap ``g = d - r_i - r_j``

@@ -35,7 +35,8 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.units import METRES, length_unit
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.gsd_export import _gsd_hoomd, _write_frame
 from regopack.plugins.exporters.solid_export_common import mass_properties, placed_solids
 from regopack.registry.interfaces import Analyzer, SolidExporter
@@ -128,7 +129,7 @@ class Gsd3dExporter(SolidExporter):
         _gsd_hoomd()
 
     def export(
-        self, packing: Packing3D, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
+        self, packing: Packing[Box], path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the frame; return ``path``."""
         hoomd = _gsd_hoomd()

@@ -39,7 +39,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ExportError
 from regopack.base.units import length_unit
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.export_common import _num, _write_text
 from regopack.plugins.exporters.lammps_export import default_length_scale
 from regopack.plugins.exporters.rounded_polyhedra import Core, erode_polyhedron
@@ -174,7 +175,7 @@ class Lammps3dBodies:
     reduced: int
 
 
-def lammps3d_bodies(packing: Packing3D, config: Lammps3dConfig | None = None) -> Lammps3dBodies:
+def lammps3d_bodies(packing: Packing[Box], config: Lammps3dConfig | None = None) -> Lammps3dBodies:
     """Cores, rounding radii, centres of mass and inertia of the placed polyhedra.
 
     Raises
@@ -296,7 +297,7 @@ class Lammps3dExporter(SolidExporter):
         return (script3d_path(path),)
 
     def export(
-        self, packing: Packing3D, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
+        self, packing: Packing[Box], path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the data file and the input script; return the data file's path."""
         cfg = self.config
@@ -398,7 +399,7 @@ class Lammps3dExporter(SolidExporter):
 
     def _script(
         self,
-        packing: Packing3D,
+        packing: Packing[Box],
         path: Path,
         lo: FloatArray,
         hi: FloatArray,

@@ -36,9 +36,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import reference_diameter
-from regopack.geometry.domain import Rectangle
+from regopack.geometry.domain import Box, Rectangle
 from regopack.packing.core import Packing, save
-from regopack.packing.core3d import Packing3D
 from regopack.plugins.exporters.solid_export_common import write_bytes
 from regopack.registry.interfaces import Analyzer, SolidExporter
 
@@ -83,7 +82,7 @@ def image_path(path: Path) -> Path:
     return Path(path).with_suffix(".png")
 
 
-def _plane(packing: Packing3D, config: SliceConfig) -> tuple[int, float]:
+def _plane(packing: Packing[Box], config: SliceConfig) -> tuple[int, float]:
     axis = AXES.index(config.axis)
     lo, hi = (float(v) for v in packing.domain.bounds().reshape(3, 2)[axis])
     if config.at is None:
@@ -105,7 +104,7 @@ def _area_centroid(poly: FloatArray) -> tuple[float, FloatArray]:
     return area, centroid
 
 
-def slice_packing(packing: Packing3D, config: SliceConfig | None = None) -> Packing:
+def slice_packing(packing: Packing[Box], config: SliceConfig | None = None) -> Packing:
     """Cut ``packing`` with the configured plane; return the section as a 2D packing.
 
     Raises
@@ -183,7 +182,7 @@ def slice_packing(packing: Packing3D, config: SliceConfig | None = None) -> Pack
     )
 
 
-def _draw(packing: Packing3D, axis: int, at: float, path: Path) -> None:
+def _draw(packing: Packing[Box], axis: int, at: float, path: Path) -> None:
     from matplotlib.figure import Figure
 
     from regopack.packing.drawing3d import draw_section
@@ -215,7 +214,7 @@ class SliceExporter(SolidExporter):
         return (image_path(path),) if self.config.image else ()
 
     def export(
-        self, packing: Packing3D, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
+        self, packing: Packing[Box], path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the 2D packing (and the picture); return the packing file's path."""
         path = Path(path)

@@ -1,6 +1,6 @@
 """What the 3D exporters share: the placed solids, their triangles, volumes and inertia.
 
-Every solid of a :class:`~regopack.packing.core3d.Packing3D` is a convex
+Every solid of a 3D :class:`~regopack.packing.core.Packing` is a convex
 polyhedron whose faces are planar loops, counter-clockwise seen from outside,
 around a reference point strictly inside. :func:`fan_triangles` splits each
 loop into a fan of triangles from its first vertex (which keeps their
@@ -18,8 +18,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.base.errors import ExportError
-from regopack.packing.core import _atomic_file
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing, _atomic_file
 
 __all__ = [
     "PlacedSolid",
@@ -68,7 +68,7 @@ class PlacedSolid:
         return out
 
 
-def placed_solids(packing: Packing3D, exporter: str, spheres: bool = False) -> list[PlacedSolid]:
+def placed_solids(packing: Packing[Box], exporter: str, spheres: bool = False) -> list[PlacedSolid]:
     """Return the placed polyhedra (and, with ``spheres``, spheres) in draw order.
 
     Raises

@@ -26,7 +26,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import check_length_unit, conversion, length_unit
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.solid_export_common import fan_triangles, placed_solids, write_bytes
 from regopack.registry.interfaces import Analyzer, SolidExporter
 
@@ -61,7 +62,7 @@ class StlConfig(BaseModel):
             raise ValueError(str(err).partition(": ")[2]) from err
 
 
-def stl_triangles(packing: Packing3D) -> tuple[np.ndarray, np.ndarray]:
+def stl_triangles(packing: Packing[Box]) -> tuple[np.ndarray, np.ndarray]:
     """Outward triangles of the placed polyhedra, in draw order.
 
     Returns
@@ -89,7 +90,7 @@ class StlExporter(SolidExporter):
         self.config = config or StlConfig()
 
     def export(
-        self, packing: Packing3D, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
+        self, packing: Packing[Box], path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the mesh; return ``path``."""
         path = Path(path)

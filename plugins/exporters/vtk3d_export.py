@@ -17,7 +17,8 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict
 
 from regopack.base.units import length_unit
-from regopack.packing.core3d import Packing3D
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.export_common import _num, _write_text
 from regopack.plugins.exporters.solid_export_common import mass_properties, placed_solids
 from regopack.registry.interfaces import Analyzer, SolidExporter
@@ -70,7 +71,7 @@ class Vtk3dExporter(SolidExporter):
         self.config = config or Vtk3dConfig()
 
     def export(
-        self, packing: Packing3D, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
+        self, packing: Packing[Box], path: Path, *, analyses: Mapping[str, Analyzer] | None = None
     ) -> Path:
         """Write the unstructured grid; return ``path``."""
         path = Path(path)

@@ -14,7 +14,7 @@ from fakes import PythonDensity
 import regopack
 from regopack.base.errors import ConfigError
 from regopack.geometry.domain import Box
-from regopack.packing.core3d import Packing3D, load_packing
+from regopack.packing.core import Packing, load
 from regopack.packing.solid_fraction import phi_in_box
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import InsertionResult, InsertionStrategy
@@ -79,7 +79,7 @@ def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> N
     scene = regopack.scene(SCENE, registry=registry)
     outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=True)
     packing = outcome.packing
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     summary = json.loads((tmp_path / "run" / "summary.json").read_text())
     assert summary["dimension"] == 3 and summary["tried"] == 40
     assert summary["placed"] == packing.n_placed > 0
@@ -88,12 +88,12 @@ def test_a_3d_scene_runs_and_writes_a_version_3_packing(tmp_path, registry) -> N
     rows = summary.get("not_placed_by_class", [])
     assert sum(r["not_placed"] for r in rows) == summary["not_placed"]
     assert all(r["d_lo"] < r["d_hi"] and r["placed"] + r["not_placed"] == r["drawn"] for r in rows)
-    back = load_packing(tmp_path / "run" / "packing.npz")
-    assert isinstance(back, Packing3D)
+    back = load(tmp_path / "run" / "packing.npz")
+    assert back.dimension == 3
     assert np.array_equal(back.vertices, packing.vertices)
     # same scene and seed: the same solids, bit for bit
     again = regopack.pack(scene)
-    assert isinstance(again, Packing3D)
+    assert again.dimension == 3
     assert np.array_equal(again.vertices, packing.vertices)
     assert np.array_equal(again.rotation, packing.rotation)
 
@@ -138,7 +138,7 @@ def test_config_refuses_what_run_refuses(capsys) -> None:  # type: ignore[no-unt
     assert "\n" not in err
 
 
-def _cube_packing(centres: list[list[float]], half: float) -> Packing3D:
+def _cube_packing(centres: list[list[float]], half: float) -> Packing:
     from packings3d import cube_packing
 
     return cube_packing(centres, half)
@@ -166,7 +166,7 @@ def test_phi_of_rotated_polyhedra_cut_by_a_window_corner_matches_sampling() -> N
     )
     base = cube_packing([[0, 0, 0], [0, 0, 0]], 0.5)
     centres = np.array([[5.0, 5.0, 5.0], [2.0, 7.5, 5.2]])
-    p = Packing3D(
+    p = Packing(
         **{
             **{k: getattr(base, k) for k in ("radius", "mineral", "mineral_names", "domain")},
             "vertices": batch.vertices,
@@ -198,11 +198,11 @@ def test_regopack_verify_checks_3d_packing_files(tmp_path, capsys) -> None:  # t
     from packings3d import cube_packing
 
     from regopack.cli.commands import EXIT_OK, EXIT_VIOLATED, main
-    from regopack.packing.core3d import save3d
+    from regopack.packing.core import save
 
-    save3d(cube_packing([[1, 1, 1], [2, 1, 1]], 0.5), tmp_path / "ok.npz")
+    save(cube_packing([[1, 1, 1], [2, 1, 1]], 0.5), tmp_path / "ok.npz")
     assert main(["verify", str(tmp_path / "ok.npz")]) == EXIT_OK
-    save3d(cube_packing([[1, 1, 1], [1.9, 1, 1]], 0.5), tmp_path / "bad.npz")
+    save(cube_packing([[1, 1, 1], [1.9, 1, 1]], 0.5), tmp_path / "bad.npz")
     assert main(["verify", str(tmp_path / "bad.npz")]) == EXIT_VIOLATED
     text = capsys.readouterr().out
     assert "overlap" in text

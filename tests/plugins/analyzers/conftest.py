@@ -6,7 +6,7 @@ from typing import Any
 
 import pytest
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 
 SCENE3D: dict[str, Any] = {
     "name": "analysis3d",
@@ -25,16 +25,16 @@ SCENE3D: dict[str, Any] = {
 
 
 @pytest.fixture(scope="session")
-def packing3d() -> Packing3D:
+def packing3d() -> Packing:
     import regopack
 
     packing = regopack.pack(SCENE3D, verify=False)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     return packing
 
 
 @pytest.fixture(scope="session")
-def analysed3d(packing3d: Packing3D) -> Any:
+def analysed3d(packing3d: Packing) -> Any:
     """The default 3D analyses of :func:`packing3d` (an ``AnalysisResults``)."""
     import regopack
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from regopack.geometry.domain import Box
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 
 _CUBE_VERTICES = np.array(
     [(x, y, z) for x in (-0.5, 0.5) for y in (-0.5, 0.5) for z in (-0.5, 0.5)], dtype=float
@@ -24,7 +24,7 @@ def cube_lattice(
     gaps: tuple[float, float, float],
     side: float = 1.0,
     minerals: int = 1,
-) -> Packing3D:
+) -> Packing:
     """Axis-aligned cubes of ``side`` on a lattice with the given gaps along x, y and z.
 
     The box holds the lattice with a gap of 0.5 to every wall; particle
@@ -37,7 +37,7 @@ def cube_lattice(
     centre = 0.5 + 0.5 * side + idx * step
     hi = centre.max(axis=0) + 0.5 * side + 0.5
     names = ("pyroxene", "glass", "olivine")[:minerals]
-    return Packing3D(
+    return Packing(
         radius=np.full(n, side * (6 / np.pi) ** (1 / 3) / 2),
         mineral=np.arange(n, dtype=np.int64) % minerals,
         mineral_names=names,
@@ -55,7 +55,7 @@ def cube_lattice(
     )
 
 
-def sphere_lattice(shape: tuple[int, int, int], radius: float, gap: float) -> Packing3D:
+def sphere_lattice(shape: tuple[int, int, int], radius: float, gap: float) -> Packing:
     """Spheres of ``radius`` on a simple cubic lattice, ``gap`` apart, 0.5 from every wall."""
     nx, ny, nz = shape
     n = nx * ny * nz
@@ -63,7 +63,7 @@ def sphere_lattice(shape: tuple[int, int, int], radius: float, gap: float) -> Pa
     idx = np.array([(a, b, c) for a in range(nx) for b in range(ny) for c in range(nz)], float)
     centre = 0.5 + radius + idx * step
     hi = centre.max(axis=0) + radius + 0.5
-    return Packing3D(
+    return Packing(
         radius=np.full(n, radius),
         mineral=np.zeros(n, dtype=np.int64),
         mineral_names=("glass",),

@@ -13,7 +13,7 @@ from scipy.spatial import ConvexHull, HalfspaceIntersection
 import regopack
 from regopack.base.errors import ConfigError
 from regopack.geometry.domain import Rectangle
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.analyzers import Contacts, ContactsConfig, Coordination, Network
 from regopack.plugins.analyzers.contact_kernel import edge_normals_and_mitres
 from regopack.plugins.analyzers.spherical_cap import equivalent_cap
@@ -201,20 +201,20 @@ GAPS = (1 / 64, 2 / 64, 3 / 64)  # exact in binary, as are the centres
 TOL = 1 / 16
 
 
-def _planes(p: Packing3D, k: int, grow: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def _planes(p: Packing, k: int, grow: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     f0, f1 = int(p.face_offsets[k]), int(p.face_offsets[k + 1])
     normals = p.normals[f0:f1]
     return normals, p.support[f0:f1] + normals @ p.centre[k] + grow
 
 
-def _grown_solid(p: Packing3D, k: int, grow: float) -> np.ndarray:
+def _grown_solid(p: Packing, k: int, grow: float) -> np.ndarray:
     """Vertices of particle ``k`` grown by ``grow`` along its face normals (Qhull)."""
     normals, offsets = _planes(p, k, grow)
     hs = HalfspaceIntersection(np.column_stack([normals, -offsets]), p.centre[k])
     return hs.intersections
 
 
-def _highs_threshold(p: Packing3D, i: int, j: int) -> float:
+def _highs_threshold(p: Packing, i: int, j: int) -> float:
     """Twice the smallest growth at which i and j meet: min t, n.x - t <= b, by HiGHS."""
     rows = [_planes(p, i), _planes(p, j)]
     a_ub = np.vstack([np.column_stack([n, -np.ones(len(n))]) for n, _ in rows])
@@ -225,7 +225,7 @@ def _highs_threshold(p: Packing3D, i: int, j: int) -> float:
 
 
 @pytest.fixture(scope="module")
-def contacts3d(packing3d: Packing3D) -> Contacts:
+def contacts3d(packing3d: Packing) -> Contacts:
     return Contacts(ContactsConfig(tol=0.05, tol_max=0.5)).compute(packing3d, {})
 
 

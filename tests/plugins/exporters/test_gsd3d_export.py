@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from packings3d import packing3d, spheres3d
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.gsd3d_export import (
     Gsd3dConfig,
     Gsd3dExporter,
@@ -18,7 +18,7 @@ gsd_hoomd = pytest.importorskip("gsd.hoomd", reason="the gsd package is not inst
 
 
 @pytest.fixture(scope="module")
-def packing() -> Packing3D:
+def packing() -> Packing:
     return packing3d()
 
 

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from packings3d import cube_and_sphere, packing3d, spheres3d
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.lammps3d_export import (
     Lammps3dBodies,
     Lammps3dConfig,
@@ -28,7 +28,7 @@ DRIVER = Path(__file__).resolve().parents[2] / "lammps_driver.py"
 
 
 @pytest.fixture(scope="module")
-def packing() -> Packing3D:
+def packing() -> Packing:
     """About 60 polyhedra of 14 face directions in a 20 µm box."""
     return packing3d()
 
@@ -39,7 +39,7 @@ def bodies(packing) -> Lammps3dBodies:  # type: ignore[no-untyped-def]
 
 
 @pytest.fixture(scope="module")
-def hexahedra() -> Packing3D:
+def hexahedra() -> Packing:
     """About 25 polyhedra of 6 face directions in a 15 µm box: cheap for LAMMPS to run."""
     return packing3d(15.0, "cube")
 

@@ -15,25 +15,24 @@ from regopack.base.errors import ConfigError
 from regopack.base.units import reference_diameter
 from regopack.cli import main
 from regopack.geometry.domain import Box
-from regopack.packing.core import load
-from regopack.packing.core3d import Packing3D, save3d
+from regopack.packing.core import Packing, load, save
 from regopack.plugins.exporters.slice_export import SliceConfig, slice_packing
 from regopack.verification.polygons import verify
 
 
 @pytest.fixture(scope="module")
-def packing() -> Packing3D:
+def packing() -> Packing:
     return packing3d()
 
 
 @pytest.fixture(scope="module")
 def packing_file(packing, tmp_path_factory):  # type: ignore[no-untyped-def]
     path = tmp_path_factory.mktemp("slice") / "packing.npz"
-    save3d(packing, path)
+    save(packing, path)
     return path
 
 
-def exact_cut_area(packing: Packing3D, j: int, axis: int, at: float) -> float:
+def exact_cut_area(packing: Packing, j: int, axis: int, at: float) -> float:
     """Area of the cut of solid ``j`` by ``x[axis] = at``, from shapely's hull of the crossings."""
     pts = packing.world_vertices(j)
     _, loops = packing.solids.solid(j)

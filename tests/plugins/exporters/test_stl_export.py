@@ -6,14 +6,14 @@ import numpy as np
 import pytest
 from packings3d import packing3d
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.stl_export import STL_RECORD, StlExporter, stl_triangles
 
 trimesh = pytest.importorskip("trimesh", reason="trimesh is not installed")
 
 
 @pytest.fixture(scope="module")
-def packing() -> Packing3D:
+def packing() -> Packing:
     return packing3d()
 
 

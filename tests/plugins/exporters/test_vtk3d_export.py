@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from packings3d import packing3d
 
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.exporters.vtk3d_export import VTK_POLYHEDRON, Vtk3dExporter
 
 vtk = pytest.importorskip("vtk", reason="the vtk package is not installed")
@@ -14,7 +14,7 @@ from vtkmodules.util.numpy_support import vtk_to_numpy  # noqa: E402
 
 
 @pytest.fixture(scope="module")
-def packing() -> Packing3D:
+def packing() -> Packing:
     return packing3d()
 
 

@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import regopack
-from regopack.packing.core3d import Packing3D
+from regopack.packing.core import Packing
 from regopack.plugins.inserters.available_surface import sweep as sweep_module
 from regopack.verification.polyhedra import separating_gap, verify_polyhedra
 
@@ -34,13 +34,13 @@ def scene(**changes: Any) -> dict[str, Any]:
     return base
 
 
-def _pack(data: dict[str, Any]) -> Packing3D:
+def _pack(data: dict[str, Any]) -> Packing:
     packing = regopack.pack(data, verify=False)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     return packing
 
 
-def _check(packing: Packing3D) -> None:
+def _check(packing: Packing) -> None:
     """Overlap-free and inside the box (the oracle), and each particle touches an earlier one."""
     order = packing.placed_in_order()
     solids = [packing.world_vertices(int(j)) for j in order]
@@ -127,11 +127,11 @@ def sweep_scene(**changes: Any) -> dict[str, Any]:
 
 
 @pytest.fixture(scope="module")
-def swept() -> Packing3D:
+def swept() -> Packing:
     return _pack(sweep_scene())
 
 
-def test_the_sweep_is_touching_overlap_free_and_starts_at_the_bottom(swept: Packing3D) -> None:
+def test_the_sweep_is_touching_overlap_free_and_starts_at_the_bottom(swept: Packing) -> None:
     _check(swept)
     order = swept.placed_in_order()
     first = int(order[0])
@@ -143,7 +143,7 @@ def test_the_sweep_is_touching_overlap_free_and_starts_at_the_bottom(swept: Pack
     assert stats["refused"] + stats["not_offered"] + swept.n_placed == swept.n_particles
 
 
-def test_the_sweep_places_each_particle_near_the_rising_front(swept: Packing3D) -> None:
+def test_the_sweep_places_each_particle_near_the_rising_front(swept: Packing) -> None:
     # a particle lands touching a candidate of the zone, whose bins span the zone
     # height below the zone's top; a particle placed above the top sits at most
     # two circumradii above it: so nothing lands in an old pore far below
@@ -163,7 +163,7 @@ def test_the_sweep_is_reproducible() -> None:
     assert np.array_equal(a.insertion_index, b.insertion_index)
 
 
-def _check_periodic(packing: Packing3D) -> None:
+def _check_periodic(packing: Packing) -> None:
     """The oracle on all periodic images, and each particle touches an earlier image."""
     report = regopack.verify(packing)
     assert report.ok, str(report)
@@ -200,7 +200,7 @@ def test_a_periodic_box_is_packed_across_its_faces(order: str) -> None:
         verify=True,
     )
     packing = out.packing
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     assert packing.n_placed >= 15
     assert out.summary["verify"]["ok"]
     # no walls: the interior is the whole cell, and every part of a solid counts once

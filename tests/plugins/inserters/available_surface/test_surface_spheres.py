@@ -10,7 +10,6 @@ import pytest
 
 import regopack
 from regopack.base.errors import ConfigError
-from regopack.packing.core3d import Packing3D
 from regopack.plugins.inserters.available_surface.spheres import free_arcs, is_free, sample_free
 
 
@@ -111,7 +110,7 @@ def test_spheres_touch_their_candidate_and_pass_the_oracle(kind: str, order: str
         verify=True,
     )
     packing = out.packing
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     assert out.summary["verify"]["ok"], out.summary["verify"]
     assert packing.n_placed >= 60
     assert math.isfinite(out.summary["phi_interior"])
@@ -133,7 +132,7 @@ def test_eta_keeps_each_sphere_its_margin_from_spheres_beyond_the_circumradius_t
     # can come closer to it than the margin: it interferes when the margin is added
     eta = 30.0
     packing = regopack.pack(scene(count=150, density={"kind": "eta", "eta": eta}), verify=False)
-    assert isinstance(packing, Packing3D)
+    assert packing.dimension == 3
     order_ = packing.placed_in_order()
     c = packing.centre[order_]
     r = packing.radius[order_]

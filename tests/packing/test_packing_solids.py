@@ -13,8 +13,7 @@ from packings3d import _cube_arrays, cube_and_sphere, cube_packing
 import regopack
 from regopack.base.errors import PackingError, PackingFileError
 from regopack.geometry.domain import Box, PeriodicBox, Rectangle
-from regopack.packing.core import load
-from regopack.packing.core3d import Packing3D, load_packing, save3d
+from regopack.packing.core import Packing, load, save
 from regopack.testing import packing_from_polygons
 
 
@@ -43,26 +42,34 @@ def test_cubes_have_their_volume_fraction() -> None:
 
 def test_file_round_trip_and_one_reader_for_both_dimensions(tmp_path) -> None:
     p3 = cube_packing([[1, 1, 1], [np.nan] * 3], domain=PeriodicBox(0, 4, 0, 5, 0, 6))
-    save3d(p3, tmp_path / "p3.npz")
-    back = load_packing(tmp_path / "p3.npz")
-    assert isinstance(back, Packing3D) and type(back.domain) is PeriodicBox
+    save(p3, tmp_path / "p3.npz")
+    back = load(tmp_path / "p3.npz")
+    assert isinstance(back, Packing) and back.dimension == 3
+    assert type(back.domain) is PeriodicBox
     for name in ("vertices", "face_vertices", "normals", "centre", "rotation", "insertion_index"):
         assert np.array_equal(getattr(back, name), getattr(p3, name), equal_nan=name == "centre")
     regopack.save(p3, tmp_path / "again.npz")
-    assert isinstance(regopack.load(tmp_path / "again.npz"), Packing3D)
+    assert regopack.load(tmp_path / "again.npz").dimension == 3
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     p2 = packing_from_polygons([square, square + 2.0], Rectangle(0, 5, 0, 5))
     regopack.save(p2, tmp_path / "p2.npz")
-    assert isinstance(regopack.load(tmp_path / "p2.npz"), regopack.Packing)
+    back2 = regopack.load(tmp_path / "p2.npz")
+    assert isinstance(back2, regopack.Packing) and back2.dimension == 2
 
 
-def test_the_2d_reader_refuses_a_3d_file_in_one_line(tmp_path) -> None:
-    save3d(cube_packing([[1, 1, 1]]), tmp_path / "p3.npz")
-    with pytest.raises(
-        PackingFileError, match=r"p3\.npz: a 3D packing .* reads 3D packings"
-    ) as err:
-        load(tmp_path / "p3.npz")
-    assert "\n" not in str(err.value)
+def test_a_version_3_file_of_another_dimension_is_refused_in_one_line(tmp_path) -> None:
+    path = tmp_path / "p3.npz"
+    save(cube_packing([[1, 1, 1]]), path)
+
+    def flat(contents: dict[str, np.ndarray]) -> None:
+        meta = json.loads(str(contents["meta"]))
+        meta["dimension"] = 2
+        contents["meta"] = np.array(json.dumps(meta))
+
+    _rewrite(path, flat)
+    with pytest.raises(PackingFileError) as err:
+        load(path)
+    assert str(err.value) == f"{path}: invalid packing file: meta 'dimension' is 2, not 3"
 
 
 @pytest.mark.parametrize(
@@ -103,7 +110,7 @@ def _rewrite(path, edit) -> None:  # type: ignore[no-untyped-def]
 
 def test_a_damaged_3d_file_is_refused_naming_the_file(tmp_path) -> None:
     path = tmp_path / "p.npz"
-    save3d(cube_packing([[1, 1, 1]]), path)
+    save(cube_packing([[1, 1, 1]]), path)
 
     def bad_domain(contents: dict[str, np.ndarray]) -> None:
         meta = json.loads(str(contents["meta"]))
@@ -112,16 +119,16 @@ def test_a_damaged_3d_file_is_refused_naming_the_file(tmp_path) -> None:
 
     _rewrite(path, bad_domain)
     with pytest.raises(PackingFileError, match=r"p\.npz: invalid packing file: meta 'domain'"):
-        load_packing(path)
+        load(path)
 
-    save3d(cube_packing([[1, 1, 1]]), path)
+    save(cube_packing([[1, 1, 1]]), path)
     _rewrite(path, lambda c: c.pop("normals"))
     with pytest.raises(PackingFileError, match="missing array 'normals'"):
-        load_packing(path)
+        load(path)
     path.write_bytes(b"not a zip")
     assert not zipfile.is_zipfile(path)
     with pytest.raises(PackingFileError, match="not an NPZ archive"):
-        load_packing(path)
+        load(path)
 
 
 def _set(name: str, value: object):  # type: ignore[no-untyped-def]
@@ -164,11 +171,11 @@ def _periodic_box(contents: dict[str, np.ndarray]) -> None:
 )
 def test_a_3d_file_whose_numbers_cannot_mean_a_packing_is_refused(tmp_path, edit, message) -> None:
     path = tmp_path / "p.npz"
-    save3d(cube_and_sphere(), path)
-    assert load_packing(path).n_placed == 2
+    save(cube_and_sphere(), path)
+    assert load(path).n_placed == 2
     _rewrite(path, edit)
     with pytest.raises(PackingFileError, match=rf"p\.npz: invalid packing file: {message}"):
-        load_packing(path)
+        load(path)
 
 
 @pytest.mark.parametrize("factor", [1e-6, 1e6])
@@ -184,14 +191,14 @@ def test_a_scaled_3d_file_loads(tmp_path, factor) -> None:
         "rounding": p.rounding * factor,
         "domain": Box(0, side, 0, side, 0, side),
     }
-    save3d(dataclasses.replace(p, **scaled), path)
-    assert load_packing(path).n_placed == 2
+    save(dataclasses.replace(p, **scaled), path)
+    assert load(path).n_placed == 2
 
 
 @pytest.mark.parametrize("bounds", [5, None, 1.5])
 def test_a_3d_file_whose_domain_bounds_are_no_list_names_the_field(tmp_path, bounds) -> None:
     path = tmp_path / "p.npz"
-    save3d(cube_packing([[1, 1, 1]]), path)
+    save(cube_packing([[1, 1, 1]]), path)
 
     def edit(contents: dict[str, np.ndarray]) -> None:
         meta = json.loads(str(contents["meta"]))
@@ -200,7 +207,7 @@ def test_a_3d_file_whose_domain_bounds_are_no_list_names_the_field(tmp_path, bou
 
     _rewrite(path, edit)
     with pytest.raises(PackingFileError) as caught:
-        load_packing(path)
+        load(path)
     assert str(caught.value) == (
         f"{path}: invalid packing file: meta 'domain' (kind 'box'): "
         f"bounds: {bounds!r} is not a list of numbers"
