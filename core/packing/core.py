@@ -19,7 +19,7 @@ import tempfile
 import zipfile
 from collections.abc import Callable, Iterator, Mapping
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any, Generic, cast
 
@@ -385,6 +385,15 @@ class Packing(PlacedParticles, Generic[D]):
     normals: FloatArray = field(default_factory=_no_rows(3), kw_only=True)
     support: FloatArray = field(default_factory=_no_floats, kw_only=True)
     rotation: FloatArray = field(default_factory=_no_rows(4), kw_only=True)
+
+    def __setstate__(self, state: dict[str, Any]) -> None:
+        """Restore a pickled packing; one pickled before a field existed gets its default."""
+        for f in fields(self):
+            if f.name not in state and f.default_factory is not MISSING:
+                state[f.name] = f.default_factory()
+            elif f.name not in state and f.default is not MISSING:
+                state[f.name] = f.default
+        self.__dict__.update(state)
 
     def __post_init__(self) -> None:
         """Convert the arrays to their dtypes (where no value changes) and :meth:`validate`."""
@@ -913,7 +922,7 @@ class Packing(PlacedParticles, Generic[D]):
         color_by: str | ArrayLike = "mineral",
         **kwargs: Any,
     ) -> PackingArtists:
-        """Draw the placed particles with matplotlib (2D).
+        """Draw the placed particles with matplotlib (a 3D packing by a section).
 
         Parameters
         ----------
@@ -926,7 +935,9 @@ class Packing(PlacedParticles, Generic[D]):
             per placed particle (with a colour bar).
         **kwargs
             ``cmap``, ``edgecolor``, ``linewidth``, ``legend``, ``colorbar``
-            and ``label`` (of the colour bar).
+            and ``label`` (of the colour bar); for a 3D packing ``axis`` (0, 1
+            or 2, the normal of the section's plane; default 1) and ``at``
+            (the plane's position; default the box's centre).
 
         Notes
         -----
@@ -934,8 +945,9 @@ class Packing(PlacedParticles, Generic[D]):
         with ``layout="constrained"``, or save it with ``bbox_inches="tight"``
         (as notebooks do), to keep it inside the picture. In a periodic
         domain the particles that reach past a side are drawn on both sides.
-        A 3D packing is drawn by :func:`regopack.packing.drawing3d.draw_view`
-        and :func:`regopack.packing.drawing3d.draw_section`.
+        A 3D packing is drawn by the section of its solids with an
+        axis-aligned plane (:func:`regopack.packing.drawing.section_polygons`);
+        :func:`regopack.packing.drawing.draw_view` renders it in 3D axes.
 
         Returns
         -------
@@ -945,12 +957,9 @@ class Packing(PlacedParticles, Generic[D]):
         """
         from regopack.packing.drawing import draw_packing
 
-        self._plane_only("plot", "regopack.packing.drawing3d.draw_view or draw_section")
         return draw_packing(self, ax, color_by, **kwargs)
 
     def _repr_png_(self) -> bytes | None:
-        if self.dimension != 2:
-            return None  # no picture: the notebook shows the repr
         from regopack.packing.drawing import packing_png
 
         return packing_png(self)
@@ -959,8 +968,6 @@ class Packing(PlacedParticles, Generic[D]):
         import base64
         import html
 
-        if self.dimension != 2:
-            return None
         from regopack.packing.drawing import packing_png, summary_line
 
         png = base64.b64encode(packing_png(self)).decode("ascii")

@@ -23,7 +23,7 @@ import matplotlib.pyplot as plt
 
 import regopack
 from regopack.packing.core import Packing
-from regopack.packing.drawing3d import draw_section, draw_view
+from regopack.packing.drawing import draw_section, draw_view
 
 HERE = Path(__file__).resolve().parent
 DEFAULT_OUT = HERE.parent / "images" / "packing3d.png"

@@ -1,7 +1,7 @@
 """The ``slice`` exporter: a planar section of a 3D packing as a 2D packing file and a picture.
 
 The plane ``x[axis] = at`` cuts every placed solid
-(:func:`regopack.packing.drawing3d.section_polygons`); each cut is a convex polygon,
+(:func:`regopack.packing.drawing.section_polygons`); each cut is a convex polygon,
 which becomes one particle of a 2D :class:`~regopack.packing.core.Packing` in the
 plane's coordinates (the two other axes in order: x, y for a z section; y, z
 for an x section; x, z for a y section), keeping its mineral, in a walled
@@ -114,7 +114,7 @@ def slice_packing(packing: Packing[Box], config: SliceConfig | None = None) -> P
     ExportError
         For a periodic box, whose sections are not cut yet.
     """
-    from regopack.packing.drawing3d import section_polygons
+    from regopack.packing.drawing import section_polygons
 
     cfg = config or SliceConfig()
     box = packing.domain
@@ -185,7 +185,7 @@ def slice_packing(packing: Packing[Box], config: SliceConfig | None = None) -> P
 def _draw(packing: Packing[Box], axis: int, at: float, path: Path) -> None:
     from matplotlib.figure import Figure
 
-    from regopack.packing.drawing3d import draw_section
+    from regopack.packing.drawing import draw_section
 
     fig = Figure(figsize=(7.0, 6.0), layout="constrained")
     ax = fig.add_subplot()
@@ -201,7 +201,7 @@ class SliceExporter(SolidExporter):
 
     See the module's documentation for what the 2D packing holds. The
     picture ``<stem>.png`` (with ``image = true``) draws the cuts by
-    mineral, as :func:`regopack.packing.drawing3d.draw_section` does.
+    mineral, as :func:`regopack.packing.drawing.draw_section` does.
     """
 
     suffix = ".slice.npz"

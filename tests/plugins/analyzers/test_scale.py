@@ -43,7 +43,7 @@ def _analyse(packing: Any, names: tuple[str, ...]) -> dict[str, Any]:
 @pytest.fixture(scope="module")
 def base2d() -> tuple[Packing, dict[str, Any]]:
     packing = regopack.pack(SCENE2D, verify=False)
-    assert isinstance(packing, Packing)
+    assert packing.dimension == 2
     return packing, _analyse(packing, ANALYSES)
 
 

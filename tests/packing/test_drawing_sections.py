@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from packings3d import cube_packing
 
-from regopack.packing.drawing3d import draw_section, draw_view, section_polygons
+from regopack.packing.drawing import draw_section, draw_view, section_polygons
 
 
 def _area(p: np.ndarray) -> float:
@@ -62,3 +62,17 @@ def test_figures_draw(tmp_path) -> None:  # type: ignore[no-untyped-def]
     fig.savefig(tmp_path / "f.png", dpi=60)
     plt.close(fig)
     assert (tmp_path / "f.png").stat().st_size > 1000
+
+
+def test_plot_draws_a_3d_packing_by_its_section() -> None:
+    # three cubes; the plane z = 5.2 cuts the first two, whose squares are drawn
+    p = cube_packing([[5.0, 5.0, 5.0], [7.0, 5.0, 5.3], [2.0, 2.0, 2.0]], 0.5)
+    _, ax = plt.subplots()
+    art = p.plot(ax, axis=2, at=5.2)
+    paths = art.particles.get_paths()
+    assert len(paths) == 2
+    assert ax.get_xlabel().startswith("x (") and ax.get_ylabel().startswith("y (")
+    art = p.plot(color_by="diameter", axis=0, at=2.25)
+    assert len(art.particles.get_paths()) == 1 and art.colorbar is not None
+    assert art.ax.get_xlabel().startswith("y (") and art.ax.get_ylabel().startswith("z (")
+    plt.close("all")
