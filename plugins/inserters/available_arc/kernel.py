@@ -51,12 +51,20 @@ from regopack.plugins.inserters.available_arc.grid import cell_range, grid_inser
 from regopack.plugins.inserters.available_arc.neighbours import (
     GAP_SLACK,
     IMAGE_QUERIES,
+    GridView,
+    ListPool,
     image_query,
     image_shift,
     image_shifts,
     register_neighbours,
 )
-from regopack.plugins.inserters.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
+from regopack.plugins.inserters.available_arc.rounded import (
+    RoundedInterferers,
+    RoundedWalls,
+    disk_arcs,
+    rounded_arcs,
+    rounded_locate,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -259,11 +267,12 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
         periodic = ipar[I_WALLMODE] == WALL_PERIODIC
+        grid = GridView(gpar, gdim, s.head, s.nxt, s.item, s.stamp)
+        lists = ListPool(s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_img, s.nb_row, s.nb_free)
         ipar[I_NBTOP] = register_neighbours(
-            i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
-            s.head, s.nxt, s.item, s.stamp, token,
-            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_row, s.nb_free, ipar[I_NBTOP],
-            s.nb_img, periodic, s.fpar[F_XMIN : F_YMAX + 1], s.shut, s.fpar[F_RMIN],
+            i, token, ipar[I_NBTOP], s.cx, s.cy, s.nb_reach, grid, lists,
+            s.fpar[F_NBCAP], s.fpar[F_REACH], periodic, s.fpar[F_XMIN : F_YMAX + 1],
+            s.shut, s.fpar[F_RMIN],
         )  # fmt: skip
         if periodic:  # the image queries took stamps of their own
             ipar[I_STAMP] = token + IMAGE_QUERIES
@@ -658,11 +667,9 @@ def analyze_candidate(
         box = np.empty(4)
         box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
         inner = s.walls[0, 2] - g.rho[i] if mode == WALL_CIRCLE else 0.0
-        return rounded_arcs(
-            wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy,
-            nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho,
-            mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner,
-        )  # fmt: skip
+        others = RoundedInterferers(nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho)
+        wl = RoundedWalls(mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner)
+        return rounded_arcs(wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy, others, wl)
 
     # ---- walls: closed box of admissible centres, relative to pk
     bx0, bx1, by0, by1 = centre_box(i, g, fpar)
