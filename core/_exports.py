@@ -9,10 +9,10 @@ one of its lighter neighbours stays light and creates no import cycle.
 from __future__ import annotations
 
 import importlib
-from collections.abc import Mapping, MutableMapping
+from collections.abc import Callable, Mapping, MutableMapping
 from typing import Any
 
-__all__ = ["load_export"]
+__all__ = ["lazy_exports", "load_export"]
 
 
 def load_export(namespace: MutableMapping[str, Any], sources: Mapping[str, str], name: str) -> Any:
@@ -28,3 +28,23 @@ def load_export(namespace: MutableMapping[str, Any], sources: Mapping[str, str],
     value = getattr(importlib.import_module(sources[name]), name)
     namespace[name] = value
     return value
+
+
+def lazy_exports(
+    namespace: MutableMapping[str, Any], sources: Mapping[str, str] | str
+) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
+    """Return a package's ``__getattr__`` and ``__dir__`` (PEP 562) for ``sources``.
+
+    ``__getattr__`` loads a name of ``sources`` (or, given one module's name,
+    of the package's ``__all__`` from that module) on first use
+    (:func:`load_export`); ``__dir__`` lists the package's ``__all__``.
+    """
+    table = dict.fromkeys(namespace["__all__"], sources) if isinstance(sources, str) else sources
+
+    def getattr_(name: str) -> Any:
+        return load_export(namespace, table, name)
+
+    def dir_() -> list[str]:
+        return sorted(namespace["__all__"])
+
+    return getattr_, dir_

@@ -6,9 +6,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.api.functions import analyze as analyze
@@ -21,13 +21,4 @@ if TYPE_CHECKING:
 
 __all__ = ["analyze", "export", "pack", "pack_and_summarise", "scene", "sweep", "verify"]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.api.functions")
-
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.api.functions` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), "regopack.api.functions")

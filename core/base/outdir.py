@@ -354,20 +354,11 @@ def _fsync_tree(folder: Path) -> None:
     """Flush every file and folder under ``folder`` to disk (best effort)."""
     for root, _dirs, files in os.walk(folder):
         for name in [*files, "."]:
-            try:
-                fd = os.open(os.path.join(root, name), os.O_RDONLY)
-            except OSError:
-                continue
-            try:
-                os.fsync(fd)
-            except OSError:
-                pass
-            finally:
-                os.close(fd)
+            fsync_directory(Path(root, name))
 
 
 def fsync_directory(directory: Path) -> None:
-    """Flush a folder's entries to disk (best effort; a failure is ignored)."""
+    """Flush a folder's entries (or a file) to disk (best effort; a failure is ignored)."""
     try:
         fd = os.open(directory, os.O_RDONLY)
     except OSError:

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.cli.commands import build_parser as build_parser
@@ -12,13 +12,4 @@ if TYPE_CHECKING:
 
 __all__ = ["build_parser", "main"]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.cli.commands")
-
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.cli.commands` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), "regopack.cli.commands")

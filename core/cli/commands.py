@@ -64,6 +64,13 @@ def _rel_tol(text: str) -> float:
     return value
 
 
+def _add_set(parser: argparse.ArgumentParser, metavar: str, help_text: str) -> None:
+    """Add the repeatable option ``--set`` (into ``overrides``)."""
+    parser.add_argument(
+        "--set", dest="overrides", action="append", default=[], metavar=metavar, help=help_text
+    )
+
+
 def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "scene",
@@ -71,14 +78,7 @@ def _add_scene_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="SCENE",
         help="built-in scene name or path of a TOML scene file (default: table1)",
     )
-    parser.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a scene value, e.g. --set density.eta=10 (repeatable)",
-    )
+    _add_set(parser, "KEY=VALUE", "override a scene value, e.g. --set density.eta=10 (repeatable)")
     parser.add_argument("--seed", type=int, metavar="N", help="seed of the random generator")
 
 
@@ -162,13 +162,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="contact tolerance in the packing's length unit (sets contacts.tol; "
         "default d_min / 40, 0.05 for the built-in scenes)",
     )
-    analyze.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="NAME.FIELD=VALUE",
-        help="set an analyzer parameter, e.g. --set contacts.tol_max=1 (repeatable)",
+    _add_set(
+        analyze,
+        "NAME.FIELD=VALUE",
+        "set an analyzer parameter, e.g. --set contacts.tol_max=1 (repeatable)",
     )
     analyze.add_argument(
         "--out",
@@ -209,13 +206,8 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="PATH",
         help="output file, or a directory (default: the packing's name with the format's suffix)",
     )
-    export.add_argument(
-        "--set",
-        dest="overrides",
-        action="append",
-        default=[],
-        metavar="FIELD=VALUE",
-        help="set an exporter parameter, e.g. --set stiffness=1e5 (repeatable)",
+    _add_set(
+        export, "FIELD=VALUE", "set an exporter parameter, e.g. --set stiffness=1e5 (repeatable)"
     )
     export.add_argument(
         "--analyses",

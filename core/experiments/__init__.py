@@ -33,9 +33,9 @@ their public names.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.experiments.builtin import builtin_experiment_path as builtin_experiment_path
@@ -111,11 +111,4 @@ _SOURCES = {
     "verify_metrics": "regopack.experiments.workers",
 }
 
-
-def __getattr__(name: str) -> Any:
-    """Load the names of the experiment modules on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), _SOURCES)

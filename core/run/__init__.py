@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.run.pipeline import BYTES_PER_PARTICLE as BYTES_PER_PARTICLE
@@ -37,13 +37,4 @@ __all__ = [
     "run_scene",
 ]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.run.pipeline")
-
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.run.pipeline` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), "regopack.run.pipeline")

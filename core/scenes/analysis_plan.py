@@ -16,6 +16,7 @@ from pydantic import ValidationError
 
 from regopack.base.errors import ConfigError, PluginError
 from regopack.base.limits import LimitError
+from regopack.base.messages import describe_validation_error
 from regopack.registry.interfaces import Analyzer
 from regopack.registry.manager import Registry
 from regopack.registry.plugin_types import AnalyzerSpec, misplaced_field
@@ -89,14 +90,12 @@ def _build(
     located by ``params_source`` when it is among ``given`` (the parameters
     from there), by ``source`` otherwise.
     """
-    from regopack.scenes.model import _describe_validation_error
-
     spec = registry.get("analysis", name)
     try:
         config = spec.config_model.model_validate(dict(params))
     except ValidationError as err:
         raise ConfigError(
-            _describe_validation_error(
+            describe_validation_error(
                 err, source=params_source, prefix=(prefix,), model=spec.config_model
             )
         ) from err

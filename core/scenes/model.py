@@ -427,21 +427,6 @@ _dotted = dotted
 _where = where
 
 
-def _describe_validation_error(
-    err: ValidationError,
-    *,
-    source: str | None,
-    prefix: Sequence[int | str] = (),
-    overridden: Mapping[str, str] | None = None,
-    model: type[BaseModel] | None = None,
-    also: Sequence[str] = (),
-) -> str:
-    """One line describing the first error of ``err`` (see :mod:`regopack.base.messages`)."""
-    return describe_validation_error(
-        err, source=source, prefix=prefix, overridden=overridden, model=model, also=also
-    )
-
-
 # ---------------------------------------------------------------------------
 # loading
 
@@ -635,7 +620,7 @@ def scene_from_dict(
         scene = Scene.model_validate(data)
     except ValidationError as err:
         raise ConfigError(
-            _describe_validation_error(err, source=source, overridden=overridden, model=Scene)
+            describe_validation_error(err, source=source, overridden=overridden, model=Scene)
         ) from err
     scene._source = source
     scene._overridden = dict(overridden or {})
@@ -834,7 +819,7 @@ def _resolve_ref(
         config = spec.config_model.model_validate(ref.params)
     except ValidationError as err:
         raise ConfigError(
-            _describe_validation_error(
+            describe_validation_error(
                 err,
                 source=scene.source,
                 prefix=loc,

@@ -5,9 +5,9 @@ Shapely checks polygons; Qhull and linear programming check polyhedra.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.verification.polygons import CONFIRM_GRID as CONFIRM_GRID
@@ -26,11 +26,4 @@ _SOURCES = {
 }
 __all__ += ["verify_packing", "verify_summary"]
 
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.verification.polygons` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), _SOURCES)

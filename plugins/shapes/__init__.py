@@ -6,9 +6,9 @@ regular and template polygons) are offered here as well.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.plugins.shapes.polygons import RandomConvexPolygon as RandomConvexPolygon
@@ -35,13 +35,4 @@ __all__ = [
     "read_templates",
 ]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.plugins.shapes.polygons")
-
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.plugins.shapes.polygons` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), "regopack.plugins.shapes.polygons")

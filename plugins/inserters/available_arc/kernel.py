@@ -51,12 +51,20 @@ from regopack.plugins.inserters.available_arc.grid import cell_range, grid_inser
 from regopack.plugins.inserters.available_arc.neighbours import (
     GAP_SLACK,
     IMAGE_QUERIES,
+    GridView,
+    ListPool,
     image_query,
     image_shift,
     image_shifts,
     register_neighbours,
 )
-from regopack.plugins.inserters.available_arc.rounded import disk_arcs, rounded_arcs, rounded_locate
+from regopack.plugins.inserters.available_arc.rounded import (
+    RoundedInterferers,
+    RoundedWalls,
+    disk_arcs,
+    rounded_arcs,
+    rounded_locate,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -259,11 +267,12 @@ def insert_particle(i: int, x: float, y: float, g: Outlines, s: Packed) -> int:
         token = ipar[I_STAMP] + 1
         ipar[I_STAMP] = token
         periodic = ipar[I_WALLMODE] == WALL_PERIODIC
+        grid = GridView(gpar, gdim, s.head, s.nxt, s.item, s.stamp)
+        lists = ListPool(s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_img, s.nb_row, s.nb_free)
         ipar[I_NBTOP] = register_neighbours(
-            i, s.fpar[F_NBCAP], s.fpar[F_REACH], s.cx, s.cy, s.nb_reach, gpar, gdim,
-            s.head, s.nxt, s.item, s.stamp, token,
-            s.nb_o, s.nb_gap, s.nb_dx, s.nb_dy, s.nb_n, s.nb_row, s.nb_free, ipar[I_NBTOP],
-            s.nb_img, periodic, s.fpar[F_XMIN : F_YMAX + 1], s.shut, s.fpar[F_RMIN],
+            i, token, ipar[I_NBTOP], s.cx, s.cy, s.nb_reach, grid, lists,
+            s.fpar[F_NBCAP], s.fpar[F_REACH], periodic, s.fpar[F_XMIN : F_YMAX + 1],
+            s.shut, s.fpar[F_RMIN],
         )  # fmt: skip
         if periodic:  # the image queries took stamps of their own
             ipar[I_STAMP] = token + IMAGE_QUERIES
@@ -335,6 +344,27 @@ def _clip_walls(
     if mode == WALL_CIRCLE:
         return clip_closed_circle(ax, ay, dx, dy, w.rx, w.ry, mq, -1.0, g.circum[i], s.walls)
     return -np.inf, np.inf
+
+
+@numba.njit(cache=True, inline="always")
+def _envelope(
+    o: int,
+    mq: int,
+    g: Outlines,
+    w: Work,
+    ox: FloatArray,
+    oy: FloatArray,
+    oex: FloatArray,
+    oey: FloatArray,
+) -> int:
+    """Envelope of particle ``o`` and the new particle (``begin_particle``) into ``ox`` .. ``oey``.
+
+    Returns its vertex count; see ``geometry.minkowski_envelope``.
+    """
+    return minkowski_envelope(
+        o, g.vx, g.vy, g.ex, g.ey, g.ang, g.offsets,
+        w.rx, w.ry, w.rex, w.rey, w.rang, mq, ox, oy, oex, oey,
+    )  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -551,25 +581,7 @@ def analyze_candidate(
 
     wx = w.wx
     wy = w.wy
-    n = minkowski_envelope(
-        pk,
-        g.vx,
-        g.vy,
-        g.ex,
-        g.ey,
-        g.ang,
-        g.offsets,
-        w.rx,
-        w.ry,
-        w.rex,
-        w.rey,
-        w.rang,
-        mq,
-        wx,
-        wy,
-        w.wex,
-        w.wey,
-    )
+    n = _envelope(pk, mq, g, w, wx, wy, w.wex, w.wey)
 
     # ---- interferer envelopes (cached per new particle), relative to their centres
     ncache = w.cache_n.shape[0]
@@ -625,25 +637,7 @@ def analyze_candidate(
         else:
             sl = f
         slot[f] = sl
-        on[sl] = minkowski_envelope(
-            o,
-            g.vx,
-            g.vy,
-            g.ex,
-            g.ey,
-            g.ang,
-            g.offsets,
-            w.rx,
-            w.ry,
-            w.rex,
-            w.rey,
-            w.rang,
-            mq,
-            ox[sl],
-            oy[sl],
-            oex[sl],
-            oey[sl],
-        )
+        on[sl] = _envelope(o, mq, g, w, ox[sl], oy[sl], oex[sl], oey[sl])
         rr = 0.0
         for j in range(on[sl]):
             d2 = ox[sl, j] * ox[sl, j] + oy[sl, j] * oy[sl, j]
@@ -658,11 +652,9 @@ def analyze_candidate(
         box = np.empty(4)
         box[0], box[1], box[2], box[3] = centre_box(i, g, fpar)
         inner = s.walls[0, 2] - g.rho[i] if mode == WALL_CIRCLE else 0.0
-        return rounded_arcs(
-            wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy,
-            nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho,
-            mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner,
-        )  # fmt: skip
+        others = RoundedInterferers(nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho)
+        wl = RoundedWalls(mode, s.walls, box, w.woff, w.rx, w.ry, mq, inner)
+        return rounded_arcs(wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], pcx, pcy, others, wl)
 
     # ---- walls: closed box of admissible centres, relative to pk
     bx0, bx1, by0, by1 = centre_box(i, g, fpar)
@@ -938,25 +930,7 @@ def locate(
     """
     wx = w.wx
     wy = w.wy
-    n = minkowski_envelope(
-        pk,
-        g.vx,
-        g.vy,
-        g.ex,
-        g.ey,
-        g.ang,
-        g.offsets,
-        w.rx,
-        w.ry,
-        w.rex,
-        w.rey,
-        w.rang,
-        mq,
-        wx,
-        wy,
-        w.wex,
-        w.wey,
-    )
+    n = _envelope(pk, mq, g, w, wx, wy, w.wex, w.wey)
     if rounded is not None:
         x, y = rounded_locate(wx, wy, w.wex, w.wey, n, g.rho[pk] + g.rho[i], angle)
         return s.cx[pk] + x, s.cy[pk] + y
@@ -1009,6 +983,36 @@ def sample_angle(arcs: FloatArray, u01: float) -> float:
     if ang > arcs[j, 1]:
         ang = arcs[j, 1]
     return ang
+
+
+@numba.njit(cache=True)
+def place_on_arcs(
+    k: int,
+    arcs: FloatArray,
+    i: int,
+    mq: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rng: np.random.Generator,
+    rounded: object,
+) -> int:
+    """Place particle ``i`` on the free ``arcs`` of candidate ``k`` (the screened search's step).
+
+    The eta control (``fpar[F_ETA]``) shrinks the arcs first; when it leaves
+    none, ``k`` records the rejection (:func:`reject`) and -1 is returned.
+    Otherwise the centre lies at an angle drawn uniformly on the arcs; returns
+    its insertion index.
+    """
+    eta = s.fpar[F_ETA]
+    if eta != 0.0:
+        arcs = eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
+        if arcs.shape[0] == 0:
+            reject(k, g.req[i], s)
+            return -1
+    angle = sample_angle(arcs, rng.random())
+    x, y = locate(s.order[k], i, mq, angle, g, s, w, rounded)
+    return insert_particle(i, x, y, g, s)
 
 
 @numba.njit(cache=True)
@@ -1147,7 +1151,6 @@ def pack_range(
     """
     # the arrays stay alive in the caller: no reference counts below (common.borrowed)
     g, s, w = borrowed(g), borrowed(s), borrowed(w)
-    eta = s.fpar[F_ETA]
     placed = 0
     for i in range(begin, end):
         if s.ipar[I_COUNT] == 0:
@@ -1160,15 +1163,8 @@ def pack_range(
             k, arcs = find_site(i, start, mq, g, s, w, rounded)
             if k < 0:
                 break
-            if eta != 0.0:
-                arcs = eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
-                if arcs.shape[0] == 0:
-                    reject(k, g.req[i], s)
-                    start = k + 1
-                    continue
-            angle = sample_angle(arcs, rng.random())
-            x, y = locate(s.order[k], i, mq, angle, g, s, w, rounded)
-            insert_particle(i, x, y, g, s)
-            placed += 1
-            break
+            if place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded) >= 0:
+                placed += 1
+                break
+            start = k + 1
     return placed

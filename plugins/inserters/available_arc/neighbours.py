@@ -23,6 +23,7 @@ be analysed again (one the sweep has left behind) gives its row back with
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -38,6 +39,37 @@ GAP_SLACK = 1e-9
 """Relative slack of the list cut-offs, far above the rounding of the gaps."""
 IMAGE_QUERIES = 9
 """Stamp values one registration in a periodic domain may take (a query per image)."""
+
+
+class ListPool(NamedTuple):
+    """The pool of neighbour lists: per row, the entries sorted by gap, and the free rows."""
+
+    o: NDArray[np.int32]
+    gap: FloatArray
+    dx: FloatArray
+    dy: FloatArray
+    n: IntArray
+    """Entries per row; -1 for a dropped list."""
+    img: NDArray[np.int8]
+    """Per entry in a periodic domain: which image of the neighbour it is (:func:`image_code`)."""
+    row: IntArray
+    """Per particle: the row of its list, -1 for none."""
+    free: IntArray
+    """The stack of free rows (``free[:top]``)."""
+
+
+class GridView(NamedTuple):
+    """The neighbour grid as a query reads it (see :mod:`.grid`)."""
+
+    par: FloatArray
+    """Origin ``x0, y0`` and the cell size."""
+    dim: IntArray
+    """Cells along x and y."""
+    head: IntArray
+    nxt: IntArray
+    item: IntArray
+    stamp: IntArray
+    """Per particle: the last query that listed it."""
 
 
 @numba.njit(cache=True, inline="always")
@@ -147,27 +179,15 @@ def _add_entry(
 @numba.njit(cache=True)
 def register_neighbours(
     p: int,
-    cap: float,
-    maxreach: float,
+    token: int,
+    top: int,
     cx: FloatArray,
     cy: FloatArray,
     reach: FloatArray,
-    gpar: FloatArray,
-    gdim: IntArray,
-    head: IntArray,
-    nxt: IntArray,
-    item: IntArray,
-    stamp: IntArray,
-    token: int,
-    nb_o: NDArray[np.int32],
-    nb_gap: FloatArray,
-    nb_dx: FloatArray,
-    nb_dy: FloatArray,
-    nb_n: IntArray,
-    row: IntArray,
-    free: IntArray,
-    top: int,
-    img: NDArray[np.int8],
+    grid: GridView,
+    lists: ListPool,
+    cap: float,
+    maxreach: float,
     periodic: bool = False,
     bounds: FloatArray | None = None,
     shut: FloatArray | None = None,
@@ -178,7 +198,9 @@ def register_neighbours(
     Call after ``p`` is placed and before it is registered in the grid;
     ``token`` must be a fresh stamp value (in a periodic domain, the
     :data:`IMAGE_QUERIES` values from ``token`` on). ``p`` takes the row on
-    top of the free stack ``free[:top]``, or none when the stack is empty.
+    top of the free stack ``lists.free[:top]``, or none when the stack is empty.
+    The lists cover new particles of reach up to ``cap``; ``maxreach`` is the
+    largest reach in the grid.
 
     In a periodic domain (``bounds``: xmin, xmax, ymin, ymax) the grid is also
     searched about ``p``'s images one period away, and each entry records its
@@ -190,6 +212,8 @@ def register_neighbours(
     particle of the scene, ``floor`` being the smallest radius: it is never
     analysed again) gives its row back instead of taking ``p``.
     """
+    gpar, gdim, head, nxt, item, stamp = grid
+    nb_o, nb_gap, nb_dx, nb_dy, nb_n, img, row, free = lists
     x = cx[p]
     y = cy[p]
     rp = reach[p]

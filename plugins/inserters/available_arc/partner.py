@@ -527,21 +527,15 @@ def place_screened_shared(
     p: Partner,
 ) -> int:
     """:func:`refusal.place_screened` with the partner analysing ahead (same result)."""
-    eta = s.fpar[K.F_ETA]
     start = int(np.int64(0))
     while True:
         k, arcs = find_site_shared(i, start, mq, g, s, w, rounded, p)
         if k < 0:
             return -1
-        if eta != 0.0:
-            arcs = K.eta_shrink(arcs, eta, g.req[i], g.req[s.order[k]], rng)
-            if arcs.shape[0] == 0:
-                K.reject(k, g.req[i], s)
-                start = k + 1
-                continue
-        angle = K.sample_angle(arcs, rng.random())
-        x, y = K.locate(s.order[k], i, mq, angle, g, s, w, rounded)
-        return K.insert_particle(i, x, y, g, s)
+        placed = K.place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded)
+        if placed >= 0:
+            return placed
+        start = k + 1
 
 
 @numba.njit(cache=True, nogil=True)

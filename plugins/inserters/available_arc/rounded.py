@@ -19,16 +19,19 @@ free, as for polygons.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.common.walls import WALL_BOX, WALL_CIRCLE, WALL_HALFPLANES
 from regopack.plugins.inserters.available_arc.disk_bound import sort_covers
 from regopack.plugins.inserters.available_arc.geometry import close_arcs, inside_open
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 QUARTER = 0.5 * math.pi
 SLACK = 1e-9
@@ -349,25 +352,48 @@ def ray_hit(piece: FloatArray, angle: float) -> tuple[float, float]:
     return px, py
 
 
-WALL_BOX, WALL_HALFPLANES, WALL_CIRCLE, WALL_PERIODIC = range(
-    4
-)  # as in regopack.plugins.common.walls
+class RoundedWalls(NamedTuple):
+    """The walls as a rounded analysis tests a centre against them (see :func:`_fits`)."""
+
+    mode: int
+    walls: FloatArray
+    box: FloatArray
+    """The closed box of centres (absolute), for a walled rectangle."""
+    woff: FloatArray
+    """The half-planes' offsets for the new particle, for a polygon."""
+    qx: FloatArray
+    """The new particle's reflected core (``mq`` vertices), for a circle."""
+    qy: FloatArray
+    mq: int
+    inner: float
+    """The circular wall's radius less the new particle's rounding."""
+
+
+class RoundedInterferers(NamedTuple):
+    """The interferers of a rounded analysis, relative to the candidate's centre ``pc``.
+
+    Interferer ``f < nf`` has its core in row ``slot[f]`` of ``o*`` (``on`` vertices,
+    relative to its own centre, which is at ``(odx[f], ody[f])`` from ``pc``; ``orad``:
+    the core's radius about that centre) and rounding ``orho[f]``.
+    """
+
+    nf: int
+    slot: IntArray
+    odx: FloatArray
+    ody: FloatArray
+    ox: FloatArray
+    oy: FloatArray
+    oex: FloatArray
+    oey: FloatArray
+    on: IntArray
+    orad: FloatArray
+    orho: FloatArray
 
 
 @numba.njit(cache=True)
-def _fits(
-    x: float,
-    y: float,
-    mode: int,
-    walls: FloatArray,
-    box: FloatArray,
-    woff: FloatArray,
-    qx: FloatArray,
-    qy: FloatArray,
-    mq: int,
-    inner: float,
-) -> bool:
+def _fits(x: float, y: float, wl: RoundedWalls) -> bool:
     """Whether a centre at ``(x, y)`` (absolute) keeps the new particle inside the walls."""
+    mode, walls, box, woff, qx, qy, mq, inner = wl
     if mode == WALL_BOX:
         return box[0] <= x <= box[1] and box[2] <= y <= box[3]
     if mode == WALL_HALFPLANES:
@@ -385,19 +411,9 @@ def _fits(
 
 
 @numba.njit(cache=True)
-def _wall_lines(
-    mode: int,
-    walls: FloatArray,
-    box: FloatArray,
-    woff: FloatArray,
-    qx: FloatArray,
-    qy: FloatArray,
-    mq: int,
-    inner: float,
-    pcx: float,
-    pcy: float,
-) -> FloatArray:
+def _wall_lines(wl: RoundedWalls, pcx: float, pcy: float) -> FloatArray:
     """Boundaries of the admissible centres relative to ``pc``: lines (kind 2), circles (3)."""
+    mode, walls, box, woff, qx, qy, mq, inner = wl
     if mode == WALL_BOX:
         out = np.zeros((4, 6))
         for e in range(4):
@@ -445,36 +461,16 @@ def rounded_arcs(
     rho: float,
     pcx: float,
     pcy: float,
-    nf: int,
-    slot: NDArray[np.int64],
-    odx: FloatArray,
-    ody: FloatArray,
-    ox: FloatArray,
-    oy: FloatArray,
-    oex: FloatArray,
-    oey: FloatArray,
-    on: NDArray[np.int64],
-    orad: FloatArray,
-    orho: FloatArray,
-    mode: int,
-    walls: FloatArray,
-    box: FloatArray,
-    woff: FloatArray,
-    qx: FloatArray,
-    qy: FloatArray,
-    mq: int,
-    inner: float,
+    others: RoundedInterferers,
+    wl: RoundedWalls,
 ) -> FloatArray:
     """Available arcs (polar angles about the candidate) of a rounded envelope.
 
     ``w`` (``n`` vertices) is the envelope's core relative to the candidate
-    centre ``pc`` and ``rho`` its rounding; interferer ``f`` has its core in
-    row ``slot[f]`` of ``o*`` (relative to its own centre, which is at
-    ``(odx[f], ody[f])`` from ``pc``) and rounding ``orho[f]``. The walls are
-    described as in :func:`_fits` (``box`` absolute; ``q`` the reflected core
-    of the new particle; ``inner`` the circular wall's radius less the new
-    particle's rounding). Same conventions as ``kernel.analyze_candidate``.
+    centre ``pc`` and ``rho`` its rounding; ``others`` are the interferers and
+    ``wl`` the walls. Same conventions as ``kernel.analyze_candidate``.
     """
+    nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho = others
     if _all_same(wx, wy, n) and wx[0] == 0.0 and wy[0] == 0.0:
         disks = True
         for f in range(nf):
@@ -489,8 +485,9 @@ def rounded_arcs(
                 ocx[f] = odx[f] + ox[slot[f], 0]
                 ocy[f] = ody[f] + oy[slot[f], 0]
             return disk_arcs(
-                rho, pcx, pcy, nf, ocx, ocy, orho, mode, walls, box, woff, qx, qy, inner
-            )
+                rho, pcx, pcy, nf, ocx, ocy, orho,
+                wl.mode, wl.walls, wl.box, wl.woff, wl.qx, wl.qy, wl.inner,
+            )  # fmt: skip
     pieces = envelope_pieces(wx, wy, wex, wey, n, rho)
     npc = pieces.shape[0]
     va = np.empty(npc + 1)
@@ -514,7 +511,7 @@ def rounded_arcs(
     obound = np.empty((start[nf], 3))
     for q in range(start[nf]):
         obound[q, 0], obound[q, 1], obound[q, 2] = piece_bound(opieces[q])
-    lines = _wall_lines(mode, walls, box, woff, qx, qy, mq, inner, pcx, pcy)
+    lines = _wall_lines(wl, pcx, pcy)
     cuts = np.empty(2 * (total + lines.shape[0]) + 2)
     arcs = np.empty((2 * npc + 2 * (total + lines.shape[0]) + 2, 2))
     na = 0
@@ -546,7 +543,7 @@ def rounded_arcs(
             if ub <= ua:
                 continue
             mx, my = piece_point(pc_, 0.5 * (ua + ub))
-            free = _fits(mx + pcx, my + pcy, mode, walls, box, woff, qx, qy, mq, inner)
+            free = _fits(mx + pcx, my + pcy, wl)
             if free:
                 for f in range(nf):
                     sl = slot[f]

@@ -109,6 +109,40 @@ class HalfspaceCache(NamedTuple):
     fill: IntArray
 
 
+class Placed(NamedTuple):
+    """The placed particles as an analysis reads them."""
+
+    order: IntArray
+    """The particle of each insertion index."""
+    centre: FloatArray
+    """``(n, 3)`` centres."""
+    circum: FloatArray
+    """Circumradii (radii, for spheres)."""
+    reach_max: float
+    """The largest circumradius placed."""
+
+
+class Bounds(NamedTuple):
+    """The box and the admissible centres of the particle being placed."""
+
+    period: FloatArray
+    """The box's sides when it is periodic; length 0 for a walled box."""
+    lo: FloatArray
+    hi: FloatArray
+    adm_lo: FloatArray
+    adm_hi: FloatArray
+
+
+class Screening(NamedTuple):
+    """What a scan screens candidates by and records (see :func:`scan`)."""
+
+    t: float
+    radius: FloatArray
+    rmin: FloatArray
+    tried: IntArray
+    counters: IntArray
+
+
 def solids_of(polys: list[Polyhedron]) -> Solids:
     """Pack :class:`Polyhedron` tuples into :class:`Solids`."""
 
@@ -303,16 +337,7 @@ def _gather(
 
 @numba.njit(cache=True)
 def _interferers(
-    g: Grid,
-    pk: int,
-    i: int,
-    centre: FloatArray,
-    circum: FloatArray,
-    reach_max: float,
-    period: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    margin: float,
+    g: Grid, pk: int, i: int, placed: Placed, bounds: Bounds, margin: float
 ) -> tuple[int, IntArray, FloatArray]:
     """Placed particles (or periodic images) that pass the circumradius test with ``pk``.
 
@@ -320,6 +345,8 @@ def _interferers(
     margin, a particle that the new one could come closer to than the margin
     interferes too.
     """
+    _, centre, circum, reach_max = placed
+    period, lo, hi, _, _ = bounds
     ck = centre[pk]
     reach = circum[pk] + reach_max + 2.0 * circum[i] + margin
     near = np.empty(64, dtype=np.int64)
@@ -356,26 +383,21 @@ def analyse_sphere(
     k: int,
     i: int,
     g: Grid,
-    order: IntArray,
-    centre: FloatArray,
-    circum: FloatArray,
-    reach_max: float,
-    period: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    adm_lo: FloatArray,
-    adm_hi: FloatArray,
+    placed: Placed,
+    bounds: Bounds,
     margin: float,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> int:
     """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`."""
+    order, centre, circum, _ = placed
+    adm_lo, adm_hi = bounds.adm_lo, bounds.adm_hi
     pk = order[k]
     ck = centre[pk]
     r = circum[i]
     big_r = circum[pk] + r
     tau = EPS * big_r
-    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
+    count, near, at = _interferers(g, pk, i, placed, bounds, margin)
     caps = np.empty((count + 6, 4))
     nc = int(np.int64(0))  # not a literal 0 (second compilations of free_arcs, sample_free)
     for m in range(count):
@@ -472,22 +494,15 @@ def analyse(
     a: Arcs,
     g: Grid,
     cache: HalfspaceCache,
-    order: IntArray,
-    centre: FloatArray,
-    circum: FloatArray,
-    reach_max: float,
-    period: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    adm_lo: FloatArray,
-    adm_hi: FloatArray,
+    placed: Placed,
+    bounds: Bounds,
     margin: float,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> int:
     """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
 
-    ``period`` has length 0 for a walled box. ``margin`` (the packing
+    ``margin`` (the packing
     control) moves every interferer's facets out and the walls in by that
     length, so the free surface keeps that distance from what covers it.
     Returns :data:`FOUND` (the
@@ -495,10 +510,12 @@ def analyse(
     cache has no room for an interferer (nothing was drawn; grow it and call
     again).
     """
+    order, centre, circum, _ = placed
+    adm_lo, adm_hi = bounds.adm_lo, bounds.adm_hi
     pk = order[k]
     q = solid(s, i)
     ck = centre[pk]
-    count, near, at = _interferers(g, pk, i, centre, circum, reach_max, period, lo, hi, margin)
+    count, near, at = _interferers(g, pk, i, placed, bounds, margin)
     kept = 0
     for m in range(count):  # drop the interferers that a face plane keeps off E_k
         # (exact without a margin only: facets moved out by it reach farther at vertices)
@@ -572,25 +589,14 @@ def scan(
     candidates: IntArray,
     begin: int,
     i: int,
-    t: float,
-    radius: FloatArray,
-    rmin: FloatArray,
-    tried: IntArray,
-    counters: IntArray,
+    screen: Screening,
     q_arcs: EdgeArcs,
     s: Solids,
     a: Arcs,
     g: Grid,
     cache: HalfspaceCache,
-    order: IntArray,
-    centre: FloatArray,
-    circum: FloatArray,
-    reach_max: float,
-    period: FloatArray,
-    lo: FloatArray,
-    hi: FloatArray,
-    adm_lo: FloatArray,
-    adm_hi: FloatArray,
+    placed: Placed,
+    bounds: Bounds,
     eta: float,
     xi: FloatArray,
     spheres: bool,
@@ -599,9 +605,10 @@ def scan(
 ) -> tuple[int, int]:
     """Offer particle ``i`` to ``candidates[begin:]`` in turn; stop at the first with free area.
 
-    A candidate is analysed when ``radius[i] < t * rmin[k]`` (``t = inf``: every
-    one); an empty one records ``rmin[k] = radius[i]``; each analysed one
-    records ``tried[k] = i`` (when ``tried`` is not empty). With ``eta > 0``
+    A candidate is analysed when ``radius[i] < t * rmin[k]`` (the fields of
+    ``screen``; ``t = inf``: every one); an empty one records ``rmin[k] =
+    radius[i]``; each analysed one records ``tried[k] = i`` (when ``tried`` is
+    not empty). With ``eta > 0``
     each analysis first draws ``xi ~ U(0, 1)`` and keeps the free surface
     ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
     from the interferers and walls (:func:`eta_margin`). With ``spheres`` the
@@ -612,6 +619,7 @@ def scan(
     ``len(candidates)``, or :data:`FULL` and the position to resume from
     after growing the cache.
     """
+    t, radius, rmin, tried, counters = screen
     r = radius[i]
     for m in range(begin, candidates.shape[0]):
         k = candidates[m]
@@ -623,15 +631,9 @@ def scan(
                 xi[0] = rng.random()
             margin = eta_margin(eta, xi[0], r)
         if spheres:
-            code = analyse_sphere(
-                k, i, g, order, centre, circum, reach_max, period,
-                lo, hi, adm_lo, adm_hi, margin, rng, out,
-            )  # fmt: skip
+            code = analyse_sphere(k, i, g, placed, bounds, margin, rng, out)
         else:
-            code = analyse(
-                k, i, q_arcs, s, a, g, cache, order, centre, circum, reach_max, period,
-                lo, hi, adm_lo, adm_hi, margin, rng, out,
-            )  # fmt: skip
+            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
         if code == FULL:
             return FULL, m
         xi[0] = -1.0

@@ -47,6 +47,7 @@ smaller than ``tau`` (faces within ``tau`` of coplanar, edges within
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -66,6 +67,47 @@ ANGLE_EPS = 1e-12
 PARALLEL_EPS = 1e-14
 """Edge pairs with ``|t × s|`` below this are parallel and give no facet."""
 HASH_MULT = -7046029254386353131  # 0x9E3779B97F4A7C15 as a signed 64-bit integer
+
+
+class Candidates(NamedTuple):
+    """The candidate directions of the facets of ``E`` (see :func:`_build_faces`)."""
+
+    cand: FloatArray
+    """``(nc, 3)`` unit directions."""
+    kind: IntArray
+    """0: a face of ``P``, 1: a face of ``-Q``, 2: an edge pair."""
+    ca: IntArray
+    """The face, or the edge of ``P`` (of the edges ``pa -> pb``)."""
+    cb: IntArray
+    """The edge of ``-Q`` of an edge pair (of the edges ``qa -> qb``)."""
+    dp: FloatArray
+    """``(nc, kp)``: ``n · p_i``."""
+    dq: FloatArray
+    """``(nc, kq)``: ``n · q_j``."""
+    pa: IntArray
+    pb: IntArray
+    qa: IntArray
+    qb: IntArray
+
+
+class FaceTable(NamedTuple):
+    """The faces found so far: normal, support, loop of vertex keys, and a hash table of them."""
+
+    normals: FloatArray
+    support: FloatArray
+    offsets: IntArray
+    fhash: IntArray
+    table: IntArray
+    keys: IntArray
+
+
+class FaceScratch(NamedTuple):
+    """Scratch of a face: the support sets, their projections, their sums and hull."""
+
+    sets: IntArray
+    plane: FloatArray
+    sums: FloatArray
+    hull: IntArray
 
 
 @numba.njit(cache=True)
@@ -199,29 +241,12 @@ def _sides(t: FloatArray, normals: FloatArray, sign: float) -> NDArray[np.int8]:
 def _build_faces(
     first: int,
     nfaces: int,
-    cand: FloatArray,
-    kind: IntArray,
-    ca: IntArray,
-    cb: IntArray,
-    dp: FloatArray,
-    dq: FloatArray,
+    cands: Candidates,
     p: Polyhedron,
     q: Polyhedron,
-    pa: IntArray,
-    pb: IntArray,
-    qa: IntArray,
-    qb: IntArray,
     tau: float,
-    normals: FloatArray,
-    support: FloatArray,
-    offsets: IntArray,
-    fhash: IntArray,
-    table: IntArray,
-    keys: IntArray,
-    sets: IntArray,
-    plane: FloatArray,
-    sums: FloatArray,
-    hull: IntArray,
+    faces: FaceTable,
+    scratch: FaceScratch,
 ) -> tuple[int, int, int, int]:
     """Turn the candidate directions from ``first`` on into faces.
 
@@ -231,7 +256,7 @@ def _build_faces(
     polygon (the 2D hull of their pairwise sums, or a face's own loop when the
     other support set is one vertex), then the face unless it has fewer than 3
     corners or repeats a face already found (same corners). Faces are
-    appended to ``normals, support, offsets, keys`` and the hash ``table``.
+    appended to ``faces`` (``normals, support, offsets, keys`` and the hash ``table``).
 
     Returns
     -------
@@ -240,6 +265,9 @@ def _build_faces(
     need_keys, need_sums
         Nonzero when ``keys`` or ``sums``/``hull`` are too small (the size needed).
     """
+    cand, kind, ca, cb, dp, dq, pa, pb, qa, qb = cands
+    normals, support, offsets, fhash, table, keys = faces
+    sets, plane, sums, hull = scratch
     vp = p.vertices
     vq = q.vertices
     kp = vp.shape[0]
@@ -524,10 +552,12 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     hull = np.empty(129, dtype=np.int64)
     nfaces = int(np.int64(0))
     c = int(np.int64(0))
+    cands = Candidates(cand[:nc], kind, ca, cb, dp, dq, pa, pb, qa, qb)
     while c < nc:
         nfaces, c, need_keys, need_sums = _build_faces(
-            c, nfaces, cand[:nc], kind, ca, cb, dp, dq, p, q, pa, pb, qa, qb, tau,
-            normals, support, offsets, fhash, table, keys, sets, plane, sums, hull,
+            c, nfaces, cands, p, q, tau,
+            FaceTable(normals, support, offsets, fhash, table, keys),
+            FaceScratch(sets, plane, sums, hull),
         )  # fmt: skip
         if need_keys > 0:
             grown = np.empty(max(need_keys, 2 * keys.shape[0]), dtype=np.int64)

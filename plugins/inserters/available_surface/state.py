@@ -19,6 +19,9 @@ from regopack.geometry.solids import SolidBatch
 from regopack.plugins.inserters.available_surface.analysis import (
     FOUND,
     FULL,
+    Bounds,
+    Placed,
+    Screening,
     arcs_for,
     cache_for,
     grid_add,
@@ -197,15 +200,16 @@ class SurfaceState:
             self._q_arcs = self._no_arcs if self.spheres else edge_arcs(self.polys[i], -1.0)
         cands = np.ascontiguousarray(candidates, dtype=np.int64)
         t = self.t if screened else np.inf
+        screen = Screening(
+            t, self.radius, self.rmin, self._no_tried if tried is None else tried, self.counters
+        )
+        placed = Placed(self.order, self.centre, self.circum, self.reach_max)
+        bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
         begin = 0
         while True:
             code, at = scan(
-                cands, begin, i, t, self.radius, self.rmin,
-                self._no_tried if tried is None else tried, self.counters,
-                self._q_arcs, self.solids, self.arcs, self.grid, self.cache,
-                self.order, self.centre, self.circum, self.reach_max, self._period,
-                self.lo, self.hi, self.adm_lo, self.adm_hi, self.eta, self._xi, self.spheres,
-                rng, self._out,
+                cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
+                self.cache, placed, bounds, self.eta, self._xi, self.spheres, rng, self._out,
             )  # fmt: skip
             if code != FULL:
                 break

@@ -316,7 +316,12 @@ def _in_arcs(arcs: np.ndarray, phi: np.ndarray) -> np.ndarray:
     scale=st.sampled_from([1e-6, 1.0, 1e6]),
 )
 def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, scale) -> None:
-    from regopack.plugins.inserters.available_arc.rounded import disk_arcs, rounded_arcs
+    from regopack.plugins.inserters.available_arc.rounded import (
+        RoundedInterferers,
+        RoundedWalls,
+        disk_arcs,
+        rounded_arcs,
+    )
 
     rng = np.random.default_rng(seed)
     rho = 2.0 * scale
@@ -336,14 +341,12 @@ def test_closed_form_disk_arcs_match_the_general_rounded_path(seed, nf, mode, sc
     ox[:, 1] = hair
     orad = np.full(nf, hair)
     w = (np.array([0.0, hair]), np.zeros(2), np.array([1.0, -1.0]), np.zeros(2))
-    common = (nf, slot, odx, ody, ox, oy)
     fast = disk_arcs(rho, pc[0], pc[1], nf, odx, ody, orho, mode, walls, box, woff, q, q, 0.0)
     # the envelope's vertex count is unsigned, as analyze_candidate passes it (an int64
     # here would compile a second specialization of the kernel for this test alone)
-    general = rounded_arcs(
-        *w, np.uint64(2), rho, pc[0], pc[1], *common, oex, oey, on, orad, orho, mode, walls,
-        box, woff, q, q, 1, 0.0,
-    )  # fmt: skip
+    others = RoundedInterferers(nf, slot, odx, ody, ox, oy, oex, oey, on, orad, orho)
+    wl = RoundedWalls(mode, walls, box, woff, q, q, 1, 0.0)
+    general = rounded_arcs(*w, np.uint64(2), rho, pc[0], pc[1], others, wl)
     phi = np.linspace(0, 2 * np.pi, 3001, endpoint=False)
     ends = np.concatenate([fast.ravel(), general.ravel()]) % (2 * np.pi)
     away = np.all(
