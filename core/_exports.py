@@ -9,6 +9,8 @@ one of its lighter neighbours stays light and creates no import cycle.
 from __future__ import annotations
 
 import importlib
+import importlib.util
+import sys
 from collections.abc import Callable, Mapping, MutableMapping
 from typing import Any
 
@@ -30,6 +32,18 @@ def load_export(namespace: MutableMapping[str, Any], sources: Mapping[str, str],
     return value
 
 
+def _public_of(namespace: Mapping[str, Any], module: str, name: str) -> bool:
+    """Whether ``module`` offers the public ``name`` that no submodule of the package takes."""
+    if name.startswith("_"):
+        return False
+    package = str(namespace["__name__"])
+    if f"{package}.{name}" in sys.modules:
+        return False
+    if namespace.get("__path__") is not None and importlib.util.find_spec(f"{package}.{name}"):
+        return False
+    return hasattr(importlib.import_module(module), name)
+
+
 def lazy_exports(
     namespace: MutableMapping[str, Any], sources: Mapping[str, str] | str
 ) -> tuple[Callable[[str], Any], Callable[[], list[str]]]:
@@ -37,11 +51,17 @@ def lazy_exports(
 
     ``__getattr__`` loads a name of ``sources`` (or, given one module's name,
     of the package's ``__all__`` from that module) on first use
-    (:func:`load_export`); ``__dir__`` lists the package's ``__all__``.
+    (:func:`load_export`); ``__dir__`` lists the package's ``__all__``. A
+    package that took the place of one module (``sources`` is its name) also
+    offers that module's other public names, as the module did before it
+    moved (``regopack.run.summary_rows``), unless a submodule of the package
+    has the name.
     """
     table = dict.fromkeys(namespace["__all__"], sources) if isinstance(sources, str) else sources
 
     def getattr_(name: str) -> Any:
+        if isinstance(sources, str) and name not in table and _public_of(namespace, sources, name):
+            return load_export(namespace, {name: sources}, name)
         return load_export(namespace, table, name)
 
     def dir_() -> list[str]:

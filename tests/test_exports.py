@@ -34,9 +34,46 @@ def test_one_module_name_serves_every_name_of_all() -> None:
 
 
 def test_a_name_not_offered_is_an_attribute_error() -> None:
-    package = _package("pkg", ["dumps"], "json")
+    package = _package("pkg", ["dumps"], {"dumps": "json"})
     with pytest.raises(AttributeError, match="'pkg' has no attribute 'loads'"):
         package.loads  # noqa: B018
+    package = _package("pkg", ["dumps"], "json")
+    for name in ("nothing_such", "_default_decoder"):  # neither in the module nor public
+        with pytest.raises(AttributeError, match=f"'pkg' has no attribute '{name}'"):
+            getattr(package, name)
+
+
+def test_a_package_in_place_of_a_module_offers_its_other_public_names() -> None:
+    # as the module did before it moved: regopack.run was one module
+    import regopack.analysis
+    import regopack.run
+    from regopack.analysis.pipeline import FigureWarning
+    from regopack.run.pipeline import summary_rows
+
+    assert regopack.run.summary_rows is summary_rows
+    assert regopack.analysis.FigureWarning is FigureWarning
+    package = _package("pkg", ["dumps"], "json")
+    assert package.loads is importlib.import_module("json").loads
+    assert dir(package) == ["dumps"]
+
+
+def test_a_submodule_is_not_taken_for_a_name_of_the_module(tmp_path, monkeypatch) -> None:  # type: ignore[no-untyped-def]
+    pkg = tmp_path / "lazypkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text(
+        "from regopack._exports import lazy_exports\n"
+        "__all__ = ['x']\n"
+        "__getattr__, __dir__ = lazy_exports(globals(), 'lazypkg.core')\n"
+    )
+    (pkg / "core.py").write_text("x = 1\nsibling = 'a name of core'\n")
+    (pkg / "sibling.py").write_text("")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    from lazypkg import sibling, x  # type: ignore[import-not-found]
+
+    assert x == 1
+    assert isinstance(sibling, ModuleType) and sibling.__name__ == "lazypkg.sibling"
+    for name in ("lazypkg", "lazypkg.core", "lazypkg.sibling"):
+        monkeypatch.delitem(sys.modules, name, raising=False)
 
 
 @pytest.mark.parametrize("name", ["regopack.run", "regopack.analysis", "regopack.plugins.shapes"])

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
-from regopack._exports import load_export
+from regopack._exports import lazy_exports
 
 if TYPE_CHECKING:
     from regopack.packing.core import FILE_MAGIC as FILE_MAGIC
@@ -16,13 +16,4 @@ if TYPE_CHECKING:
 
 __all__ = ["FILE_MAGIC", "FORMAT_VERSION", "Packing", "load", "save", "write_json_atomic"]
 
-_SOURCES = dict.fromkeys(__all__, "regopack.packing.core")
-
-
-def __getattr__(name: str) -> Any:
-    """Load the names of :mod:`regopack.packing.core` on first use (PEP 562)."""
-    return load_export(globals(), _SOURCES, name)
-
-
-def __dir__() -> list[str]:
-    return sorted(__all__)
+__getattr__, __dir__ = lazy_exports(globals(), "regopack.packing.core")
