@@ -83,7 +83,9 @@ SCENES: dict[str, tuple[str, Edit]] = {
 EXPORTS_2D = ("csv", "json", "lammps", "gsd", "vtk", "svg")
 """Exporters whose files are fingerprinted for every 2D scene (3D: :data:`EXPORTS_3D`)."""
 
-EXPORTS_3D = ("gsd3d", "lammps3d", "slice", "stl", "vtk3d")
+EXPORTS_3D = {"gsd3d": "gsd", "lammps3d": "lammps", "slice": "slice", "stl": "stl", "vtk3d": "vtk"}
+"""Exporters of 3D packings, by the key their files are filed under (the 3D names
+that ``vtk``, ``gsd`` and ``lammps`` had when the earlier dumps were made)."""
 
 
 def _edit(data: Any, edit: Any) -> Any:
@@ -168,11 +170,11 @@ def _analysis_arrays(results: Any) -> dict[str, Any]:
 def _export_digests(p: Any) -> dict[str, str]:
     """One SHA-256 per file that each exporter writes for ``p``."""
     out: dict[str, str] = {}
-    kinds = EXPORTS_3D if getattr(p, "dimension", 2) == 3 else EXPORTS_2D
-    for kind in kinds:
+    kinds = EXPORTS_3D if getattr(p, "dimension", 2) == 3 else {k: k for k in EXPORTS_2D}
+    for kind, exporter in kinds.items():
         with tempfile.TemporaryDirectory() as tmp:
             try:
-                regopack.export(p, kind, Path(tmp) / "packing")
+                regopack.export(p, exporter, Path(tmp) / "packing")
             except Exception as exc:  # an export that fails is an entry too
                 out[kind] = f"error: {type(exc).__name__}: {exc}"
                 continue

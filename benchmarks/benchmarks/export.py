@@ -15,7 +15,7 @@ import regopack
 
 from . import common
 
-NEEDS = {"gsd": "gsd", "gsd3d": "gsd"}
+NEEDS = {"gsd": "gsd"}
 """Exporters that need an optional package (``pip install gsd``); skipped without it."""
 
 
@@ -71,7 +71,7 @@ class Export2D(_Export):
 class Export3D(_Export):
     """3D exporters on the polyhedra of the 60 µm cube."""
 
-    params = ["vtk3d", "stl", "lammps3d", "gsd3d", "slice"]
+    params = ["vtk", "stl", "lammps", "gsd", "slice"]
     param_names = ["exporter"]
     key = "polyhedra"
 

@@ -487,13 +487,13 @@ def export(
     packing
         A packing (2D or 3D) or the path of a packing file.
     to
-        The exporter (``regopack plugins`` lists them: ``lammps``, ``vtk``,
-        ``image``, ``gsd``, ``csv``, ... for 2D packings; ``vtk3d``, ``stl``,
-        ``lammps3d``, ``gsd3d`` and ``slice`` for 3D ones).
+        The exporter (``regopack plugins`` lists them: ``lammps``, ``vtk`` and
+        ``gsd`` for packings of both dimensions; ``image``, ``csv``, ... for 2D
+        packings; ``stl`` and ``slice`` for 3D ones).
     path
         The main file to write, or a folder. Required for a packing object;
         for a packing file it defaults to the file's name with the exporter's
-        suffix, beside it.
+        suffix for the packing's dimension (``vtk``: ``.vtp`` or ``.vtu``), beside it.
     analyses
         Results of :func:`analyze`, or analyzer names to compute, whose
         per-particle results the exporter adds (e.g. Z in the VTK file).
@@ -536,10 +536,10 @@ def export(
     if path is None:
         if file is None:
             raise ConfigError("export: give the path to write (the packing has no file)")
-        target = output_path(exporter, file)
+        target = output_path(exporter, file, dimension=loaded.dimension)
     else:
         source = Path("packing.npz") if file is None else file
-        target = output_path(exporter, source, _out_path(path, "path"))
+        target = output_path(exporter, source, _out_path(path, "path"), dimension=loaded.dimension)
     if file is not None and os.path.realpath(target) == os.path.realpath(file):
         raise ConfigError(f"path {target}: is the packing file itself; give another file")
     if loaded.dimension == 3:
@@ -568,7 +568,8 @@ def export(
             loaded, to, target, registry=reg, params=merged, analyses=computed, force=force
         )
     except ConfigError as err:  # a parameter that does not fit this packing
-        if params_source and str(err).startswith(f"exporter {to!r}: "):
+        named = {to, reg.canonical("export", to)}
+        if params_source and any(str(err).startswith(f"exporter {n!r}: ") for n in named):
             raise ConfigError(f"{params_source}: {err}") from err
         raise
 

@@ -196,8 +196,8 @@ def build_parser() -> argparse.ArgumentParser:
         required=True,
         metavar="FORMAT",
         help=(
-            "exporter name: csv, json, svg, vtk, lammps, gsd, image (2D packings); vtk3d, stl, "
-            "gsd3d, lammps3d, slice (3D packings); or one from a plugin"
+            "exporter name: vtk, lammps, gsd (2D and 3D packings); csv, json, svg, image "
+            "(2D packings); stl, slice (3D packings); or one from a plugin"
         ),
     )
     export.add_argument(

@@ -1,11 +1,14 @@
 """Write a packing in another program's file format through an exporter plugin.
 
 The formats are the plugins of kind ``"export"`` (see
-:func:`regopack.registry.hookspecs.regopack_exporters`); the built-in ones are ``csv``,
-``json``, ``svg``, ``vtk``, ``lammps``, ``gsd`` and ``image`` for 2D packings,
-and ``vtk3d``, ``stl``, ``lammps3d``, ``gsd3d`` and ``slice`` for 3D packings.
-Each exporter's spec lists the dimensions it writes; a packing of another
-dimension is refused in one line that names the exporters that fit.
+:func:`regopack.registry.hookspecs.regopack_exporters`); the built-in ones are ``vtk``,
+``lammps`` and ``gsd`` for packings of both dimensions, ``csv``, ``json``,
+``svg`` and ``image`` for 2D packings, and ``stl`` and ``slice`` for 3D
+packings. Each exporter's spec lists the dimensions it writes; a packing of
+another dimension is refused in one line that names the exporters that fit.
+An exporter names the suffix of its main file per dimension
+(:meth:`~regopack.registry.interfaces.Exporter.suffix_for`: ``vtk`` writes
+``.vtp`` polygons and ``.vtu`` polyhedra).
 
 Examples
 --------
@@ -31,8 +34,9 @@ from pydantic import ValidationError
 from regopack.base.errors import ConfigError, ExportError, PluginError
 from regopack.base.messages import describe_validation_error
 from regopack.packing.core import Packing
-from regopack.registry.interfaces import Analyzer, Exporter, SolidExporter
+from regopack.registry.interfaces import Analyzer, Exporter
 from regopack.registry.manager import Registry
+from regopack.registry.plugin_types import misplaced_field, served_dimensions
 
 __all__ = [
     "build_exporter",
@@ -45,8 +49,12 @@ __all__ = [
 
 
 def exporter_dimensions(registry: Registry, kind: str) -> tuple[int, ...]:
-    """Dimensions of the packings the exporter ``kind`` writes (2D unless its spec says)."""
-    return tuple(getattr(registry.get("export", kind), "dimensions", (2,)))
+    """Dimensions of the packings the exporter ``kind`` writes (2D unless its spec says).
+
+    An old name writes the dimensions it wrote before (``vtk3d``: 3D), see
+    :func:`~regopack.registry.plugin_types.served_dimensions`.
+    """
+    return served_dimensions(registry.get("export", kind), kind)
 
 
 def check_exporter_dimension(
@@ -102,7 +110,8 @@ def build_exporter(
     params: Mapping[str, Any] | None = None,
     *,
     source: str | None = None,
-) -> Exporter | SolidExporter:
+    dimension: int | None = None,
+) -> Exporter[Any]:
     """Validate ``params`` with the exporter's config model and build the exporter.
 
     Parameters
@@ -115,16 +124,19 @@ def build_exporter(
         Its parameters.
     source
         Where the parameters came from (e.g. ``"--set"``), named in messages.
+    dimension
+        The dimension of the packing to write, when known: a parameter that
+        has no meaning in it (``lammps.thickness`` for a 3D packing) is refused.
 
     Raises
     ------
     PluginError
         If no exporter is registered as ``kind`` (the message lists the known ones),
-        or the plugin does not build an :class:`~regopack.registry.interfaces.Exporter`
-        (a :class:`~regopack.registry.interfaces.SolidExporter` for a 3D exporter).
+        or the plugin does not build an :class:`~regopack.registry.interfaces.Exporter`.
     ConfigError
         One line naming the exporter, the parameter, its value and the allowed
-        parameters, if a parameter is unknown or out of range.
+        parameters, if a parameter is unknown or out of range (or, with
+        ``dimension``, has no meaning in that dimension).
 
     Examples
     --------
@@ -142,30 +154,36 @@ def build_exporter(
         text = describe_validation_error(err, source=None, model=spec.config_model)
         where = f"{source}: " if source else ""
         raise ConfigError(f"{where}exporter {kind!r}: {text}") from err
+    misplaced = None if dimension is None else misplaced_field(config, dimension)
+    if misplaced is not None:
+        where = f"{source}: " if source else ""
+        raise ConfigError(f"{where}exporter {kind!r}: {misplaced[1]}")
     exporter = spec.factory(config)
-    want = SolidExporter if exporter_dimensions(registry, kind) == (3,) else Exporter
-    if not isinstance(exporter, want):
+    if not isinstance(exporter, Exporter):
         raise PluginError(
             f"export plugin {kind!r} ({registry.origin('export', kind)}) built a "
-            f"{type(exporter).__name__}, not an {want.__name__}"
+            f"{type(exporter).__name__}, not an Exporter"
         )
     return exporter
 
 
 def output_path(
-    exporter: Exporter | SolidExporter, packing_path: Path, out: Path | None = None
+    exporter: Exporter[Any], packing_path: Path, out: Path | None = None, *, dimension: int = 2
 ) -> Path:
     """Where to write: ``out``, or ``<out>/<stem><suffix>`` if ``out`` is a directory.
 
-    Without ``out``, the packing file's name with the exporter's suffix.
+    Without ``out``, the packing file's name with the exporter's suffix for
+    packings of ``dimension`` (:meth:`~regopack.registry.interfaces.Exporter.suffix_for`).
 
     Examples
     --------
     >>> from regopack.plugins.exporters import VtkExporter
     >>> output_path(VtkExporter(), Path("runs/a/packing.npz")).as_posix()
     'runs/a/packing.vtp'
+    >>> output_path(VtkExporter(), Path("runs/a/packing.npz"), dimension=3).as_posix()
+    'runs/a/packing.vtu'
     """
-    name = Path(packing_path).with_suffix(exporter.suffix).name
+    name = Path(packing_path).with_suffix(exporter.suffix_for(dimension)).name
     if out is None:
         return Path(packing_path).with_name(name)
     if out.is_dir():
@@ -215,20 +233,18 @@ def export_packing(
     Raises
     ------
     ConfigError
-        One line, if the exporter does not write packings of this dimension.
+        One line, if the exporter does not write packings of this dimension,
+        or a parameter has no meaning in it.
     ExportError
         One line, if the file cannot be written.
     """
-    check_exporter_dimension(registry, kind, packing.dimension, source)
-    exporter = build_exporter(registry, kind, params)
+    dimension = packing.dimension
+    check_exporter_dimension(registry, kind, dimension, source)
+    exporter = build_exporter(registry, kind, params, dimension=dimension)
     if not force:
         _refuse_users_files(exporter, Path(path))
     try:
-        if packing.dimension == 3 and isinstance(exporter, SolidExporter):
-            return exporter.export(packing, Path(path), analyses=analyses)
-        if packing.dimension == 2 and isinstance(exporter, Exporter):
-            return exporter.export(packing, Path(path), analyses=analyses)
-        raise PluginError(f"export plugin {kind!r} cannot write a {packing.dimension}D packing")
+        return exporter.export(packing, Path(path), analyses=analyses)
     except OSError as err:
         why = err.strerror or type(err).__name__
         raise ExportError(f"cannot write {path}: {why}") from err
@@ -252,8 +268,9 @@ def run_exports(
     plugins: Sequence[Any],
     packing_path: Path,
     shown_path: Path,
+    analyses: Mapping[str, Analyzer] | None = None,
 ) -> tuple[Path, ...]:
-    """Write a 3D run's ``outputs.exports`` beside its packing file; return the main files.
+    """Write a run's ``outputs.exports`` beside its packing file; return the main files.
 
     Parameters
     ----------
@@ -261,25 +278,31 @@ def run_exports(
         The packing of the run.
     plugins
         The resolved exporters of ``outputs.exports`` (already checked to
-        write 3D packings when the scene was resolved).
+        write packings of its dimension when the scene was resolved).
     packing_path
         The packing file in the run's temporary folder; each file is
-        ``<packing stem><suffix>`` beside it.
+        ``<packing stem><suffix>`` beside it, the suffix of the packing's
+        dimension.
     shown_path
         Where the packing file will be, for messages.
+    analyses
+        The run's computed analyzers, passed on to every exporter.
     """
+    dimension = packing.dimension
     written = []
     for plugin in plugins:
         exporter = plugin.build()
-        if not isinstance(exporter, SolidExporter):
+        if not isinstance(exporter, Exporter):
             raise PluginError(
                 f"export plugin {plugin.kind!r} ({plugin.origin}) built a "
-                f"{type(exporter).__name__}, not a SolidExporter"
+                f"{type(exporter).__name__}, not an Exporter"
             )
-        path = packing_path.with_suffix(exporter.suffix)
+        suffix = exporter.suffix_for(dimension)
         try:
-            written.append(exporter.export(packing, path))
+            written.append(
+                exporter.export(packing, packing_path.with_suffix(suffix), analyses=analyses)
+            )
         except OSError as err:
-            shown = shown_path.with_suffix(exporter.suffix)
+            shown = shown_path.with_suffix(suffix)
             raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err
     return tuple(written)

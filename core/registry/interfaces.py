@@ -12,7 +12,7 @@ from abc import ABC, abstractmethod
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, ClassVar, Self
+from typing import TYPE_CHECKING, Any, ClassVar, Generic, Self, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -207,19 +207,37 @@ class Analyzer(ABC):
         return {}
 
 
-class Exporter(ABC):
+P = TypeVar("P", bound="Packing")
+"""The packings an exporter takes: ``Packing`` (either dimension) or, say, ``Packing[Box]``."""
+
+
+class Exporter(ABC, Generic[P]):
     """Writer of a packing in a file format that other programs read.
 
-    ``suffix`` is the file name suffix (with its dot, e.g. ``".vtp"``) of the
-    main file the exporter writes; the command line uses it to name the output.
+    One exporter may write packings of both dimensions (its spec,
+    :class:`~regopack.registry.plugin_types.ExporterSpec`, lists them in
+    ``dimensions``); the type parameter may narrow the packings it takes
+    (``Exporter[Packing[Box]]`` for 3D packings only). ``suffix`` is the file
+    name suffix (with its dot, e.g. ``".vtp"``) of the main file it writes;
+    ``suffixes`` gives another suffix for the packings of a dimension that
+    need one (``{3: ".vtu"}``), and the command line names the output with
+    :meth:`suffix_for`.
     """
 
     suffix: str = ""
+    suffixes: ClassVar[Mapping[int, str]] = {}
+
+    def suffix_for(self, dimension: int) -> str:
+        """Suffix of the main file written for a packing of ``dimension`` (2 or 3).
+
+        ``suffixes[dimension]`` where given, else :attr:`suffix`.
+        """
+        return self.suffixes.get(dimension, self.suffix)
 
     @abstractmethod
     def export(
         self,
-        packing: Packing,
+        packing: P,
         path: Path,
         *,
         analyses: Mapping[str, Analyzer] | None = None,
@@ -229,7 +247,7 @@ class Exporter(ABC):
         Parameters
         ----------
         packing
-            The packing to write.
+            The packing to write, of a dimension the exporter's spec lists.
         path
             Main output file. An exporter may write companion files beside it,
             named after its stem.
@@ -248,37 +266,19 @@ class Exporter(ABC):
         return ()
 
 
-class SolidExporter(ABC):
-    """Writer of a 3D packing (a :class:`~regopack.packing.core.Packing` in a box) in a format.
+class _SolidExporter(Exporter[Any]):
+    """An :class:`Exporter` of 3D packings, under its deprecated name ``SolidExporter``.
 
-    The 3D counterpart of :class:`Exporter`, with the same ``suffix`` and
-    :meth:`companions`; its spec (:class:`~regopack.registry.plugin_types.ExporterSpec`)
-    declares ``dimensions = (3,)``.
+    Kept for one release so that exporters written against it still work;
+    subclass :class:`Exporter` instead.
     """
 
-    suffix: str = ""
 
-    @abstractmethod
-    def export(
-        self,
-        packing: Packing,
-        path: Path,
-        *,
-        analyses: Mapping[str, Analyzer] | None = None,
-    ) -> Path:
-        """Write ``packing`` to ``path``; return the path of the main file written.
+def __getattr__(name: str) -> Any:
+    """Give the deprecated ``SolidExporter`` (PEP 562): :class:`Exporter` writes 3D packings too."""
+    if name == "SolidExporter":
+        from regopack._compat import warn_moved
 
-        Parameters
-        ----------
-        packing
-            The 3D packing to write.
-        path
-            Main output file. An exporter may write companion files beside it,
-            named after its stem.
-        analyses
-            Computed analyzers by name; an exporter may ignore them.
-        """
-
-    def companions(self, path: Path) -> tuple[Path, ...]:
-        """Companion files that :meth:`export` writes beside the main file ``path``."""
-        return ()
+        warn_moved(f"{__name__}.SolidExporter", f"{__name__}.Exporter")
+        return _SolidExporter
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

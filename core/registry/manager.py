@@ -60,7 +60,6 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.exporters",
     "regopack.plugins.exporters.image_export",
     "regopack.plugins.exporters.gsd_export",
-    "regopack.plugins.exporters.exporters3d",
 )
 """Modules of the built-in plugins, imported and registered in this order."""
 

@@ -21,7 +21,6 @@ from regopack.registry.interfaces import (
     InsertionStrategy,
     ShapeGenerator,
     SizeDistribution,
-    SolidExporter,
     SolidGenerator,
 )
 
@@ -102,14 +101,33 @@ class AnalyzerSpec(PluginSpec[Analyzer]):
 
 
 @dataclass(frozen=True)
-class ExporterSpec(PluginSpec[Exporter | SolidExporter]):
+class ExporterSpec(PluginSpec[Exporter[Any]]):
     """Spec of an exporter plugin; ``dimensions`` lists the dimensions of the packings it writes.
 
-    A 2D exporter (the default) builds an :class:`~regopack.registry.interfaces.Exporter`,
-    a 3D one a :class:`~regopack.registry.interfaces.SolidExporter`.
+    Its factory builds an :class:`~regopack.registry.interfaces.Exporter`, for
+    2D packings unless ``dimensions`` says otherwise (``(2, 3)``: both).
     """
 
     dimensions: tuple[int, ...] = (2,)
+
+
+def served_dimensions(spec: PluginSpec[Any], name: str) -> tuple[int, ...]:
+    """Dimensions that ``name``, the spec's own name or one of its old names, serves.
+
+    An old name serves :attr:`PluginSpec.alias_dimensions` when the spec gives
+    them (``vtk3d``: 3D); otherwise every name serves the spec's
+    ``dimensions`` (2D when it has none).
+
+    Examples
+    --------
+    >>> spec = ExporterSpec("vtk", BaseModel, object, dimensions=(2, 3), aliases=("vtk3d",),
+    ...                     alias_dimensions=(3,))
+    >>> served_dimensions(spec, "vtk"), served_dimensions(spec, "vtk3d")
+    ((2, 3), (3,))
+    """
+    if name != spec.name and spec.alias_dimensions:
+        return tuple(spec.alias_dimensions)
+    return tuple(getattr(spec, "dimensions", (2,)))
 
 
 def field_dimensions(model: type[BaseModel]) -> dict[str, tuple[int, ...]]:

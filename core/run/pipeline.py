@@ -20,7 +20,7 @@ import numpy as np
 from regopack._compat import warn_moved
 from regopack.analysis.pipeline import AnalysisFiles, write_analysis_files
 from regopack.base import toml as _toml
-from regopack.base.errors import ConfigError, ExportError, GeometryError, PluginError
+from regopack.base.errors import ConfigError, GeometryError, PluginError
 from regopack.base.limits import (
     MAX_EXTENT_RATIO,
     LimitError,
@@ -47,7 +47,6 @@ from regopack.packing.solid_fraction import phi_in_box, phi_in_window
 from regopack.registry.interfaces import (
     Analyzer,
     DensityController,
-    Exporter,
     InsertionResult,
     InsertionStrategy,
     ProgressCallback,
@@ -749,37 +748,13 @@ def _write_run(
             )
         if resolved.exports:
             checkpoint("exports")
-        if packing.dimension == 3:
-            exports = run_exports(packing, resolved.exports, tmp / outputs.packing, packing_path)
-        else:
-            exports = tuple(
-                _export(packing, plugin, tmp / outputs.packing, packing_path, analyzers)
-                for plugin in resolved.exports
-            )
+        exports = run_exports(
+            packing, resolved.exports, tmp / outputs.packing, packing_path, analyzers or None
+        )
     if analysis is not None:
         analysis = analysis.moved(tmp, out)
     exports = tuple(rebase(p, tmp, out) for p in exports)
     return RunOutcome(packing, summary, packing_path, summary_path, analysis, exports)
-
-
-def _export(
-    packing: Packing,
-    plugin: ResolvedPlugin[Any],
-    packing_path: Path,
-    shown_path: Path,
-    analyzers: Mapping[str, Analyzer],
-) -> Path:
-    """Write ``packing`` with one exporter of ``outputs.exports``, beside ``packing_path``.
-
-    ``shown_path`` is where the packing file will be, for messages.
-    """
-    exporter: Exporter = _build(plugin, Exporter, "export")
-    path = packing_path.with_suffix(exporter.suffix)
-    try:
-        return exporter.export(packing, path, analyses=analyzers or None)
-    except OSError as err:
-        shown = shown_path.with_suffix(exporter.suffix)
-        raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err
 
 
 def _params(plugin: ResolvedPlugin[Any]) -> dict[str, Any]:

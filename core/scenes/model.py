@@ -45,7 +45,7 @@ from regopack.base.units import _ALIASES, LENGTH_UNITS, _allowed
 from regopack.geometry.domain import DOMAIN_KINDS, Box, Circle, ConvexPolygon, Rectangle
 from regopack.geometry.domain import Domain as DomainGeometry
 from regopack.registry.manager import Registry
-from regopack.registry.plugin_types import PluginSpec, misplaced_field
+from regopack.registry.plugin_types import PluginSpec, misplaced_field, served_dimensions
 
 __all__ = [
     "ANALYSIS_FOLDER",
@@ -939,7 +939,7 @@ def _check_export_dimensions(
     """Refuse, in one line, an exporter of ``outputs.exports`` of another dimension."""
     dim = scene.domain.dimension
     for i, (plugin, item) in enumerate(zip(exports, scene.outputs.exports, strict=True)):
-        own = _dimensions_of(plugin.spec, "export")
+        own = served_dimensions(plugin.spec, plugin.kind)
         if dim in own:
             continue
         loc = f"outputs.exports.{i}" + ("" if isinstance(item, str) else ".kind")
@@ -1009,7 +1009,12 @@ def _output_entries(
         loc = f"outputs.exports.{i}"
         value = item if isinstance(item, str) else None
         exporter = plugin.build()
-        suffix = getattr(exporter, "suffix", "")
+        suffix_for = getattr(exporter, "suffix_for", None)
+        suffix = (
+            suffix_for(scene.domain.dimension)
+            if callable(suffix_for)
+            else getattr(exporter, "suffix", "")
+        )
         main = _export_name(outputs.packing, suffix if isinstance(suffix, str) else "")
         if main is None:
             raise ConfigError(

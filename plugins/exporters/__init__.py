@@ -1,12 +1,18 @@
-"""Built-in exporters: CSV, JSON, SVG, VTK and LAMMPS, registered as one plugin.
+"""Built-in exporters: VTK and LAMMPS (2D and 3D), CSV, JSON and SVG (2D), STL and slice (3D).
 
-Each format lives in its own module: :mod:`.csv_export`, :mod:`.json_export`,
-:mod:`.svg_export`, :mod:`.vtk_export` and :mod:`.lammps_export` (what they
-share is in :mod:`.export_common`). This module registers them and gathers
-their public names, so ``from regopack.plugins.exporters import read_csv``
-keeps working. Every exporter writes one main file (and, for CSV, two
-companion files named after its stem); CSV and JSON keep every array of the
-packing exactly and are read back by :func:`read_csv` and :func:`read_json`.
+Each format lives in its own module: :mod:`.vtk_export`, :mod:`.lammps_export`,
+:mod:`.csv_export`, :mod:`.json_export`, :mod:`.svg_export`,
+:mod:`.stl_export` and :mod:`.slice_export` (what they share is in
+:mod:`.export_common`, and for 3D packings in :mod:`.solid_export_common`);
+``gsd`` and ``image`` register themselves. This module registers them and
+gathers their public names, so ``from regopack.plugins.exporters import
+read_csv`` keeps working. Every exporter writes one main file (and, for CSV,
+two companion files named after its stem); CSV and JSON keep every array of
+the packing exactly and are read back by :func:`read_csv` and :func:`read_json`.
+An exporter of both dimensions names its suffix per dimension (``vtk``:
+``.vtp`` polygons, ``.vtu`` polyhedra); the 3D exporters' old names
+``vtk3d`` and ``lammps3d`` (and ``gsd3d``) select them for one release, with a
+deprecation warning.
 """
 
 from __future__ import annotations
@@ -23,9 +29,12 @@ from regopack.plugins.exporters.csv_export import (
 from regopack.plugins.exporters.csv_export import PARTICLE_COLUMNS as PARTICLE_COLUMNS
 from regopack.plugins.exporters.csv_export import VERTEX_COLUMNS as VERTEX_COLUMNS
 from regopack.plugins.exporters.export_common import EXPORT_FORMAT_VERSION as EXPORT_FORMAT_VERSION
+from regopack.plugins.exporters.export_common import both_dimensions
 from regopack.plugins.exporters.json_export import JSON_FORMAT, JsonConfig, JsonExporter, read_json
 from regopack.plugins.exporters.lammps_export import LammpsConfig, LammpsExporter
 from regopack.plugins.exporters.rounded_bodies import polygon_moments as polygon_moments
+from regopack.plugins.exporters.slice_export import SliceConfig, SliceExporter
+from regopack.plugins.exporters.stl_export import StlConfig, StlExporter
 from regopack.plugins.exporters.svg_export import SvgConfig, SvgExporter
 from regopack.plugins.exporters.vtk_export import VtkConfig, VtkExporter
 from regopack.registry.hookspecs import hookimpl
@@ -40,6 +49,10 @@ __all__ = [
     "JsonExporter",
     "LammpsConfig",
     "LammpsExporter",
+    "SliceConfig",
+    "SliceExporter",
+    "StlConfig",
+    "StlExporter",
     "SvgConfig",
     "SvgExporter",
     "VtkConfig",
@@ -59,11 +72,32 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
         ),
         ExporterSpec("json", JsonConfig, JsonExporter, "One JSON document (exact round trip)."),
         ExporterSpec("svg", SvgConfig, SvgExporter, "Picture of the particles, by mineral."),
-        ExporterSpec("vtk", VtkConfig, VtkExporter, "VTK XML PolyData (.vtp) for ParaView."),
-        ExporterSpec(
+        both_dimensions(
+            "vtk",
+            VtkConfig,
+            VtkExporter,
+            "VTK XML for ParaView: PolyData (.vtp) of polygons, an unstructured grid (.vtu) "
+            "of polyhedron cells.",
+        ),
+        both_dimensions(
             "lammps",
             LammpsConfig,
             LammpsExporter,
-            "LAMMPS data file (body rounded/polygon) and an input script that runs it.",
+            "LAMMPS data file (body rounded/polygon or rounded/polyhedron) and an input script "
+            "that runs it.",
+        ),
+        ExporterSpec(
+            "stl",
+            StlConfig,
+            StlExporter,
+            "3D: binary STL mesh of every placed polyhedron (outward triangles).",
+            dimensions=(3,),
+        ),
+        ExporterSpec(
+            "slice",
+            SliceConfig,
+            SliceExporter,
+            "3D: a planar section as a 2D packing file (convex polygons) and its picture.",
+            dimensions=(3,),
         ),
     ]

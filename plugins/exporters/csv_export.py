@@ -100,7 +100,7 @@ def _csv_text(header: Sequence[str], rows: Iterable[Sequence[object]]) -> str:
     return buf.getvalue()
 
 
-class CsvExporter(Exporter):
+class CsvExporter(Exporter[Packing]):
     """Particle table, vertex table and a small metadata file (exact round trip).
 
     ``<stem>.csv`` has one row per drawn particle (columns

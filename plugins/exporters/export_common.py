@@ -10,24 +10,50 @@ from __future__ import annotations
 
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+from pydantic import BaseModel
 
 from regopack.base.errors import ExportError, GeometryError, PackingError
 from regopack.geometry.domain import domain_from_dict
 from regopack.packing.core import Packing, _atomic_file, _finite_or_none
+from regopack.registry.interfaces import Analyzer
+from regopack.registry.plugin_types import ExporterSpec
 
 __all__ = ["EXPORT_FORMAT_VERSION"]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+AnyPacking = Packing
+"""A packing of either dimension, as the exporters of both take it (``packing.dimension``)."""
+Analyses = Mapping[str, Analyzer] | None
+"""The ``analyses`` an exporter is given: computed analyzers by name, or none."""
 
 EXPORT_FORMAT_VERSION = 1
 """Version of the CSV and JSON export layouts."""
+
+
+def both_dimensions(
+    name: str, config: type[BaseModel], factory: Callable[[Any], Any], description: str
+) -> ExporterSpec:
+    """Return the spec of an exporter of both dimensions, once registered for 3D as ``<name>3d``.
+
+    The old name (``vtk3d``) selects it for one release, for 3D packings only.
+    """
+    aliases = (f"{name}3d",)
+    return ExporterSpec(
+        name,
+        config,
+        factory,
+        description,
+        dimensions=(2, 3),
+        aliases=aliases,
+        alias_dimensions=(3,),
+    )
 
 
 def _num(value: float) -> str:

@@ -627,7 +627,7 @@ def _metadata(packing: Packing, image: RasterImage, files: Mapping[str, Path]) -
     }
 
 
-class ImageExporter(Exporter):
+class ImageExporter(Exporter[Packing]):
     """Binary, label and mineral images and a PoreSpy phase array (see :func:`image_paths`).
 
     ``<stem>.png`` is the binary image (8-bit grey: solid 255, void 0, outside

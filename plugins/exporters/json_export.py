@@ -44,7 +44,7 @@ class JsonConfig(BaseModel):
     )
 
 
-class JsonExporter(Exporter):
+class JsonExporter(Exporter[Packing]):
     """One JSON document with the header and one object per particle (exact round trip).
 
     The document holds ``format``, ``format_version``, ``version``, ``seed``,

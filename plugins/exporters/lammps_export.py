@@ -1,26 +1,41 @@
-"""LAMMPS export: a data file of rounded-polygon bodies and an input script that runs it.
+"""LAMMPS export: a data file of rounded bodies and an input script that runs it.
 
 Every placed particle becomes one body of LAMMPS' ``atom_style body
-rounded/polygon``: a convex core and a rounding radius ``r``, the body being
-the points within ``r`` of the core. A sharp polygon's core is its outline
-eroded by ``r`` (:func:`~regopack.plugins.exporters.rounded_bodies.erode_convex`), so
-the body fills the particle but for its rounded corners and never reaches past
-it: neighbours that touch in the packing touch, without overlap, in LAMMPS. A
-disk is one vertex with its own radius; a rounded polygon keeps its core and
-radius. Repeated and collinear vertices are removed first
-(:func:`~regopack.plugins.exporters.rounded_bodies.clean_outline`).
+rounded/polygon`` (2D packings) or ``rounded/polyhedron`` (3D): a convex core
+and a rounding radius ``r``, the body being the points within ``r`` of the
+core. LAMMPS computes contacts between these rounded surfaces. The core is
+the particle eroded by ``r``, so the body fills the particle but for its
+rounded corners (and edges) and never reaches past it: neighbours that touch
+in the packing touch, without overlap, in LAMMPS.
+
+- *Polygons*: the outline, cleaned of repeated and collinear vertices
+  (:func:`~regopack.plugins.exporters.rounded_bodies.clean_outline`), is
+  eroded by ``r`` (:func:`~regopack.plugins.exporters.rounded_bodies.erode_convex`).
+  A disk is one vertex with its own radius; a rounded polygon keeps its core
+  and radius. The body's mass and moments are those of the rounded body.
+- *Polyhedra*: every face plane moves inward by ``r``
+  (:func:`~regopack.plugins.exporters.rounded_polyhedra.erode_polyhedron`).
+  The body carries the mass, centre of mass and inertia of the particle itself
+  (the sharp polyhedron): the rounding shapes the contacts, not the grain. A
+  sphere is one vertex rounded by its own radius (``N E F = 1 0 0``: LAMMPS
+  reads no edges or faces for it, and a face count above 0 would make it
+  copy values past the body's storage).
+
+``r`` is ``rounding_fraction`` × the particle's equivalent radius (5 % by
+default), or ``rounding_radius``; a particle whose core would vanish (or, in
+3D, break up) gets ``r`` halved (up to 8 times).
 
 Beside ``<stem>.data`` the exporter writes ``<stem>.in``, an input script that
-reads it with the pair style ``body/rounded/polygon``, walls or periodic
-boundaries from the domain, a time step from the smallest body's mass and the
-stiffness, and its parameters as LAMMPS ``index`` variables (``lmp -in
-packing.in -var k_n 1e5`` changes one).
+reads it with the pair style ``body/rounded/polygon`` (``polyhedron``), walls
+(``wall/body/polygon``, ``wall/body/polyhedron``) or periodic boundaries from
+the domain, gravity along -y (-z in 3D), a time step from the lightest body's
+mass and the stiffness, and its parameters as LAMMPS ``index`` variables
+(``lmp -in packing.in -var k_n 1e5`` changes one).
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
@@ -29,10 +44,11 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.base.errors import ExportError
+from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import conversion, length_scale, length_unit
-from regopack.geometry.domain import PeriodicRectangle, Rectangle
-from regopack.packing.core import Packing, _atomic_file
+from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
+from regopack.packing.core import Packing
+from regopack.plugins.exporters.export_common import Analyses, AnyPacking, _num, _write_text
 from regopack.plugins.exporters.rounded_bodies import (
     CLEAN_TOLERANCE,
     clean_outline,
@@ -40,13 +56,19 @@ from regopack.plugins.exporters.rounded_bodies import (
     rounded_moments,
 )
 from regopack.plugins.exporters.rounded_bodies_kernel import rounded_bodies
-from regopack.registry.interfaces import Analyzer, Exporter
+from regopack.plugins.exporters.rounded_polyhedra import Core, erode_polyhedron
+from regopack.plugins.exporters.solid_export_common import mass_properties, placed_solids
+from regopack.registry.interfaces import Exporter
+from regopack.registry.plugin_types import misplaced_field
 
 __all__ = [
     "LammpsBodies",
     "LammpsConfig",
     "LammpsExporter",
+    "PolyhedronBodies",
+    "body_faces",
     "lammps_bodies",
+    "polyhedron_bodies",
     "reference_body",
     "script_path",
 ]
@@ -54,10 +76,16 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 STEPS_PER_COLLISION = 50
-"""Time steps per duration of a collision of the two smallest bodies (sets the time step)."""
+"""Time steps per duration of a collision of the two lightest bodies (sets the time step)."""
 
 MAX_BODY_LINES = 32
 """Lines LAMMPS' read_data accepts for one body (its MAXBODY); long cores share lines."""
+
+LINE_CHARS = 200
+"""Longest line of a polyhedron body's values: LAMMPS reads a body's values over
+as many lines as it likes, but a long line is cut (and its numbers with it) and
+a body may span at most :data:`MAX_BODY_LINES` lines, so the values are packed
+into lines of this length."""
 
 ROUNDING_TRIES = 8
 """Times the rounding radius of one body is halved when its eroded core vanishes."""
@@ -89,7 +117,7 @@ def default_length_scale(packing: Any, units: str) -> float:
 
 
 class LammpsConfig(BaseModel):
-    """Parameters of the LAMMPS exporter.
+    """Parameters of the LAMMPS exporter (``thickness`` is for 2D packings only).
 
     Lengths of the packing are multiplied by ``length_scale`` and written in
     the length unit of ``units``; every other quantity is in that unit system.
@@ -124,9 +152,10 @@ class LammpsConfig(BaseModel):
         None,
         gt=0,
         allow_inf_nan=False,
+        json_schema_extra={"dimensions": [2]},
         description=(
-            "Out-of-plane thickness of every body in the packing's length unit; "
-            "a body's mass is its area × thickness × density. Default: d_min / 2 "
+            "2D packings only: out-of-plane thickness of every body in the packing's length "
+            "unit; a body's mass is its area × thickness × density. Default: d_min / 2 "
             "(1 at the built-in scenes' d_min = 2)."
         ),
     )
@@ -135,8 +164,8 @@ class LammpsConfig(BaseModel):
         gt=0,
         le=0.5,
         description=(
-            "Rounding radius of a polygon body as a fraction of the particle's "
-            "equivalent radius (disks and rounded polygons keep their own)."
+            "Rounding radius of a body as a fraction of the particle's equivalent "
+            "radius (disks, rounded polygons and spheres keep their own)."
         ),
     )
     rounding_radius: float = Field(
@@ -144,8 +173,8 @@ class LammpsConfig(BaseModel):
         ge=0,
         allow_inf_nan=False,
         description=(
-            "One rounding radius for every polygon body, in the packing's length unit; "
-            "0 uses `rounding_fraction`."
+            "One rounding radius for every body but disks, rounded polygons and spheres, "
+            "in the packing's length unit; 0 uses `rounding_fraction`."
         ),
     )
     stiffness: float = Field(
@@ -159,7 +188,7 @@ class LammpsConfig(BaseModel):
         gt=0,
         le=1,
         description=(
-            "Normal coefficient of restitution of a collision of the two smallest bodies; "
+            "Normal coefficient of restitution of a collision of the two lightest bodies; "
             "sets the damping c_n."
         ),
     )
@@ -168,7 +197,9 @@ class LammpsConfig(BaseModel):
         0.0,
         ge=0,
         allow_inf_nan=False,
-        description="Acceleration of gravity along -y in the input script (0: none).",
+        description=(
+            "Acceleration of gravity along -y (2D) or -z (3D) in the input script (0: none)."
+        ),
     )
     steps: int = Field(10000, ge=0, description="Time steps the input script runs.")
 
@@ -286,6 +317,124 @@ def reference_body(
     return core, r, c, area, ixx, iyy, ixy
 
 
+@dataclass(frozen=True)
+class PolyhedronBodies:
+    """The bodies of the polyhedra (and spheres) of a 3D packing, in its length unit, unit density.
+
+    ``index``, ``rounding``, ``position`` (here the particle's centroid) and
+    ``reduced`` are those of :class:`LammpsBodies`; ``cores`` holds each
+    body's core, its vertices relative to the body's centre of mass,
+    ``volume`` each particle's volume and ``inertia`` its ``(n, 3, 3)``
+    inertia tensor about its centre of mass.
+    """
+
+    index: NDArray[np.int64]
+    cores: list[Core]
+    rounding: FloatArray
+    position: FloatArray
+    volume: FloatArray
+    inertia: FloatArray
+    reduced: int
+
+
+def polyhedron_bodies(
+    packing: Packing[Box], config: LammpsConfig | None = None
+) -> PolyhedronBodies:
+    """Cores, rounding radii, centres of mass and inertia of the placed polyhedra.
+
+    Raises
+    ------
+    ExportError
+        One line, for a particle too thin to carry a rounded body.
+    """
+    cfg = config or LammpsConfig()
+    solids = placed_solids(packing, "lammps", spheres=True)
+    fo = packing.face_offsets
+    cores, rounding, position, volume, inertia = [], [], [], [], []
+    reduced = 0
+    for s in solids:
+        j = s.index
+        if s.rounding > 0:  # a sphere: one vertex rounded by its own radius
+            rho = s.rounding
+            v = 4.0 / 3.0 * np.pi * rho**3
+            cores.append(Core(np.zeros((1, 3)), [], np.zeros((0, 2), dtype=np.int64)))
+            rounding.append(rho)
+            position.append(s.centre.copy())
+            volume.append(v)
+            inertia.append(np.eye(3) * 0.4 * v * rho * rho)
+            continue
+        v, c, moments = mass_properties(s.local, s.loops)
+        normals = packing.normals[fo[j] : fo[j + 1]]
+        support = packing.support[fo[j] : fo[j + 1]]
+        r = cfg.rounding_radius or cfg.rounding_fraction * float(packing.radius[j])
+        core = None
+        for attempt in range(ROUNDING_TRIES):
+            core = erode_polyhedron(normals, support, r)
+            if core is not None:
+                reduced += attempt > 0
+                break
+            r *= 0.5
+        if core is None:
+            raise ExportError(f"particle {j}: it is too thin to carry a rounded body")
+        cores.append(Core(core.vertices - c, core.loops, core.edges))
+        rounding.append(r)
+        position.append(s.centre + c)
+        volume.append(v)
+        inertia.append(np.trace(moments) * np.eye(3) - moments)
+    n = len(solids)
+    return PolyhedronBodies(
+        index=np.array([s.index for s in solids], dtype=np.int64),
+        cores=cores,
+        rounding=np.array(rounding, dtype=np.float64),
+        position=np.array(position, dtype=np.float64).reshape(n, 3),
+        volume=np.array(volume, dtype=np.float64),
+        inertia=np.array(inertia, dtype=np.float64).reshape(n, 3, 3),
+        reduced=reduced,
+    )
+
+
+def body_faces(core: Core) -> NDArray[np.int64]:
+    """``(F, 4)`` faces as LAMMPS reads them: quadrilaterals, and triangles ending in -1.
+
+    A face of more than four vertices is split into a fan of quadrilaterals
+    from its first vertex (and a last triangle when its count is odd), in its
+    turning sense, so every piece is planar, convex and outward. Fewer pieces
+    mean fewer vertex-face tests in LAMMPS' contact search.
+
+    Examples
+    --------
+    >>> core = Core(np.zeros((7, 3)), [np.array([0, 1, 2, 3, 4, 5, 6]), np.array([0, 1, 2])],
+    ...             np.zeros((0, 2), dtype=np.int64))
+    >>> body_faces(core).tolist()
+    [[0, 1, 2, 3], [0, 3, 4, 5], [0, 5, 6, -1], [0, 1, 2, -1]]
+    """
+    rows: list[list[int]] = []
+    for loop in core.loops:
+        ids = [int(i) for i in loop]
+        k = 1
+        while len(ids) - k >= 3:  # a quadrilateral (v0, v_k, v_k+1, v_k+2)
+            rows.append([ids[0], ids[k], ids[k + 1], ids[k + 2]])
+            k += 2
+        if len(ids) - k == 2:  # a last triangle (v0, v_k, v_k+1)
+            rows.append([ids[0], ids[k], ids[k + 1], -1])
+    return np.array(rows, dtype=np.int64).reshape(-1, 4)
+
+
+def _lines(values: list[str]) -> list[str]:
+    """Pack ``values`` into lines of at most :data:`LINE_CHARS` characters."""
+    lines: list[str] = []
+    line = ""
+    for v in values:
+        if line and len(line) + 1 + len(v) > LINE_CHARS:
+            lines.append(line)
+            line = v
+        else:
+            line = f"{line} {v}" if line else v
+    if line:
+        lines.append(line)
+    return lines
+
+
 def script_path(path: Path) -> Path:
     """Return the input script written beside the data file ``path``: ``<stem>.in``.
 
@@ -297,55 +446,223 @@ def script_path(path: Path) -> Path:
     return Path(path).with_suffix(".in")
 
 
-def _num(value: float) -> str:
-    return repr(float(value))
+@dataclass(frozen=True)
+class _Style:
+    """What the data file and the input script say differently in each dimension."""
+
+    dimension: int
+    body: str
+    eroded: str
+    down: str
+    gravity: str
 
 
-def _write(path: Path, text: str) -> None:
-    try:
-        with _atomic_file(path) as fh:
-            fh.write(text.encode("utf-8"))
-    except OSError as err:
-        raise ExportError(f"cannot write {path}: {err.strerror or type(err).__name__}") from err
+_STYLES = {
+    2: _Style(2, "polygon", "outline", "y", "0 -1 0"),
+    3: _Style(3, "polyhedron", "particle", "z", "0 0 -1"),
+}
 
 
 @dataclass(frozen=True)
-class _Frame:
-    """Box, boundary and walls of the LAMMPS simulation, in LAMMPS lengths."""
+class _Layout:
+    """The bodies of a packing laid out as LAMMPS reads them, in LAMMPS units.
 
-    box: tuple[float, float, float, float]
+    ``lo`` and ``hi`` are the box's bounds (in 2D, z spans the room that
+    LAMMPS' bins need), ``walls`` the wall lines of the input script,
+    ``notes`` the ends of the data file's fourth and fifth lines (comments),
+    ``domain`` a line of the script's header (2D) and ``blocks`` the
+    ``Bodies`` section.
+    """
+
+    style: _Style
+    bodies: LammpsBodies | PolyhedronBodies
+    scale: float
+    lo: FloatArray
+    hi: FloatArray
     boundary: str
     walls: list[str]
-    note: str
+    mass: FloatArray
+    position: FloatArray
+    blocks: list[str]
+    n_min: int
+    n_max: int
+    d_min: float
+    notes: tuple[str, str]
+    domain: list[str]
+
+    @property
+    def rounding(self) -> FloatArray:
+        """Rounding radius of each body, in LAMMPS lengths."""
+        out: FloatArray = self.bodies.rounding * self.scale
+        return out
 
 
-def _frame(packing: Packing, scale: float) -> _Frame:
+def _check_finite(given: str, checks: list[tuple[str, FloatArray]]) -> None:
+    """Refuse masses and moments that are not positive finite numbers (subnormal ones too)."""
+    tiny = np.finfo(np.float64).tiny  # subnormal numbers lose their precision
+    for what, values in checks:
+        if values.size and not (np.isfinite(values).all() and (values >= tiny).all()):
+            raise ExportError(
+                f"{given}: a body's {what} is not a positive finite number; give values nearer 1"
+            )
+
+
+def _walls_2d(packing: Packing, s: float) -> tuple[str, list[str], str]:
+    """Boundary, wall lines and note of a 2D domain (in LAMMPS lengths)."""
     d = packing.domain
-    xmin, xmax, ymin, ymax = (float(v) * scale for v in d.bounds())
+    xmin, xmax, ymin, ymax = (float(v) * s for v in d.bounds())
     if isinstance(d, PeriodicRectangle):
-        return _Frame((xmin, xmax, ymin, ymax), "p p p", [], "periodic in x and y")
-    if isinstance(d, Rectangle):
-        walls = [f"xplane {_num(xmin)} {_num(xmax)}", f"yplane {_num(ymin)} {_num(ymax)}"]
-        return _Frame((xmin, xmax, ymin, ymax), "f f p", walls, "walls on all sides")
+        return "p p p", [], "periodic in x and y"
     walls = [f"xplane {_num(xmin)} {_num(xmax)}", f"yplane {_num(ymin)} {_num(ymax)}"]
-    return _Frame(
-        (xmin, xmax, ymin, ymax),
-        "f f p",
-        walls,
-        f"walls on the bounding box; the {d.kind}'s own walls are not modelled",
+    lines = [
+        f"fix wall{i} all wall/body/polygon ${{k_n}} ${{c_n}} ${{c_t}} {w}"
+        for i, w in enumerate(walls, start=1)
+    ]
+    if isinstance(d, Rectangle):
+        return "f f p", lines, "walls on all sides"
+    return "f f p", lines, f"walls on the bounding box; the {d.kind}'s own walls are not modelled"
+
+
+def _polygon_layout(packing: Packing, cfg: LammpsConfig, s: float) -> _Layout:
+    """Lay out the bodies of a 2D packing: rounded polygons, laminae of ``thickness``."""
+    bodies = lammps_bodies(packing, cfg)
+    thickness = length_scale(packing) if cfg.thickness is None else cfg.thickness
+    boundary, walls, note = _walls_2d(packing, s)
+    lamina = cfg.density * thickness * s  # mass per unit area (LAMMPS lengths)
+    with np.errstate(over="ignore", under="ignore"):  # checked below
+        mass = bodies.area * (np.float64(s) ** 2 * lamina)
+        per_area = np.float64(lamina) * np.float64(s) ** 4
+        inertia = np.stack([bodies.ixx, bodies.iyy, bodies.ixy], axis=1) * per_area
+    given = f"length_scale = {s}, thickness = {thickness}, density = {cfg.density}"
+    _check_finite(given, [("mass", mass), ("moment of inertia", inertia[:, :2])])
+    n = bodies.index.size
+    counts = [c.shape[0] for c in bodies.core]
+    n_min, n_max = (min(counts), max(counts)) if counts else (1, 1)
+    lo, hi = np.asarray(packing.domain.bounds(), dtype=np.float64).reshape(2, 2).T * s
+    pos = np.zeros((n, 3))
+    pos[:, :2] = bodies.position * s
+    if isinstance(packing.domain, PeriodicRectangle):
+        pos[:, :2] = lo + np.mod(pos[:, :2] - lo, hi - lo)
+    reach = np.array([np.hypot(*c.T).max() for c in bodies.core]) + bodies.rounding
+    # bins need room in z; at least d_min / 4 (0.5 at the built-in scenes' d_min = 2)
+    half_z = max(0.5 * length_scale(packing) * s, 2.0 * float(reach.max(initial=0.0)) * s)
+    per_line = max(1, math.ceil(n_max / (MAX_BODY_LINES - 4)))  # + count, inertia, rounding
+    blocks: list[str] = []
+    for k in range(n):
+        ixx, iyy, ixy = inertia[k]  # area moments x s^4 x mass per area
+        core = bodies.core[k] * s
+        blocks.append(f"{k + 1} 1 {6 + 3 * core.shape[0] + 1}")
+        blocks.append(str(core.shape[0]))
+        blocks.append(" ".join(_num(v) for v in (ixx, iyy, ixx + iyy, -ixy, 0.0, 0.0)))
+        xyz = [f"{_num(x)} {_num(y)} 0.0" for x, y in core.tolist()]
+        blocks += [" ".join(xyz[i : i + per_line]) for i in range(0, len(xyz), per_line)]
+        blocks.append(_num(2.0 * bodies.rounding[k] * s))
+    fill = float(np.min(bodies.area / packing.area()[bodies.index])) if n else 1.0
+    return _Layout(
+        style=_STYLES[2],
+        bodies=bodies,
+        scale=s,
+        lo=np.array([lo[0], lo[1], -half_z]),
+        hi=np.array([hi[0], hi[1], half_z]),
+        boundary=boundary,
+        walls=walls,
+        mass=mass,
+        position=pos,
+        blocks=blocks,
+        n_min=n_min,
+        n_max=n_max,
+        d_min=float(2.0 * math.sqrt(bodies.area.min() / math.pi) * s) if n else 1.0,
+        notes=(
+            f"; the smallest body fills {_num(round(fill, 4))} of its particle",
+            f"area x {_num(thickness * s)} x {_num(cfg.density)}; {note}",
+        ),
+        domain=[f"# Domain: {note}."],
     )
 
 
-class LammpsExporter(Exporter):
-    """LAMMPS data file (``atom_style body rounded/polygon``, 2d) and its input script.
+def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _Layout:
+    """Lay out the bodies of a 3D packing: rounded polyhedra (and spheres), grains' inertia."""
+    misplaced = misplaced_field(cfg, 3)  # thickness: regopack.export refuses it first
+    if misplaced is not None:
+        raise ConfigError(f"exporter 'lammps': {misplaced[1]}")
+    bodies = polyhedron_bodies(packing, cfg)
+    with np.errstate(over="ignore", under="ignore"):  # checked below
+        mass = bodies.volume * (np.float64(s) ** 3 * cfg.density)
+        inertia = bodies.inertia * (np.float64(s) ** 5 * cfg.density)
+    diagonal = inertia[:, [0, 1, 2], [0, 1, 2]]
+    _check_finite(
+        f"length_scale = {s}, density = {cfg.density}",
+        [("mass", mass), ("moment of inertia", diagonal)],
+    )
+    # LAMMPS sizes every body's storage from Nmax as if it had Nmax vertices,
+    # edges and faces: Nmax is the largest of the three counts of any body
+    counts = [c.vertices.shape[0] for c in bodies.cores]
+    sizes = [
+        max(c.vertices.shape[0], c.edges.shape[0], body_faces(c).shape[0]) for c in bodies.cores
+    ]
+    n_min, n_max = (min(counts), max(sizes)) if counts else (1, 1)
+    box = packing.domain
+    lo, hi = box.bounds().reshape(3, 2).T * s
+    pos = bodies.position * s
+    if box.periodic:
+        pos = lo + np.mod(pos - lo, hi - lo)
+    blocks: list[str] = []
+    for k in range(bodies.index.size):
+        core = bodies.cores[k]
+        faces = body_faces(core)
+        t = inertia[k]
+        values = [_num(v) for v in (t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])]
+        values += [_num(x) for x in (core.vertices * s).ravel()]
+        values += [str(int(i)) for i in core.edges.ravel()]
+        values += [str(int(i)) for i in faces.ravel()]
+        values.append(_num(2.0 * bodies.rounding[k] * s))
+        blocks.append(f"{k + 1} 3 {len(values)}")
+        blocks.append(f"{core.vertices.shape[0]} {core.edges.shape[0]} {faces.shape[0]}")
+        blocks += _lines(values)
+    walls = [
+        f"fix          wall{i + 1} all wall/body/polyhedron ${{k_n}} ${{c_n}} ${{c_t}} "
+        f"{axis}plane {_num(lo[i])} {_num(hi[i])}"
+        for i, axis in enumerate("xyz")
+    ]
+    n = bodies.index.size
+    return _Layout(
+        style=_STYLES[3],
+        bodies=bodies,
+        scale=s,
+        lo=lo,
+        hi=hi,
+        boundary="p p p" if box.periodic else "f f f",
+        walls=[] if box.periodic else walls,
+        mass=mass,
+        position=pos,
+        blocks=blocks,
+        n_min=n_min,
+        n_max=n_max,
+        d_min=float(2.0 * packing.radius[bodies.index].min() * s) if n else 1.0,
+        notes=(
+            "",
+            f"particle volume x {_num(cfg.density)}; "
+            + ("periodic in x, y and z" if box.periodic else "walls on all six sides"),
+        ),
+        domain=[],
+    )
+
+
+class LammpsExporter(Exporter[AnyPacking]):
+    """LAMMPS data file (``atom_style body rounded/polygon`` or ``rounded/polyhedron``) and script.
 
     One body per placed particle, in draw order: atom type = mineral index + 1,
-    mass = area of the rounded body × ``thickness`` × ``density``, position =
-    its centre of mass. In the ``Bodies`` section each body lists its vertex
-    count, the six components of its inertia tensor in the box frame
-    (``ixx iyy izz ixy ixz iyz`` of a uniform lamina), its core vertices
-    relative to the centre of mass (z = 0) and its rounding *diameter*. See
-    the module documentation for how the cores are made.
+    position = its centre of mass. See the module documentation for how the
+    cores are made. In the ``Bodies`` section each body lists
+
+    - 2D: its vertex count, the six components of its inertia tensor in the
+      box frame (``ixx iyy izz ixy ixz iyz`` of a uniform lamina), its core
+      vertices relative to the centre of mass (z = 0) and its rounding
+      *diameter*; mass = area of the rounded body × ``thickness`` × ``density``;
+    - 3D: ``N E F``, the six components of its inertia tensor in the box
+      frame, its core vertices relative to the centre of mass, its edges, its
+      faces (four indices, -1 ending a triangle) and its rounding *diameter*;
+      mass = volume of the particle × ``density``.
     """
 
     suffix = ".data"
@@ -357,90 +674,64 @@ class LammpsExporter(Exporter):
         """Return the input script written beside the data file."""
         return (script_path(path),)
 
-    def export(
-        self, packing: Packing, path: Path, *, analyses: Mapping[str, Analyzer] | None = None
-    ) -> Path:
-        """Write the data file and the input script; return the data file's path."""
+    def export(self, packing: AnyPacking, path: Path, *, analyses: Analyses = None) -> Path:
+        """Write the data file and the input script; return the data file's path.
+
+        Raises
+        ------
+        ConfigError
+            One line, when ``thickness`` is set for a 3D packing.
+        """
         cfg = self.config
         path = Path(path)
-        bodies = lammps_bodies(packing, cfg)
         s = (
             default_length_scale(packing, cfg.units)
             if cfg.length_scale is None
             else cfg.length_scale
         )
-        thickness = length_scale(packing) if cfg.thickness is None else cfg.thickness
-        frame = _frame(packing, s)
-        lamina = cfg.density * thickness * s  # mass per unit area (LAMMPS lengths)
-        with np.errstate(over="ignore", under="ignore"):  # checked below
-            mass = bodies.area * (np.float64(s) ** 2 * lamina)
-            per_area = np.float64(lamina) * np.float64(s) ** 4
-            inertia = np.stack([bodies.ixx, bodies.iyy, bodies.ixy], axis=1) * per_area
-        n = bodies.index.size
-        counts = [c.shape[0] for c in bodies.core]
-        n_min, n_max = (min(counts), max(counts)) if counts else (1, 1)
+        if packing.dimension == 3:
+            layout = _polyhedron_layout(packing, cfg, s)
+        else:
+            layout = _polygon_layout(packing, cfg, s)
+        _write_text(path, self._data(packing, layout, s))
+        _write_text(script_path(path), self._script(packing, path, layout))
+        return path
+
+    def _data(self, packing: AnyPacking, layout: _Layout, s: float) -> str:
+        cfg = self.config
+        style = layout.style
+        n = layout.bodies.index.size
         n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
-        pos = bodies.position * s
-        if isinstance(packing.domain, PeriodicRectangle):
-            lo = np.array([frame.box[0], frame.box[2]])
-            width = np.array([frame.box[1] - frame.box[0], frame.box[3] - frame.box[2]])
-            pos = lo + np.mod(pos - lo, width)
-        for what, values in (("mass", mass), ("moment of inertia", inertia[:, :2])):
-            tiny = np.finfo(np.float64).tiny  # subnormal numbers lose their precision
-            if n and not (np.isfinite(values).all() and (values >= tiny).all()):
-                raise ExportError(
-                    f"length_scale = {s}, thickness = {thickness}, density = {cfg.density}: "
-                    f"a body's {what} is not a positive finite number; give values nearer 1"
-                )
-        reach = np.array([np.hypot(*c.T).max() for c in bodies.core]) + bodies.rounding
-        # bins need room in z; at least d_min / 4 (0.5 at the built-in scenes' d_min = 2)
-        half_z = max(0.5 * length_scale(packing) * s, 2.0 * float(reach.max(initial=0.0)) * s)
-        per_line = max(1, math.ceil(n_max / (MAX_BODY_LINES - 4)))  # + count, inertia, rounding
-        atoms: list[str] = []
-        blocks: list[str] = []
-        for k in range(n):
-            j = int(bodies.index[k])
-            atoms.append(
-                f"{k + 1} {int(packing.mineral[j]) + 1} 1 {_num(mass[k])} "
-                f"{_num(pos[k, 0])} {_num(pos[k, 1])} 0.0"
-            )
-            ixx, iyy, ixy = inertia[k]  # area moments x s^4 x mass per area
-            core = bodies.core[k] * s
-            blocks.append(f"{k + 1} 1 {6 + 3 * core.shape[0] + 1}")
-            blocks.append(str(core.shape[0]))
-            blocks.append(" ".join(_num(v) for v in (ixx, iyy, ixx + iyy, -ixy, 0.0, 0.0)))
-            xyz = [f"{_num(x)} {_num(y)} 0.0" for x, y in core.tolist()]
-            blocks += [" ".join(xyz[i : i + per_line]) for i in range(0, len(xyz), per_line)]
-            blocks.append(_num(2.0 * bodies.rounding[k] * s))
+        atoms = [
+            f"{k + 1} {int(packing.mineral[j]) + 1} 1 {_num(layout.mass[k])} "
+            + " ".join(_num(x) for x in layout.position[k])
+            for k, j in enumerate(layout.bodies.index.tolist())
+        ]
         rounding_note = (
             f"rounding radius {_num(cfg.rounding_radius)}"
             if cfg.rounding_radius
             else f"rounding radius {cfg.rounding_fraction} x equivalent radius"
         )
-        r_all = bodies.rounding * s
-        fill = float(np.min(bodies.area / packing.area()[bodies.index])) if n else 1.0
-        xlo, xhi, ylo, yhi = frame.box
+        r_all = layout.rounding
+        lo, hi = layout.lo, layout.hi
         lines = [
             f"LAMMPS data file from regopack {packing.version}: scene "
             f"{packing.scene.get('name', '?')}, seed {packing.seed}, "
-            f"atom_style body rounded/polygon {n_min} {n_max}",
+            f"atom_style body rounded/{style.body} {layout.n_min} {layout.n_max}",
             "",
-            f"# polygon bodies: outline eroded by the {rounding_note}; the Bodies section "
-            "ends each body with its rounding diameter",
+            f"# {style.body} bodies: {style.eroded} eroded by the {rounding_note}; the Bodies "
+            "section ends each body with its rounding diameter",
             f"# rounding radii from {_num(r_all.min() if n else 0.0)} to "
-            f"{_num(r_all.max() if n else 0.0)}; {bodies.reduced} bodies with a halved radius; "
-            f"the smallest body fills {_num(round(fill, 4))} of its particle",
+            f"{_num(r_all.max() if n else 0.0)}; {layout.bodies.reduced} bodies with a "
+            f"halved radius{layout.notes[0]}",
             f"# lengths = packing lengths ({length_unit(packing)}) x {_num(s)}; "
-            f"mass = area x {_num(thickness * s)} "
-            f"x {_num(cfg.density)}; {frame.note}",
+            f"mass = {layout.notes[1]}",
             "",
             f"{n} atoms",
             f"{n} bodies",
             f"{n_types} atom types",
             "",
-            f"{_num(xlo)} {_num(xhi)} xlo xhi",
-            f"{_num(ylo)} {_num(yhi)} ylo yhi",
-            f"{_num(-half_z)} {_num(half_z)} zlo zhi",
+            *(f"{_num(lo[i])} {_num(hi[i])} {a}lo {a}hi" for i, a in enumerate("xyz")),
             "",
             "Atoms # body",
             "",
@@ -448,46 +739,32 @@ class LammpsExporter(Exporter):
             "",
             "Bodies",
             "",
-            *blocks,
+            *layout.blocks,
         ]
-        m_min = float(mass.min()) if n else 1.0
-        d_min = float(2.0 * math.sqrt(bodies.area.min() / math.pi) * s) if n else 1.0
-        script = self._script(packing, path, frame, n_min, n_max, m_min, d_min, r_all)
-        _write(path, "\n".join(lines) + "\n")
-        _write(script_path(path), script)
-        return path
+        return "\n".join(lines) + "\n"
 
-    def _script(
-        self,
-        packing: Packing,
-        path: Path,
-        frame: _Frame,
-        n_min: int,
-        n_max: int,
-        m_min: float,
-        d_min: float,
-        rounding: FloatArray,
-    ) -> str:
+    def _script(self, packing: AnyPacking, path: Path, layout: _Layout) -> str:
         cfg = self.config
-        r_min = float(rounding.min()) if rounding.size else 0.05 * d_min
-        walls = [
-            f"fix wall{i} all wall/body/polygon ${{k_n}} ${{c_n}} ${{c_t}} {w}"
-            for i, w in enumerate(frame.walls, start=1)
-        ]
+        style = layout.style
+        m_min = float(layout.mass.min()) if layout.mass.size else 1.0
+        d_min = layout.d_min
+        r_min = float(layout.rounding.min()) if layout.rounding.size else 0.05 * d_min
         return "\n".join(
             [
                 f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
                 f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
                 f"# Run it in this folder: lmp -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var k_n 1e5 -var steps 50000.",
-                f"# Domain: {frame.note}.",
+                *layout.domain,
                 "",
                 f"variable steps index {cfg.steps}",
                 f"variable k_n   index {_num(cfg.stiffness)}   # normal stiffness (force/length)",
                 f"variable e_n   index {_num(cfg.restitution)}   "
-                "# restitution of two smallest bodies",
+                f"# restitution of two {'smallest' if style.dimension == 2 else 'lightest'} "
+                "bodies",
                 f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
-                f"variable g     index {_num(cfg.gravity)}   # gravity along -y (acceleration)",
+                f"variable g     index {_num(cfg.gravity)}   "
+                f"# gravity along -{style.down} (acceleration)",
                 f"variable m_min equal {_num(m_min)}   # mass of the lightest body",
                 "variable zeta  equal -ln(v_e_n)/sqrt(PI^2+ln(v_e_n)^2)",
                 "variable c_n   equal 2*v_zeta*sqrt(0.5*v_m_min*v_k_n)   # normal damping",
@@ -497,14 +774,14 @@ class LammpsExporter(Exporter):
                 f"variable cut   equal {_num(0.5 * r_min)}",
                 "",
                 f"units        {cfg.units}",
-                "dimension    2",
-                f"boundary     {frame.boundary}",
+                f"dimension    {style.dimension}",
+                f"boundary     {layout.boundary}",
                 "newton       on",
-                f"atom_style   body rounded/polygon {n_min} {n_max}",
+                f"atom_style   body rounded/{style.body} {layout.n_min} {layout.n_max}",
                 "atom_modify  map array",
                 f"read_data    {path.name}",
                 "",
-                "pair_style   body/rounded/polygon ${c_n} ${c_t} ${mu} 1.0 ${cut}",
+                f"pair_style   body/rounded/{style.body} ${{c_n}} ${{c_t}} ${{mu}} 1.0 ${{cut}}",
                 "pair_coeff   * * ${k_n} 0.0",
                 "comm_modify  vel yes",
                 "neighbor     ${skin} bin",
@@ -512,9 +789,9 @@ class LammpsExporter(Exporter):
                 "timestep     ${dt}",
                 "",
                 "fix          integrate all nve/body",
-                *walls,
-                "fix          weight all gravity ${g} vector 0 -1 0",
-                "fix          plane all enforce2d",
+                *layout.walls,
+                f"fix          weight all gravity ${{g}} vector {style.gravity}",
+                *(["fix          plane all enforce2d"] if style.dimension == 2 else []),
                 "",
                 "thermo_style custom step atoms ke pe",
                 "thermo       1000",

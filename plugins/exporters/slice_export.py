@@ -39,7 +39,7 @@ from regopack.base.units import reference_diameter
 from regopack.geometry.domain import Box, Rectangle
 from regopack.packing.core import Packing, save
 from regopack.plugins.exporters.solid_export_common import write_bytes
-from regopack.registry.interfaces import Analyzer, SolidExporter
+from regopack.registry.interfaces import Analyzer, Exporter
 
 __all__ = ["SliceConfig", "SliceExporter", "image_path", "slice_packing"]
 
@@ -196,7 +196,7 @@ def _draw(packing: Packing[Box], axis: int, at: float, path: Path) -> None:
     write_bytes(path, buf.getvalue())
 
 
-class SliceExporter(SolidExporter):
+class SliceExporter(Exporter[Packing[Box]]):
     """A section of a 3D packing as a 2D packing file (``.slice.npz``) and its picture.
 
     See the module's documentation for what the 2D packing holds. The

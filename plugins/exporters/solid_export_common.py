@@ -85,7 +85,7 @@ def placed_solids(packing: Packing[Box], exporter: str, spheres: bool = False) -
         if rho[j] > 0 and not (spheres and not loops):
             raise ExportError(
                 f"particle {j}: a sphere; the {exporter} export writes sharp polyhedra only"
-                + ("" if spheres else " (gsd3d and lammps3d write spheres)")
+                + ("" if spheres else " (gsd and lammps write spheres)")
             )
         out.append(PlacedSolid(int(j), local, loops, packing.centre[j], float(rho[j])))
     return out

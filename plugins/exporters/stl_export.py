@@ -29,7 +29,7 @@ from regopack.base.units import check_length_unit, conversion, length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.solid_export_common import fan_triangles, placed_solids, write_bytes
-from regopack.registry.interfaces import Analyzer, SolidExporter
+from regopack.registry.interfaces import Analyzer, Exporter
 
 __all__ = ["STL_RECORD", "StlConfig", "StlExporter", "stl_triangles"]
 
@@ -81,7 +81,7 @@ def stl_triangles(packing: Packing[Box]) -> tuple[np.ndarray, np.ndarray]:
     return np.concatenate(tris), np.concatenate(owner)
 
 
-class StlExporter(SolidExporter):
+class StlExporter(Exporter[Packing[Box]]):
     """Binary STL (``.stl``): every placed polyhedron's faces as outward triangles, one mesh."""
 
     suffix = ".stl"

@@ -36,7 +36,7 @@ class SvgConfig(BaseModel):
     )
 
 
-class SvgExporter(Exporter):
+class SvgExporter(Exporter[Packing]):
     """Picture of the placed particles, coloured by mineral.
 
     The ``viewBox`` is in the scene's length unit and the y axis points up (the

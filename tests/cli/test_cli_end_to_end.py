@@ -43,17 +43,15 @@ def test_default_registry_has_the_builtins():
     assert reg.names("export") == [
         "csv",
         "gsd",
-        "gsd3d",
         "image",
         "json",
         "lammps",
-        "lammps3d",
         "slice",
         "stl",
         "svg",
         "vtk",
-        "vtk3d",
     ]
+    assert reg.aliases("export") == {"gsd3d": "gsd", "lammps3d": "lammps", "vtk3d": "vtk"}
     assert reg.origin("shape", "octagon") == "regopack.plugins.shapes.octagon"
     assert default_registry(autoload=False) is not reg
 

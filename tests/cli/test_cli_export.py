@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 import xml.etree.ElementTree as ET
 
 import numpy as np
@@ -11,6 +12,7 @@ pytest.importorskip("regopack.plugins.inserters.available_arc")
 
 from cli_helpers import one_error_line
 
+from regopack.base.errors import DeprecatedNameWarning
 from regopack.cli import main
 from regopack.packing.core import load, save
 from regopack.plugins.exporters import read_csv, read_json
@@ -85,7 +87,7 @@ def test_a_companion_of_the_users_is_not_overwritten(packing_file, tmp_path, cap
 def test_unknown_format_is_one_line(packing_file, capsys):
     assert main(["export", str(packing_file), "--to", "xyz"]) == 2
     line = one_error_line(capsys)
-    assert "unknown export kind 'xyz'" in line and "csv, gsd, gsd3d, image, json" in line
+    assert "unknown export kind 'xyz'" in line and "csv, gsd, image, json, lammps" in line
 
 
 def test_unwritable_path_is_one_line(packing_file, tmp_path, capsys):
@@ -136,5 +138,85 @@ def test_the_schema_lists_the_exporters():
     registry = default_registry(autoload=False)
     exports = scene_schema(registry)["$defs"]["Outputs"]["properties"]["exports"]
     by_name, by_table = exports["items"]["anyOf"]
-    assert by_name["enum"] == registry.names("export")
-    assert by_table["properties"]["kind"]["enum"] == registry.names("export")
+    old = ["gsd3d", "lammps3d", "vtk3d"]  # deprecated names still accepted
+    assert by_name["enum"] == [*registry.names("export"), *old]
+    assert by_table["properties"]["kind"]["enum"] == [*registry.names("export"), *old]
+
+
+# ---------------------------------------------------------------------------
+# exporters of both dimensions
+
+
+@pytest.fixture(scope="module")
+def packing3d_file(tmp_path_factory):
+    from packings3d import packing3d
+
+    path = tmp_path_factory.mktemp("run3d") / "packing.npz"
+    save(packing3d(), path)
+    return path
+
+
+@pytest.mark.parametrize(("fmt", "suffix"), [("vtk", ".vtu"), ("lammps", ".data"), ("gsd", ".gsd")])
+def test_an_exporter_of_both_dimensions_names_the_3d_file_by_its_suffix(
+    packing3d_file, tmp_path, capsys, fmt, suffix
+):
+    if fmt == "gsd":
+        pytest.importorskip("gsd.hoomd", reason="the gsd package is not installed")
+    assert main(["export", str(packing3d_file), "--to", fmt, "--out", str(tmp_path)]) == 0
+    path = tmp_path / f"packing{suffix}"
+    assert capsys.readouterr().out.strip() == f"wrote {path}"
+    assert [p.name for p in tmp_path.iterdir() if p.suffix != ".in"] == [path.name]
+
+
+def test_vtk_writes_beside_a_3d_packing_an_unstructured_grid(packing3d_file, capsys):
+    assert main(["export", str(packing3d_file), "--to", "vtk"]) == 0
+    path = packing3d_file.with_suffix(".vtu")
+    assert capsys.readouterr().out.strip() == f"wrote {path}"
+    assert 'type="UnstructuredGrid"' in path.read_text()
+    assert not packing3d_file.with_suffix(".vtp").exists()
+
+
+@pytest.mark.parametrize("fmt", ["lammps", "lammps3d"])
+def test_a_2d_parameter_for_a_3d_packing_is_one_line(packing3d_file, tmp_path, capsys, fmt):
+    args = ["export", str(packing3d_file), "--to", fmt, "--out", str(tmp_path)]
+    assert main([*args, "--set", "thickness=2"]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[-1] == (
+        f"regopack: error: --set: exporter {fmt!r}: thickness = 2.0: has no meaning for a 3D "
+        "packing, only for 2D ones"
+    )
+    said = [line.split(" is deprecated")[0] for line in lines[:-1]]
+    assert said == ([] if fmt == "lammps" else ["regopack: warning: the export kind 'lammps3d'"])
+    assert not list(tmp_path.iterdir())
+
+
+def test_an_old_3d_name_keeps_its_dimension(packing_file, tmp_path, capsys):
+    out = tmp_path / "p.vtp"
+    assert main(["export", str(packing_file), "--to", "vtk3d", "--out", str(out)]) == 2
+    lines = capsys.readouterr().err.splitlines()
+    assert lines[-1] == (
+        f"regopack: error: {packing_file}: exporter 'vtk3d' writes 3D packings, and this is a "
+        "2D packing; 2D exporters: csv, gsd, image, json, lammps, svg, vtk"
+    )
+    assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("old", "new"), [("vtk3d", "vtk"), ("gsd3d", "gsd"), ("lammps3d", "lammps")]
+)
+def test_an_old_3d_name_warns_and_writes_the_same_files(packing3d_file, tmp_path, old, new):
+    import regopack
+
+    if new == "gsd":
+        pytest.importorskip("gsd.hoomd", reason="the gsd package is not installed")
+    params = {} if new == "vtk" else {"density": 2.5}  # the old name's parameters
+    for name in (old, new):
+        (tmp_path / name).mkdir()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", DeprecatedNameWarning)
+        regopack.export(packing3d_file, new, tmp_path / new, **params)
+    with pytest.warns(DeprecatedNameWarning, match=rf"kind '{old}' is deprecated.*use '{new}'"):
+        regopack.export(packing3d_file, old, tmp_path / old, **params)
+    files = {p.name: p.read_bytes() for p in (tmp_path / new).iterdir()}
+    assert len(files) == (2 if new == "lammps" else 1)
+    assert {p.name: p.read_bytes() for p in (tmp_path / old).iterdir()} == files

@@ -45,7 +45,6 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.exporters",
         "regopack.plugins.exporters.image_export",
         "regopack.plugins.exporters.gsd_export",
-        "regopack.plugins.exporters.exporters3d",
     )
 
 

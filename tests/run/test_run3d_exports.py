@@ -7,7 +7,7 @@ from cli_helpers import one_error_line
 from packings3d import scene3d
 
 import regopack
-from regopack.base.errors import ConfigError
+from regopack.base.errors import ConfigError, DeprecatedNameWarning
 from regopack.cli import main
 from regopack.packing.core import load
 
@@ -44,7 +44,7 @@ exports = ["stl", { kind = "svg", width_px = 300 }]
 
 
 def test_a_3d_run_writes_every_3d_export_beside_its_packing(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    exports = ["vtk3d", "stl", "gsd3d", "lammps3d", {"kind": "slice", "axis": "x"}]
+    exports = ["vtk", "stl", "gsd", "lammps", {"kind": "slice", "axis": "x"}]
     scene = {**scene3d(15.0), "outputs": {"exports": exports}}
     outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=False)
     run = tmp_path / "run"
@@ -63,7 +63,7 @@ def test_a_2d_exporter_in_a_3d_scene_file_is_one_line(tmp_path, capsys) -> None:
     assert main(["run", str(path), "--out", str(tmp_path / "run")]) != 0
     assert one_error_line(capsys) == (
         f"regopack: error: {path}: outputs.exports.1.kind = 'svg' is a 2D exporter, but "
-        "domain.kind = 'box' makes the scene 3D; 3D exporters: gsd3d, lammps3d, slice, stl, vtk3d"
+        "domain.kind = 'box' makes the scene 3D; 3D exporters: gsd, lammps, slice, stl, vtk"
     )
     assert not (tmp_path / "run").exists()
 
@@ -71,12 +71,50 @@ def test_a_2d_exporter_in_a_3d_scene_file_is_one_line(tmp_path, capsys) -> None:
 def test_a_2d_exporter_set_on_the_command_line_is_blamed_on_it(tmp_path, capsys) -> None:  # type: ignore[no-untyped-def]
     path = tmp_path / "box.toml"
     path.write_text(SCENE_TOML.replace('"stl", { kind = "svg", width_px = 300 }', ""), "utf-8")
-    args = ["run", str(path), "--set", 'outputs.exports=["vtk"]', "--out", str(tmp_path / "r")]
+    args = ["run", str(path), "--set", 'outputs.exports=["csv"]', "--out", str(tmp_path / "r")]
     assert main(args) != 0
     line = one_error_line(capsys)
-    assert line.startswith("regopack: error: --set: outputs.exports.0 = 'vtk' is a 2D exporter")
+    assert line.startswith("regopack: error: --set: outputs.exports.0 = 'csv' is a 2D exporter")
 
 
 def test_a_3d_exporter_in_a_2d_scene_is_refused() -> None:
     with pytest.raises(ConfigError, match=r"outputs\.exports\.0 = 'stl' is a 3D exporter, but "):
         regopack.scene("small", outputs__exports=["stl"])
+
+
+def test_the_files_of_an_exporter_of_both_dimensions_follow_the_scene() -> None:
+    from regopack.scenes.model import output_files
+
+    for source, name in ((scene3d(15.0), "packing.vtu"), ("small", "packing.vtp")):
+        files = output_files(regopack.scene(source, outputs__exports=["vtk", "lammps"]))
+        assert files["outputs.exports.0"] == [name]
+        assert files["outputs.exports.1"] == ["packing.data", "packing.in"]
+
+
+def test_a_3d_run_takes_the_old_exporter_names_with_their_parameters(tmp_path) -> None:
+    exports = ["vtk3d", {"kind": "lammps3d", "density": 2.0}]
+    scene = {**scene3d(15.0), "outputs": {"exports": exports}}
+    with pytest.warns(DeprecatedNameWarning) as caught:
+        outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=False)
+    said = {str(w.message).split(" is deprecated")[0] for w in caught}
+    assert said == {"the export kind 'vtk3d'", "the export kind 'lammps3d'"}
+    assert [p.name for p in outcome.exports] == ["packing.vtu", "packing.data"]
+    assert "x 2.0; walls on all six sides" in outcome.exports[1].read_text()
+
+
+def test_a_2d_parameter_of_a_3d_scene_is_refused_before_packing(tmp_path) -> None:
+    exports = [{"kind": "lammps", "thickness": 2.0}]
+    with pytest.raises(ConfigError) as err:
+        regopack.pack_and_summarise(
+            {**scene3d(15.0), "outputs": {"exports": exports}}, out=tmp_path / "run"
+        )
+    assert str(err.value).endswith(
+        "outputs.exports.0.thickness = 2.0: has no meaning for a 3D packing, only for 2D ones"
+    )
+    assert not (tmp_path / "run").exists()
+
+
+def test_an_old_3d_exporter_name_in_a_2d_scene_is_refused() -> None:
+    with pytest.raises(ConfigError, match=r"outputs\.exports\.0 = 'gsd3d' is a 3D exporter, but "):
+        with pytest.warns(DeprecatedNameWarning):
+            regopack.scene("small", outputs__exports=["gsd3d"])

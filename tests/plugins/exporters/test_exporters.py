@@ -273,17 +273,21 @@ def test_the_plugin_registers_each_format_module_under_its_name():
         csv_export,
         json_export,
         lammps_export,
+        slice_export,
+        stl_export,
         svg_export,
         vtk_export,
     )
 
     specs = list(exporters.regopack_exporters())
-    assert [(s.name, s.config_model, s.factory) for s in specs] == [
-        ("csv", csv_export.CsvConfig, csv_export.CsvExporter),
-        ("json", json_export.JsonConfig, json_export.JsonExporter),
-        ("svg", svg_export.SvgConfig, svg_export.SvgExporter),
-        ("vtk", vtk_export.VtkConfig, vtk_export.VtkExporter),
-        ("lammps", lammps_export.LammpsConfig, lammps_export.LammpsExporter),
+    assert [(s.name, s.config_model, s.factory, s.dimensions, s.aliases) for s in specs] == [
+        ("csv", csv_export.CsvConfig, csv_export.CsvExporter, (2,), ()),
+        ("json", json_export.JsonConfig, json_export.JsonExporter, (2,), ()),
+        ("svg", svg_export.SvgConfig, svg_export.SvgExporter, (2,), ()),
+        ("vtk", vtk_export.VtkConfig, vtk_export.VtkExporter, (2, 3), ("vtk3d",)),
+        ("lammps", lammps_export.LammpsConfig, lammps_export.LammpsExporter, (2, 3), ("lammps3d",)),
+        ("stl", stl_export.StlConfig, stl_export.StlExporter, (3,), ()),
+        ("slice", slice_export.SliceConfig, slice_export.SliceExporter, (3,), ()),
     ]
 
 

@@ -10,13 +10,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from packings3d import packing3d, spheres3d
 
 from regopack.base.errors import ConfigError, ExportError
 from regopack.exports.pipeline import build_exporter, export_packing
 from regopack.geometry.domain import PeriodicRectangle
 from regopack.packing.core import ROUNDED_SEGMENTS, Packing, save
 from regopack.plugins.exporters import polygon_moments
-from regopack.plugins.exporters.gsd_export import GsdExporter, convex_outline, shape_moments
+from regopack.plugins.exporters.gsd_export import (
+    GsdConfig,
+    GsdExporter,
+    convex_outline,
+    quaternion_from_matrix,
+    shape_moments,
+)
+from regopack.plugins.exporters.solid_export_common import mass_properties
 from regopack.registry.manager import default_registry
 from regopack.run.pipeline import run_scene
 from regopack.scenes.model import load_scene, resolve_scene
@@ -409,3 +417,107 @@ def test_the_length_unit_is_logged_in_metres(walled, registry, tmp_path):
         p = replace(walled, scene={**walled.scene, "length_unit": unit})
         path = export_packing(p, "gsd", tmp_path / f"{metres}.gsd", registry=registry)
         assert read(path).log["regopack/length_unit_m"][0] == metres
+
+
+# ---------------------------------------------------------------------------
+# 3D packings: convex polyhedra and spheres
+
+
+@pytest.fixture(scope="module")
+def polyhedra() -> Packing:
+    return packing3d()
+
+
+@pytest.fixture(scope="module")
+def solid_frame(polyhedra, tmp_path_factory):
+    path = tmp_path_factory.mktemp("gsd") / "p.gsd"
+    GsdExporter(GsdConfig(density=3.1)).export(polyhedra, path)
+    with gsd_hoomd.open(path, "r") as traj:
+        assert len(traj) == 1
+        return traj[0]
+
+
+def rotate(q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Rotate the rows of ``v`` by the unit quaternion ``q = (w, x, y, z)`` (HOOMD's order)."""
+    w, u = q[0], q[1:]
+    return v + 2.0 * np.cross(u, np.cross(u, v) + w * v)
+
+
+def test_box_types_and_one_shape_per_particle(polyhedra, solid_frame) -> None:
+    idx = np.flatnonzero(polyhedra.placed)
+    lo, hi = polyhedra.domain.bounds().reshape(3, 2).T
+    assert solid_frame.configuration.dimensions == 3
+    np.testing.assert_allclose(solid_frame.configuration.box, [*(hi - lo), 0, 0, 0])
+    np.testing.assert_allclose(solid_frame.log["regopack/origin"], 0.5 * (lo + hi))
+    assert solid_frame.particles.N == idx.size
+    np.testing.assert_array_equal(solid_frame.particles.typeid, np.arange(idx.size))
+    names = [f"{polyhedra.mineral_names[polyhedra.mineral[j]]}_{j}" for j in idx]
+    assert list(solid_frame.particles.types) == names
+    assert {s["type"] for s in solid_frame.particles.type_shapes} == {"ConvexPolyhedron"}
+    np.testing.assert_array_equal(solid_frame.log["particles/regopack/index"], idx)
+    np.testing.assert_array_equal(
+        solid_frame.log["particles/regopack/mineral"], polyhedra.mineral[idx]
+    )
+
+
+def test_shapes_rotated_by_the_quaternion_give_each_particle(polyhedra, solid_frame) -> None:
+    idx = np.flatnonzero(polyhedra.placed)
+    origin = np.asarray(solid_frame.log["regopack/origin"])
+    for i, j in enumerate(idx.tolist()):
+        body = np.array(solid_frame.particles.type_shapes[i]["vertices"])
+        q = np.asarray(solid_frame.particles.orientation[i], dtype=np.float64)
+        assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-6)
+        world = rotate(q / np.linalg.norm(q), body) + solid_frame.particles.position[i] + origin
+        want = polyhedra.world_vertices(j)
+        np.testing.assert_allclose(world, want, atol=2e-6 * polyhedra.domain.size[0])
+
+
+def test_positions_are_centroids_and_masses_volumes(polyhedra, solid_frame) -> None:
+    idx = np.flatnonzero(polyhedra.placed)
+    origin = np.asarray(solid_frame.log["regopack/origin"])
+    solids = polyhedra.solids
+    for i, j in enumerate(idx.tolist()):
+        local, loops = solids.solid(j)
+        volume, c, moments = mass_properties(local, loops)
+        pos = solid_frame.particles.position[i] + origin
+        np.testing.assert_allclose(pos, polyhedra.centre[j] + c, atol=1e-5)
+        assert solid_frame.particles.mass[i] == pytest.approx(3.1 * volume, rel=1e-6)
+        inertia = 3.1 * (np.trace(moments) * np.eye(3) - moments)
+        assert np.sort(solid_frame.particles.moment_inertia[i]) == pytest.approx(
+            np.linalg.eigvalsh(inertia), rel=1e-5
+        )
+
+
+def test_the_body_frame_is_the_principal_frame(polyhedra, solid_frame) -> None:
+    """The type's vertices have a diagonal inertia tensor: HOOMD-blue needs principal axes."""
+    for i in range(solid_frame.particles.N):
+        body = np.array(solid_frame.particles.type_shapes[i]["vertices"])
+        j = int(solid_frame.log["particles/regopack/index"][i])
+        _, loops = polyhedra.solids.solid(j)
+        _, c, moments = mass_properties(body, loops)
+        np.testing.assert_allclose(c, 0.0, atol=1e-9 * polyhedra.radius[j])
+        off = moments - np.diag(np.diag(moments))
+        assert np.abs(off).max() < 1e-9 * np.abs(moments).max()
+
+
+def test_quaternion_from_matrix_round_trips() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        q = rng.normal(size=4)
+        q /= np.linalg.norm(q)
+        m = np.column_stack([rotate(q, e) for e in np.eye(3)])
+        got = quaternion_from_matrix(m)
+        assert np.allclose(got, q * np.sign(q[0]), atol=1e-12)
+
+
+def test_spheres_are_sphere_shapes_at_their_centres(tmp_path) -> None:
+    spheres = spheres3d()
+    path = GsdExporter().export(spheres, tmp_path / "s.gsd")
+    with gsd_hoomd.open(path, "r") as traj:
+        frame = traj[0]
+    idx = np.flatnonzero(spheres.placed)
+    origin = np.asarray(frame.log["regopack/origin"])
+    want = [{"type": "Sphere", "diameter": 2 * spheres.radius[j]} for j in idx]
+    assert list(frame.particles.type_shapes) == want
+    np.testing.assert_allclose(frame.particles.position + origin, spheres.centre[idx], atol=1e-5)
+    np.testing.assert_array_equal(frame.particles.orientation, [[1, 0, 0, 0]] * idx.size)

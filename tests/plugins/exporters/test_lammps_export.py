@@ -14,16 +14,21 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
+from packings3d import cube_and_sphere, packing3d, spheres3d
 
 from regopack.base.errors import ExportError
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.lammps_export import (
     LammpsConfig,
     LammpsExporter,
+    PolyhedronBodies,
+    body_faces,
     lammps_bodies,
+    polyhedron_bodies,
     reference_body,
     script_path,
 )
+from regopack.plugins.exporters.solid_export_common import mass_properties
 from regopack.registry.manager import default_registry
 from regopack.run.pipeline import run_scene
 from regopack.scenes.model import load_scene, resolve_scene
@@ -353,3 +358,200 @@ def test_the_default_length_scale_follows_the_scenes_unit(small, tmp_path):
     assert "# lengths = packing lengths (mm) x 1000.0;" in text
     a, b = body_blocks(one)[0][1], body_blocks(text)[0][1]
     np.testing.assert_allclose(np.array(b[1:-1]), 1e3 * np.array(a[1:-1]), rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# 3D packings: polyhedron bodies
+
+
+@pytest.fixture(scope="module")
+def polyhedra() -> Packing:
+    """About 60 polyhedra of 14 face directions in a 20 µm box."""
+    return packing3d()
+
+
+@pytest.fixture(scope="module")
+def solid_bodies(polyhedra) -> PolyhedronBodies:
+    return polyhedron_bodies(polyhedra)
+
+
+@pytest.fixture(scope="module")
+def hexahedra() -> Packing:
+    """About 25 polyhedra of 6 face directions in a 15 µm box: cheap for LAMMPS to run."""
+    return packing3d(15.0, "cube")
+
+
+def solid_blocks(text: str) -> list[tuple[list[int], list[float]]]:
+    """``([id, 3, M, N, E, F], values)`` of each body of a data file, however its lines run."""
+    lines = text.split("\nBodies\n", 1)[1].split()
+    out, i = [], 0
+    while i < len(lines):
+        header = [int(v) for v in lines[i : i + 6]]
+        m = header[2]
+        out.append((header, [float(v) for v in lines[i + 6 : i + 6 + m]]))
+        i += 6 + m
+    return out
+
+
+# ---------------------------------------------------------------------------
+# the polyhedron bodies, without LAMMPS
+
+
+def test_every_body_lies_inside_its_particle_and_is_a_closed_polyhedron(
+    polyhedra, solid_bodies
+) -> None:
+    assert solid_bodies.reduced == 0 and solid_bodies.index.size == polyhedra.n_placed
+    fo = polyhedra.face_offsets
+    volumes = polyhedra.solids.volume
+    for k, j in enumerate(solid_bodies.index.tolist()):
+        core, r = solid_bodies.cores[k], solid_bodies.rounding[k]
+        assert r == pytest.approx(0.05 * polyhedra.radius[j])
+        world = core.vertices + solid_bodies.position[k] - polyhedra.centre[j]
+        n, s = polyhedra.normals[fo[j] : fo[j + 1]], polyhedra.support[fo[j] : fo[j + 1]]
+        assert np.all(world @ n.T + r <= s + 1e-9 * polyhedra.radius[j])  # core ⊕ r inside
+        nv, ne, nf = core.vertices.shape[0], core.edges.shape[0], len(core.loops)
+        assert nv - ne + nf == 2
+        volume, c, _ = mass_properties(core.vertices, core.loops)
+        assert volume > 0.7 * volumes[j]
+        faces = body_faces(core)
+        for face in faces:  # planar, outward pieces of at most four vertices
+            p = core.vertices[face[face >= 0]]
+            normal = np.cross(p[1] - p[0], p[2] - p[0])
+            assert normal @ (p.mean(axis=0) - c) > 0
+        lengths = np.linalg.norm(np.diff(core.vertices[core.edges], axis=1)[:, 0], axis=1)
+        assert lengths.min() > 1e-6 * polyhedra.radius[j]
+
+
+def test_mass_centre_and_inertia_are_the_particle_s(polyhedra, solid_bodies) -> None:
+    volumes = polyhedra.solids.volume
+    for k, j in enumerate(solid_bodies.index.tolist()):
+        local, loops = polyhedra.solids.solid(j)
+        _, c, moments = mass_properties(local, loops)
+        assert solid_bodies.volume[k] == pytest.approx(volumes[j], rel=1e-12)
+        np.testing.assert_allclose(solid_bodies.position[k], polyhedra.centre[j] + c, rtol=1e-14)
+        np.testing.assert_allclose(
+            solid_bodies.inertia[k],
+            np.trace(moments) * np.eye(3) - moments,
+            rtol=1e-12,
+            atol=1e-300,
+        )
+
+
+def test_polyhedra_data_file_layout(polyhedra, solid_bodies, tmp_path) -> None:
+    path = LammpsExporter(LammpsConfig(density=2.0)).export(polyhedra, tmp_path / "p.data")
+    text = path.read_text()
+    n = polyhedra.n_placed
+    assert f"{n} atoms\n{n} bodies\n{len(polyhedra.mineral_names)} atom types" in text
+    blocks = solid_blocks(text)
+    assert len(blocks) == n
+    sizes = []
+    for k, (header, values) in enumerate(blocks):
+        _, three, m, nv, ne, nf = header
+        assert three == 3 and m == 6 + 3 * nv + 2 * ne + 4 * nf + 1 == len(values)
+        assert values[-1] == pytest.approx(2 * solid_bodies.rounding[k])
+        ixx, iyy, izz, ixy, ixz, iyz = values[:6]
+        t = 2.0 * solid_bodies.inertia[k]
+        np.testing.assert_allclose(
+            [ixx, iyy, izz, ixy, ixz, iyz], t[[0, 1, 2, 0, 0, 1], [0, 1, 2, 1, 2, 2]]
+        )
+        sizes.append((nv, max(nv, ne, nf)))
+    script = script_path(path).read_text()
+    low, high = min(s[0] for s in sizes), max(s[1] for s in sizes)
+    assert f"atom_style   body rounded/polyhedron {low} {high}" in script
+    assert script.count("wall/body/polyhedron") == 3 and "boundary     f f f" in script
+    assert max(len(line) for line in text.splitlines()[20:]) <= 200
+    lines_per_body = text.split("\nBodies\n", 1)[1].strip().count("\n") / n
+    assert lines_per_body < 30  # LAMMPS reads at most 32 lines a body
+
+
+def test_a_periodic_box_and_spheres(polyhedra, tmp_path) -> None:
+    import dataclasses
+
+    from regopack.geometry.domain import PeriodicBox
+
+    periodic = dataclasses.replace(polyhedra, domain=PeriodicBox(*polyhedra.domain.bounds()))
+    path = LammpsExporter().export(periodic, tmp_path / "p.data")
+    script = script_path(path).read_text()
+    assert "boundary     p p p" in script and "wall/body" not in script
+    text = LammpsExporter().export(cube_and_sphere(), tmp_path / "s.data").read_text()
+    _, (sphere, values) = solid_blocks(text)
+    assert sphere == [2, 3, 10, 1, 0, 0]  # one vertex, no edge or face
+    assert values[6:] == [0.0, 0.0, 0.0, 2.0]  # at its centre, rounded by its own radius
+    np.testing.assert_allclose(values[:6], [0.4 * 3.1 * 4 / 3 * np.pi] * 3 + [0.0] * 3)
+    assert "rounded/polyhedron 1 " in script_path(tmp_path / "s.data").read_text()
+
+
+def test_a_cube_erodes_into_a_smaller_cube() -> None:
+    bodies = polyhedron_bodies(cube_and_sphere(rounded=False), LammpsConfig(rounding_radius=0.25))
+    core = bodies.cores[0]
+    assert core.vertices.shape == (8, 3) and core.edges.shape == (12, 2) and len(core.loops) == 6
+    np.testing.assert_allclose(np.abs(core.vertices), 0.75)
+    assert body_faces(core).shape == (6, 4) and (body_faces(core) >= 0).all()
+    np.testing.assert_allclose(bodies.position[0], [3, 3, 3])
+    np.testing.assert_allclose(bodies.inertia[0], np.eye(3) * 8 * 2 / 3, atol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# LAMMPS itself, on polyhedra
+
+
+def test_lammps_reads_back_polyhedra(polyhedra, tmp_path) -> None:
+    path = LammpsExporter().export(polyhedra, tmp_path / "p.data")
+    lmp = _lammps()
+    cwd = os.getcwd()
+    try:
+        os.chdir(tmp_path)
+        script = script_path(path).read_text().splitlines()
+        lmp.commands_string("\n".join(line for line in script if not line.startswith("run")))
+        lmp.command(f"write_data {tmp_path / 'back.data'}")
+    finally:
+        os.chdir(cwd)
+        lmp.close()
+    ours = solid_blocks(path.read_text())
+    back = sorted(solid_blocks((tmp_path / "back.data").read_text()), key=lambda b: b[0][0])
+    assert len(back) == len(ours) == polyhedra.n_placed
+    for (h1, v1), (h2, v2) in zip(ours, back, strict=True):
+        assert h1 == h2
+        scale = max(abs(v) for v in v1[:6])
+        np.testing.assert_allclose(v2[:6], v1[:6], atol=1e-9 * scale)  # inertia
+        np.testing.assert_allclose(v2[6:-1], v1[6:-1], atol=1e-9)  # vertices, edges, faces
+        assert v2[-1] == pytest.approx(v1[-1])
+
+
+def test_lammps_holds_polyhedra_still_without_external_force(hexahedra, tmp_path) -> None:
+    """2 000 steps of the exported script: nothing moves, nothing is lost or NaN."""
+    path = LammpsExporter().export(hexahedra, tmp_path / "p.data")
+    report = simulate(path, [1000, 1000])
+    d_min = 2.0 * float(hexahedra.radius[hexahedra.placed].min())
+    assert report["natoms"] == hexahedra.n_placed > 15 and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+    assert len(report["ke"]) == 2 and max(report["ke"]) < 1e-12 * hexahedra.n_placed
+
+
+def test_lammps_runs_many_faced_bodies(polyhedra, tmp_path) -> None:
+    """Bodies of up to 24 vertices and 40 faces: LAMMPS sizes their storage from Nmax."""
+    path = LammpsExporter().export(polyhedra, tmp_path / "p.data")
+    report = simulate(path, [20])
+    d_min = 2.0 * float(polyhedra.radius[polyhedra.placed].min())
+    assert report["natoms"] == polyhedra.n_placed and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_lammps_holds_a_packing_of_spheres_still(tmp_path) -> None:
+    spheres = spheres3d()
+    path = LammpsExporter().export(spheres, tmp_path / "p.data")
+    report = simulate(path, [2000])
+    d_min = 2.0 * float(spheres.radius[spheres.placed].min())
+    assert report["natoms"] == spheres.n_placed > 15 and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_the_thickness_of_a_lamina_is_refused_for_polyhedra(polyhedra, tmp_path) -> None:
+    from regopack.base.errors import ConfigError
+
+    with pytest.raises(ConfigError) as err:
+        LammpsExporter(LammpsConfig(thickness=2.0)).export(polyhedra, tmp_path / "p.data")
+    assert str(err.value) == (
+        "exporter 'lammps': thickness = 2.0: has no meaning for a 3D packing, only for 2D ones"
+    )
+    assert not list(tmp_path.iterdir())

@@ -137,11 +137,11 @@ def test_the_command_writes_a_section_that_analyze_and_2d_exports_read(  # type:
 
 
 def test_a_2d_exporter_is_refused_in_one_line(packing_file, capsys) -> None:  # type: ignore[no-untyped-def]
-    assert main(["export", str(packing_file), "--to", "vtk"]) != 0
+    assert main(["export", str(packing_file), "--to", "svg"]) != 0
     line = one_error_line(capsys)
     assert line == (
-        f"regopack: error: {packing_file}: exporter 'vtk' writes 2D packings, and this is a "
-        "3D packing; 3D exporters: gsd3d, lammps3d, slice, stl, vtk3d"
+        f"regopack: error: {packing_file}: exporter 'svg' writes 2D packings, and this is a "
+        "3D packing; 3D exporters: gsd, lammps, slice, stl, vtk"
     )
 
 

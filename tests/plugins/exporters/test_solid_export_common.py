@@ -12,7 +12,7 @@ from regopack.exports.pipeline import export_packing
 from regopack.plugins.exporters.solid_export_common import fan_triangles, mass_properties
 from regopack.registry.manager import default_registry
 
-EXPORTS = [("vtk3d", ".vtu"), ("stl", ".stl"), ("gsd3d", ".gsd"), ("lammps3d", ".data")]
+EXPORTS = [("vtk", ".vtu"), ("stl", ".stl"), ("gsd", ".gsd"), ("lammps", ".data")]
 
 
 def test_mass_properties_of_a_shifted_box_match_the_formulas() -> None:
@@ -63,7 +63,7 @@ def test_a_packing_with_nothing_placed_gives_an_empty_file(kind, suffix, tmp_pat
     assert path.stat().st_size > 0
 
 
-@pytest.mark.parametrize("kind", ["vtk3d", "stl"])
+@pytest.mark.parametrize("kind", ["vtk", "stl"])
 def test_spheres_are_refused_in_one_line_by_the_polyhedron_formats(kind, tmp_path) -> None:  # type: ignore[no-untyped-def]
     from regopack.base.errors import ExportError
 

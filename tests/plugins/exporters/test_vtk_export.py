@@ -1,4 +1,7 @@
-"""The ``vtk3d`` export, read back by VTK: cells, data arrays, and VTK's own volumes and normals."""
+"""The ``vtk`` export of 3D packings, read back by VTK: cells, data arrays, volumes, normals.
+
+The 2D PolyData is tested with the other 2D formats in ``test_exporters.py``.
+"""
 
 from __future__ import annotations
 
@@ -7,7 +10,7 @@ import pytest
 from packings3d import packing3d
 
 from regopack.packing.core import Packing
-from regopack.plugins.exporters.vtk3d_export import VTK_POLYHEDRON, Vtk3dExporter
+from regopack.plugins.exporters.vtk_export import VTK_POLYHEDRON, VtkExporter
 
 vtk = pytest.importorskip("vtk", reason="the vtk package is not installed")
 from vtkmodules.util.numpy_support import vtk_to_numpy  # noqa: E402
@@ -20,7 +23,7 @@ def packing() -> Packing:
 
 @pytest.fixture(scope="module")
 def grid(packing, tmp_path_factory):  # type: ignore[no-untyped-def]
-    path = Vtk3dExporter().export(packing, tmp_path_factory.mktemp("vtk3d") / "p.vtu")
+    path = VtkExporter().export(packing, tmp_path_factory.mktemp("vtk") / "p.vtu")
     reader = vtk.vtkXMLUnstructuredGridReader()
     reader.SetFileName(str(path))
     reader.Update()
