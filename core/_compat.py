@@ -16,9 +16,10 @@ import importlib.abc
 import importlib.util
 import sys
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from importlib.machinery import ModuleSpec
 from types import ModuleType
+from typing import Any
 
 __all__ = ["MOVED_MODULES", "AliasFinder", "install", "warn_moved"]
 
@@ -179,3 +180,21 @@ def install() -> None:
     """Put :data:`FINDER` at the front of :data:`sys.meta_path` (once)."""
     if FINDER not in sys.meta_path:
         sys.meta_path.insert(0, FINDER)
+
+
+def renamed_names(module: str, names: Mapping[str, str]) -> Callable[[str], Any]:
+    """Return a module ``__getattr__`` (PEP 562) that gives ``module``'s renamed objects.
+
+    ``names`` maps each old name to the new name of the same object in
+    ``module``, or in another module given as ``"package.module:Name"``; an
+    old name warns at every use (:func:`warn_moved`).
+    """
+
+    def getattr_(name: str) -> Any:
+        if name not in names:
+            raise AttributeError(f"module {module!r} has no attribute {name!r}")
+        where, _, new = names[name].rpartition(":")
+        warn_moved(f"{module}.{name}", f"{where or module}.{new}")
+        return getattr(importlib.import_module(where) if where else sys.modules[module], new)
+
+    return getattr_

@@ -48,6 +48,14 @@ __all__ = [
 ]
 
 
+def _takes_analyses(exporter: Exporter[Any]) -> bool:
+    """Whether ``exporter.export`` takes the keyword ``analyses``."""
+    import inspect
+
+    params = inspect.signature(exporter.export).parameters.values()
+    return any(p.name == "analyses" or p.kind is p.VAR_KEYWORD for p in params)
+
+
 def exporter_dimensions(registry: Registry, kind: str) -> tuple[int, ...]:
     """Dimensions of the packings the exporter ``kind`` writes (2D unless its spec says).
 
@@ -298,10 +306,10 @@ def run_exports(
                 f"{type(exporter).__name__}, not an Exporter"
             )
         suffix = exporter.suffix_for(dimension)
+        # an exporter written for 3D before the interfaces merged may take no analyses
+        more = {"analyses": analyses} if analyses and _takes_analyses(exporter) else {}
         try:
-            written.append(
-                exporter.export(packing, packing_path.with_suffix(suffix), analyses=analyses)
-            )
+            written.append(exporter.export(packing, packing_path.with_suffix(suffix), **more))
         except OSError as err:
             shown = shown_path.with_suffix(suffix)
             raise ExportError(f"cannot write {shown}: {err.strerror or err}") from err

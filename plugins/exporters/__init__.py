@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
+from regopack._compat import renamed_names
 from regopack.plugins.exporters.csv_export import (
     CSV_FORMAT,
     CsvConfig,
@@ -101,3 +102,17 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             dimensions=(3,),
         ),
     ]
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {
+        "Vtk3dConfig": "VtkConfig",
+        "Vtk3dExporter": "VtkExporter",
+        "Gsd3dConfig": "regopack.plugins.exporters.gsd_export:GsdConfig",
+        "Gsd3dExporter": "regopack.plugins.exporters.gsd_export:GsdExporter",
+        "Lammps3dConfig": "LammpsConfig",
+        "Lammps3dExporter": "LammpsExporter",
+    },
+)
+"""The names of the 3D exporter this module's exporter took over, for one release."""

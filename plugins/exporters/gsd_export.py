@@ -60,6 +60,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack._compat import renamed_names
 from regopack.base.errors import ExportError
 from regopack.base.messages import install_hint
 from regopack.base.units import METRES, length_unit
@@ -494,3 +495,13 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             "particle).",
         )
     ]
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {
+        "Gsd3dConfig": "GsdConfig",
+        "Gsd3dExporter": "GsdExporter",
+    },
+)
+"""The names of the 3D exporter this module's exporter took over, for one release."""

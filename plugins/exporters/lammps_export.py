@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
+from regopack._compat import renamed_names
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import conversion, length_scale, length_unit
 from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
@@ -799,3 +800,16 @@ class LammpsExporter(Exporter[AnyPacking]):
                 "",
             ]
         )
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {
+        "Lammps3dBodies": "PolyhedronBodies",
+        "Lammps3dConfig": "LammpsConfig",
+        "Lammps3dExporter": "LammpsExporter",
+        "lammps3d_bodies": "polyhedron_bodies",
+        "script3d_path": "script_path",
+    },
+)
+"""The names of the 3D exporter this module's exporter took over, for one release."""

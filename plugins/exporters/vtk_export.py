@@ -18,6 +18,7 @@ from xml.sax.saxutils import escape
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
+from regopack._compat import renamed_names
 from regopack.base.errors import ExportError
 from regopack.base.units import length_unit
 from regopack.geometry.domain import Box
@@ -242,3 +243,13 @@ class VtkExporter(Exporter[AnyPacking]):
             text = _polydata(packing, analyses)
         _write_text(path, text)
         return path
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {
+        "Vtk3dConfig": "VtkConfig",
+        "Vtk3dExporter": "VtkExporter",
+    },
+)
+"""The names of the 3D exporter this module's exporter took over, for one release."""

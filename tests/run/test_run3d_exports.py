@@ -118,3 +118,57 @@ def test_an_old_3d_exporter_name_in_a_2d_scene_is_refused() -> None:
     with pytest.raises(ConfigError, match=r"outputs\.exports\.0 = 'gsd3d' is a 3D exporter, but "):
         with pytest.warns(DeprecatedNameWarning):
             regopack.scene("small", outputs__exports=["gsd3d"])
+
+
+def test_an_old_3d_exporter_without_analyses_runs_in_a_scene_with_analyses(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    # written against SolidExporter, whose runs never passed the analyses
+    from pathlib import Path
+
+    from pydantic import BaseModel
+
+    from regopack.registry.hookspecs import hookimpl
+    from regopack.registry.interfaces import Exporter
+    from regopack.registry.plugin_types import ExporterSpec
+    from regopack.testing import make_registry
+
+    class NoConfig(BaseModel):
+        pass
+
+    class Counts(Exporter):  # type: ignore[type-arg]
+        suffix = ".count"
+
+        def __init__(self, config: NoConfig) -> None:
+            pass
+
+        def export(self, packing, path):  # type: ignore[no-untyped-def, override]
+            Path(path).write_text(f"{packing.n_placed}\n")
+            return Path(path)
+
+    class Plugin:
+        @hookimpl
+        def regopack_exporters(self):  # type: ignore[no-untyped-def]
+            return [ExporterSpec("counts", NoConfig, Counts, dimensions=(3,))]
+
+    outputs = {"exports": ["counts"], "analyses": ["coordination"]}
+    scene = regopack.scene({**scene3d(15.0), "outputs": outputs}, registry=make_registry(Plugin()))
+    outcome = regopack.pack_and_summarise(scene, out=tmp_path / "run", verify=False)
+    assert [p.name for p in outcome.exports] == ["packing.count"]
+    assert int(outcome.exports[0].read_text()) == outcome.packing.n_placed
+
+
+def test_the_old_3d_exporter_names_of_the_flat_layout_still_import() -> None:
+    import importlib
+
+    from regopack.plugins.exporters.gsd_export import GsdExporter
+    from regopack.plugins.exporters.lammps_export import LammpsExporter, polyhedron_bodies
+    from regopack.plugins.exporters.vtk_export import VtkExporter
+
+    with pytest.warns(DeprecationWarning):
+        old = importlib.import_module("regopack.plugins.lammps3d_export")
+    for name, new in (("Lammps3dExporter", LammpsExporter), ("lammps3d_bodies", polyhedron_bodies)):
+        with pytest.warns(DeprecationWarning, match=f"{name} is deprecated"):
+            assert getattr(old, name) is new
+    package = importlib.import_module("regopack.plugins.exporters")
+    for name, new in (("Vtk3dExporter", VtkExporter), ("Gsd3dExporter", GsdExporter)):
+        with pytest.warns(DeprecationWarning, match=f"{name} is deprecated"):
+            assert getattr(package, name) is new
