@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from typing_extensions import TypeVar
 
-from regopack._compat import warn_moved
+from regopack._compat import renamed_names
 from regopack.base.errors import GeometryError, PackingError, PackingFileError
 from regopack.geometry.domain import Box, Domain, PlaneDomain, Rectangle, domain_from_dict
 from regopack.geometry.solids import SolidBatch
@@ -2155,10 +2155,5 @@ _DEPRECATED = {
 """Former names (of ``regopack.packing.core3d``), deprecated, and the names that replaced them."""
 
 
-def __getattr__(name: str) -> Any:
-    """Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""
-    if name in _DEPRECATED:
-        new = _DEPRECATED[name]
-        warn_moved(f"{__name__}.{name}", f"{__name__}.{new}")
-        return globals()[new]
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = renamed_names(__name__, _DEPRECATED)
+"""Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""

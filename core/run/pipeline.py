@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from regopack._compat import warn_moved
+from regopack._compat import renamed_names
 from regopack.analysis.pipeline import AnalysisFiles, write_analysis_files
 from regopack.base import toml as _toml
 from regopack.base.errors import ConfigError, GeometryError, PluginError
@@ -819,10 +819,5 @@ _MOVED_3D = {
 """Names of the former 3D run module, now the names of this one for both dimensions."""
 
 
-def __getattr__(name: str) -> Any:
-    """Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""
-    if name in _MOVED_3D:
-        new = _MOVED_3D[name]
-        warn_moved(f"{__name__}.{name}", f"{__name__}.{new}")
-        return globals()[new]
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+__getattr__ = renamed_names(__name__, _MOVED_3D)
+"""Give the former 3D names (deprecated) the names that replaced them (PEP 562)."""

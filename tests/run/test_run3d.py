@@ -289,3 +289,21 @@ def test_what_available_surface_cannot_pack_is_refused_before_drawing(tmp_path) 
     text = str(err.value)
     assert "phases.1.shape.kind: 'sphere' beside 'polyhedron' in phase 0" in text
     assert "\n" not in text
+
+
+@pytest.mark.parametrize(
+    ("old", "new"),
+    [
+        ("run_scene3d", "run_scene"),
+        ("RunOutcome3D", "RunOutcome"),
+        ("check_scene3d", "check_scene"),
+        ("draw_population3d", "draw_population"),
+    ],
+)
+def test_the_former_3d_run_names_give_the_run_of_both_dimensions(old: str, new: str) -> None:
+    import regopack.run.pipeline as pipeline
+
+    with pytest.warns(DeprecationWarning, match=f"pipeline.{old} is deprecated.*pipeline.{new}"):
+        assert getattr(pipeline, old) is getattr(pipeline, new)
+    with pytest.raises(AttributeError, match="has no attribute 'run_scene4d'"):
+        pipeline.run_scene4d  # noqa: B018
