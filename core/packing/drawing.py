@@ -189,6 +189,8 @@ def draw_packing(
         raise ConfigError(f"ax: expected matplotlib axes, not {type(ax).__name__}")
     placed = np.flatnonzero(packing.placed).astype(np.int64)
     if packing.dimension == 3:
+        if axis not in (0, 1, 2):
+            raise ConfigError(f"axis = {axis!r}: expected 0, 1 or 2 (the normal of the section)")
         polygons, owner = section_polygons(packing, axis, at)
         keep = [a for a in range(3) if a != axis]
         box = packing.domain.bounds().reshape(3, 2)

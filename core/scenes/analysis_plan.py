@@ -19,7 +19,7 @@ from regopack.base.limits import LimitError
 from regopack.base.messages import describe_validation_error
 from regopack.registry.interfaces import Analyzer
 from regopack.registry.manager import Registry
-from regopack.registry.plugin_types import AnalyzerSpec, misplaced_field
+from regopack.registry.plugin_types import misplaced_field, served_dimensions
 
 if TYPE_CHECKING:
     from regopack.packing.core import Packing
@@ -122,12 +122,7 @@ def dimensions_of(registry: Registry, name: str) -> tuple[int, ...]:
     An old name serves the dimensions it served before (``contacts3d``: 3D),
     when its spec says so (:attr:`~regopack.registry.plugin_types.PluginSpec.alias_dimensions`).
     """
-    new = registry.canonical("analysis", name)
-    spec = registry.get("analysis", new)
-    if new != name and spec.alias_dimensions:
-        return tuple(spec.alias_dimensions)
-    dims = spec.dimensions if isinstance(spec, AnalyzerSpec) else (2,)
-    return tuple(dims)
+    return served_dimensions(registry.get("analysis", registry.canonical("analysis", name)), name)
 
 
 def _fitting(registry: Registry, dimension: int) -> str:

@@ -76,3 +76,12 @@ def test_plot_draws_a_3d_packing_by_its_section() -> None:
     assert len(art.particles.get_paths()) == 1 and art.colorbar is not None
     assert art.ax.get_xlabel().startswith("y (") and art.ax.get_ylabel().startswith("z (")
     plt.close("all")
+
+
+def test_a_bad_section_axis_is_one_line() -> None:
+    from regopack.base.errors import ConfigError
+
+    p = cube_packing([[5.0, 5.0, 5.0]], 0.5)
+    with pytest.raises(ConfigError, match=r"^axis = 3: expected 0, 1 or 2"):
+        p.plot(axis=3)
+    plt.close("all")
