@@ -37,6 +37,7 @@ from typing import Any, Literal
 
 import numpy as np
 
+from regopack.analysis import __all__ as __all__  # the public names, listed once in the package
 from regopack.base.errors import ConfigError, PluginError
 from regopack.base.outdir import mark_folder, rebase, replace_folder
 from regopack.base.units import DEFAULT_LENGTH_UNIT, length_unit
@@ -44,22 +45,9 @@ from regopack.packing.core import Packing, _atomic_file, write_json_atomic
 from regopack.registry.interfaces import Analyzer
 from regopack.registry.manager import Registry
 from regopack.registry.plugin_types import FigureSpec
-from regopack.scenes.analysis_plan import (
-    DEFAULT_ANALYSES,
-    DEFAULT_ANALYSES_3D,
-    run_analyses,
-)
-
-__all__ = [
-    "DEFAULT_ANALYSES",
-    "DEFAULT_ANALYSES_3D",
-    "AnalysisFiles",
-    "analysis_summary",
-    "main_numbers",
-    "run_analyses",
-    "write_analysis",
-    "write_analysis_files",
-]
+from regopack.scenes.analysis_plan import DEFAULT_ANALYSES as DEFAULT_ANALYSES
+from regopack.scenes.analysis_plan import DEFAULT_ANALYSES_3D as DEFAULT_ANALYSES_3D
+from regopack.scenes.analysis_plan import run_analyses as run_analyses
 
 ANALYSIS_KIND = "analysis"
 """Kind of the folder :func:`write_analysis` writes (in its marker file)."""

@@ -54,27 +54,11 @@ from regopack.registry.interfaces import (
     SizeDistribution,
     SolidGenerator,
 )
+from regopack.run import __all__ as __all__  # the public names, listed once in the package
 from regopack.run.compilation import CompileTime, compile_timer
 from regopack.scenes.analysis_plan import plan_analyses, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.verification.summary import verify_summary
-
-__all__ = [
-    "BYTES_PER_PARTICLE",
-    "PARTICLE_BYTES",
-    "RUN_FOLDER",
-    "RunOutcome",
-    "check_runnable",
-    "check_scene",
-    "default_out_dir",
-    "draw_population",
-    "memory_limit",
-    "particle_bytes",
-    "particle_count",
-    "phi_in_window",
-    "run_scene",
-]
-
 
 RUN_FOLDER = "run"
 """Kind of the folder a run writes (in its :data:`regopack.base.outdir.MARKER` file)."""
