@@ -474,19 +474,35 @@ class Packing(PlacedParticles, Generic[D]):
         else:
             self._validate_outlines()
 
-    def _validate_outlines(self) -> None:
-        """Check a 2D packing (see :meth:`validate`)."""
-        check_array_types(self, _ARRAYS)
-        radius, mineral, vertices, offsets = self.radius, self.mineral, self.vertices, self.offsets
-        centre, index = self.centre, self.insertion_index
-        n = radius.shape[0]
-        for name in ("mineral", "orientation", "centre", "insertion_index"):
+    def _check_rows(self, names: tuple[str, ...]) -> None:
+        """Each array of ``names`` has one row per particle (as many as ``radius``)."""
+        n = self.radius.shape[0]
+        for name in names:
             rows = getattr(self, name).shape[0]
             if rows != n:
                 raise PackingError(
                     f"array {name!r} has {rows} rows, expected one per particle "
                     f"({n}, the length of 'radius')"
                 )
+
+    def _check_finite(self, names: tuple[str, ...], where: Callable[[str, int], str]) -> None:
+        """Every value of the arrays ``names`` is finite; ``where`` names a bad array's row."""
+        for name in names:
+            arr = getattr(self, name)
+            finite = np.isfinite(arr)
+            if not finite.all():
+                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
+                raise PackingError(
+                    f"array {name!r} has the non-finite value {arr[row]} at {where(name, row)}"
+                )
+
+    def _validate_outlines(self) -> None:
+        """Check a 2D packing (see :meth:`validate`)."""
+        check_array_types(self, _ARRAYS)
+        radius, mineral, vertices, offsets = self.radius, self.mineral, self.vertices, self.offsets
+        centre, index = self.centre, self.insertion_index
+        n = radius.shape[0]
+        self._check_rows(("mineral", "orientation", "centre", "insertion_index"))
         for name in ("centre", "vertices"):
             shape = getattr(self, name).shape
             if shape[1] != 2:
@@ -517,17 +533,14 @@ class Packing(PlacedParticles, Generic[D]):
                 f"array 'offsets' ends at {offsets[-1]}, but 'vertices' has "
                 f"{vertices.shape[0]} rows"
             )
-        for name in _FINITE:
-            arr = getattr(self, name)
-            finite = np.isfinite(arr)
-            if not finite.all():
-                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
-                which = (
-                    f"row {row} (particle {int(np.searchsorted(offsets, row, side='right')) - 1})"
-                    if name == "vertices"
-                    else f"particle {row}"
-                )
-                raise PackingError(f"array {name!r} has the non-finite value {arr[row]} at {which}")
+        self._check_finite(
+            _FINITE,
+            lambda name, row: (
+                f"row {row} (particle {int(np.searchsorted(offsets, row, side='right')) - 1})"
+                if name == "vertices"
+                else f"particle {row}"
+            ),
+        )
         check_particles(
             radius, mineral, self.mineral_names, index, centre, self.rounding, self.stats
         )
@@ -547,13 +560,7 @@ class Packing(PlacedParticles, Generic[D]):
                     f"array {name!r} has shape {shape}, expected ({shape[0]}, {cols})"
                 )
         n = self.radius.shape[0]
-        for name in ("mineral", "rotation", "centre", "insertion_index"):
-            rows = getattr(self, name).shape[0]
-            if rows != n:
-                raise PackingError(
-                    f"array {name!r} has {rows} rows, expected one per particle "
-                    f"({n}, the length of 'radius')"
-                )
+        self._check_rows(("mineral", "rotation", "centre", "insertion_index"))
         faces = self.normals.shape[0]
         if self.support.shape[0] != faces:
             raise PackingError(
@@ -576,14 +583,7 @@ class Packing(PlacedParticles, Generic[D]):
                     f"array 'face_vertices' has the value {self.face_vertices[k]} at entry {k} "
                     f"(particle {loop_owner[k]}, which has {count[k]} vertices)"
                 )
-        for name in _FINITE3D:
-            arr = getattr(self, name)
-            finite = np.isfinite(arr)
-            if not finite.all():
-                row = _first(~finite.reshape(arr.shape[0], -1).all(axis=1))
-                raise PackingError(
-                    f"array {name!r} has the non-finite value {arr[row]} at row {row}"
-                )
+        self._check_finite(_FINITE3D, lambda name, row: f"row {row}")
         for name in ("normals", "rotation"):
             arr = getattr(self, name)
             off = np.abs(np.sqrt(np.einsum("ij,ij->i", arr, arr)) - 1.0) > UNIT_TOLERANCE
