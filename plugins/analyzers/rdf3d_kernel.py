@@ -2,16 +2,12 @@
 
 from __future__ import annotations
 
-import math
-
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from regopack.geometry.population import FloatArray, IntArray
+from regopack.plugins.analyzers.rdf_kernel import add_pair
 
 
 @numba.njit(cache=True)
@@ -66,12 +62,5 @@ def weighted_pair_histogram3d(
                 if dx >= a or dy >= b or dz >= c:
                     continue
                 w = 1.0 / ((a - dx) * (b - dy) * (c - dz))
-            k = int((math.sqrt(d2) - r_lo) / width)
-            if k >= bins:
-                k = bins - 1
-            kq = ks[q]
-            if kp <= kq:
-                out[kp, kq, k] += w
-            else:
-                out[kq, kp, k] += w
+            add_pair(out, kp, ks[q], d2, r_lo, width, bins, w)
     return out

@@ -6,12 +6,27 @@ import math
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.geometry.population import FloatArray, IntArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+
+@numba.njit(cache=True)
+def add_pair(
+    out: FloatArray, kp: int, kq: int, d2: float, r_lo: float, width: float, bins: int, w: float
+) -> None:
+    """Add weight ``w`` of a pair at squared distance ``d2`` to its bin of ``out``.
+
+    The bin is ``(sqrt(d2) - r_lo) / width``, the last one for a distance at
+    the upper end; the cell is ``[min(kp, kq), max(kp, kq)]``.
+    """
+    k = int((math.sqrt(d2) - r_lo) / width)
+    if k >= bins:
+        k = bins - 1
+    if kp <= kq:
+        out[kp, kq, k] += w
+    else:
+        out[kq, kp, k] += w
 
 
 @numba.njit(cache=True)
@@ -60,17 +75,10 @@ def weighted_pair_histogram(
             d2 = dx * dx + dy * dy
             if d2 >= r_hi2 or d2 < r_lo2:
                 continue
-            k = int((math.sqrt(d2) - r_lo) / width)
-            if k >= bins:
-                k = bins - 1
             if gp and ghost[q]:
                 continue
             w = 1.0 / ((a - dx) * (b - abs(dy))) if translation else 1.0
             if gp or ghost[q]:
                 w *= 0.5
-            kq = ks[q]
-            if kp <= kq:
-                out[kp, kq, k] += w
-            else:
-                out[kq, kp, k] += w
+            add_pair(out, kp, ks[q], d2, r_lo, width, bins, w)
     return out

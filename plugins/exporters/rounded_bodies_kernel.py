@@ -13,12 +13,10 @@ import math
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from regopack.geometry.population import FloatArray, IntArray
+from regopack.plugins.common.halfplane_clip import clip_halfplane
 
 __all__ = ["rounded_bodies"]
 
@@ -86,19 +84,7 @@ def _erode(
             continue
         a, b = ey / length, -ex / length
         c = a * vx[i] + b * vy[i] - r
-        out = 0
-        for j in range(count):
-            j2 = j + 1 if j + 1 < count else 0
-            f1 = c - (a * px[j] + b * py[j])
-            f2 = c - (a * px[j2] + b * py[j2])
-            if f1 >= 0.0:
-                qx[out], qy[out] = px[j], py[j]
-                out += 1
-            if (f1 >= 0.0) != (f2 >= 0.0):
-                u = f1 / (f1 - f2)
-                qx[out] = px[j] + u * (px[j2] - px[j])
-                qy[out] = py[j] + u * (py[j2] - py[j])
-                out += 1
+        out = clip_halfplane(px, py, count, a, b, c, qx, qy)
         for j in range(out):
             px[j], py[j] = qx[j], qy[j]
         count = out
