@@ -16,8 +16,8 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from regopack.plugins.sizes.diameters import DiameterDistribution
 from regopack.registry.hookspecs import hookimpl
-from regopack.registry.interfaces import SizeDistribution
 from regopack.registry.plugin_types import SizeDistributionSpec
 
 MIN_SPREAD = 1e-9
@@ -68,7 +68,7 @@ class Change5Config(BaseModel):
         return self
 
 
-class Change5(SizeDistribution):
+class Change5(DiameterDistribution):
     """Truncated shifted power law of diameters, ``n(d) ∝ (d + d0)^(-alpha)``.
 
     Parameters
@@ -87,6 +87,8 @@ class Change5(SizeDistribution):
         self.config = config
         self._scale = config.d_min + config.d0
         self._xmax = (config.d_max + config.d0) / self._scale  # > 1
+        self.d_lo = config.d_min
+        self.d_hi = config.d_max
 
     # -- distribution functions in the normalised variable x = (d + d0) / (d_min + d0)
     def _g(self, x: NDArray[np.float64] | float) -> NDArray[np.float64]:
@@ -115,8 +117,8 @@ class Change5(SizeDistribution):
         d = x * self._scale - c.d0
         return np.clip(d, c.d_min, c.d_max)
 
-    def _moment(self, k: int) -> float:
-        """E[d^k] by Gauss-Legendre quadrature in log-spaced panels of x."""
+    def moment(self, k: float) -> float:
+        """``E[d^k]`` by Gauss-Legendre quadrature in log-spaced panels of x."""
         c = self.config
         nodes, weights = np.polynomial.legendre.leggauss(64)
         edges = np.geomspace(1.0, self._xmax, 33)
@@ -133,31 +135,6 @@ class Change5(SizeDistribution):
     def sample(self, n: int, rng: np.random.Generator) -> NDArray[np.float64]:
         """Draw ``n`` equivalent radii (half the sampled diameters)."""
         return 0.5 * self.ppf(rng.random(n))
-
-    @property
-    def mean_diameter(self) -> float:
-        """Expected diameter E[d]."""
-        return self._moment(1)
-
-    @property
-    def mean_area(self) -> float:
-        """Expected particle area E[pi d^2 / 4]."""
-        return math.pi / 4.0 * self._moment(2)
-
-    @property
-    def mean_volume(self) -> float:
-        """Expected particle volume E[pi d^3 / 6] (3D scenes)."""
-        return math.pi / 6.0 * self._moment(3)
-
-    @property
-    def r_min(self) -> float:
-        """Smallest radius, d_min / 2."""
-        return 0.5 * self.config.d_min
-
-    @property
-    def r_max(self) -> float:
-        """Largest radius, d_max / 2."""
-        return 0.5 * self.config.d_max
 
 
 @hookimpl

@@ -31,7 +31,7 @@ import math
 import re
 from collections.abc import Iterable
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -39,8 +39,8 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 from scipy import special
 
 from regopack.base.errors import ConfigError
+from regopack.plugins.sizes.diameters import DiameterDistribution
 from regopack.registry.hookspecs import hookimpl
-from regopack.registry.interfaces import SizeDistribution
 from regopack.registry.plugin_types import SizeDistributionSpec
 
 __all__ = [
@@ -133,6 +133,10 @@ _D_MAX_DESCRIPTION = (
     "restricted to d <= d_max and renormalised. Omit for no upper bound (then r_max is "
     "the largest quantile the sampler can reach)."
 )
+_DMin = Annotated[float | None, Field(gt=0, allow_inf_nan=False, description=_D_MIN_DESCRIPTION)]
+"""Optional lower truncation diameter of a distribution (``None``: no lower bound)."""
+_DMax = Annotated[float | None, Field(gt=0, allow_inf_nan=False, description=_D_MAX_DESCRIPTION)]
+"""Optional upper truncation diameter of a distribution (``None``: no upper bound)."""
 
 
 class LogNormalConfig(BaseModel):
@@ -164,8 +168,8 @@ class LogNormalConfig(BaseModel):
         allow_inf_nan=False,
         description="Standard deviation of ln d (0 < sigma <= 5); required.",
     )
-    d_min: float | None = Field(None, gt=0, allow_inf_nan=False, description=_D_MIN_DESCRIPTION)
-    d_max: float | None = Field(None, gt=0, allow_inf_nan=False, description=_D_MAX_DESCRIPTION)
+    d_min: _DMin = None
+    d_max: _DMax = None
 
     @model_validator(mode="after")
     def _check(self) -> LogNormalConfig:
@@ -204,8 +208,8 @@ class RosinRammlerConfig(BaseModel):
         allow_inf_nan=False,
         description="Shape (uniformity) exponent n (0.1 <= n <= 100); required.",
     )
-    d_min: float | None = Field(None, gt=0, allow_inf_nan=False, description=_D_MIN_DESCRIPTION)
-    d_max: float | None = Field(None, gt=0, allow_inf_nan=False, description=_D_MAX_DESCRIPTION)
+    d_min: _DMin = None
+    d_max: _DMax = None
 
     @model_validator(mode="after")
     def _check(self) -> RosinRammlerConfig:
@@ -284,11 +288,8 @@ class TabulatedConfig(BaseModel):
 # distributions
 
 
-class _Diameters(SizeDistribution):
-    """A distribution of diameters ``d`` sampled by its inverse CDF; radii are ``d / 2``."""
-
-    d_lo: float
-    d_hi: float
+class _Diameters(DiameterDistribution):
+    """A distribution of diameters sampled by its inverse CDF."""
 
     def _quantile(self, a: FloatArray, b: FloatArray) -> FloatArray:
         """Diameters at cumulative probability ``a``, given also ``b = 1 - a`` exactly."""
@@ -296,10 +297,6 @@ class _Diameters(SizeDistribution):
 
     def cdf(self, d: ArrayLike) -> FloatArray:
         """Probability that a diameter is at most ``d``."""
-        raise NotImplementedError
-
-    def moment(self, k: float) -> float:
-        """Raw moment ``E[d^k]`` of the diameter."""
         raise NotImplementedError
 
     def ppf(self, u: ArrayLike) -> FloatArray:
@@ -315,31 +312,6 @@ class _Diameters(SizeDistribution):
     def sample(self, n: int, rng: np.random.Generator) -> FloatArray:
         """Draw ``n`` equivalent radii (half the sampled diameters)."""
         return 0.5 * self.sample_diameters(n, rng)
-
-    @property
-    def mean_diameter(self) -> float:
-        """Expected diameter ``E[d]``."""
-        return self.moment(1)
-
-    @property
-    def mean_area(self) -> float:
-        """Expected particle area ``E[pi d^2 / 4]``."""
-        return math.pi / 4.0 * self.moment(2)
-
-    @property
-    def mean_volume(self) -> float:
-        """Expected particle volume ``E[pi d^3 / 6]`` (3D scenes)."""
-        return math.pi / 6.0 * self.moment(3)
-
-    @property
-    def r_min(self) -> float:
-        """Smallest radius the sampler can return."""
-        return 0.5 * self.d_lo
-
-    @property
-    def r_max(self) -> float:
-        """Largest radius the sampler can return."""
-        return 0.5 * self.d_hi
 
 
 class _Truncated(_Diameters):
