@@ -37,7 +37,7 @@ from typing import Any, Literal
 
 import numpy as np
 
-from regopack.analysis import __all__ as __all__  # the public names, listed once in the package
+from regopack.analysis import __all__ as __all__  # public names, listed in the package
 from regopack.base.errors import ConfigError, PluginError
 from regopack.base.outdir import mark_folder, rebase, replace_folder
 from regopack.base.units import DEFAULT_LENGTH_UNIT, length_unit

@@ -54,7 +54,7 @@ from regopack.registry.interfaces import (
     SizeDistribution,
     SolidGenerator,
 )
-from regopack.run import __all__ as __all__  # the public names, listed once in the package
+from regopack.run import __all__ as __all__  # public names, listed in the package
 from regopack.run.compilation import CompileTime, compile_timer
 from regopack.scenes.analysis_plan import plan_analyses, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files

@@ -21,6 +21,7 @@ from pydantic import BaseModel, ConfigDict, Field
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.geometry.population import ShapeBatch
 from regopack.plugins.common.halfplane_clip import clip_halfplane
+from regopack.plugins.shapes.coefficients import Amplitude, ShapeCoefficient
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import ShapeGenerator
 from regopack.registry.plugin_types import ShapeSpec
@@ -35,20 +36,14 @@ class OctagonConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    psi: float = Field(
+    psi: ShapeCoefficient = Field(
         1.0,
-        gt=0,
-        le=1e6,
-        allow_inf_nan=False,
         description=(
             "Shape coefficient psi (> 0): larger is rounder, psi -> inf gives the regular m-gon."
         ),
     )
-    a: float = Field(
+    a: Amplitude = Field(
         1.0 / 3.0,
-        gt=0,
-        le=1,
-        allow_inf_nan=False,
         description=(
             "Perturbation amplitude a in (0, 1]: support distances lie within ±a of their mean."
         ),

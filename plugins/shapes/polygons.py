@@ -35,22 +35,10 @@ from pydantic import BaseModel, ConfigDict, Field
 from regopack.base.errors import ConfigError
 from regopack.base.toml import not_a_file
 from regopack.geometry.population import ShapeBatch
+from regopack.plugins.shapes import __all__ as __all__  # public names, listed in the package
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import ShapeGenerator
 from regopack.registry.plugin_types import ShapeSpec
-
-__all__ = [
-    "RandomConvexPolygon",
-    "RandomPolygonConfig",
-    "RegularConfig",
-    "RegularPolygon",
-    "Template",
-    "TemplateConfig",
-    "TemplateError",
-    "TemplatePolygon",
-    "TemplateWarning",
-    "read_templates",
-]
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from regopack.geometry.solids import SolidBatch
+from regopack.plugins.shapes.coefficients import Amplitude, ShapeCoefficient
 from regopack.plugins.shapes.polyhedra.directions import (
     cube,
     fibonacci,
@@ -69,21 +70,15 @@ class PolyhedronConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    psi: float = Field(
+    psi: ShapeCoefficient = Field(
         1.0,
-        gt=0,
-        le=1e6,
-        allow_inf_nan=False,
         description=(
             "Shape coefficient psi (> 0): larger is more regular, psi -> inf gives the "
             "regular solid of the direction set."
         ),
     )
-    a: float = Field(
+    a: Amplitude = Field(
         1.0 / 3.0,
-        gt=0,
-        le=1,
-        allow_inf_nan=False,
         description=(
             "Perturbation amplitude a in (0, 1]: support distances lie within ±a of the "
             "regular solid's, relatively."
