@@ -124,10 +124,8 @@ def build_exporter(
 
     Parameters
     ----------
-    registry
-        Registry to look the exporter up in.
-    kind
-        Name of the exporter.
+    registry, kind
+        Registry to look the exporter up in, and the exporter's name.
     params
         Its parameters.
     source

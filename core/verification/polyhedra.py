@@ -371,10 +371,8 @@ def overlap_volume(P: ArrayLike, Q: ArrayLike) -> float:
 
     Raises
     ------
-    PackingError
-        When an array is not ``(k, 3)`` or holds a non-finite value.
-    GeometryError
-        When a polyhedron has fewer than four vertices or is flat.
+    PackingError, GeometryError
+        As :func:`separating_gap` does.
 
     Examples
     --------

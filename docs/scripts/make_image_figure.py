@@ -36,6 +36,7 @@ import regopack
 from regopack.base.colours import mineral_colours
 from regopack.exports.pipeline import export_packing
 from regopack.packing.core import Packing
+from regopack.plugins.analyzers.figure_style import WIDTH, style
 from regopack.plugins.exporters.image_export import image_paths
 from regopack.registry.manager import default_registry
 
@@ -43,21 +44,7 @@ HERE = Path(__file__).resolve().parent
 IMAGES_DIR = HERE.parent / "images"
 """The documentation's pictures, ``docs/images``."""
 IMAGES = IMAGES_DIR
-WIDTH = 7.0
-"""Figure width in inches (a two-column page); fonts of 8 pt stay legible at half of it."""
-
 DPI = 200
-
-STYLE: dict[str, Any] = {
-    "font.size": 8,
-    "axes.titlesize": 8,
-    "axes.labelsize": 8,
-    "xtick.labelsize": 7,
-    "ytick.labelsize": 7,
-    "legend.fontsize": 7,
-    "legend.frameon": False,
-    "axes.linewidth": 0.6,
-}
 
 CLOSE_UP = 6.0
 """Side, in µm, of the close-up window around the smallest particle."""
@@ -94,7 +81,7 @@ def draw_files(packing: Packing, files: dict[str, Path], meta: dict[str, Any], o
     colours = ["#000000", *mineral_colours(names)]  # by name, as in the analysis figures
     cmap = ListedColormap([*colours, *["#808080"] * (256 - len(colours))])
 
-    with plt.rc_context(STYLE):
+    with style():
         fig, axes = plt.subplots(1, 3, figsize=(WIDTH, 2.85), layout="constrained", dpi=DPI)
         _show(axes[0], binary, extent, cmap="gray", vmin=0, vmax=255)
         axes[0].set_title(f"(a) {files['binary'].name} (binary)")
@@ -157,7 +144,7 @@ def draw_porespy(phases: np.ndarray, meta: dict[str, Any], out: Path) -> Path:
 
     left, right, bottom, top = meta["extent"]
     cx, cy, half = (left + right) / 2, (bottom + top) / 2, min(WINDOW, right - left) / 2
-    with plt.rc_context(STYLE):
+    with style():
         fig, (ax, hist) = plt.subplots(
             1, 2, figsize=(WIDTH, 3.0), layout="constrained", dpi=DPI, width_ratios=(1, 1.2)
         )
