@@ -1761,35 +1761,26 @@ def row_limits(n: int, arrays: Mapping[str, tuple[type[np.generic], int]]) -> di
     return {name: per_item.get(name, n) for name in (*arrays, "rounding")}
 
 
-def _read_domain(path: Path, data: Any) -> PlaneDomain:
+def _read_domain(path: Path, data: Any, dimension: int) -> Domain:
+    """Rebuild the ``domain`` record of a packing of ``dimension`` (2D: rectangle by default)."""
     if not isinstance(data, dict):
         raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
     try:
-        return domain_from_dict(data, 2)
+        return domain_from_dict(data, dimension)
     except (KeyError, TypeError, ValueError, GeometryError) as err:
         why = f"no {err}" if isinstance(err, KeyError) else str(err)
-        kind = _short(data.get("kind", "rectangle"))
+        kind = _short(data.get("kind", "rectangle" if dimension == 2 else None))
         raise _invalid(path, f"meta 'domain' (kind {kind}): {why}") from err
-
-
-def _read_box(path: Path, data: Any) -> Box:
-    if not isinstance(data, dict):
-        raise _invalid(path, f"meta 'domain' is {_short(data)}, not an object")
-    try:
-        return domain_from_dict(data, 3)
-    except (KeyError, TypeError, ValueError, GeometryError) as err:
-        why = f"no {err}" if isinstance(err, KeyError) else str(err)
-        raise _invalid(path, f"meta 'domain' (kind {_short(data.get('kind'))}): {why}") from err
 
 
 def _read_meta_keys(
     path: Path,
     meta: Mapping[str, Any],
-    read_domain: Callable[[Path, Any], Any] | None = None,
+    dimension: int = 2,
 ) -> dict[str, Any]:
     """Return the keyword arguments of :class:`Packing` that ``meta`` holds, types checked.
 
-    ``read_domain`` reads the ``domain`` record (default: a 2D domain).
+    The ``domain`` record is read as a domain of ``dimension``.
     """
     for key in ("domain", "mineral_names"):
         if key not in meta:
@@ -1814,7 +1805,7 @@ def _read_meta_keys(
             raise _invalid(path, f"meta 'stats' has {key!r} = {_short(value)}, not a number")
     return {
         "mineral_names": tuple(names),
-        "domain": (read_domain or _read_domain)(path, meta["domain"]),
+        "domain": _read_domain(path, meta["domain"], dimension),
         "scene": scene,
         "seed": seed,
         "version": version,
@@ -2135,7 +2126,7 @@ def load(path: str | Path) -> Packing:
             arrays = read_arrays(path, npz, _ARRAYS3D if solid else _ARRAYS)
     except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
         raise _bad(Path(path), " ".join(str(err).split()) or type(err).__name__) from err
-    keys = _read_meta_keys(path, meta, _read_box if solid else None)
+    keys = _read_meta_keys(path, meta, 3 if solid else 2)
     try:
         packing: Packing = Packing(**arrays, **keys)
         check_file_values(packing, meta["format_version"])

@@ -212,3 +212,21 @@ def test_a_3d_file_whose_domain_bounds_are_no_list_names_the_field(tmp_path, bou
         f"{path}: invalid packing file: meta 'domain' (kind 'box'): "
         f"bounds: {bounds!r} is not a list of numbers"
     )
+
+
+def test_a_3d_file_whose_domain_names_no_kind_says_so(tmp_path) -> None:
+    path = tmp_path / "p.npz"
+    save(cube_packing([[1, 1, 1]]), path)
+
+    def edit(contents: dict[str, np.ndarray]) -> None:
+        meta = json.loads(str(contents["meta"]))
+        meta["domain"].pop("kind")
+        contents["meta"] = np.array(json.dumps(meta))
+
+    _rewrite(path, edit)
+    with pytest.raises(PackingFileError) as caught:
+        load(path)
+    assert str(caught.value) == (
+        f"{path}: invalid packing file: meta 'domain' (kind None): 'rectangle' is a 2D "
+        "domain kind, not 3D; 3D kinds: box, periodic-box"
+    )
