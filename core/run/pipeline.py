@@ -26,8 +26,8 @@ from regopack.base.limits import (
     LimitError,
     check_memory,
     format_bytes,
-    memory_limit,
 )
+from regopack.base.limits import memory_limit as memory_limit
 from regopack.base.outdir import (
     MARKER,
     NAME_RULE,
@@ -43,7 +43,8 @@ from regopack.geometry.population import FloatArray, IntArray, Population, conca
 from regopack.geometry.solids import SolidBatch, concat_solids
 from regopack.packing.core import Packing, save, write_json_atomic
 from regopack.packing.sieve import unplaced_per_class
-from regopack.packing.solid_fraction import phi_in_box, phi_in_window
+from regopack.packing.solid_fraction import phi_in_box
+from regopack.packing.solid_fraction import phi_in_window as phi_in_window
 from regopack.registry.interfaces import (
     Analyzer,
     DensityController,
