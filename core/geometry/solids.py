@@ -124,31 +124,32 @@ class SolidBatch:
 
     @property
     def volume(self) -> FloatArray:
-        """Volume of every particle.
+        """Volume of every particle, all faces at once.
 
         A polyhedron's is the sum of the cones from its reference point over
-        its faces; a sphere's is ``4/3 pi r^3``. A rounded polyhedron (whose
-        volume would need Steiner's formula) raises ``NotImplementedError``.
+        its faces, ``(A_f . n_f) b_f / 3`` with the area vector
+        ``A_f = 1/2 sum_k p_k x p_(k+1)`` of the face's vertex loop; a
+        sphere's is ``4/3 pi r^3``. A rounded polyhedron (whose volume would
+        need Steiner's formula) raises ``NotImplementedError``.
         """
         n = len(self)
         rho = self.rounding_radius
-        out = np.zeros(n, dtype=np.float64)
-        for j in range(n):
-            f0, f1 = int(self.face_offsets[j]), int(self.face_offsets[j + 1])
-            if f1 > f0 and rho[j] > 0:
-                raise NotImplementedError("the volume of a rounded polyhedron")
-            verts = self.vertices[self.offsets[j] : self.offsets[j + 1]]
-            total = 0.0
-            for f in range(f0, f1):
-                loop = self.face_vertices[
-                    self.face_vertex_offsets[f] : self.face_vertex_offsets[f + 1]
-                ]
-                p = verts[loop]
-                # area vector of the planar loop, times the plane's distance / 3
-                area = 0.5 * np.cross(p - p[0], np.roll(p, -1, axis=0) - p[0]).sum(axis=0)
-                total += float(np.dot(area, self.normals[f])) * float(self.support[f]) / 3.0
-            out[j] = total + (4.0 / 3.0) * np.pi * rho[j] ** 3
-        return out
+        faces = np.diff(self.face_offsets)
+        if np.any((faces > 0) & (rho > 0)):
+            raise NotImplementedError("the volume of a rounded polyhedron")
+        out = (4.0 / 3.0) * np.pi * rho**3
+        if self.normals.shape[0] == 0:
+            return np.asarray(out, dtype=np.float64)
+        sizes = np.diff(self.face_vertex_offsets)
+        owner = np.repeat(np.repeat(np.arange(n), faces), sizes)
+        v = self.vertices[self.offsets[owner] + self.face_vertices]
+        nxt = np.arange(v.shape[0]) + 1
+        nxt[self.face_vertex_offsets[1:] - 1] = self.face_vertex_offsets[:-1]
+        area = 0.5 * np.add.reduceat(np.cross(v, v[nxt]), self.face_vertex_offsets[:-1])
+        cone = np.einsum("ij,ij->i", area, self.normals) * self.support / 3.0
+        face_owner = np.repeat(np.arange(n), faces)
+        out = out + np.bincount(face_owner, weights=cone, minlength=n)
+        return np.asarray(out, dtype=np.float64)
 
 
 def concat_solids(parts: list[tuple[IntArray, SolidBatch]], n: int) -> SolidBatch:

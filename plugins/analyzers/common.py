@@ -254,28 +254,5 @@ def scaled_defaults(config: _Config, packing: Any, defaults: Mapping[str, Any]) 
 
 
 def solid_volumes(packing: Packing[Box]) -> NDArray[np.float64]:
-    """Volume of every solid, all faces at once (as ``SolidBatch.volume``).
-
-    Each face contributes the cone from the centre over it, ``(A_f . n_f) b_f / 3``,
-    with the area vector ``A_f = 1/2 sum_k p_k x p_(k+1)`` of its vertex loop;
-    a sphere has ``4/3 pi r^3``. Rounded polyhedra raise ``NotImplementedError``.
-    """
-    n = packing.n_particles
-    rho = packing.solids.rounding_radius
-    faces = np.diff(packing.face_offsets)
-    if np.any((faces > 0) & (rho > 0)):
-        raise NotImplementedError("the volume of a rounded polyhedron")
-    out = (4.0 / 3.0) * np.pi * rho**3
-    n_faces = packing.normals.shape[0]
-    if n_faces == 0:
-        return np.asarray(out, dtype=np.float64)
-    sizes = np.diff(packing.face_vertex_offsets)
-    owner = np.repeat(np.repeat(np.arange(n), faces), sizes)
-    v = packing.vertices[packing.offsets[owner] + packing.face_vertices]
-    nxt = np.arange(v.shape[0]) + 1
-    nxt[packing.face_vertex_offsets[1:] - 1] = packing.face_vertex_offsets[:-1]
-    area = 0.5 * np.add.reduceat(np.cross(v, v[nxt]), packing.face_vertex_offsets[:-1])
-    cone = np.einsum("ij,ij->i", area, packing.normals) * packing.support / 3.0
-    face_owner = np.repeat(np.arange(n), faces)
-    out = out + np.bincount(face_owner, weights=cone, minlength=n)
-    return np.asarray(out, dtype=np.float64)
+    """Volume of every solid (:attr:`regopack.geometry.solids.SolidBatch.volume`)."""
+    return packing.solids.volume

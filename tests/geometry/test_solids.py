@@ -101,3 +101,44 @@ def test_concat_interleaves_phases_back_into_particle_order() -> None:
     verts, loops = merged.solid(1)
     assert np.array_equal(verts, a.vertices) and len(loops) == 6
     assert merged.solid(0)[1] == [] and merged.solid(2)[1] == []
+
+
+def _hulls(seed: int, n: int) -> tuple[SolidBatch, list[float]]:
+    """``n`` random convex hulls (triangulated faces, 5 to 30 points each) as one batch."""
+    rng = np.random.default_rng(seed)
+    verts, loops, normals, support, vcount, fcount, volumes = [], [], [], [], [], [], []
+    for _ in range(n):
+        pts = rng.normal(size=(int(rng.integers(5, 31)), 3)) * rng.uniform(0.1, 10.0)
+        hull = ConvexHull(pts)
+        v = pts[hull.vertices]
+        local = {int(g): k for k, g in enumerate(hull.vertices)}
+        for tri, eq in zip(hull.simplices, hull.equations, strict=True):
+            loop = np.array([local[int(g)] for g in tri])
+            p = v[loop]
+            if np.dot(np.cross(p[1] - p[0], p[2] - p[0]), eq[:3]) < 0:
+                loop = loop[::-1]
+            loops.append(loop)
+            normals.append(eq[:3])
+            support.append(-eq[3])
+        verts.append(v)
+        vcount.append(len(v))
+        fcount.append(len(hull.simplices))
+        volumes.append(hull.volume)
+    batch = SolidBatch(
+        vertices=np.concatenate(verts),
+        offsets=np.concatenate([[0], np.cumsum(vcount)]).astype(np.int64),
+        face_vertices=np.concatenate(loops).astype(np.int64),
+        face_vertex_offsets=np.arange(0, 3 * len(loops) + 1, 3, dtype=np.int64),
+        face_offsets=np.concatenate([[0], np.cumsum(fcount)]).astype(np.int64),
+        normals=np.array(normals),
+        support=np.array(support),
+        rotation=np.tile([1.0, 0, 0, 0], (n, 1)),
+    )
+    return batch, volumes
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_volumes_of_random_hulls_agree_with_qhull(seed: int) -> None:
+    """Every particle's volume, all faces at once, is Qhull's (each face belongs to its owner)."""
+    batch, volumes = _hulls(seed, 7)
+    assert batch.volume.tolist() == pytest.approx(volumes, rel=1e-12)

@@ -125,6 +125,43 @@ def test_crossing_edges_touch():
     assert overlap_volume(p, q - (0, 0, 0.01)) > 0.0
 
 
+def _sat_separation(p, q):
+    """Facet-plane and edge-cross separations of one pair, as verify_polyhedra measures them."""
+    parts = v3._Particles([v3._polyhedron(p, "p"), v3._polyhedron(q, "q")])
+    i, j, t = np.array([0]), np.array([1]), np.zeros((1, 3))
+    return float(v3._face_separations(parts, i, j, t)[0]), float(
+        v3._edge_separations(parts, i, j, t)[0]
+    )
+
+
+def test_crossing_edges_are_settled_by_the_edge_directions():
+    """Only an edge-cross direction separates two cubes touching edge to edge."""
+    p = rotated_cube(math.pi / 4, about="x")
+    q = rotated_cube(math.pi / 4, about="y")
+    q = q + (0.0, 0.0, p[:, 2].max() - q[:, 2].min())
+    face, edge = _sat_separation(p, q)
+    assert face < -0.1  # no facet plane separates them
+    assert abs(edge) <= 1e-15
+    face, edge = _sat_separation(p, q - (0, 0, 0.01))
+    assert edge == pytest.approx(-0.01, rel=1e-9)
+    assert not verify_polyhedra([p, q - (0, 0, 0.01)], None, (-2, -2, -2), (3, 3, 4))
+    assert verify_polyhedra([p, q], None, (-2, -2, -2), (3, 3, 4))
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_separating_axes_give_the_penetration_depth(seed):
+    """The larger of the two separations is minus the penetration depth of an overlapping pair."""
+    rng = np.random.default_rng(seed)
+    p = random_polyhedron(rng)
+    q = random_polyhedron(rng) + rng.normal(size=3) * 0.5
+    depth = separating_gap(p, q)
+    sat = max(_sat_separation(p, q))
+    if depth < 0:
+        assert sat == pytest.approx(depth, rel=1e-9, abs=1e-12)
+    else:  # apart: the axes' margin is at most the distance
+        assert 0 <= sat <= depth * (1 + 1e-12) + 1e-15
+
+
 def test_diagonal_distance_is_euclidean():
     # the closest points are two vertices, not along a face normal
     assert separating_gap(CUBE, CUBE + (2, 2, 2)) == pytest.approx(math.sqrt(3), rel=1e-14)
