@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from scipy.integrate import quad
 
 from regopack.geometry.sphere_volume import disk_in_rectangle, sphere_in_box
 
@@ -40,3 +41,32 @@ def test_random_cuts_agree_with_monte_carlo(seed: int) -> None:
     share = inside.mean()
     sigma = math.sqrt(share * (1 - share) / n) * (2 * r) ** 3
     assert abs(v - share * (2 * r) ** 3) < 5 * sigma + 1e-12
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_a_ball_one_face_cuts_agrees_with_the_quadrature(seed: int) -> None:
+    """The closed-form cap agrees with the disks integrated over height (any face, either side)."""
+    rng = np.random.default_rng(seed)
+    lo, hi = np.array([-2.0, -3.0, -1.0]), np.array([2.0, 1.0, 4.0])
+    for _ in range(200):
+        r = float(rng.uniform(0.05, 0.9))
+        axis, side = int(rng.integers(3)), int(rng.integers(2))
+        c = 0.5 * (lo + hi)
+        c[axis] = (hi if side else lo)[axis] + rng.uniform(-r, r)  # only this face cuts
+        b0, b1 = lo - c, hi - c
+        z0, z1 = max(b0[2], -r), min(b1[2], r)
+        # the heights where the disk's edge meets a side: the integrand's kinks
+        kinks = [math.sqrt(r * r - d * d) for d in (*b0[:2], *b1[:2]) if abs(d) < r]
+        breaks = sorted({p for k in kinks for p in (k, -k) if z0 < p < z1}) or None
+        ref = quad(
+            lambda z, b0=b0, b1=b1, r=r: disk_in_rectangle(
+                math.sqrt(max(r * r - z * z, 0.0)), b0[0], b1[0], b0[1], b1[1]
+            ),
+            z0,
+            z1,
+            epsabs=0.0,
+            epsrel=1e-12,
+            limit=400,
+            points=breaks,
+        )[0]
+        assert sphere_in_box(c, r, lo, hi) == pytest.approx(ref, rel=1e-9)
