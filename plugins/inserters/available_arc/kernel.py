@@ -1016,6 +1016,32 @@ def place_on_arcs(
 
 
 @numba.njit(cache=True)
+def place_screened(
+    i: int,
+    mq: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rng: np.random.Generator,
+    rounded: object,
+) -> int:
+    """Place particle ``i`` at the first candidate that takes it (the paper's screened search).
+
+    Candidates whose arcs the eta control removes record the rejection and
+    the search goes on. Returns the new insertion index, or -1.
+    """
+    start = int(np.int64(0))
+    while True:
+        k, arcs = find_site(i, start, mq, g, s, w, rounded)
+        if k < 0:
+            return -1
+        placed = place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded)
+        if placed >= 0:
+            return placed
+        start = k + 1
+
+
+@numba.njit(cache=True)
 def eta_shrink(
     arcs: FloatArray, eta: float, r_new: float, r_cand: float, rng: np.random.Generator
 ) -> FloatArray:
@@ -1158,13 +1184,6 @@ def pack_range(
                 placed += 1
             continue
         mq = begin_particle(i, g, s, w)
-        start = int(np.int64(0))
-        while True:
-            k, arcs = find_site(i, start, mq, g, s, w, rounded)
-            if k < 0:
-                break
-            if place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded) >= 0:
-                placed += 1
-                break
-            start = k + 1
+        if place_screened(i, mq, g, s, w, rng, rounded) >= 0:
+            placed += 1
     return placed

@@ -57,32 +57,6 @@ def try_candidate(
 
 
 @numba.njit(cache=True)
-def place_screened(
-    i: int,
-    mq: int,
-    g: K.Outlines,
-    s: K.Packed,
-    w: K.Work,
-    rng: np.random.Generator,
-    rounded: object,
-) -> int:
-    """Place particle ``i`` at the first candidate that takes it (the paper's screened search).
-
-    Candidates whose arcs the eta control removes record the rejection and
-    the search goes on. Returns the new insertion index, or -1.
-    """
-    start = int(np.int64(0))
-    while True:
-        k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
-        if k < 0:
-            return -1
-        placed = K.place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded)
-        if placed >= 0:
-            return placed
-        start = k + 1
-
-
-@numba.njit(cache=True)
 def pack_range_exact(
     begin: int,
     end: int,
@@ -106,7 +80,7 @@ def pack_range_exact(
                 placed += 1
             continue
         mq = K.begin_particle(i, g, s, w)
-        done = place_screened(i, mq, g, s, w, rng, rounded) >= 0
+        done = K.place_screened(i, mq, g, s, w, rng, rounded) >= 0
         if not done:
             for k in range(s.ipar[K.I_COUNT]):
                 if try_candidate(k, i, mq, g, s, w, rng, rounded):
