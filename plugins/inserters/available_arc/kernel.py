@@ -40,6 +40,7 @@ from regopack.plugins.inserters.available_arc.bound_queue import post_bound
 from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.inserters.available_arc.disk_bound import disk_bound
 from regopack.plugins.inserters.available_arc.geometry import (
+    angle_slot,
     clip_closed_box,
     clip_open_interior,
     close_arcs,
@@ -936,13 +937,7 @@ def locate(
         return s.cx[pk] + x, s.cy[pk] + y
     va = w.va
     _vertex_angles(wx, wy, n, va)
-    period = va[n] - va[0]
-    a = angle - va[0]
-    a = a - period * math.floor(a / period)
-    a += va[0]
-    j = 0
-    while j < n - 1 and va[j + 1] < a:
-        j += 1
+    a, j = angle_slot(va, n, angle)
     j2 = j + 1 if j + 1 < n else 0
     dxr = math.cos(a)
     dyr = math.sin(a)
