@@ -45,7 +45,7 @@ from regopack.plugins.common.walls import (
     point_fits,
     wall_arrays,
 )
-from regopack.plugins.inserters.available_arc.grid import cell_range, grid_insert
+from regopack.plugins.inserters.available_arc.grid import cell_range, empty_grid, grid_insert
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -470,10 +470,7 @@ def _prepare(population: Population, domain: PlaneDomain) -> tuple[Outlines, Gri
         cx=np.full(n, np.nan),
         cy=np.full(n, np.nan),
         placed=np.zeros(n, dtype=np.int64),
-        head=np.full(gnx * gny, -1, dtype=np.int64),
-        nxt=np.empty(capacity, dtype=np.int64),
-        item=np.empty(capacity, dtype=np.int64),
-        stamp=np.zeros(n, dtype=np.int64),
+        **empty_grid(n, gnx * gny, capacity),
         fpar=fpar,
         ipar=ipar,
         walls=walls,
