@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack._compat import renamed_names
 from regopack.plugins.common.borrowed import borrowed
 from regopack.plugins.inserters.available_arc import kernel as K
 
@@ -90,3 +91,10 @@ def pack_range_exact(
         if done:
             placed += 1
     return placed
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {"place_screened": "regopack.plugins.inserters.available_arc.kernel:place_screened"},
+)
+"""The screened search that moved to the kernel beside the loop that calls it, for one release."""
