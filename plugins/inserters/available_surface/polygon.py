@@ -136,7 +136,7 @@ def split_polygon(
     each at most); returns their vertex counts. A part with fewer than 3
     vertices is empty or degenerate.
     """
-    return _clip(rows, x, y, n, g, 1.0, ix, iy), _clip(rows, x, y, n, g, -1.0, ox, oy)
+    return _split(rows, x, y, n, g, ix, iy, ox, oy, True)
 
 
 @numba.njit(cache=True)
@@ -145,32 +145,53 @@ def clip_polygon(rows: FloatArray, x: int, y: int, n: int, g: int, ix: int, iy: 
 
     See :func:`split_polygon`; returns the part's vertex count.
     """
-    return _clip(rows, x, y, n, g, 1.0, ix, iy)
+    return _split(rows, x, y, n, g, ix, iy, ix, iy, False)[0]
 
 
 @numba.njit(cache=True, inline="always")
-def _clip(rows: FloatArray, x: int, y: int, n: int, g: int, sign: float, ix: int, iy: int) -> int:
-    """Write the closed part ``sign * g >= 0`` of a convex polygon to rows ``ix, iy``.
+def _split(
+    rows: FloatArray,
+    x: int,
+    y: int,
+    n: int,
+    g: int,
+    ix: int,
+    iy: int,
+    ox: int,
+    oy: int,
+    outside: bool,
+) -> tuple[int, int]:
+    """:func:`split_polygon`; the part ``g <= 0`` is written only when ``outside`` (else 0).
 
-    ``sign`` is 1 or -1: negating the values changes no crossing point by
-    any rounding, so the two parts of :func:`split_polygon` share their cuts
-    exactly.
+    Inlined with ``outside`` a constant, so that the compiler drops the
+    branches of the part not asked for.
     """
     nin = 0
+    nout = 0
     for j in range(n):
         j2 = j + 1 if j + 1 < n else 0
-        f1 = sign * rows[g, j]
-        f2 = sign * rows[g, j2]
+        f1 = rows[g, j]
+        f2 = rows[g, j2]
         if f1 >= 0.0:
             rows[ix, nin] = rows[x, j]
             rows[iy, nin] = rows[y, j]
             nin += 1
+        if outside and f1 <= 0.0:
+            rows[ox, nout] = rows[x, j]
+            rows[oy, nout] = rows[y, j]
+            nout += 1
         if (f1 > 0.0 and f2 < 0.0) or (f1 < 0.0 and f2 > 0.0):
             u = f1 / (f1 - f2)
-            rows[ix, nin] = rows[x, j] + u * (rows[x, j2] - rows[x, j])
-            rows[iy, nin] = rows[y, j] + u * (rows[y, j2] - rows[y, j])
+            cx = rows[x, j] + u * (rows[x, j2] - rows[x, j])
+            cy = rows[y, j] + u * (rows[y, j2] - rows[y, j])
+            rows[ix, nin] = cx
+            rows[iy, nin] = cy
             nin += 1
-    return nin
+            if outside:
+                rows[ox, nout] = cx
+                rows[oy, nout] = cy
+                nout += 1
+    return nin, nout
 
 
 @numba.njit(cache=True)
