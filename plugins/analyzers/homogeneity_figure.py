@@ -31,6 +31,15 @@ of length of each quantity."""
 
 POINTS = "#0072B2"
 FIT = "#D55E00"
+POINT_STYLE: dict[str, Any] = {
+    "fmt": "o",
+    "color": POINTS,
+    "ecolor": POINTS,
+    "elinewidth": 0.6,
+    "capsize": 1.5,
+    "markersize": 3,
+}
+"""Markers and error bars of the regions' values."""
 MAX_LABELLED_TILES = 36
 """Tile maps with more tiles than this carry no value labels."""
 
@@ -51,12 +60,7 @@ def _profile(
         y,
         yerr=err,
         xerr=[r - lo, hi - r],
-        fmt="o",
-        color=POINTS,
-        ecolor=POINTS,
-        elinewidth=0.6,
-        capsize=1.5,
-        markersize=3,
+        **POINT_STYLE,
         label=f"rings: value ± 1 standard error (of φ: from its {SECTORS} sectors), ring extent",
     )
     overall = scale * h.overall[column]
@@ -109,12 +113,7 @@ def _height_profile(
         scale * np.asarray(layers[column], dtype=float),
         yerr=scale * np.asarray(layers[f"{column}_err"], dtype=float),
         xerr=[z - z0, z1 - z],
-        fmt="o",
-        color=POINTS,
-        ecolor=POINTS,
-        elinewidth=0.6,
-        capsize=1.5,
-        markersize=3,
+        **POINT_STYLE,
         label="layers: value ± 1 standard error, layer extent",
     )
     if np.isfinite(overall):
