@@ -141,6 +141,29 @@ class AnalyzeAll3D(_Shared):
         regopack.analyze(self.packing)
 
 
+class FabricBlock(_Shared):
+    """The run summary's fabric block (contacts, Z, rattlers, anisotropy and its error).
+
+    On every shared packing: ``table1`` and ``dem`` at 800 µm, the 60 µm cubes.
+    """
+
+    params = [list(common.SHARED_SIDES)]
+    param_names = ["packing"]
+
+    def setup(self, cache: dict[str, Any], key: str) -> None:
+        from regopack.registry.manager import default_registry
+
+        self.packing = _load(cache[key]["path"])
+        self.registry = default_registry()
+        tiny = common.tiny_2d(key) if key in common.MODES_2D else common.tiny_3d(key)
+        _warm(tiny, ["coordination", "network"])
+
+    def time_fabric(self, cache: dict[str, Any], key: str) -> None:
+        from regopack.run.fabric import fabric_summary
+
+        fabric_summary(self.packing, self.registry)
+
+
 class Outcome(_Shared):
     """What the shared packings hold: placed particles and candidate analyses.
 

@@ -452,7 +452,7 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
     Rows appear for the built-in analyzers that were run: packing density,
     contacts, coordination numbers (overall, interior, per mineral), the first
     peak of g(r) (or its plateau, when the top is no distinct peak) and the
-    fabric anisotropy, of either dimension, under the analyzers' names or
+    fabric anisotropy with its sampling error, of either dimension, under the analyzers' names or
     their old 3D names (``contacts3d``, ...).
     """
     rows: list[tuple[str, str]] = []
@@ -488,7 +488,12 @@ def main_numbers(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
         rows.append(("far-field mean g(r)", _fmt(rdf.get("far_mean"))))
     network = _either(summary, "network")
     if isinstance(network, dict):
-        rows.append(("fabric anisotropy", _fmt(network.get("anisotropy"))))
+        a, err = network.get("anisotropy"), network.get("anisotropy_error")
+        value = _fmt(a)
+        if isinstance(a, float) and isinstance(err, float) and math.isfinite(err) and err > 0:
+            digits = max(0, 1 - math.floor(math.log10(err)))  # two significant digits of err
+            value = f"{a:.{digits}f} ± {err:.{digits}f}"
+        rows.append(("fabric anisotropy", value))
     return rows
 
 

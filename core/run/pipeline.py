@@ -57,6 +57,7 @@ from regopack.registry.interfaces import (
 )
 from regopack.run import __all__ as __all__  # public names, listed in the package
 from regopack.run.compilation import CompileTime, compile_timer
+from regopack.run.fabric import fabric_rows, fabric_summary
 from regopack.scenes.analysis_plan import plan_analyses, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.verification.summary import verify_summary
@@ -547,6 +548,10 @@ def run_scene(
 
     Notes
     -----
+    The summary's ``fabric`` block (:func:`regopack.run.fabric.fabric_summary`:
+    contacts, Z, Z_m, rattlers and the fabric anisotropy with its error) is
+    measured after packing unless ``outputs.fabric`` is false, reusing the
+    scene's analyses where they hold its analyzers.
     The analyzers in ``outputs.analyses`` (and those they require) run after
     packing; the summary holds the results of the listed ones, and
     :func:`regopack.analysis.pipeline.write_analysis` writes all of them into
@@ -635,6 +640,10 @@ def _run(
         requests = [(p.kind, _params(p)) for p in resolved.analyses]
         analyzers = run_analyses(packing, resolved.registry, requests, source=_analyses(resolved))
         summary["analyses"] = {p.kind: analyzers[p.kind].results() for p in resolved.analyses}
+    if resolved.scene.outputs.fabric:
+        begin = time.perf_counter()
+        summary["fabric"] = fabric_summary(packing, resolved.registry, analyzers)
+        summary["fabric_time_s"] = time.perf_counter() - begin
     summary["compile_time_s"] = compiling.seconds
     if summary_extras is not None:
         summary.update(summary_extras(packing))
@@ -774,6 +783,9 @@ def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
             + (" (kernels compiled meanwhile)" if "insertion_time_note" in summary else ""),
         ),
     ]
+    fabric = summary.get("fabric")
+    if isinstance(fabric, Mapping):
+        rows.extend(fabric_rows(fabric))
     compiled = summary.get("compile_time_s") or 0.0
     if compiled >= 0.05:
         rows.append(("compiling kernels", f"{compiled:.1f} s (first run only; then cached)"))

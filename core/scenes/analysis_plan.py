@@ -265,6 +265,7 @@ def run_analyses(
     source: str | None = None,
     params_source: str | None = None,
     warn: bool = True,
+    computed: Mapping[str, Analyzer] | None = None,
 ) -> dict[str, Analyzer]:
     """Compute the requested analyzers and those they require, requirements first.
 
@@ -295,6 +296,11 @@ def run_analyses(
     warn
         Warn about old names among ``requests``; regopack's own default
         requests (:func:`default_analyses`) pass ``False``.
+    computed
+        Analyzers already computed on ``packing``, by the name their results
+        are filed under (a run's scene analyses): an analyzer of the same
+        registered name is taken from there, with the parameters it was
+        computed with, instead of being computed again.
 
     Returns
     -------
@@ -336,7 +342,12 @@ def run_analyses(
     )
     done: dict[str, Analyzer] = {}
     by_name = {registry.canonical("analysis", name): name for name in planned}
+    reuse = {registry.canonical("analysis", name): a for name, a in (computed or {}).items()}
     for name, analyzer in planned.items():
+        known = reuse.get(registry.canonical("analysis", name))
+        if known is not None:
+            done[name] = known
+            continue
         context = {
             req: done[by_name[registry.canonical("analysis", req)]] for req in analyzer.requires
         }

@@ -307,6 +307,15 @@ class Outputs(BaseModel):
         ),
     )
 
+    fabric: bool = Field(
+        True,
+        description=(
+            "Measure the contact network for the summary's fabric block: contacts, Z and "
+            "the mechanical Z_m, the share of rattlers and the fabric anisotropy with its "
+            "sampling error (a contact search after packing; false leaves it out)."
+        ),
+    )
+
     @field_validator("packing", "summary")
     @classmethod
     def _check_file_name(cls, name: str) -> str:
@@ -728,6 +737,9 @@ class ResolvedScene:
     def to_dict(self) -> dict[str, Any]:
         """Return the fully resolved scene (every default filled in) as plain data.
 
+        ``outputs.fabric`` is written only when it is false, so that a scene
+        stored in a packing reads as it did before the field existed.
+
         Reading the result back with :func:`scene_from_dict` and resolving it
         gives the same scene.
         """
@@ -756,6 +768,8 @@ class ResolvedScene:
                     e.kind if isinstance(item, str) else e.to_dict()
                     for e, item in zip(self.exports, s.outputs.exports, strict=True)
                 ],
+                # only when off: the scenes stored in packings stay as they were
+                **({} if s.outputs.fabric else {"fabric": False}),
             },
         }
 

@@ -74,11 +74,26 @@ def test_rdf_alone_never_builds_contacts(packing, registry, monkeypatch, tmp_pat
 
 def test_a_scene_asking_for_rdf_never_builds_contacts(registry, monkeypatch, tmp_path):
     _forbid(monkeypatch, Contacts)
-    scene = resolve_scene(load_scene("small", ["count=100", 'outputs.analyses=["rdf"]']), registry)
+    # the run summary's fabric block searches contacts unless it is switched off
+    overrides = ["count=100", 'outputs.analyses=["rdf"]', "outputs.fabric=false"]
+    scene = resolve_scene(load_scene("small", overrides), registry)
     outcome = run_scene(scene, tmp_path, figures=False)
     assert list(outcome.summary["analyses"]) == ["rdf"]
     assert outcome.analysis is not None
     assert json.loads(outcome.analysis.results.read_text())["analyses"] == ["rdf"]
+
+
+def test_computed_analyzers_are_reused_not_computed_again(packing, registry, monkeypatch):
+    contacts = run_analyses(packing, registry, [("contacts", {"tol": 0.1})])["contacts"]
+    monkeypatch.setattr(Contacts, "compute", _forbid_compute)
+    done = run_analyses(
+        packing, registry, [("coordination", {})], computed={"contacts3d": contacts}
+    )
+    assert done["contacts"] is contacts and done["coordination"].results()["tol"] == 0.1
+
+
+def _forbid_compute(self, *args):
+    raise AssertionError("computed again")
 
 
 def test_requirements_come_first_and_keep_requested_parameters(packing, registry):
@@ -284,6 +299,13 @@ def test_main_numbers_skip_what_was_not_run():
     assert rows == {"first g(r) peak": "4.5 µm", "far-field mean g(r)": "1.1"}
     peak = {"first_peak_r": 4.434, "first_peak_r_err": 0.2287}
     assert dict(main_numbers({"tol": None, "rdf": peak}))["first g(r) peak"] == "4.43 ± 0.23 µm"
+
+
+def test_main_numbers_give_the_fabric_anisotropy_with_its_error():
+    net = {"anisotropy": 0.17893, "anisotropy_error": 0.005778}
+    assert dict(main_numbers({"network": net}))["fabric anisotropy"] == "0.1789 ± 0.0058"
+    net["anisotropy_error"] = None
+    assert dict(main_numbers({"network3d": net}))["fabric anisotropy"] == "0.1789"
 
 
 def test_main_numbers_give_a_plateau_where_g_has_no_distinct_peak():

@@ -129,4 +129,9 @@ def test_stress_verify_metrics(tmp_path: Path) -> None:
         "verify.worst_overlap",
         "verify.outside",
         "verify.any_nan",
+        "fabric.anisotropy",
+        "fabric.anisotropy_error",
+        "fabric.z_mechanical",
+        "fabric.rattler_fraction",
     } <= set(header)
+    assert "fabric.principal_direction" not in header  # a list, not a single value

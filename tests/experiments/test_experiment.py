@@ -270,7 +270,14 @@ def test_results_csv_has_a_row_per_run_with_the_metrics(
     root, outcome, _ = tiny_sweep
     rows = read_csv(root / "out" / "results.csv")
     assert [row["run_id"] for row in rows] == IDS
-    assert list(rows[0]) == ["run_id", "density.eta", "seed", "status", "error", *DEFAULT_METRICS]
+    head = ["run_id", "density.eta", "seed", "status", "error", *DEFAULT_METRICS]
+    assert list(rows[0])[: len(head)] == head
+    fabric = [
+        f"fabric.{key}"
+        for key in json.loads((root / "out" / IDS[0] / "summary.json").read_text())["fabric"]
+        if key != "principal_direction"
+    ]
+    assert sorted(list(rows[0])[len(head) :]) == sorted(fabric) and "fabric.anisotropy" in fabric
     assert [(row["density.eta"], row["seed"]) for row in rows] == [
         ("0", "1"),
         ("0", "2"),
@@ -283,7 +290,8 @@ def test_results_csv_has_a_row_per_run_with_the_metrics(
         assert int(row["placed"]) == run.metrics["placed"] > 0
         assert 0 < float(row["phi_domain"]) < 1
         assert float(row["wall_time_s"]) > 0
-    assert outcome.metrics == DEFAULT_METRICS
+    assert outcome.metrics[: len(DEFAULT_METRICS)] == DEFAULT_METRICS
+    assert sorted(outcome.metrics[len(DEFAULT_METRICS) :]) == sorted(fabric)
 
 
 def test_results_csv_is_complete_after_every_run(tiny_sweep: tuple[Path, Any, Any]) -> None:
