@@ -104,13 +104,9 @@ def phi_in_box(packing: Packing[Box], window: Box, volume: FloatArray | None = N
     box_hi = np.maximum.reduceat(packing.vertices, starts) + packing.centre + rho[:, None]
     whole = np.all(box_lo >= lo, axis=1) & np.all(box_hi <= hi, axis=1)
     apart = np.any(box_hi <= lo, axis=1) | np.any(box_lo >= hi, axis=1)
-    total = 0.0
-    for j in np.flatnonzero(packing.placed).tolist():
-        if whole[j]:
-            total += float(volume[j])
-            continue
-        if apart[j]:
-            continue
+    placed = packing.placed
+    total = float(np.sum(volume[placed & whole]))
+    for j in np.flatnonzero(placed & ~whole & ~apart).tolist():
         pts = packing.world_vertices(int(j))
         if rho[j] > 0:
             if pts.shape[0] != 1:

@@ -134,7 +134,7 @@ def field_dimensions(model: type[BaseModel]) -> dict[str, tuple[int, ...]]:
     """Return the parameters of ``model`` that have a meaning in some dimensions only.
 
     A field declares them as ``Field(..., json_schema_extra={"dimensions": [2]})``
-    (``homogeneity.tiles``: 2D, ``homogeneity.layers``: 3D); the schema shows
+    (``homogeneity.tiles``: 2D, ``homogeneity.shells``: 3D); the schema shows
     them, and a scene or call that sets one for a packing of another dimension
     is refused before anything is packed (:func:`misplaced_field`).
     """

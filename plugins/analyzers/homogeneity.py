@@ -149,8 +149,11 @@ class HomogeneityConfig(BaseModel):
         None,
         ge=1,
         le=1000,
-        json_schema_extra=SOLID,
-        description="Horizontal layers of a 3D window along z; default: 6.",
+        json_schema_extra={"dimensions": [2, 3]},
+        description=(
+            "Horizontal layers of the window, bottom to top (along y in 2D, z in 3D): the "
+            "height profile of a packing built from its floor; default: 6."
+        ),
     )
     shells: int | None = Field(
         None,
@@ -312,7 +315,31 @@ def _none(x: float) -> float | None:
 
 
 PLANE_FIELDS = ("ring_width", "rings", "tiles")
-"""Parameters that cut a 2D window; ``layers`` and ``shells`` cut a 3D one."""
+"""Parameters that cut a 2D window; ``shells`` cuts a 3D one, ``layers`` either."""
+
+
+def height_profile(
+    height: FloatArray, layers: Mapping[str, Any], overall: Mapping[str, float], per_length: float
+) -> dict[str, float | None]:
+    """Compare the layers with the whole window and fit their trends with height.
+
+    For each of number density, φ and mean diameter: the largest relative
+    deviation of a layer from the window's value (``layer_<q>_max_rel_dev``),
+    the χ² per degree of freedom of the layers about their weighted mean
+    (``layer_<q>_chi2_dof``: about 1 when they differ by their sampling
+    errors only), and the weighted straight line against the layers' mid
+    heights (``layer_<q>_slope_per_100`` and its error, per ``per_length``).
+    """
+    out: dict[str, float | None] = {}
+    for prefix, column in QUANTITIES:
+        values = np.asarray(layers[column], dtype=np.float64)
+        err = np.asarray(layers[f"{column}_err"], dtype=np.float64)
+        fit = trend(height, values, err)
+        out[f"layer_{prefix}_max_rel_dev"] = _max_rel_dev(values, overall[column])
+        out[f"layer_{prefix}_chi2_dof"] = _chi2_dof(values, err)
+        out[f"layer_{prefix}_slope_per_100"] = _none(fit.slope * per_length)
+        out[f"layer_{prefix}_slope_err"] = _none(fit.slope_err * per_length)
+    return out
 
 
 class Homogeneity(Measured):
@@ -335,6 +362,7 @@ class Homogeneity(Measured):
         self.tiles_table: dict[str, Any] = {}
         self.trends: dict[str, Trend] = {}
         self.overall: dict[str, float] = {}
+        self.layers: dict[str, Any] = {}
 
     def _ring_width(self, packing: Packing, window: PlaneDomain) -> float:
         near, far = window_reach(window, self.centre)
@@ -351,7 +379,7 @@ class Homogeneity(Measured):
 
     def compute(self, packing: Packing, context: Mapping[str, Analyzer]) -> Self:
         """Cut the window into regions and measure each; in 2D, fit the radial trends."""
-        own = ("layers", "shells") if packing.dimension == 3 else PLANE_FIELDS
+        own = ("layers", "shells") if packing.dimension == 3 else (*PLANE_FIELDS, "layers")
         other = set(PLANE_FIELDS + ("layers", "shells")) - set(own)
         given = sorted(f for f in other if getattr(self.config, f) is not None)
         if given:
@@ -368,6 +396,21 @@ class Homogeneity(Measured):
             self._tables, self._results = layers_and_shells(packing, window, margin, layers, shells)
             self.layers = self._tables["homogeneity_layers"]
             self.shells = self._tables["homogeneity_shells"]
+            overall = {
+                key: math.nan if self._results[key] is None else self._results[key]
+                for key in ("number_density", "phi", "mean_d")
+            }
+            per_length = PER_LENGTH * length_scale(packing)
+            self._results["slope_length"] = per_length
+            self._results["layers"] = len(self.layers["z_lo"])
+            self._results.update(
+                height_profile(
+                    0.5 * (self.layers["z_lo"] + self.layers["z_hi"]),
+                    self.layers,
+                    overall,
+                    per_length,
+                )
+            )
             return self
         self.centre = packing.domain.center
         names = packing.mineral_names
@@ -426,6 +469,27 @@ class Homogeneity(Measured):
             **tile_stats,
         }
 
+        # layers: the height profile
+        n_layers = self.config.layers or DEFAULT_REGIONS["layers"]
+        bands: Tiles = tile_grid(window, 1, n_layers)
+        layer_of = self._tile_of(centre_xy, inside, bands, window, 1, n_layers)
+        layer_stats = region_stats(
+            layer_of,
+            len(bands.area),
+            bands.area,
+            tile_piece_areas(pieces, bands),
+            diameter,
+            mineral,
+            names,
+            tile_cell_areas(pieces, window, bands, TILE_SPLIT),
+        )
+        self.layers = {
+            "layer": np.arange(len(bands.area), dtype=np.int64),
+            "y_min": bands.bounds[:, 2],
+            "y_max": bands.bounds[:, 3],
+            **layer_stats,
+        }
+
         # the whole window, the trends and the spread
         whole = region_stats(
             np.where(inside, 0, -1).astype(np.int64),
@@ -462,6 +526,15 @@ class Homogeneity(Measured):
             res[f"{prefix}_slope_err"] = _none(fit.slope_err * per_length)
             res[f"{prefix}_trend_chi2_dof"] = _none(fit.chi2_dof)
             res[f"{prefix}_max_rel_dev"] = _max_rel_dev(self.rings[column], self.overall[column])
+        res["layers"] = len(bands.area)
+        res.update(
+            height_profile(
+                0.5 * (bands.bounds[:, 2] + bands.bounds[:, 3]),
+                self.layers,
+                self.overall,
+                per_length,
+            )
+        )
         for prefix, column in QUANTITIES:
             res[f"tile_{prefix}_max_rel_dev"] = _max_rel_dev(
                 self.tiles_table[column], self.overall[column]
@@ -488,7 +561,11 @@ class Homogeneity(Measured):
             notes.append(f"only {k} ring(s): no trend error without 3 rings or more")
         res["notes"] = notes
         self._results = res
-        self._tables = {"homogeneity_rings": self.rings, "homogeneity_tiles": self.tiles_table}
+        self._tables = {
+            "homogeneity_rings": self.rings,
+            "homogeneity_tiles": self.tiles_table,
+            "homogeneity_layers": self.layers,
+        }
         return self
 
     @staticmethod
@@ -514,6 +591,6 @@ class Homogeneity(Measured):
         return out
 
     def tables(self) -> dict[str, dict[str, Any]]:
-        """Tables ``homogeneity_rings`` and ``homogeneity_tiles`` (3D: ``_layers``, ``_shells``)."""
+        """Tables ``homogeneity_rings``, ``_tiles``, ``_layers`` (3D: ``_layers``, ``_shells``)."""
         self._need()
         return {name: dict(table) for name, table in self._tables.items()}

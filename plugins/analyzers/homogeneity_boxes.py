@@ -25,8 +25,12 @@ from numpy.typing import NDArray
 from regopack.geometry.domain import Box, PeriodicBox
 from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import solid_volumes
+from regopack.plugins.analyzers.regions import scatter_error
 
 FloatArray = NDArray[np.float64]
+
+LAYER_SPLIT = 3
+"""Each layer is cut into this many by this many columns for the error of its φ."""
 
 
 def _region_stats(
@@ -85,6 +89,10 @@ def layers_and_shells(
     with np.errstate(invalid="ignore"):
         layers: dict[str, list[float]] = {k: [] for k in ("z_lo", "z_hi", "n", "density")}
         layers.update({"phi": [], "mean_diameter": []})
+        errors: dict[str, list[float]] = {k: [] for k in ("density", "phi", "mean_diameter")}
+        split = np.linspace(0.0, 1.0, LAYER_SPLIT + 1)
+        xs = w.xmin + (w.xmax - w.xmin) * split
+        ys = w.ymin + (w.ymax - w.ymin) * split
         edges = np.linspace(w.zmin, w.zmax, n_layers + 1)
         # a periodic cell holds its wrapped centres in [lo, hi)
         low = np.greater_equal if p3.domain.periodic else np.greater
@@ -100,12 +108,25 @@ def layers_and_shells(
             slab = Box(w.xmin, w.xmax, w.ymin, w.ymax, float(lo), float(hi))
             sel = inside_xy & (centre[:, 2] >= lo) & (centre[:, 2] < hi)
             n, density, diameter = _region_stats(p3, sel, slab.volume)
+            columns = [
+                Box(float(xs[a]), float(xs[a + 1]), float(ys[b]), float(ys[b + 1]), lo, hi)
+                for a in range(LAYER_SPLIT)
+                for b in range(LAYER_SPLIT)
+            ]
+            parts = np.array([[phi_in_box(p3, col, volume) * col.volume for col in columns]])
+            cells = np.array([[col.volume for col in columns]])
             for key, value in zip(
                 layers,
-                (lo, hi, n, density, phi_in_box(p3, slab, volume), diameter),
+                (lo, hi, n, density, parts.sum() / slab.volume, diameter),
                 strict=True,
             ):
                 layers[key].append(float(value))
+            d = 2.0 * p3.radius[sel]
+            errors["density"].append(math.sqrt(max(n, 1)) / slab.volume)
+            errors["phi"].append(float(scatter_error(parts, cells)[0]))
+            errors["mean_diameter"].append(
+                float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.nan
+            )
         shells: dict[str, list[float]] = {k: [] for k in ("half_lo", "half_hi", "n")}
         shells.update({"density": [], "phi": [], "mean_diameter": []})
         c = np.array(w.center)
@@ -131,8 +152,17 @@ def layers_and_shells(
     def clean(values: list[float]) -> list[float | None]:
         return [float(v) if math.isfinite(v) else None for v in values]
 
+    whole = inside_xy & low(centre[:, 2], w.zmin) & (centre[:, 2] < w.zmax)
+    n_whole, density_whole, d_whole = (
+        _region_stats(p3, whole, w.volume) if w.volume > 0 else (0, math.nan, math.nan)
+    )
+    phi_whole = phi_in_box(p3, w, volume) if w.volume > 0 else math.nan
     results = {
         "interior_margin": margin,
+        "n_interior": n_whole,
+        "number_density": float(density_whole) if math.isfinite(density_whole) else None,
+        "phi": float(phi_whole) if math.isfinite(phi_whole) else None,
+        "mean_d": float(d_whole) if math.isfinite(d_whole) else None,
         "window": [float(s) for s in w.size],
         "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
         "phi_layers": clean(layers["phi"]),
@@ -144,8 +174,19 @@ def layers_and_shells(
         "mean_diameter_shells": clean(shells["mean_diameter"]),
         "phi_shells_cv": _cv(shells["phi"]),
     }
+    layer_table = {k: np.asarray(v) for k, v in layers.items()}
+    # the columns under the names of the 2D tables, with their sampling errors
+    layer_table.update(
+        {
+            "number_density": layer_table["density"],
+            "number_density_err": np.asarray(errors["density"]),
+            "phi_err": np.asarray(errors["phi"]),
+            "mean_d": layer_table["mean_diameter"],
+            "mean_d_err": np.asarray(errors["mean_diameter"]),
+        }
+    )
     tables = {
-        "homogeneity_layers": {k: np.asarray(v) for k, v in layers.items()},
+        "homogeneity_layers": layer_table,
         "homogeneity_shells": {k: np.asarray(v) for k, v in shells.items()},
     }
     return tables, results

@@ -82,6 +82,49 @@ def _profile(
     ax.set_ylabel(label)
 
 
+def _height_profile(
+    ax: Axes,
+    layers: Any,
+    lo: str,
+    hi: str,
+    column: str,
+    scale: float,
+    overall: float,
+    fit: tuple[float | None, float | None, float],
+    unit: str,
+) -> None:
+    """One quantity over the layers, bottom to top, with errors, the window's value and its trend.
+
+    ``fit`` is the trend's slope and error per length and that length (from
+    the analyzer's ``layer_<q>_slope_per_100``, ``_slope_err`` and
+    ``slope_length``), written in the title.
+    """
+    z0, z1 = np.asarray(layers[lo], dtype=float), np.asarray(layers[hi], dtype=float)
+    if z0.size == 0:
+        note(ax, "no layers (empty window)")
+        return
+    z = 0.5 * (z0 + z1)
+    ax.errorbar(
+        z,
+        scale * np.asarray(layers[column], dtype=float),
+        yerr=scale * np.asarray(layers[f"{column}_err"], dtype=float),
+        xerr=[z - z0, z1 - z],
+        fmt="o",
+        color=POINTS,
+        ecolor=POINTS,
+        elinewidth=0.6,
+        capsize=1.5,
+        markersize=3,
+        label="layers: value ± 1 standard error, layer extent",
+    )
+    if np.isfinite(overall):
+        ax.axhline(scale * overall, color="#777777", linestyle=":", linewidth=0.8)
+    slope, err, per = fit
+    if slope is not None and err is not None:
+        text = f"trend {scale * slope:+.3g} ± {scale * err:.2g} per {per:g} {unit}"
+        ax.set_title(text, fontsize=7)
+
+
 def _outline(ax: Axes, xy: NDArray[np.float64], **kwargs: Any) -> None:
     ax.add_patch(PolygonPatch(xy, closed=True, fill=False, **kwargs))
 
@@ -152,8 +195,8 @@ def draw_homogeneity(packing: Any, h: Homogeneity) -> Figure:
     res = h.results()
     unit = length_unit(packing)
     shown = [axis_unit(power, unit, length_scale(packing)) for *_, power in PANELS]
-    fig = Figure(figsize=(WIDTH, 5.6))
-    axes = fig.subplots(2, 3, height_ratios=(1.0, 1.25))
+    fig = Figure(figsize=(WIDTH, 7.8))
+    axes = fig.subplots(3, 3, height_ratios=(1.0, 1.25, 1.0))
     for ax, (prefix, column, label, *_), (text, scale) in zip(axes[0], PANELS, shown, strict=True):
         _profile(ax, h, prefix, column, label.format(unit=text), scale, unit)
     nx, ny = res["tiles"]
@@ -163,6 +206,24 @@ def draw_homogeneity(packing: Any, h: Homogeneity) -> Figure:
             continue
         _tile_map(ax, fig, h, column, scale, unit, length_scale(packing))
         ax.set_title(f"{short}, {nx} × {ny} tiles")
+    for ax, (prefix, column, label, *_), (text, scale) in zip(axes[2], PANELS, shown, strict=True):
+        _height_profile(
+            ax,
+            h.layers,
+            "y_min",
+            "y_max",
+            column,
+            scale,
+            h.overall[column],
+            (
+                res[f"layer_{prefix}_slope_per_100"],
+                res[f"layer_{prefix}_slope_err"],
+                res["slope_length"],
+            ),
+            unit,
+        )
+        ax.set_xlabel(f"height y of the layer ({unit})")
+        ax.set_ylabel(label.format(unit=text))
     handles, labels = axes[0, 0].get_legend_handles_labels()
     if handles:
         order = [labels.index(t) for t in labels if t.startswith("rings")]
@@ -171,8 +232,8 @@ def draw_homogeneity(packing: Any, h: Homogeneity) -> Figure:
         fig.legend(handles, labels, loc="outside lower center", ncol=len(handles))
     fig.suptitle(
         f"{res['n_interior']:,} particles in the interior window "
-        f"(margin {res['interior_margin']:g} {unit}); rings of {res['ring_width']:.3g} {unit} "
-        f"about the centre; tile values labelled",
+        f"(margin {res['interior_margin']:g} {unit}): rings of {res['ring_width']:.3g} {unit} "
+        f"about the centre, tiles, {res['layers']} layers",
         fontsize=8,
     )
     return fig
@@ -182,7 +243,9 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
     """Draw number density, φ and mean diameter over the layers (top) and shells (bottom).
 
     Each region is drawn at its middle (the layer's height, the shell's mean
-    half width), with a dashed line at the mean over the regions; lengths are
+    half width); the layers with their sampling errors, a dotted line at the
+    whole window's value and the trend with height in the title; the shells
+    with a dashed line at the mean over them; lengths are
     labelled in ``unit``.
     """
     fig = Figure(figsize=(WIDTH, 4.4))
@@ -196,7 +259,32 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
         ("phi", "volume fraction φ"),
         ("mean_diameter", f"mean diameter ({unit})"),
     )
+    res = homogeneity.results()
+    for col, (prefix, column) in enumerate(
+        (("density", "number_density"), ("phi", "phi"), ("mean_d", "mean_d"))
+    ):
+        ax = axes[0, col]
+        overall = res.get(column)
+        _height_profile(
+            ax,
+            homogeneity.layers,
+            "z_lo",
+            "z_hi",
+            column,
+            1.0,
+            float("nan") if overall is None else float(overall),
+            (
+                res[f"layer_{prefix}_slope_per_100"],
+                res[f"layer_{prefix}_slope_err"],
+                res["slope_length"],
+            ),
+            unit,
+        )
+        ax.set_xlabel(rows[0][3])
+        ax.set_ylabel(columns[col][1])
     for row, (table, lo, hi, xlabel) in enumerate(rows):
+        if row == 0:
+            continue
         x = 0.5 * (np.asarray(table[lo]) + np.asarray(table[hi]))
         for col, (key, ylabel) in enumerate(columns):
             ax = axes[row, col]
@@ -214,6 +302,8 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
             ax.set_xlabel(xlabel)
             ax.set_ylabel(ylabel)
     fig.suptitle(
-        "Homogeneity of the interior window: layers along z, shells about the centre", fontsize=8
+        "Interior window: layers along z (± 1 standard error; dotted: the whole window), "
+        "shells about the centre",
+        fontsize=8,
     )
     return fig

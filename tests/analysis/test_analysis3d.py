@@ -200,11 +200,11 @@ def test_an_old_3d_name_is_refused_on_a_2d_packing() -> None:
 
 
 def test_a_3d_parameter_of_a_2d_scene_is_refused_by_config(tmp_path, capsys) -> None:
-    argv = ["config", "small", "--set", 'outputs.analyses=[{kind = "homogeneity", layers = 3}]']
+    argv = ["config", "small", "--set", 'outputs.analyses=[{kind = "homogeneity", shells = 3}]']
     assert main(argv) == 2
     assert one_error_line(capsys) == (
-        "regopack: error: --set: outputs.analyses.0.layers = 3: has no meaning for a 2D "
-        "packing, only for 3D ones; its 2D parameters: ring_width, rings, tiles"
+        "regopack: error: --set: outputs.analyses.0.shells = 3: has no meaning for a 2D "
+        "packing, only for 3D ones; its 2D parameters: ring_width, rings, tiles, layers"
     )
 
 

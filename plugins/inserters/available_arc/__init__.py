@@ -22,6 +22,8 @@ from regopack.base.errors import ConfigError
 from regopack.base.threads import kernel_threads
 from regopack.geometry.domain import Domain, Rectangle
 from regopack.geometry.population import Population
+from regopack.plugins.inserters.options import ZONE_PER_RADIUS as ZONE_PER_RADIUS
+from regopack.plugins.inserters.options import ScreeningCoefficient, SweepZone, sweep_zone
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -43,8 +45,6 @@ IntArray = NDArray[np.int64]
 PROGRESS_EVERY = 256
 SWEEP_POOL_ROWS = 4096
 """Neighbour-list rows the sweep starts with (the pool grows when a batch could exhaust it)."""
-ZONE_PER_RADIUS = 6.0
-"""Default sweep zone height over the largest equivalent radius (three diameters)."""
 
 
 class AvailableArcConfig(BaseModel):
@@ -52,11 +52,8 @@ class AvailableArcConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    t: float = Field(
+    t: ScreeningCoefficient = Field(
         0.999,
-        gt=0,
-        le=1,
-        allow_inf_nan=False,
         description=(
             "Screening coefficient t in (0, 1]: candidate k is analysed when r_new < t * rmin_k."
         ),
@@ -107,15 +104,7 @@ class AvailableArcConfig(BaseModel):
             "The sweep order always refuses exactly."
         ),
     )
-    zone: float = Field(
-        0.0,
-        ge=0,
-        allow_inf_nan=False,
-        description=(
-            "Height of the sweep's zone (length units); 0: three times the largest "
-            "particle's equivalent diameter. Ignored by order = 'paper'."
-        ),
-    )
+    zone: SweepZone = 0.0
     closing: Literal["paced", "prompt", "tail"] = Field(
         "paced",
         description=(
@@ -294,9 +283,7 @@ def _pack_sweep(
     n = len(population)
     bounds = domain.bounds()
     height = float(bounds[3] - bounds[2])
-    zone = cfg.zone
-    if zone == 0.0:
-        zone = ZONE_PER_RADIUS * float(population.radius.max()) if n else 1.0
+    zone = sweep_zone(cfg.zone, population.radius)
     width = float(bounds[1] - bounds[0])
     strip = cfg.strip
     if strip > 0.0 and n:

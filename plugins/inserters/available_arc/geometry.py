@@ -339,6 +339,24 @@ def segment_point_distance(
 
 
 @numba.njit(cache=True)
+def angle_slot(va: FloatArray, n: int, angle: float) -> tuple[float, int]:
+    """Find where polar ``angle`` falls among the ``n`` slots ``va[j] .. va[j + 1]`` of a turn.
+
+    ``va`` holds ``n + 1`` ascending angles, the last one turn after the first.
+    Returns ``angle`` moved by whole turns to ``[va[0], va[n])`` and the slot
+    ``j`` that holds it (the last slot for an angle past every bound).
+    """
+    period = va[n] - va[0]
+    a = angle - va[0]
+    a = a - period * math.floor(a / period)
+    a += va[0]
+    j = 0
+    while j < n - 1 and va[j + 1] < a:
+        j += 1
+    return a, j
+
+
+@numba.njit(cache=True)
 def close_arcs(arcs: FloatArray, na: int, wraps: bool, period: float) -> FloatArray:
     """Finish the ``na`` arcs collected around an envelope.
 

@@ -8,6 +8,7 @@ overlaps once (a per-query stamp removes repeats).
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -47,6 +48,22 @@ def grid_layout(bounds: FloatArray, reach: FloatArray) -> tuple[float, int, int,
     per_y = np.minimum(np.floor(2.0 * reach / cell) + 3.0, float(ny))
     capacity = int(np.sum(per_x * per_y)) + 1
     return cell, nx, ny, capacity
+
+
+def empty_grid(n: int, cells: int, capacity: int) -> dict[str, NDArray[Any]]:
+    """Arrays of an empty grid, by the field names of the state tuples that hold them.
+
+    ``head`` (per cell: its last registration, -1 for none), ``nxt`` and
+    ``item`` (``capacity`` registrations, filled by :func:`grid_insert`) and
+    ``stamp`` (per particle, marks the particles a query has listed) for
+    ``n`` particles and ``cells`` cells.
+    """
+    return {
+        "head": np.full(cells, -1, dtype=np.int64),
+        "nxt": np.empty(capacity, dtype=np.int64),
+        "item": np.empty(capacity, dtype=np.int64),
+        "stamp": np.zeros(n, dtype=np.int64),
+    }
 
 
 @numba.njit(cache=True)

@@ -40,6 +40,7 @@ from regopack.plugins.inserters.available_arc.bound_queue import post_bound
 from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.inserters.available_arc.disk_bound import disk_bound
 from regopack.plugins.inserters.available_arc.geometry import (
+    angle_slot,
     clip_closed_box,
     clip_open_interior,
     close_arcs,
@@ -936,13 +937,7 @@ def locate(
         return s.cx[pk] + x, s.cy[pk] + y
     va = w.va
     _vertex_angles(wx, wy, n, va)
-    period = va[n] - va[0]
-    a = angle - va[0]
-    a = a - period * math.floor(a / period)
-    a += va[0]
-    j = 0
-    while j < n - 1 and va[j + 1] < a:
-        j += 1
+    a, j = angle_slot(va, n, angle)
     j2 = j + 1 if j + 1 < n else 0
     dxr = math.cos(a)
     dyr = math.sin(a)
@@ -1013,6 +1008,32 @@ def place_on_arcs(
     angle = sample_angle(arcs, rng.random())
     x, y = locate(s.order[k], i, mq, angle, g, s, w, rounded)
     return insert_particle(i, x, y, g, s)
+
+
+@numba.njit(cache=True)
+def place_screened(
+    i: int,
+    mq: int,
+    g: Outlines,
+    s: Packed,
+    w: Work,
+    rng: np.random.Generator,
+    rounded: object,
+) -> int:
+    """Place particle ``i`` at the first candidate that takes it (the paper's screened search).
+
+    Candidates whose arcs the eta control removes record the rejection and
+    the search goes on. Returns the new insertion index, or -1.
+    """
+    start = int(np.int64(0))
+    while True:
+        k, arcs = find_site(i, start, mq, g, s, w, rounded)
+        if k < 0:
+            return -1
+        placed = place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded)
+        if placed >= 0:
+            return placed
+        start = k + 1
 
 
 @numba.njit(cache=True)
@@ -1158,13 +1179,6 @@ def pack_range(
                 placed += 1
             continue
         mq = begin_particle(i, g, s, w)
-        start = int(np.int64(0))
-        while True:
-            k, arcs = find_site(i, start, mq, g, s, w, rounded)
-            if k < 0:
-                break
-            if place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded) >= 0:
-                placed += 1
-                break
-            start = k + 1
+        if place_screened(i, mq, g, s, w, rng, rounded) >= 0:
+            placed += 1
     return placed

@@ -526,7 +526,7 @@ def place_screened_shared(
     rounded: object,
     p: Partner,
 ) -> int:
-    """:func:`refusal.place_screened` with the partner analysing ahead (same result)."""
+    """:func:`kernel.place_screened` with the partner analysing ahead (same result)."""
     start = int(np.int64(0))
     while True:
         k, arcs = find_site_shared(i, start, mq, g, s, w, rounded, p)

@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack._compat import renamed_names
 from regopack.plugins.common.borrowed import borrowed
 from regopack.plugins.inserters.available_arc import kernel as K
 
@@ -57,32 +58,6 @@ def try_candidate(
 
 
 @numba.njit(cache=True)
-def place_screened(
-    i: int,
-    mq: int,
-    g: K.Outlines,
-    s: K.Packed,
-    w: K.Work,
-    rng: np.random.Generator,
-    rounded: object,
-) -> int:
-    """Place particle ``i`` at the first candidate that takes it (the paper's screened search).
-
-    Candidates whose arcs the eta control removes record the rejection and
-    the search goes on. Returns the new insertion index, or -1.
-    """
-    start = int(np.int64(0))
-    while True:
-        k, arcs = K.find_site(i, start, mq, g, s, w, rounded)
-        if k < 0:
-            return -1
-        placed = K.place_on_arcs(k, arcs, i, mq, g, s, w, rng, rounded)
-        if placed >= 0:
-            return placed
-        start = k + 1
-
-
-@numba.njit(cache=True)
 def pack_range_exact(
     begin: int,
     end: int,
@@ -106,7 +81,7 @@ def pack_range_exact(
                 placed += 1
             continue
         mq = K.begin_particle(i, g, s, w)
-        done = place_screened(i, mq, g, s, w, rng, rounded) >= 0
+        done = K.place_screened(i, mq, g, s, w, rng, rounded) >= 0
         if not done:
             for k in range(s.ipar[K.I_COUNT]):
                 if try_candidate(k, i, mq, g, s, w, rng, rounded):
@@ -116,3 +91,10 @@ def pack_range_exact(
         if done:
             placed += 1
     return placed
+
+
+__getattr__ = renamed_names(
+    __name__,
+    {"place_screened": "regopack.plugins.inserters.available_arc.kernel:place_screened"},
+)
+"""The screened search that moved to the kernel beside the loop that calls it, for one release."""

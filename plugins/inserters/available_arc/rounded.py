@@ -28,7 +28,7 @@ from numpy.typing import NDArray
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.common.walls import WALL_BOX, WALL_CIRCLE, WALL_HALFPLANES
 from regopack.plugins.inserters.available_arc.disk_bound import sort_covers
-from regopack.plugins.inserters.available_arc.geometry import close_arcs, inside_open
+from regopack.plugins.inserters.available_arc.geometry import angle_slot, close_arcs, inside_open
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -715,11 +715,5 @@ def rounded_locate(
     npc = pieces.shape[0]
     va = np.empty(npc + 1)
     piece_angles(pieces, va)
-    period = va[npc] - va[0]
-    a = angle - va[0]
-    a = a - period * math.floor(a / period)
-    a += va[0]
-    p = 0
-    while p < npc - 1 and va[p + 1] < a:
-        p += 1
+    a, p = angle_slot(va, npc, angle)
     return ray_hit(pieces[p], a)

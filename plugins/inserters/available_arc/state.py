@@ -18,7 +18,7 @@ from regopack.plugins.inserters.available_arc import kernel
 from regopack.plugins.inserters.available_arc.bound_queue import new_queue
 from regopack.plugins.inserters.available_arc.candidates import tree_size
 from regopack.plugins.inserters.available_arc.geometry import prepare_outlines
-from regopack.plugins.inserters.available_arc.grid import grid_layout
+from regopack.plugins.inserters.available_arc.grid import empty_grid, grid_layout
 from regopack.plugins.inserters.available_arc.neighbours import free_stack, list_capacity
 
 if TYPE_CHECKING:
@@ -146,10 +146,7 @@ class ArcState:
             cy=np.full(n, np.nan),
             order=np.full(n, -1, dtype=np.int64),
             tree=np.full(2 * leaves, -np.inf),
-            head=np.full(gnx * gny, -1, dtype=np.int64),
-            nxt=np.empty(capacity, dtype=np.int64),
-            item=np.empty(capacity, dtype=np.int64),
-            stamp=np.zeros(n, dtype=np.int64),
+            **empty_grid(n, gnx * gny, capacity),
             fpar=fpar,
             ipar=ipar,
             walls=walls,

@@ -30,17 +30,17 @@ from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.base.limits import derived_count
-from regopack.plugins.inserters.available_surface.envelope import minkowski_envelope
+from regopack.plugins.inserters.available_surface.envelope import (
+    EdgeArcs,
+    edge_arcs,
+    minkowski_envelope,
+)
 from regopack.plugins.inserters.available_surface.free_surface import (
     Interferers,
     free_surface,
     sample_free_point,
 )
-from regopack.plugins.inserters.available_surface.halfspaces import (
-    EdgeArcs,
-    edge_arcs,
-    halfspaces_of_arcs,
-)
+from regopack.plugins.inserters.available_surface.halfspaces import halfspaces_of_arcs
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
 from regopack.plugins.inserters.available_surface.spheres import EPS, free_arcs, sample_free
 

@@ -110,6 +110,15 @@ class FaceScratch(NamedTuple):
     hull: IntArray
 
 
+class EdgeArcs(NamedTuple):
+    """The edges of a polyhedron (``P``, or ``-Q``) as arcs of its Gauss map."""
+
+    left: IntArray
+    right: IntArray
+    t: FloatArray
+    u: FloatArray
+
+
 @numba.njit(cache=True)
 def polyhedron_edges(
     face_vertices: IntArray, face_offsets: IntArray, n_vertices: int
@@ -223,6 +232,14 @@ def _edge_arcs(
         u[e, 4] = gz * tx - gx * tz
         u[e, 5] = gx * ty - gy * tx
     return t, u
+
+
+@numba.njit(cache=True)
+def edge_arcs(p: Polyhedron, sign: float) -> EdgeArcs:
+    """Edge arcs of ``P`` (``sign = 1``) or of ``-P`` (``sign = -1``), to reuse across pairs."""
+    a, b, left, right = polyhedron_edges(p.face_vertices, p.face_offsets, p.vertices.shape[0])
+    t, u = _edge_arcs(p.vertices, p.normals, sign, a, b, left, right)
+    return EdgeArcs(left, right, t, u)
 
 
 @numba.njit(cache=True)
@@ -464,47 +481,23 @@ def edge_pair_directions(
 
 
 @numba.njit(cache=True)
-def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
-    """Return the envelope ``E = P ⊕ (-Q)`` as a :class:`Polyhedron`.
+def candidate_directions(
+    p: Polyhedron, ep: EdgeArcs, q: Polyhedron, eq: EdgeArcs
+) -> tuple[FloatArray, IntArray, IntArray, IntArray, int]:
+    """Directions in which ``P ⊕ (-Q)`` may have a facet, from the edge arcs of ``P`` and ``-Q``.
 
-    Parameters
-    ----------
-    p, q
-        Convex polyhedra relative to their reference points.
-
-    Returns
-    -------
-    Polyhedron
-        ``E`` relative to ``P``'s reference point: ``Q``'s reference point at
-        ``x`` makes ``Q`` touch ``P`` exactly when ``x`` is on ``E``'s boundary.
-        Vertices are sums ``p_i - q_j``; see the module docstring for the
-        method and the tolerance.
+    The face normals of ``P`` (``kind`` 0, the face in ``ca``), those of
+    ``-Q`` (``kind`` 1), then the crossings of their edge arcs
+    (:func:`edge_pair_directions`, ``kind`` 2). Returns ``(cand, kind, ca, cb,
+    nc)``, the directions in the first ``nc`` rows of ``cand``.
     """
-    vp = p.vertices
-    vq = q.vertices
-    kp = vp.shape[0]
-    kq = vq.shape[0]
+    pl, pr, tp, up = ep
+    ql, qr, tq, uq = eq
     fp = p.normals.shape[0]
     fq = q.normals.shape[0]
-    rp = 0.0
-    for i in range(kp):
-        rp = max(rp, math.sqrt(vp[i, 0] ** 2 + vp[i, 1] ** 2 + vp[i, 2] ** 2))
-    rq = 0.0
-    for j in range(kq):
-        rq = max(rq, math.sqrt(vq[j, 0] ** 2 + vq[j, 1] ** 2 + vq[j, 2] ** 2))
-    tau = ENVELOPE_EPS * (rp + rq)
-
-    pa, pb, pl, pr = polyhedron_edges(p.face_vertices, p.face_offsets, kp)
-    qa, qb, ql, qr = polyhedron_edges(q.face_vertices, q.face_offsets, kq)
-    tp, up = _edge_arcs(vp, p.normals, 1.0, pa, pb, pl, pr)
-    tq, uq = _edge_arcs(vq, q.normals, -1.0, qa, qb, ql, qr)
-    nep = pa.shape[0]
-    neq = qa.shape[0]
-
-    # candidate directions: faces of P, faces of -Q, crossing edge arcs
-    cap = fp + fq + nep * neq
+    cap = fp + fq + pl.shape[0] * ql.shape[0]
     cand = np.empty((cap, 3))
-    kind = np.empty(cap, dtype=np.int64)  # 0: face of P, 1: face of -Q, 2: edge pair
+    kind = np.empty(cap, dtype=np.int64)
     ca = np.empty(cap, dtype=np.int64)
     cb = np.empty(cap, dtype=np.int64)
     # counters start as int(np.int64(0)), not 0: numba would type a literal 0 and compile
@@ -530,6 +523,45 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     side_q = _sides(tq, p.normals, 1.0)  # faces of P against the edges of -Q
     nc = edge_pair_directions(
         tp, up, pl, pr, tq, uq, ql, qr, side_p, side_q, cand, kind, ca, cb, nc
+    )
+    return cand, kind, ca, cb, nc
+
+
+@numba.njit(cache=True)
+def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
+    """Return the envelope ``E = P ⊕ (-Q)`` as a :class:`Polyhedron`.
+
+    Parameters
+    ----------
+    p, q
+        Convex polyhedra relative to their reference points.
+
+    Returns
+    -------
+    Polyhedron
+        ``E`` relative to ``P``'s reference point: ``Q``'s reference point at
+        ``x`` makes ``Q`` touch ``P`` exactly when ``x`` is on ``E``'s boundary.
+        Vertices are sums ``p_i - q_j``; see the module docstring for the
+        method and the tolerance.
+    """
+    vp = p.vertices
+    vq = q.vertices
+    kp = vp.shape[0]
+    kq = vq.shape[0]
+    rp = 0.0
+    for i in range(kp):
+        rp = max(rp, math.sqrt(vp[i, 0] ** 2 + vp[i, 1] ** 2 + vp[i, 2] ** 2))
+    rq = 0.0
+    for j in range(kq):
+        rq = max(rq, math.sqrt(vq[j, 0] ** 2 + vq[j, 1] ** 2 + vq[j, 2] ** 2))
+    tau = ENVELOPE_EPS * (rp + rq)
+
+    pa, pb, pl, pr = polyhedron_edges(p.face_vertices, p.face_offsets, kp)
+    qa, qb, ql, qr = polyhedron_edges(q.face_vertices, q.face_offsets, kq)
+    tp, up = _edge_arcs(vp, p.normals, 1.0, pa, pb, pl, pr)
+    tq, uq = _edge_arcs(vq, q.normals, -1.0, qa, qb, ql, qr)
+    cand, kind, ca, cb, nc = candidate_directions(
+        p, EdgeArcs(pl, pr, tp, up), q, EdgeArcs(ql, qr, tq, uq)
     )
 
     # support values of P and -Q in every candidate direction

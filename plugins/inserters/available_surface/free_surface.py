@@ -332,6 +332,25 @@ def _face_polygon(
     return n
 
 
+@numba.njit(cache=True, inline="always")
+def _line_values(
+    work: FloatArray, x: int, y: int, n: int, la: float, lb: float, lc: float
+) -> tuple[float, float]:
+    """Write ``lc - la s - lb t`` at the polygon's vertices to row ``W_G``; return its range.
+
+    The polygon is rows ``x, y`` of ``work`` (``n`` vertices); returns the
+    least and the greatest value.
+    """
+    gmin = np.inf
+    gmax = -np.inf
+    for i in range(n):
+        gi = lc - la * work[x, i] - lb * work[y, i]
+        work[W_G, i] = gi
+        gmin = min(gmin, gi)
+        gmax = max(gmax, gi)
+    return gmin, gmax
+
+
 @numba.njit(cache=True)
 def _covered_part(
     q: int,
@@ -392,13 +411,7 @@ def _covered_part(
             continue
         if gc + spread <= 0.0:
             return -1
-        gmin = np.inf
-        gmax = -np.inf
-        for i in range(kn):
-            gi = lc - la * work[kx, i] - lb * work[ky, i]
-            work[W_G, i] = gi
-            gmin = min(gmin, gi)
-            gmax = max(gmax, gi)
+        gmin, gmax = _line_values(work, kx, ky, kn, la, lb, lc)
         if gmin >= 0.0:
             continue
         if gmax <= 0.0:
@@ -485,13 +498,7 @@ def _subtract(
             la = geom[0, li]
             lb = geom[1, li]
             lc = geom[2, li]
-            gmin = np.inf
-            gmax = -np.inf
-            for i in range(rn):
-                gi = lc - la * work[rx, i] - lb * work[ry, i]
-                work[W_G, i] = gi
-                gmin = min(gmin, gi)
-                gmax = max(gmax, gi)
+            gmin, gmax = _line_values(work, rx, ry, rn, la, lb, lc)
             if gmin >= 0.0:
                 continue
             if gmax <= 0.0:

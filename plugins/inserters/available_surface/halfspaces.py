@@ -13,40 +13,20 @@ envelope exactly.
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.plugins.inserters.available_surface.envelope import (
-    _edge_arcs,
-    _sides,
-    edge_pair_directions,
-    polyhedron_edges,
+    EdgeArcs,
+    candidate_directions,
+    edge_arcs,
 )
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class EdgeArcs(NamedTuple):
-    """The edges of a polyhedron (``P``, or ``-Q``) as arcs of its Gauss map."""
-
-    left: IntArray
-    right: IntArray
-    t: FloatArray
-    u: FloatArray
-
-
-@numba.njit(cache=True)
-def edge_arcs(p: Polyhedron, sign: float) -> EdgeArcs:
-    """Edge arcs of ``P`` (``sign = 1``) or of ``-P`` (``sign = -1``), to reuse across pairs."""
-    a, b, left, right = polyhedron_edges(p.face_vertices, p.face_offsets, p.vertices.shape[0])
-    t, u = _edge_arcs(p.vertices, p.normals, sign, a, b, left, right)
-    return EdgeArcs(left, right, t, u)
 
 
 @numba.njit(cache=True)
@@ -67,36 +47,7 @@ def halfspaces_of_arcs(
     vq = q.vertices
     kp = vp.shape[0]
     kq = vq.shape[0]
-    fp = p.normals.shape[0]
-    fq = q.normals.shape[0]
-    pl = ep.left
-    pr = ep.right
-    tp = ep.t
-    up = ep.u
-    ql = eq.left
-    qr = eq.right
-    tq = eq.t
-    uq = eq.u
-    nep = pl.shape[0]
-    neq = ql.shape[0]
-    cand = np.empty((fp + fq + nep * neq, 3))
-    nc = int(np.int64(0))  # not a literal 0 (a second compilation of edge_pair_directions)
-    for f in range(fp):
-        for a in range(3):
-            cand[nc, a] = p.normals[f, a]
-        nc += 1
-    for g in range(fq):
-        for a in range(3):
-            cand[nc, a] = -q.normals[g, a]
-        nc += 1
-    side_p = _sides(tp, q.normals, -1.0)
-    side_q = _sides(tq, p.normals, 1.0)
-    cap = cand.shape[0]
-    nc = edge_pair_directions(
-        tp, up, pl, pr, tq, uq, ql, qr, side_p, side_q, cand,
-        np.empty(cap, dtype=np.int64), np.empty(cap, dtype=np.int64),
-        np.empty(cap, dtype=np.int64), nc,
-    )  # fmt: skip
+    cand, _, _, _, nc = candidate_directions(p, ep, q, eq)
     normals = cand[:nc].copy()
     support = np.empty(nc)
     for c in range(nc):

@@ -46,6 +46,8 @@ from pydantic import BaseModel, ConfigDict, Field
 from regopack.base.errors import ConfigError
 from regopack.geometry.domain import Box, Domain
 from regopack.geometry.population import Population
+from regopack.plugins.inserters.options import ZONE_PER_RADIUS as ZONE_PER_RADIUS
+from regopack.plugins.inserters.options import ScreeningCoefficient, SweepZone, sweep_zone
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -63,8 +65,6 @@ IntArray = NDArray[np.int64]
 
 PROGRESS_EVERY = 500
 """Particles between progress reports."""
-ZONE_PER_RADIUS = 6.0
-"""Default sweep zone height over the largest equivalent radius (three diameters)."""
 
 
 class AvailableSurfaceConfig(BaseModel):
@@ -72,11 +72,8 @@ class AvailableSurfaceConfig(BaseModel):
 
     model_config = ConfigDict(extra="forbid", strict=True)
 
-    t: float = Field(
+    t: ScreeningCoefficient = Field(
         0.999,
-        gt=0,
-        le=1,
-        allow_inf_nan=False,
         description=(
             "Screening coefficient t in (0, 1]: candidate k is analysed for a particle of "
             "radius r only when r < t * rmin_k, the smallest radius it refused."
@@ -98,15 +95,7 @@ class AvailableSurfaceConfig(BaseModel):
             "per particle does not grow with the box; see docs/explanation/method.md)."
         ),
     )
-    zone: float = Field(
-        0.0,
-        ge=0,
-        allow_inf_nan=False,
-        description=(
-            "Height of the sweep's zone (length units); 0: three times the largest "
-            "particle's equivalent diameter. Ignored by order = 'paper'."
-        ),
-    )
+    zone: SweepZone = 0.0
     closing: Literal["paced", "prompt", "tail"] = Field(
         "paced",
         description=(
@@ -206,11 +195,7 @@ class AvailableSurface(InsertionStrategy):
         )
         stats: dict[str, float] = {}
         if cfg.order == "sweep":
-            zone = (
-                cfg.zone
-                if cfg.zone > 0.0
-                else ZONE_PER_RADIUS * (float(radius.max()) if n else 1.0)
-            )
+            zone = sweep_zone(cfg.zone, radius)
             strip = cfg.strip
             if strip > 0.0 and n:
                 # columns at least two circumradii of the largest particle wide: a

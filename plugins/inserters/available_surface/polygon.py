@@ -136,6 +136,36 @@ def split_polygon(
     each at most); returns their vertex counts. A part with fewer than 3
     vertices is empty or degenerate.
     """
+    return _split(rows, x, y, n, g, ix, iy, ox, oy, True)
+
+
+@numba.njit(cache=True)
+def clip_polygon(rows: FloatArray, x: int, y: int, n: int, g: int, ix: int, iy: int) -> int:
+    """Write the closed part ``g >= 0`` of a convex polygon to rows ``ix, iy``.
+
+    See :func:`split_polygon`; returns the part's vertex count.
+    """
+    return _split(rows, x, y, n, g, ix, iy, ix, iy, False)[0]
+
+
+@numba.njit(cache=True, inline="always")
+def _split(
+    rows: FloatArray,
+    x: int,
+    y: int,
+    n: int,
+    g: int,
+    ix: int,
+    iy: int,
+    ox: int,
+    oy: int,
+    outside: bool,
+) -> tuple[int, int]:
+    """:func:`split_polygon`; the part ``g <= 0`` is written only when ``outside`` (else 0).
+
+    Inlined with ``outside`` a constant, so that the compiler drops the
+    branches of the part not asked for.
+    """
     nin = 0
     nout = 0
     for j in range(n):
@@ -146,7 +176,7 @@ def split_polygon(
             rows[ix, nin] = rows[x, j]
             rows[iy, nin] = rows[y, j]
             nin += 1
-        if f1 <= 0.0:
+        if outside and f1 <= 0.0:
             rows[ox, nout] = rows[x, j]
             rows[oy, nout] = rows[y, j]
             nout += 1
@@ -157,33 +187,11 @@ def split_polygon(
             rows[ix, nin] = cx
             rows[iy, nin] = cy
             nin += 1
-            rows[ox, nout] = cx
-            rows[oy, nout] = cy
-            nout += 1
+            if outside:
+                rows[ox, nout] = cx
+                rows[oy, nout] = cy
+                nout += 1
     return nin, nout
-
-
-@numba.njit(cache=True)
-def clip_polygon(rows: FloatArray, x: int, y: int, n: int, g: int, ix: int, iy: int) -> int:
-    """Write the closed part ``g >= 0`` of a convex polygon to rows ``ix, iy``.
-
-    See :func:`split_polygon`; returns the part's vertex count.
-    """
-    nin = 0
-    for j in range(n):
-        j2 = j + 1 if j + 1 < n else 0
-        f1 = rows[g, j]
-        f2 = rows[g, j2]
-        if f1 >= 0.0:
-            rows[ix, nin] = rows[x, j]
-            rows[iy, nin] = rows[y, j]
-            nin += 1
-        if (f1 > 0.0 and f2 < 0.0) or (f1 < 0.0 and f2 > 0.0):
-            u = f1 / (f1 - f2)
-            rows[ix, nin] = rows[x, j] + u * (rows[x, j2] - rows[x, j])
-            rows[iy, nin] = rows[y, j] + u * (rows[y, j2] - rows[y, j])
-            nin += 1
-    return nin
 
 
 @numba.njit(cache=True)

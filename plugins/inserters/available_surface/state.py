@@ -29,11 +29,8 @@ from regopack.plugins.inserters.available_surface.analysis import (
     scan,
     solids_of,
 )
-from regopack.plugins.inserters.available_surface.halfspaces import (
-    EdgeArcs,
-    edge_arcs,
-    minkowski_halfspaces,
-)
+from regopack.plugins.inserters.available_surface.envelope import EdgeArcs, edge_arcs
+from regopack.plugins.inserters.available_surface.halfspaces import minkowski_halfspaces
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
 
 FloatArray = NDArray[np.float64]

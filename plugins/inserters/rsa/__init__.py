@@ -45,6 +45,7 @@ from regopack.plugins.common.walls import (
     point_fits,
     wall_arrays,
 )
+from regopack.plugins.inserters.available_arc.grid import cell_range, empty_grid, grid_insert
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -84,6 +85,10 @@ MAX_ATTEMPTS_LIMIT = 10_000_000
     I_WALLMODE,
 ) = range(10)
 N_IPAR = 10
+
+# ``Grid.fpar`` after the domain's box (xmin, xmax, ymin, ymax): the largest circumradius,
+# then the grid's origin and cell size in a row, as ``grid_insert`` reads them
+F_REACH, F_GX0, F_GY0, F_GCELL = 4, 5, 6, 7
 
 
 class RsaConfig(BaseModel):
@@ -133,8 +138,8 @@ class Grid(NamedTuple):
     item: IntArray
     stamp: IntArray
     fpar: FloatArray
-    """``[xmin, xmax, ymin, ymax, cell, reach]``: the domain's box, the cell size (grid
-    origin xmin, ymin) and the largest circumradius."""
+    """``[xmin, xmax, ymin, ymax, reach, x0, y0, cell]``: the domain's box, the largest
+    circumradius, and the grid's origin (the box's lower corner) and cell size."""
     ipar: IntArray
     walls: FloatArray
     """Wall array of :func:`regopack.plugins.common.walls.wall_arrays`."""
@@ -249,31 +254,12 @@ def _grid_layout(domain: PlaneDomain, circum: FloatArray) -> tuple[float, int, i
 
 
 @numba.njit(cache=True)
-def _cells(lo: float, hi: float, origin: float, cell: float, count: int) -> tuple[int, int]:
-    """Inclusive range of the cell indices that ``[lo, hi]`` overlaps along one axis."""
-    a = math.floor((lo - origin) / cell)
-    b = math.floor((hi - origin) / cell)
-    a = min(max(a, 0), count - 1)  # an interval beyond a side maps to that side's cells
-    b = min(max(b, 0), count - 1)
-    return int(a), int(b)
-
-
-@numba.njit(cache=True)
 def _register(p: int, g: Outlines, s: Grid) -> None:
     """Enter placed particle ``p`` in every cell of its circumscribed square."""
-    x, y, reach = s.cx[p], s.cy[p], g.circum[p]
-    nx, ny = s.ipar[I_GNX], s.ipar[I_GNY]
-    ia, ib = _cells(x - reach, x + reach, s.fpar[0], s.fpar[4], nx)
-    ja, jb = _cells(y - reach, y + reach, s.fpar[2], s.fpar[4], ny)
-    used = s.ipar[I_GUSED]
-    for j in range(ja, jb + 1):
-        for i in range(ia, ib + 1):
-            c = j * nx + i
-            s.item[used] = p
-            s.nxt[used] = s.head[c]
-            s.head[c] = used
-            used += 1
-    s.ipar[I_GUSED] = used
+    grid_insert(
+        p, s.cx[p], s.cy[p], g.circum[p], s.fpar[F_GX0 : F_GCELL + 1],
+        s.ipar[I_GNX : I_GUSED + 1], s.head, s.nxt, s.item,
+    )  # fmt: skip
 
 
 @numba.njit(cache=True)
@@ -286,7 +272,7 @@ def _hits(i: int, x: float, y: float, g: Outlines, s: Grid) -> bool:
     # the images one period away of the particles near (x, y)
     lx = s.fpar[1] - s.fpar[0]
     ly = s.fpar[3] - s.fpar[2]
-    span = g.circum[i] + s.fpar[5]
+    span = g.circum[i] + s.fpar[F_REACH]
     for sx in (0.0, lx, -lx):
         if (sx > 0.0 and x - span >= s.fpar[0]) or (sx < 0.0 and x + span <= s.fpar[1]):
             continue
@@ -305,8 +291,8 @@ def _hits_near(
     """Return whether outline ``a`` of particle ``i`` at ``(x, y)`` overlaps a registered one."""
     reach = g.circum[i]
     nx, ny = s.ipar[I_GNX], s.ipar[I_GNY]
-    ia, ib = _cells(x - reach, x + reach, s.fpar[0], s.fpar[4], nx)
-    ja, jb = _cells(y - reach, y + reach, s.fpar[2], s.fpar[4], ny)
+    ia, ib = cell_range(x - reach, x + reach, s.fpar[F_GX0], s.fpar[F_GCELL], nx)
+    ja, jb = cell_range(y - reach, y + reach, s.fpar[F_GY0], s.fpar[F_GCELL], ny)
     gen = s.ipar[I_GEN] + 1
     s.ipar[I_GEN] = gen
     for j in range(ja, jb + 1):
@@ -473,7 +459,8 @@ def _prepare(population: Population, domain: PlaneDomain) -> tuple[Outlines, Gri
     mode, walls = wall_arrays(domain)
     cell, gnx, gny, capacity = _grid_layout(domain, circum)
     reach = float(circum.max()) if n else 0.0
-    fpar = np.array([*domain.bounds(), cell, reach], dtype=np.float64)
+    bounds = domain.bounds()
+    fpar = np.array([*bounds, reach, bounds[0], bounds[2], cell], dtype=np.float64)
     ipar = np.zeros(N_IPAR, dtype=np.int64)
     ipar[I_WALLMODE] = mode
     ipar[I_GNX] = gnx
@@ -483,10 +470,7 @@ def _prepare(population: Population, domain: PlaneDomain) -> tuple[Outlines, Gri
         cx=np.full(n, np.nan),
         cy=np.full(n, np.nan),
         placed=np.zeros(n, dtype=np.int64),
-        head=np.full(gnx * gny, -1, dtype=np.int64),
-        nxt=np.empty(capacity, dtype=np.int64),
-        item=np.empty(capacity, dtype=np.int64),
-        stamp=np.zeros(n, dtype=np.int64),
+        **empty_grid(n, gnx * gny, capacity),
         fpar=fpar,
         ipar=ipar,
         walls=walls,

@@ -171,6 +171,28 @@ def test_a_graded_pattern_has_a_negative_density_trend():
     assert abs(res["mean_d_slope_per_100"]) < 1e-9  # every square has the same size
 
 
+def test_uniform_points_have_no_height_trend_and_a_gradient_has_one():
+    """The layers (2D height profile): flat for a uniform pattern, falling for a graded one."""
+    rng = np.random.default_rng(5)
+    xy = rng.uniform(-200, 200, size=(30_000, 2))
+    h = analyse(squares(xy, 0.5, (-200, 200, -200, 200)), margin=10.0, layers=5)
+    res = h.results()
+    assert res["layers"] == 5 and len(h.layers["n"]) == 5
+    assert h.layers["n"].sum() == res["n_interior"]
+    assert np.sum(h.layers["phi"] * h.layers["area"]) == pytest.approx(res["phi"] * 380**2)
+    n_min = int(np.min(h.layers["n"]))
+    assert res["layer_density_max_rel_dev"] < 4 / math.sqrt(n_min)
+    for q in ("density", "phi"):
+        assert abs(res[f"layer_{q}_slope_per_100"]) < 3 * res[f"layer_{q}_slope_err"], q
+    assert 0.2 < res["layer_density_chi2_dof"] < 3.0
+    # fewer particles the higher up: a negative trend with height, well beyond its error
+    keep = rng.random(len(xy)) < 1.0 - 0.4 * (xy[:, 1] + 200) / 400
+    res = analyse(squares(xy[keep], 0.5, (-200, 200, -200, 200)), margin=10.0).results()
+    assert res["layer_density_slope_per_100"] < -5 * res["layer_density_slope_err"]
+    assert res["layer_density_max_rel_dev"] > 0.1
+    assert res["layer_density_chi2_dof"] > 10
+
+
 def dense_lattice(rng, side=60, spacing=1.0):
     """Squares on a square lattice, sizes 0.6 to 0.95 of the spacing, jittered without overlap.
 
@@ -346,7 +368,7 @@ def test_files_and_figure(small, registry, tmp_path):
     summary = json.loads(files_.results.read_text(encoding="utf-8"))
     assert summary["homogeneity"]["n_rings"] == 3  # the corners merge into the third ring
     assert summary["interior_margin"] == 40.0
-    assert set(files_.tables) == {"homogeneity_rings", "homogeneity_tiles"}
+    assert set(files_.tables) == {"homogeneity_rings", "homogeneity_tiles", "homogeneity_layers"}
     header = files_.tables["homogeneity_rings"].read_text(encoding="utf-8").splitlines()[0]
     assert header.startswith("ring,r_inner,r_outer,r_mean,area,n,number_density,")
     assert "frac_pyroxene,frac_pyroxene_err" in header
@@ -397,6 +419,29 @@ def test_a_lattice_of_cubes_is_homogeneous_layer_by_layer() -> None:
     r = h.results()
     assert r["phi_layers_cv"] == pytest.approx(0.0, abs=1e-12)
     assert r["mean_diameter_layers"] == pytest.approx([2 * p.radius[0]] * 6)
+    # the height profile: every layer at the window's values, no trend, exact φ errors of 0
+    np.testing.assert_allclose(h.layers["phi_err"], 0.0, atol=1e-12)
+    assert r["layer_phi_max_rel_dev"] == pytest.approx(0.0, abs=1e-12)
+    assert r["layer_density_max_rel_dev"] == pytest.approx(0.0, abs=1e-12)
+    assert r["layer_density_slope_per_100"] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_graded_3d_lattice_shows_its_height_trend() -> None:
+    """Cubes thinned towards the top: the layers' number density falls with height."""
+    import dataclasses
+
+    p = cube_lattice((6, 6, 8), (0.0, 0.0, 0.0))
+    z = p.centre[:, 2]
+    keep = np.ones(len(z), bool)
+    rng = np.random.default_rng(3)
+    keep &= rng.random(len(z)) < 1.0 - 0.6 * (z - z.min()) / np.ptp(z)
+    index = np.where(keep, np.cumsum(keep) - 1, -1)
+    centre = np.where(keep[:, None], p.centre, np.nan)
+    thinned = dataclasses.replace(p, insertion_index=index, centre=centre)
+    h = Homogeneity(HomogeneityConfig(layers=8, shells=1, margin=0.5)).compute(thinned, {})
+    r = h.results()
+    assert r["layer_density_slope_per_100"] < -3 * r["layer_density_slope_err"]
+    assert h.layers["number_density_err"].min() > 0
 
 
 def test_a_periodic_cell_counts_the_solids_that_cross_its_faces_in_their_images() -> None:

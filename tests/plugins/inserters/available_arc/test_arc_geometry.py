@@ -10,6 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from regopack.plugins.inserters.available_arc.geometry import (
+    angle_slot,
     clip_closed_box,
     clip_open_interior,
     minkowski_envelope,
@@ -62,6 +63,17 @@ def test_envelope_is_the_hull_of_all_vertex_differences(seed, psi, a, mp, ratio,
     cross = wex[:n] * e[:, 1] - wey[:n] * e[:, 0]
     assert np.all(np.abs(cross) <= 1e-9 * size)
     assert np.all(wex[:n] * e[:, 0] + wey[:n] * e[:, 1] >= -1e-9 * size)
+
+
+def test_angle_slot_wraps_by_whole_turns_and_finds_the_slot() -> None:
+    va = np.array([-1.0, 0.5, 2.0, -1.0 + 2 * np.pi])  # three slots of one turn
+    assert angle_slot(va, 3, 0.0) == (0.0, 0)
+    assert angle_slot(va, 3, 1.0) == (1.0, 1)
+    assert angle_slot(va, 3, 0.5) == (0.5, 0)  # a bound belongs to the slot below it
+    a, j = angle_slot(va, 3, 1.0 + 4 * np.pi)
+    assert j == 1 and a == pytest.approx(1.0, abs=1e-12)
+    a, j = angle_slot(va, 3, -2.0)  # below the first bound: one turn up, in the last slot
+    assert j == 2 and a == pytest.approx(-2.0 + 2 * np.pi, abs=1e-12)
 
 
 def test_clip_open_interior_square() -> None:

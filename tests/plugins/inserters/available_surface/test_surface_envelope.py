@@ -19,6 +19,8 @@ from surface_helpers import (
 )
 
 from regopack.plugins.inserters.available_surface.envelope import (
+    candidate_directions,
+    edge_arcs,
     minkowski_envelope,
     polyhedron_edges,
 )
@@ -226,3 +228,19 @@ def test_an_open_surface_is_refused() -> None:
     flipped[:4] = flipped[:4][::-1]
     with pytest.raises(ValueError):
         polyhedron_edges(flipped, cube.face_offsets, 8)
+
+
+def test_candidate_directions_are_the_faces_of_p_and_of_minus_q_then_edge_crossings() -> None:
+    rng = np.random.default_rng(5)
+    p = box((1.0, 2.0, 3.0))
+    q = tetrahedron(0.5, rotation(rng))
+    cand, kind, ca, _cb, nc = candidate_directions(p, edge_arcs(p, 1.0), q, edge_arcs(q, -1.0))
+    fp, fq = p.normals.shape[0], q.normals.shape[0]
+    assert np.array_equal(cand[:fp], p.normals)
+    assert np.array_equal(cand[fp : fp + fq], -q.normals)
+    assert list(kind[: fp + fq]) == [0] * fp + [1] * fq
+    assert list(ca[: fp + fq]) == [*range(fp), *range(fq)]
+    assert nc > fp + fq and np.all(kind[fp + fq : nc] == 2)
+    # each facet of the envelope takes the normal of the candidate it comes from
+    env = minkowski_envelope(p, q)
+    assert all((cand[:nc] == normal).all(axis=1).any() for normal in env.normals)

@@ -133,6 +133,26 @@ def test_split_and_clip_match_shapely(seed: int) -> None:
     assert polygon_area(rows, 2, 3, 0, k) == pytest.approx(got_in, rel=1e-12, abs=1e-300)
 
 
+@given(seed=st.integers(0, 2**32 - 1))
+@settings(max_examples=50, deadline=None)
+def test_the_two_parts_of_a_split_share_their_cut_points_exactly(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    poly = random_convex(rng) * 10.0 ** rng.uniform(-6, 6)
+    n = len(poly)
+    rows = rows_of(poly)
+    a, b = rng.normal(size=2)
+    rows[6, :n] = a * poly[:, 0] + b * poly[:, 1] - rng.normal() * np.abs(poly).max()
+    nin, nout = split_polygon(rows, 0, 1, n, 6, 2, 3, 4, 5)
+    inside = {(x, y) for x, y in zip(rows[2, :nin], rows[3, :nin], strict=True)}
+    outside = {(x, y) for x, y in zip(rows[4, :nout], rows[5, :nout], strict=True)}
+    corners = {(x, y) for x, y in poly}
+    g = rows[6, :n]
+    crossings = int(np.sum(g * np.roll(g, -1) < 0.0))  # edges whose ends lie strictly apart
+    # the cut points (not corners of the polygon) stand in both parts, bit for bit
+    assert len(inside - corners) == crossings
+    assert inside - corners == outside - corners
+
+
 def test_split_keeps_vertices_on_the_line_on_both_sides() -> None:
     square = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     rows = rows_of(square)
