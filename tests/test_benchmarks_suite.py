@@ -95,6 +95,7 @@ def test_the_suite_has_every_kind_of_benchmark() -> None:
     for wanted in (
         "packing.Pack2D",
         "packing.Pack3D",
+        "packing.Sweep3D",
         "analysis.Analyze2D",
         "analysis.Analyze3D",
         "analysis.AnalyzeAll2D",

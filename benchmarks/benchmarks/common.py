@@ -77,11 +77,11 @@ def scene_2d(mode: str, side: float, **overrides: Any) -> Any:
     return regopack.scene(name, **{"domain.width": side, "domain.height": side, **overrides})
 
 
-def scene_3d(shape: str, side: float, **overrides: Any) -> Any:
-    """A cube ``side`` µm wide of ``table1-3d`` (sizes 2-12 µm) with ``shape`` particles."""
+def scene_3d(shape: str, side: float, base: str = "table1-3d", **overrides: Any) -> Any:
+    """A cube ``side`` µm wide of a 3D scene (sizes 2-12 µm) with ``shape`` particles."""
     extra = spheres() if shape == "spheres" else {}
     box = {"domain.width": side, "domain.height": side, "domain.depth": side}
-    return regopack.scene("table1-3d", **box, **SIZE_3D, **extra, **overrides)
+    return regopack.scene(base, **{**box, **SIZE_3D, **extra, **overrides})
 
 
 _WARM: dict[Any, Any] = {}

@@ -77,6 +77,32 @@ class Pack3D(_Slow):
         regopack.pack(self.scene, verify=False)
 
 
+class Sweep3D(_Slow):
+    """3D: the homogeneous sweep of ``dem3d`` (sizes 2-12 µm) in boxes twice as tall as wide.
+
+    Polyhedra and spheres, the paced closing (the scene's) and the tail
+    closing, one column over the floor.
+    """
+
+    params = (list(common.SHAPES_3D), ["paced", "tail"], [30.0, 45.0])
+    param_names = ["shape", "closing", "side_um"]
+
+    def setup(self, _cache: Any, shape: str, closing: str, side: float) -> None:
+        common.warm_3d(shape)
+        self.scene = common.scene_3d(
+            shape,
+            side,
+            base="dem3d",
+            **{"domain.height": 2.0 * side, "insertion.closing": closing, "insertion.strip": 0.0},
+        )
+
+    def time_pack(self, _cache: Any, shape: str, closing: str, side: float) -> None:
+        regopack.pack(self.scene, verify=False)
+
+    def peakmem_pack(self, _cache: Any, shape: str, closing: str, side: float) -> None:
+        regopack.pack(self.scene, verify=False)
+
+
 class Threads(_Slow):
     """One kernel thread against two: the partner thread and the sweep's parallel scans.
 

@@ -446,7 +446,7 @@ def builtin_scenes() -> dict[str, str]:
     Examples
     --------
     >>> sorted(builtin_scenes())
-    ['dem', 'small', 'table1', 'table1-3d']
+    ['dem', 'dem3d', 'small', 'table1', 'table1-3d']
     """
     out: dict[str, str] = {}
     for entry in sorted(resources.files("regopack.scenes").iterdir(), key=lambda e: e.name):

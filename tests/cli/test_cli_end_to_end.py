@@ -58,7 +58,7 @@ def test_default_registry_has_the_builtins():
 
 def test_builtin_scenes_resolve():
     reg = default_registry(autoload=False)
-    for name in ("table1", "small", "dem", "table1-3d"):
+    for name in ("table1", "small", "dem", "table1-3d", "dem3d"):
         resolve_scene(load_scene(name), reg)
 
 
@@ -93,6 +93,21 @@ def test_run_table1_3d_end_to_end_in_a_smaller_box(tmp_path, capsys):
     assert summary["placed"] == packing.n_placed > 30
     assert summary["phi_domain"] == pytest.approx(packing.phi)
     assert main(["verify", str(out / "packing.npz")]) == 0
+
+
+def test_run_dem3d_end_to_end_in_a_smaller_box(tmp_path, capsys):
+    """The 3D DEM scene packs by the sweep, verified, and its layers are measured."""
+    out = tmp_path / "out"
+    sides = [f"domain.{k}=36" for k in ("width", "height", "depth")] + ["size.d_max=8"]
+    args = ["run", "dem3d", *[a for s in sides for a in ("--set", s)], "--out", str(out)]
+    assert main([*args, "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["dimension"] == 3 and summary["verify"]["ok"]
+    assert summary["zone_raises"] > 0  # the sweep's zone rose from the floor
+    packing = regopack.load(out / "packing.npz")
+    assert packing.scene["insertion"]["order"] == "sweep"
+    res = regopack.analyze(packing, ["homogeneity"])["homogeneity"]
+    assert res["layers"] == 6 and res["layer_phi_max_rel_dev"] is not None
 
 
 def _arrays(packing):

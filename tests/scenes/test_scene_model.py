@@ -69,7 +69,7 @@ def error_of(path_or_name, registry, overrides=(), seed=None) -> str:
 
 def test_builtin_scenes_have_descriptions():
     scenes = builtin_scenes()
-    assert set(scenes) == {"table1", "small", "dem", "table1-3d"}
+    assert set(scenes) == {"table1", "small", "dem", "table1-3d", "dem3d"}
     assert all(desc and "\n" not in desc for desc in scenes.values())
     assert DEFAULT_SCENE == "table1"
 
