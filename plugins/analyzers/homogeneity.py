@@ -446,18 +446,8 @@ class Homogeneity(Measured):
 
         # tiles
         nx, ny = self.config.tiles or DEFAULT_REGIONS["tiles"]
-        tiles: Tiles = tile_grid(window, nx, ny)
-        tile_of = self._tile_of(centre_xy, inside, tiles, window, nx, ny)
-        tile_stats = region_stats(
-            tile_of,
-            len(tiles.area),
-            tiles.area,
-            tile_piece_areas(pieces, tiles),
-            diameter,
-            mineral,
-            names,
-            tile_cell_areas(pieces, window, tiles, TILE_SPLIT),
-        )
+        grid = (centre_xy, inside, window, pieces, diameter, mineral, names)
+        tiles, tile_stats = self._grid_stats(*grid, nx, ny)
         self.tiles_table = {
             "tile": np.arange(len(tiles.area), dtype=np.int64),
             "ix": tiles.ix,
@@ -471,18 +461,7 @@ class Homogeneity(Measured):
 
         # layers: the height profile
         n_layers = self.config.layers or DEFAULT_REGIONS["layers"]
-        bands: Tiles = tile_grid(window, 1, n_layers)
-        layer_of = self._tile_of(centre_xy, inside, bands, window, 1, n_layers)
-        layer_stats = region_stats(
-            layer_of,
-            len(bands.area),
-            bands.area,
-            tile_piece_areas(pieces, bands),
-            diameter,
-            mineral,
-            names,
-            tile_cell_areas(pieces, window, bands, TILE_SPLIT),
-        )
+        bands, layer_stats = self._grid_stats(*grid, 1, n_layers)
         self.layers = {
             "layer": np.arange(len(bands.area), dtype=np.int64),
             "y_min": bands.bounds[:, 2],
@@ -567,6 +546,33 @@ class Homogeneity(Measured):
             "homogeneity_layers": self.layers,
         }
         return self
+
+    @classmethod
+    def _grid_stats(
+        cls,
+        xy: FloatArray,
+        inside: NDArray[np.bool_],
+        window: PlaneDomain,
+        pieces: Any,
+        diameter: FloatArray,
+        mineral: IntArray,
+        names: tuple[str, ...],
+        nx: int,
+        ny: int,
+    ) -> tuple[Tiles, dict[str, FloatArray]]:
+        """Cut the window into an ``nx`` by ``ny`` grid (tiles, or layers when ``nx`` is 1)."""
+        cells: Tiles = tile_grid(window, nx, ny)
+        stats = region_stats(
+            cls._tile_of(xy, inside, cells, window, nx, ny),
+            len(cells.area),
+            cells.area,
+            tile_piece_areas(pieces, cells),
+            diameter,
+            mineral,
+            names,
+            tile_cell_areas(pieces, window, cells, TILE_SPLIT),
+        )
+        return cells, stats
 
     @staticmethod
     def _tile_of(
