@@ -84,8 +84,12 @@ def sphere_in_box(centre: ArrayLike, r: float, lo: ArrayLike, hi: ArrayLike) -> 
         cut = np.flatnonzero(inside < r)
         if cut.size == 0:
             return 4.0 / 3.0 * math.pi * r**3
-        if cut.size == 1:  # one face cuts the ball: the ball less one cap, in closed form
-            h = r - float(inside[cut[0]])
+        if cut.size == 1:  # one face cuts the ball: a cap or the ball less one, in closed form
+            d = float(inside[cut[0]])
+            if d < 0.0:  # the centre lies outside: the part inside is the cap itself
+                h = r + d
+                return math.pi * h * h * (3.0 * r - h) / 3.0
+            h = r - d
             return 4.0 / 3.0 * math.pi * r**3 - math.pi * h * h * (3.0 * r - h) / 3.0
 
     def area(z: float) -> float:

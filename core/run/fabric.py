@@ -113,15 +113,39 @@ def _plain(value: Any, spec: str) -> str:
     return format(value, spec)
 
 
+CHANCE: dict[int, float] = {2: 2.0, 3: 7.5}
+"""Root-mean-square anisotropy of ``n`` independent isotropic normals, times ``sqrt(n)``.
+
+The anisotropy is a norm of the deviator of the fabric, positive whatever
+the normals: ``n`` normals drawn from an isotropic distribution have
+``E[a**2] = 4 / n`` in 2D (``a = 2 (l1 - l2)``) and ``56.25 / n`` in 3D
+(``a = 7.5 sqrt(3/2 F':F')``, ``E[F':F'] = 2 / (3 n)``).
+"""
+
+
+def _by_chance(block: Mapping[str, Any], dimension: int) -> float:
+    """Return the anisotropy that as many isotropic normals as the fabric has show by chance."""
+    n = block.get("n_fabric_contacts")
+    if not isinstance(n, int) or n <= 0:
+        return 0.0
+    return CHANCE[dimension] / math.sqrt(n)
+
+
 def _direction(block: Mapping[str, Any]) -> str:
     """`` (vertical)``, `` (horizontal)`` or `` (40° from vertical)``; empty when not significant.
 
-    The direction is shown only when the anisotropy exceeds twice its error.
+    The direction is shown only when the anisotropy exceeds twice its error
+    and twice what isotropic normals as many as the fabric's give by chance
+    (:data:`CHANCE`): the anisotropy is never below that noise, so its error
+    alone does not tell a fabric from an isotropic one (three isotropic
+    networks in five pass twice the error in 3D).
     The vertical is the last axis (y in 2D, z in 3D).
     """
     a, err = block.get("anisotropy"), block.get("anisotropy_error")
     v = block.get("principal_direction")
     if a is None or err is None or not v or not a > 2.0 * err:
+        return ""
+    if not a > 2.0 * _by_chance(block, len(v)):
         return ""
     angle = math.degrees(math.acos(min(1.0, abs(float(v[-1])))))
     if angle <= 15.0:

@@ -70,3 +70,20 @@ def test_a_ball_one_face_cuts_agrees_with_the_quadrature(seed: int) -> None:
             points=breaks,
         )[0]
         assert sphere_in_box(c, r, lo, hi) == pytest.approx(ref, rel=1e-9)
+
+
+@pytest.mark.parametrize("r", [2.0**-20, 2.0**-10, 1.0, 2.0**10])
+@pytest.mark.parametrize("gap", [2.0**-10, 2.0**-20, 2.0**-30, 2.0**-40])
+def test_a_ball_barely_inside_one_face_keeps_its_cap(r: float, gap: float) -> None:
+    """A ball whose centre is outside one face by ``(1 - gap) r`` holds a cap of height ``gap r``.
+
+    The ball less the outer cap cancels to rounding there: it gave 0 or a
+    negative volume. (Powers of two: the centre and the cap height are exact.)
+    """
+    h = gap * r
+    cap = math.pi * h * h * (3.0 * r - h) / 3.0
+    lo, hi = np.array([0.0, -8.0, -8.0]) * r, np.array([8.0, 8.0, 8.0]) * r
+    for axis, sign in ((0, -1.0), (2, 1.0)):
+        c = 0.5 * (lo + hi)
+        c[axis] = (lo if sign < 0 else hi)[axis] + sign * (r - h)
+        assert sphere_in_box(c, r, lo, hi) == pytest.approx(cap, rel=1e-6, abs=0.0)

@@ -186,3 +186,50 @@ def test_a_3d_run_writes_the_block(registry) -> None:  # type: ignore[no-untyped
     assert np.linalg.norm(block["principal_direction"]) == pytest.approx(1.0)
     rows = dict(summary_rows(summary))
     assert "fabric anisotropy" in rows and "Z / Z_m / rattlers" in rows
+
+
+@pytest.mark.parametrize("dimension", [2, 3])
+def test_an_isotropic_fabric_shows_no_direction(dimension: int) -> None:
+    """Isotropic normals give an anisotropy of about 2 / sqrt(n) (2D), 7.5 / sqrt(n) (3D).
+
+    That is three times the jackknife error in 3D: twice the error let a
+    direction through for three isotropic networks in five.
+    """
+    from regopack.plugins.analyzers.network import (
+        anisotropy_of,
+        block_jackknife,
+        block_of,
+        principal_direction,
+    )
+
+    rng = np.random.default_rng(7)
+    shown = 0
+    for _ in range(100):
+        normals = rng.normal(size=(300, dimension))
+        normals /= np.linalg.norm(normals, axis=1)[:, None]
+        where = rng.uniform(0.0, 1.0, size=(300, dimension))
+        error, _ = block_jackknife(normals, block_of(where, np.array([0.0, 1.0] * dimension), 2))
+        fabric = normals.T @ normals / 300
+        block = {
+            "anisotropy": anisotropy_of(fabric),
+            "anisotropy_error": error,
+            "principal_direction": principal_direction(fabric),
+            "n_fabric_contacts": 300,
+            "z": 4.0,
+            "z_mechanical": 4.0,
+            "rattler_fraction": 0.0,
+        }
+        shown += fabric_rows(block)[0][1].endswith(")")
+    assert shown <= 5
+    # a fabric of normals mostly along the vertical keeps its direction
+    normals = np.zeros((300, dimension))
+    normals[:, -1] = 1.0
+    normals[::3, 0] = 1.0
+    normals[::3, -1] = 0.0
+    fabric = normals.T @ normals / 300
+    block.update(
+        anisotropy=anisotropy_of(fabric),
+        anisotropy_error=0.01,
+        principal_direction=principal_direction(fabric),
+    )
+    assert fabric_rows(block)[0][1].endswith("(vertical)")

@@ -3,6 +3,7 @@ from __future__ import annotations
 import dataclasses
 import math
 import time
+import tracemalloc
 
 import numpy as np
 import pytest
@@ -160,6 +161,40 @@ def test_separating_axes_give_the_penetration_depth(seed):
         assert sat == pytest.approx(depth, rel=1e-9, abs=1e-12)
     else:  # apart: the axes' margin is at most the distance
         assert 0 <= sat <= depth * (1 + 1e-12) + 1e-15
+
+
+def _ball(rng, k):
+    """The hull of ``k`` random points of the unit sphere."""
+    x = rng.normal(size=(k, 3))
+    return x / np.linalg.norm(x, axis=1)[:, None]
+
+
+def test_polyhedra_of_many_vertices_do_not_pad_the_edge_directions():
+    """Hulls of 200 vertices go to Qhull; two cubes beside them are still settled by their edges.
+
+    The edge directions cost a pair ``e**2 v`` products (``e`` edges, ``v``
+    vertices): padded to a 200-vertex hull, every pair needed a gigabyte.
+    """
+    rng = np.random.default_rng(5)
+    ball = _ball(rng, 200)
+    p = rotated_cube(math.pi / 4, about="x")
+    q = rotated_cube(math.pi / 4, about="y")
+    q = q + (0.0, 0.0, p[:, 2].max() - q[:, 2].min())
+    solids = [ball, ball + (1.5, 0, 0), p + (10, 0, 0), q + (10, 0, 0)]
+    tracemalloc.start()
+    try:
+        report = verify_polyhedra(solids, None, (-2, -2, -2), (14, 4, 6))
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert report.overlapping_pairs == ((0, 1),)
+    assert report.worst_overlap_fraction == pytest.approx(
+        overlap_volume(ball, ball + (1.5, 0, 0)) / ConvexHull(ball).volume, rel=1e-9
+    )
+    assert peak < 64e6
+    parts = v3._Particles([v3._polyhedron(s, "s") for s in solids])
+    edges = v3._edge_separations(parts, np.array([0, 2]), np.array([1, 3]), np.zeros((2, 3)))
+    assert edges[0] == -np.inf and abs(edges[1]) <= 1e-15
 
 
 def test_diagonal_distance_is_euclidean():
