@@ -54,8 +54,13 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--first", choices=["this", "other"], default="other")
     args = parser.parse_args()
+    if args.rounds < 1:
+        parser.error("--rounds must be 1 or more")
     sys.path.insert(0, args.other)
-    other_scan = importlib.import_module(f"{args.package}.analysis").scan
+    try:
+        other_scan = importlib.import_module(f"{args.package}.analysis").scan
+    except ImportError as err:
+        parser.error(f"--other {args.other}: no build {args.package!r} there ({err})")
     scans: dict[str, Callable[..., Any]] = {"this": this_scan, "other": other_scan}
     registry = default_registry()
     # a warm-up in the scene's shape kind (the phases' overrides apply to it too)
