@@ -434,18 +434,30 @@ def edge_pair_directions(
 
     Each crossing goes to ``cand[nc]`` (unit normal ``± t × s``) with
     ``kind = 2`` and the two edges in ``ca``, ``cb``; returns the new count.
+    For each edge of ``P`` the edges of ``-Q`` that pass both sign tables are
+    first listed without branches (most pairs fail one, at random), then
+    tested in ascending order.
     """
     nep = tp.shape[0]
     neq = tq.shape[0]
+    near = np.empty(neq, dtype=np.int64)
     for e in range(nep):
+        m = 0
+        for e2 in range(neq):
+            near[m] = e2
+            m += 1 if side_p[e, ql[e2]] * side_p[e, qr[e2]] <= 0 else 0
+        left = pl[e]
+        right = pr[e]
+        kept = 0
+        for c in range(m):
+            e2 = near[c]
+            near[kept] = e2
+            kept += 1 if side_q[e2, left] * side_q[e2, right] <= 0 else 0
         tx = tp[e, 0]
         ty = tp[e, 1]
         tz = tp[e, 2]
-        for e2 in range(neq):
-            if side_p[e, ql[e2]] * side_p[e, qr[e2]] > 0:
-                continue
-            if side_q[e2, pl[e]] * side_q[e2, pr[e]] > 0:
-                continue
+        for c in range(kept):
+            e2 = near[c]
             sx = tq[e2, 0]
             sy = tq[e2, 1]
             sz = tq[e2, 2]

@@ -26,7 +26,8 @@ Interferers are culled first by bounding spheres (``radii``), then facet by
 facet: a facet whose plane misses ``E_k``'s circumsphere, or a face's
 circumcircle, either leaves the whole face outside ``E_j`` or constrains
 nothing there (the facet that last separated a face from ``E_j`` is tried
-first on the next face).
+first on the next face); so are the few interferers that last covered a
+whole face.
 
 The pieces are returned with their areas; :func:`sample_free_point` picks a
 piece by area and a point uniformly in it (a triangle fan), so the point is
@@ -84,6 +85,8 @@ FREE_EPS = 1e-12
 """Contact tolerance, relative to the candidate envelope's circumradius."""
 THIN_FACTOR = 16.0
 """Pieces thinner than this many tolerances count as no surface."""
+COVER_MEMORY = 4
+"""Interferers that last covered a whole face, tried first on the next face."""
 
 
 class Interferers(NamedTuple):
@@ -551,22 +554,26 @@ def _face_pieces(
     """Subtract every interferer from the face polygon (rows ``W_FX, W_FY``).
 
     Returns the number of pieces and their generation (see :func:`_subtract`);
-    the number is -1 if the piece buffers are too small. ``last[0]`` is the
-    interferer that last covered a whole face: neighbouring faces are often
-    inside the same one, so it is tried first (the result is the same, an
-    empty face, in whichever order the interferers come).
+    the number is -1 if the piece buffers are too small. ``last`` lists the
+    interferers that last covered a whole face, most recent first
+    (:data:`COVER_MEMORY` of them, ``-1``: none): other faces are often
+    inside the same ones, so they are tried first (the result is the same,
+    an empty face, in whichever order the interferers come).
     """
     if n > pieces.shape[1]:
         return -1, 0
     fr = G_FRAME
     rf = geom[fr, F_RADIUS]
-    q = last[0]
-    if q >= 0:
+    for slot in range(last.shape[0]):
+        q = last[slot]
+        if q < 0:
+            break
         cx = geom[fr, F_O] - shifts[q, 0]
         cy = geom[fr, F_O + 1] - shifts[q, 1]
         cz = geom[fr, F_O + 2] - shifts[q, 2]
         if math.sqrt(cx * cx + cy * cy + cz * cz) <= rf + shifts[q, 3] + tau:
             if _covered_part(q, n, facets, index, geom, work, tau, thin) == 0:
+                _remember(last, slot, q)
                 return 0, 0
     for i in range(n):
         pieces[0, i] = work[W_FX, i]
@@ -586,7 +593,7 @@ def _face_pieces(
         if nl < 0:
             continue
         if nl == 0:  # the face lies inside E_q
-            last[0] = q
+            _remember(last, last.shape[0] - 1, q)
             return 0, gen
         ncur = _subtract(nl, geom, pieces, poff, gen, ncur, thin, work)
         if ncur < 0:
@@ -595,6 +602,18 @@ def _face_pieces(
         if ncur == 0:
             break
     return ncur, gen
+
+
+@numba.njit(cache=True)
+def _remember(last: IntArray, slot: int, q: int) -> None:
+    """Move interferer ``q`` to the front of ``last``, from ``slot`` (or from its own place)."""
+    for s in range(slot):
+        if last[s] == q:
+            slot = s
+            break
+    for s in range(slot, 0, -1):
+        last[s] = last[s - 1]
+    last[0] = q
 
 
 @numba.njit(cache=True)
@@ -659,7 +678,7 @@ def free_surface(
     out_off = np.zeros(nf + 2, dtype=np.int64)
     out_area = np.empty(nf + 1)
     out_face = np.empty(nf + 1, dtype=np.int64)
-    last = np.full(1, -1, dtype=np.int64)
+    last = np.full(COVER_MEMORY, -1, dtype=np.int64)
     # not literal 0s, which numba would compile second specializations of the callees for
     npieces = int(np.int64(0))
     f = int(np.int64(0))

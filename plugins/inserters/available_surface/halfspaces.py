@@ -45,21 +45,46 @@ def halfspaces_of_arcs(
     """:func:`minkowski_halfspaces` from the edge arcs of ``P`` and of ``-Q``."""
     vp = p.vertices
     vq = q.vertices
-    kp = vp.shape[0]
-    kq = vq.shape[0]
     cand, _, _, _, nc = candidate_directions(p, ep, q, eq)
     normals = cand[:nc].copy()
     support = np.empty(nc)
     for c in range(nc):
-        hp = -np.inf
-        for i in range(kp):
-            v = normals[c, 0] * vp[i, 0] + normals[c, 1] * vp[i, 1] + normals[c, 2] * vp[i, 2]
-            if v > hp:
-                hp = v
-        hq = -np.inf
-        for j in range(kq):
-            v = -(normals[c, 0] * vq[j, 0] + normals[c, 1] * vq[j, 1] + normals[c, 2] * vq[j, 2])
-            if v > hq:
-                hq = v
-        support[c] = hp + hq
+        nx = normals[c, 0]
+        ny = normals[c, 1]
+        nz = normals[c, 2]
+        support[c] = _largest_dot(nx, ny, nz, vp, 1.0) + _largest_dot(nx, ny, nz, vq, -1.0)
     return normals, support
+
+
+@numba.njit(cache=True, inline="always")
+def _largest_dot(nx: float, ny: float, nz: float, v: FloatArray, sign: float) -> float:
+    """Return the largest ``sign * (n · v_i)`` over the rows of ``v``.
+
+    Four running maxima over every fourth row, merged at the end: the same
+    products and the same maximum as one running maximum (the order of a
+    maximum does not change it), without one long chain of dependent
+    comparisons.
+    """
+    k = v.shape[0]
+    h0 = -np.inf
+    h1 = -np.inf
+    h2 = -np.inf
+    h3 = -np.inf
+    i = 0
+    while i + 4 <= k:
+        d0 = sign * (nx * v[i, 0] + ny * v[i, 1] + nz * v[i, 2])
+        d1 = sign * (nx * v[i + 1, 0] + ny * v[i + 1, 1] + nz * v[i + 1, 2])
+        d2 = sign * (nx * v[i + 2, 0] + ny * v[i + 2, 1] + nz * v[i + 2, 2])
+        d3 = sign * (nx * v[i + 3, 0] + ny * v[i + 3, 1] + nz * v[i + 3, 2])
+        h0 = d0 if d0 > h0 else h0
+        h1 = d1 if d1 > h1 else h1
+        h2 = d2 if d2 > h2 else h2
+        h3 = d3 if d3 > h3 else h3
+        i += 4
+    while i < k:
+        d0 = sign * (nx * v[i, 0] + ny * v[i, 1] + nz * v[i, 2])
+        h0 = d0 if d0 > h0 else h0
+        i += 1
+    h0 = h1 if h1 > h0 else h0
+    h2 = h3 if h3 > h2 else h2
+    return h2 if h2 > h0 else h0

@@ -19,6 +19,9 @@ from surface_helpers import (
 )
 
 from regopack.plugins.inserters.available_surface.envelope import (
+    ANGLE_EPS,
+    PARALLEL_EPS,
+    _sides,
     candidate_directions,
     edge_arcs,
     minkowski_envelope,
@@ -244,3 +247,54 @@ def test_candidate_directions_are_the_faces_of_p_and_of_minus_q_then_edge_crossi
     # each facet of the envelope takes the normal of the candidate it comes from
     env = minkowski_envelope(p, q)
     assert all((cand[:nc] == normal).all(axis=1).any() for normal in env.normals)
+
+
+def _pairwise_directions(
+    p: Polyhedron, q: Polyhedron
+) -> list[tuple[float, float, float, int, int]]:
+    """The edge-pair directions by the plain double loop over both sign tables."""
+    pl, pr, tp, up = edge_arcs(p, 1.0)
+    ql, qr, tq, uq = edge_arcs(q, -1.0)
+    side_p = _sides(tp, q.normals, -1.0)
+    side_q = _sides(tq, p.normals, 1.0)
+    out = []
+    for e in range(len(tp)):
+        for e2 in range(len(tq)):
+            if int(side_p[e, ql[e2]]) * int(side_p[e, qr[e2]]) > 0:
+                continue
+            if int(side_q[e2, pl[e]]) * int(side_q[e2, pr[e]]) > 0:
+                continue
+            tx, ty, tz = tp[e]
+            sx, sy, sz = tq[e2]
+            dx = ty * sz - tz * sy
+            dy = tz * sx - tx * sz
+            dz = tx * sy - ty * sx
+            dn = np.sqrt(dx * dx + dy * dy + dz * dz)
+            if dn < PARALLEL_EPS:
+                continue
+            dx, dy, dz = dx / dn, dy / dn, dz / dn
+            a1 = dx * up[e, 0] + dy * up[e, 1] + dz * up[e, 2]
+            a2 = dx * up[e, 3] + dy * up[e, 4] + dz * up[e, 5]
+            b1 = dx * uq[e2, 0] + dy * uq[e2, 1] + dz * uq[e2, 2]
+            b2 = dx * uq[e2, 3] + dy * uq[e2, 4] + dz * uq[e2, 5]
+            if min(a1, a2, b1, b2) >= -ANGLE_EPS:
+                out.append((dx, dy, dz, e, e2))
+            elif max(a1, a2, b1, b2) <= ANGLE_EPS:
+                out.append((-dx, -dy, -dz, e, e2))
+    return out
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_edge_pair_directions_are_those_of_the_pairwise_test(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    pairs = [
+        (random_polyhedron(rng, 20), random_polyhedron(rng, 12, 0.4)),
+        (box((1.0, 0.5, 0.3)), box(0.7)),  # parallel edges and faces: sides of 0
+        (box(1.0, rotation(rng)), tetrahedron(0.5, rotation(rng))),
+    ]
+    for p, q in pairs:
+        cand, kind, ca, cb, nc = candidate_directions(p, edge_arcs(p, 1.0), q, edge_arcs(q, -1.0))
+        first = len(p.normals) + len(q.normals)
+        assert np.all(kind[first:nc] == 2)
+        got = [(*cand[c], ca[c], cb[c]) for c in range(first, nc)]
+        assert got == _pairwise_directions(p, q)

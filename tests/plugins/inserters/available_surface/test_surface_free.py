@@ -431,3 +431,19 @@ def test_rotating_the_scene_keeps_the_free_area() -> None:
         "centres": scene["centres"] @ rot.T,
     }
     assert run(turned).area == pytest.approx(run(scene).area, rel=1e-9)
+
+
+def test_the_covering_interferers_are_remembered_most_recent_first() -> None:
+    from regopack.plugins.inserters.available_surface.free_surface import _remember
+
+    last = np.full(4, -1, dtype=np.int64)
+    for q in (5, 7, 9):  # found by the loop over the interferers
+        _remember(last, last.shape[0] - 1, q)
+    assert last.tolist() == [9, 7, 5, -1]
+    _remember(last, 2, 5)  # found again in its slot
+    assert last.tolist() == [5, 9, 7, -1]
+    _remember(last, last.shape[0] - 1, 7)  # already listed: moved, not repeated
+    assert last.tolist() == [7, 5, 9, -1]
+    for q in (1, 2):
+        _remember(last, last.shape[0] - 1, q)
+    assert last.tolist() == [2, 1, 7, 5]  # the oldest goes

@@ -71,3 +71,20 @@ def test_random_polyhedra_pairs() -> None:
     assert (env.vertices @ normals.T - support).max() <= 1e-9
     assert len(support) >= len(env.support)
     assert len(support) == pytest.approx(len(env.support), rel=0.5)
+
+
+@pytest.mark.parametrize("sign", [1.0, -1.0])
+def test_the_largest_dot_is_the_running_maximum(sign: float) -> None:
+    from regopack.plugins.inserters.available_surface.halfspaces import _largest_dot
+
+    rng = np.random.default_rng(5)
+    for rows in range(0, 12):
+        for _ in range(20):
+            v = rng.normal(size=(rows, 3))
+            n = rng.normal(size=3)
+            n /= np.linalg.norm(n)
+            best = -np.inf
+            for i in range(rows):
+                d = sign * (n[0] * v[i, 0] + n[1] * v[i, 1] + n[2] * v[i, 2])
+                best = d if d > best else best
+            assert _largest_dot(n[0], n[1], n[2], v, sign) == best
