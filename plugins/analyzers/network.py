@@ -7,6 +7,7 @@ correlation of neighbouring contacts, which share particles.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any, Self
 
@@ -64,8 +65,7 @@ def fabric_tensor(normals: FloatArray) -> tuple[FloatArray, FloatArray, float]:
         return nan, nan, float("nan")
     f = n.T @ n / n.shape[0]
     dev = f - np.eye(3) * np.trace(f) / 3.0
-    a = 7.5 * float(np.sqrt(1.5 * np.sum(dev * dev)))
-    return f, dev, a
+    return f, dev, anisotropy_of(f)
 
 
 def anisotropy_of(fabric: FloatArray) -> float:
@@ -161,12 +161,8 @@ def block_jackknife(normals: FloatArray, block: NDArray[np.int64]) -> tuple[floa
 def _plane_fabric(normals: FloatArray) -> dict[str, Any]:
     """Fabric of 2D normals and its anisotropy ``2 (l1 - l2) / (l1 + l2)`` (0: isotropic)."""
     fabric = normals.T @ normals / max(len(normals), 1)
-    vals = np.linalg.eigvalsh(fabric)
-    l2, l1 = float(vals[0]), float(vals[1])
-    return {
-        "fabric": fabric.tolist(),
-        "anisotropy": 2.0 * (l1 - l2) / (l1 + l2) if l1 + l2 > 0 else None,
-    }
+    a = anisotropy_of(fabric)
+    return {"fabric": fabric.tolist(), "anisotropy": a if math.isfinite(a) else None}
 
 
 def _solid_fabric(normals: FloatArray) -> dict[str, Any]:
