@@ -266,7 +266,8 @@ def _arc_min(
     base = h * (ax * nx + ay * ny + az * nz)
     a = ax * e1x + ay * e1y + az * e1z
     b = ax * e2x + ay * e2y + az * e2z
-    start, end = arc[1], arc[2]
+    start = float(arc[1])
+    end = float(arc[2])
     low = min(a * math.cos(start) + b * math.sin(start), a * math.cos(end) + b * math.sin(end))
     amp = math.sqrt(a * a + b * b)
     if amp > 0.0:
@@ -274,7 +275,7 @@ def _arc_min(
         t = (math.atan2(b, a) + math.pi - start) % (2.0 * math.pi)
         if t <= end - start:
             low = -amp
-    return base + rc * low
+    return float(base + rc * low)
 
 
 @numba.njit(cache=True)
