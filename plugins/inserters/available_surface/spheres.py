@@ -32,7 +32,12 @@ boundary of ``F`` lies on the free arcs, the rest of the sphere, ``S \\ K``
 (connected), is wholly free or wholly covered; the point opposite the axis
 tells which, and when it is free ``K`` is the whole sphere. A free set in a
 small corner is thus sampled with a hit rate of a few tenths, not its share
-of the sphere. After ``TRIES`` failures (a free set under about 1e-5 of
+of the sphere. The boundary lies on the free arcs up to the seam rule: an arc
+dropped because the free set beside it is too narrow at its middle and both
+quarters bounds nothing, so other caps touching such an arc at exactly those
+three points, and nowhere else, leave part of ``F`` outside ``K`` (a
+configuration of measure zero: moving them apart by 1e-11 of ``R`` restores
+the bound). After ``TRIES`` failures (a free set under about 1e-5 of
 ``K``: seams and slivers) a point uniform by length on the free arcs is
 taken: free, but not uniform by area; in dense packings no placed sphere was
 seen to take it.

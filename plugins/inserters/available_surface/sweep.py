@@ -159,6 +159,11 @@ class SurfaceSweep:
             self.delta = 1.0
         self.nbins = max(1, math.ceil(height / self.delta)) + 1
         self.zones = [Zone() for _ in range(int(self.ntile.prod()))]
+        self._tiles = (
+            [float(v) for v in state.lo[:2]],
+            [float(v) for v in self.twidth],
+            [int(v) for v in self.ntile],
+        )
         n = max(state.n, 1)
         self.flag = np.full(n, FROZEN, dtype=np.int8)
         self.tile = np.zeros(n, dtype=np.int64)
@@ -185,9 +190,11 @@ class SurfaceSweep:
     def _tile_of(self, c: FloatArray) -> int:
         if len(self.zones) == 1:
             return 0
-        ij = np.floor((c[:2] - self.state.lo[:2]) / self.twidth).astype(np.int64)
-        ij = np.clip(ij, 0, self.ntile - 1)
-        return int(ij[1] * self.ntile[0] + ij[0])
+        # in floats, not small arrays: this runs once per particle placed
+        lo, width, n = self._tiles
+        i = min(max(math.floor((float(c[0]) - lo[0]) / width[0]), 0), n[0] - 1)
+        j = min(max(math.floor((float(c[1]) - lo[1]) / width[1]), 0), n[1] - 1)
+        return j * n[0] + i
 
     def _flag(self, k: int, flag: int) -> None:
         """Set candidate ``k``'s flag and its screening leaf (open only when active)."""
