@@ -103,6 +103,32 @@ class Sweep3D(_Slow):
         regopack.pack(self.scene, verify=False)
 
 
+class SweepScale3D(_Slow):
+    """3D: the sweep of spheres (sizes 2-12 µm) in cubes of about 10^3, 10^4 and 10^5 spheres.
+
+    Columns 45 µm wide and the tail closing; the time per sphere should not
+    grow with the cube (the candidate search descends per-column trees).
+    """
+
+    params = ([55.0, 120.0, 256.0],)
+    param_names = ["side_um"]
+
+    def setup(self, _cache: Any, side: float) -> None:
+        common.warm_3d("spheres")
+        self.scene = common.scene_3d(
+            "spheres",
+            side,
+            base="dem3d",
+            **{"insertion.closing": "tail", "insertion.strip": 45.0, "outputs.fabric": False},
+        )
+
+    def time_pack(self, _cache: Any, side: float) -> None:
+        regopack.pack(self.scene, verify=False)
+
+    def peakmem_pack(self, _cache: Any, side: float) -> None:
+        regopack.pack(self.scene, verify=False)
+
+
 class Threads(_Slow):
     """One kernel thread against two: the partner thread and the sweep's parallel scans.
 

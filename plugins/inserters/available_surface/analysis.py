@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.base.limits import derived_count
+from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.inserters.available_surface.envelope import (
     EdgeArcs,
     edge_arcs,
@@ -602,6 +603,7 @@ def scan(
     spheres: bool,
     rng: np.random.Generator,
     out: FloatArray,
+    tree: FloatArray,
 ) -> tuple[int, int]:
     """Offer particle ``i`` to ``candidates[begin:]`` in turn; stop at the first with free area.
 
@@ -618,10 +620,28 @@ def scan(
     and the candidate's position (the centre in ``out``), :data:`EMPTY` and
     ``len(candidates)``, or :data:`FULL` and the position to resume from
     after growing the cache.
+
+    With a ``tree`` (not empty), the screening reads it instead of ``rmin``:
+    a max-tree over the positions of ``candidates``
+    (:func:`~regopack.plugins.inserters.available_arc.candidates.tree_set`)
+    whose leaf is ``rmin_k`` for a candidate open to the search and ``-inf``
+    for one hidden from it; the scan descends it to the next candidate that
+    passes, so a search costs the candidates analysed, not the candidates
+    listed. An empty analysis sets the leaf to ``radius[i]`` as it sets
+    ``rmin``.
     """
     t, radius, rmin, tried, counters = screen
     r = radius[i]
-    for m in range(begin, candidates.shape[0]):
+    leaves = tree.shape[0] // 2
+    m = begin - 1
+    while True:
+        m += 1
+        if leaves > 0:
+            m = first_candidate(tree, leaves, m, candidates.shape[0], r, t, False)
+            if m < 0:
+                break
+        elif m >= candidates.shape[0]:
+            break
         k = candidates[m]
         if not r < t * rmin[k]:
             continue
@@ -644,4 +664,6 @@ def scan(
             return FOUND, m
         counters[1] += 1
         rmin[k] = r
+        if leaves > 0:
+            tree_set(tree, leaves, m, r)
     return EMPTY, candidates.shape[0]

@@ -24,17 +24,23 @@ than ``WIDTH`` tolerances at their middle and at both quarters (two caps
 meeting along a seam; another cap that only touches the arc at one point
 does not remove it).
 
-**Sampling.** The centre is uniform by area on ``F``: points uniform on ``S``
-are proposed and the first free one is taken; after ``TRIES`` failures
-(``F`` is under about 1e-4 of the sphere) the proposals come from the
-smallest cap about the free arcs' mean direction that holds them, which
-holds ``F`` when ``F`` lies in a hemisphere (its boundary arcs bulge into it);
-after ``TRIES`` more, a point uniform by length on the free arcs is taken:
-free, but not uniform by area. That happens for a free set under about
-1e-9 of the sphere inside a small cap, but also for a scattered or
-band-shaped free set under about 1e-5 of the sphere (then the cap about the
-arcs is the whole sphere); in dense packings no placed sphere was seen to
-take it.
+**Sampling.** The centre is uniform by area on ``F``: points uniform on a cap
+``K`` that holds ``F`` are proposed and the first free one is taken
+(:func:`bounding_cap`). ``K`` is the smallest cap about the free arcs' mean
+direction that holds every free arc, computed exactly per arc. Since the
+boundary of ``F`` lies on the free arcs, the rest of the sphere, ``S \\ K``
+(connected), is wholly free or wholly covered; the point opposite the axis
+tells which, and when it is free ``K`` is the whole sphere. A free set in a
+small corner is thus sampled with a hit rate of a few tenths, not its share
+of the sphere. The boundary lies on the free arcs up to the seam rule: an arc
+dropped because the free set beside it is too narrow at its middle and both
+quarters bounds nothing, so other caps touching such an arc at exactly those
+three points, and nowhere else, leave part of ``F`` outside ``K`` (a
+configuration of measure zero: moving them apart by 1e-11 of ``R`` restores
+the bound). After ``TRIES`` failures (a free set under about 1e-5 of
+``K``: seams and slivers) a point uniform by length on the free arcs is
+taken: free, but not uniform by area; in dense packings no placed sphere was
+seen to take it.
 """
 
 from __future__ import annotations
@@ -253,6 +259,75 @@ def _arc_point(
 
 
 @numba.njit(cache=True)
+def _arc_min(
+    caps: FloatArray, big_r: float, arc: FloatArray, ax: float, ay: float, az: float
+) -> float:
+    """Return the least ``a · u`` over a free arc (``u`` on it, ``a`` a unit vector), exactly."""
+    cap = int(arc[0])
+    nx, ny, nz, h = caps[cap, 0], caps[cap, 1], caps[cap, 2], caps[cap, 3]
+    rc = math.sqrt(max(big_r * big_r - h * h, 0.0))
+    e1x, e1y, e1z, e2x, e2y, e2z = _frame(nx, ny, nz)
+    # a . u(t) = h (a . n) + rc (A cos t + B sin t) = h (a . n) + rc M cos(t - mid)
+    base = h * (ax * nx + ay * ny + az * nz)
+    a = ax * e1x + ay * e1y + az * e1z
+    b = ax * e2x + ay * e2y + az * e2z
+    start = float(arc[1])
+    end = float(arc[2])
+    low = min(a * math.cos(start) + b * math.sin(start), a * math.cos(end) + b * math.sin(end))
+    amp = math.sqrt(a * a + b * b)
+    if amp > 0.0:
+        # the minimum of the whole circle, at mid + pi, when the arc passes it
+        t = (math.atan2(b, a) + math.pi - start) % (2.0 * math.pi)
+        if t <= end - start:
+            low = -amp
+    return float(base + rc * low)
+
+
+@numba.njit(cache=True)
+def bounding_cap(
+    caps: FloatArray, ncaps: int, arcs: FloatArray, big_r: float, tau: float
+) -> tuple[float, float, float, float]:
+    """Return a cap ``{u : a · u >= R cos_max}`` holding the whole free set, and its axis.
+
+    The axis ``a`` is the free arcs' mean direction; ``cos_max`` is the
+    least ``a · u / R`` over the arcs (exact per arc, :func:`_arc_min`), less a
+    margin of the tolerance. Every boundary point of the free set lies on a
+    free arc, so inside the cap: the rest of the sphere, connected, is then
+    either wholly free or wholly covered, and one point of it tells which —
+    the point opposite the axis. When it is free, the cap is the whole sphere
+    (``cos_max = -1``). Without arcs (no caps) the whole sphere.
+    """
+    na = arcs.shape[0]
+    if na == 0:
+        return 0.0, 0.0, 1.0, -1.0
+    ax = ay = az = 0.0
+    for a in range(na):
+        for m in range(9):
+            ang = arcs[a, 1] + (arcs[a, 2] - arcs[a, 1]) * m / 8.0
+            px, py, pz = _arc_point(caps, big_r, int(arcs[a, 0]), ang)
+            ax += px
+            ay += py
+            az += pz
+    norm = math.sqrt(ax * ax + ay * ay + az * az)
+    if not norm > 1e-6 * big_r * 9 * na:
+        # arcs all about the sphere: the middle of the first one
+        mid = 0.5 * (arcs[0, 1] + arcs[0, 2])
+        ax, ay, az = _arc_point(caps, big_r, int(arcs[0, 0]), mid)
+        norm = math.sqrt(ax * ax + ay * ay + az * az)
+    ax /= norm
+    ay /= norm
+    az /= norm
+    if is_free(caps, ncaps, -big_r * ax, -big_r * ay, -big_r * az, tau):
+        return ax, ay, az, -1.0
+    low = big_r
+    for a in range(na):
+        low = min(low, _arc_min(caps, big_r, arcs[a], ax, ay, az))
+    # points within tau of a cap's edge are free: reach that far beyond the arcs
+    cos_max = (low - 2.0 * tau) / big_r - 1e-12
+    return ax, ay, az, max(cos_max, -1.0)
+
+
+@numba.njit(cache=True)
 def sample_free(
     caps: FloatArray,
     ncaps: int,
@@ -262,39 +337,8 @@ def sample_free(
     rng: np.random.Generator,
 ) -> tuple[float, float, float]:
     """Draw a point of the free set, uniform by area (see the module docstring)."""
-    for _ in range(TRIES):
-        z = 2.0 * rng.random() - 1.0
-        phi = 2.0 * math.pi * rng.random()
-        s = math.sqrt(max(1.0 - z * z, 0.0))
-        ux, uy, uz = big_r * s * math.cos(phi), big_r * s * math.sin(phi), big_r * z
-        if is_free(caps, ncaps, ux, uy, uz, tau):
-            return ux, uy, uz
-    # a cap about the free arcs' mean direction that holds them
     na = arcs.shape[0]
-    pts = np.empty((9 * na, 3))
-    ax = ay = az = 0.0
-    for a in range(na):
-        for m in range(9):
-            ang = arcs[a, 1] + (arcs[a, 2] - arcs[a, 1]) * m / 8.0
-            px, py, pz = _arc_point(caps, big_r, int(arcs[a, 0]), ang)
-            pts[9 * a + m, 0] = px
-            pts[9 * a + m, 1] = py
-            pts[9 * a + m, 2] = pz
-            ax += px
-            ay += py
-            az += pz
-    norm = math.sqrt(ax * ax + ay * ay + az * az)
-    cos_max = -1.0
-    if norm > 1e-6 * big_r * pts.shape[0]:
-        ax /= norm
-        ay /= norm
-        az /= norm
-        cos_max = 1.0
-        for p in range(pts.shape[0]):
-            cos_max = min(cos_max, (ax * pts[p, 0] + ay * pts[p, 1] + az * pts[p, 2]) / big_r)
-        cos_max = max(cos_max - 1e-9, -1.0)
-    else:
-        ax, ay, az = 0.0, 0.0, 1.0
+    ax, ay, az, cos_max = bounding_cap(caps, ncaps, arcs, big_r, tau)
     e1x, e1y, e1z, e2x, e2y, e2z = _frame(ax, ay, az)
     for _ in range(TRIES):
         z = 1.0 - rng.random() * (1.0 - cos_max)

@@ -109,6 +109,7 @@ class SurfaceState:
         self.count = 0
         self.counters = np.zeros(2, dtype=np.int64)
         self._no_tried = np.zeros(0, dtype=np.int64)
+        self._no_tree = np.zeros(0)
         self._no_arcs = EdgeArcs(
             np.zeros(0, dtype=np.int64),
             np.zeros(0, dtype=np.int64),
@@ -179,12 +180,15 @@ class SurfaceState:
         rng: np.random.Generator,
         screened: bool = True,
         tried: IntArray | None = None,
+        tree: FloatArray | None = None,
     ) -> tuple[int, FloatArray | None]:
         """Offer the current particle to ``candidates`` (insertion indices) in turn.
 
         A candidate is analysed when the particle passes its screening (every
         one when ``screened`` is False); the first with free area takes it.
         Each analysed candidate gets ``tried[k] = i`` when ``tried`` is given.
+        With a screening ``tree`` over the positions of ``candidates`` (see
+        :func:`.analysis.scan`) only the candidates open in it are searched.
 
         Returns
         -------
@@ -207,6 +211,7 @@ class SurfaceState:
             code, at = scan(
                 cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
                 self.cache, placed, bounds, self.eta, self._xi, self.spheres, rng, self._out,
+                self._no_tree if tree is None else tree,
             )  # fmt: skip
             if code != FULL:
                 break

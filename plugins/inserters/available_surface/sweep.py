@@ -16,6 +16,12 @@ those of 2D.
 A candidate analysed for a particle keeps its answer while that particle is
 being placed (nothing changes in between), so the exact pass skips the
 candidates the screened passes already found without free area.
+
+Each column lists its candidates in insertion order with a screening max-tree
+over them (:class:`Zone`): the leaf of an active candidate is its ``rmin``,
+that of a frozen or retired one ``-inf``, so the screened search descends the
+tree to the candidates that pass instead of listing the whole packing for
+every particle: its cost does not grow with the number placed.
 """
 
 from __future__ import annotations
@@ -23,15 +29,19 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
+import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.base.limits import MAX_ZONE_BINS as MAX_BINS
 from regopack.base.limits import zone_bins
 from regopack.plugins.common.strips import strip_count
+from regopack.plugins.inserters.available_arc.candidates import tree_set
 from regopack.plugins.inserters.available_surface.state import SurfaceState
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 ZONE_BINS = 80
 """Bins per zone height: the zone rises by ``zone / ZONE_BINS`` at a time."""
@@ -46,14 +56,59 @@ MAX_TILES = 1 << 10
 """Most columns over the box's floor."""
 
 
+HIDDEN = -np.inf
+"""Screening leaf of a candidate hidden from the search (no radius passes it)."""
+
+
+@numba.njit(cache=True)
+def _set_leaves(tree: FloatArray, positions: IntArray, values: FloatArray) -> None:
+    leaves = tree.shape[0] // 2
+    for m in range(positions.shape[0]):
+        tree_set(tree, leaves, positions[m], values[m])
+
+
 class Zone:
-    """The rising zone of one column: its bins, lowest and top bin, and counters."""
+    """The rising zone of one column: its bins, lowest and top bin, and counters.
+
+    ``members[:size]`` lists the column's candidates in insertion order;
+    ``tree`` is the screening max-tree over those positions (``2 * leaves``
+    values, leaf ``leaves + p`` for ``members[p]``).
+    """
 
     def __init__(self) -> None:
         self.bins: dict[int, list[int]] = {}  # filled bins only
         self.lo = self.hi = 0
         self.full = self.closed = self.seeded = False
         self.raises = self.offered = self.pace = self.since = 0
+        self.members = np.zeros(64, dtype=np.int64)
+        self.size = 0
+        self.tree = np.full(2 * 64, HIDDEN)
+
+    def append(self, k: int) -> int:
+        """List candidate ``k`` (hidden); return its position."""
+        if self.size == self.members.shape[0]:
+            self._grow()
+        p = self.size
+        self.members[p] = k
+        self.size += 1
+        return p
+
+    def _grow(self) -> None:
+        old = self.members.shape[0]
+        new = 2 * old
+        members = np.zeros(new, dtype=np.int64)
+        members[:old] = self.members
+        tree = np.full(2 * new, HIDDEN)
+        tree[new : new + old] = self.tree[old : 2 * old]
+        level = new
+        while level > 1:  # every node the larger of its children, level by level
+            half = level // 2
+            tree[half:level] = np.maximum(
+                tree[level : 2 * level : 2], tree[level + 1 : 2 * level : 2]
+            )
+            level = half
+        self.members = members
+        self.tree = tree
 
 
 class SurfaceSweep:
@@ -104,10 +159,16 @@ class SurfaceSweep:
             self.delta = 1.0
         self.nbins = max(1, math.ceil(height / self.delta)) + 1
         self.zones = [Zone() for _ in range(int(self.ntile.prod()))]
+        self._tiles = (
+            [float(v) for v in state.lo[:2]],
+            [float(v) for v in self.twidth],
+            [int(v) for v in self.ntile],
+        )
         n = max(state.n, 1)
         self.flag = np.full(n, FROZEN, dtype=np.int8)
         self.tile = np.zeros(n, dtype=np.int64)
         self.tried = np.full(n, -1, dtype=np.int64)  # particle last analysed at each candidate
+        self.pos = np.zeros(n, dtype=np.int64)  # each candidate's position in its column's list
         self.status = np.zeros(n, dtype=np.int8)
         self.nzone = max(1, zone_bins(zone, self.delta, height, ZONE_BINS))
         self.closing = closing
@@ -129,9 +190,18 @@ class SurfaceSweep:
     def _tile_of(self, c: FloatArray) -> int:
         if len(self.zones) == 1:
             return 0
-        ij = np.floor((c[:2] - self.state.lo[:2]) / self.twidth).astype(np.int64)
-        ij = np.clip(ij, 0, self.ntile - 1)
-        return int(ij[1] * self.ntile[0] + ij[0])
+        # in floats, not small arrays: this runs once per particle placed
+        lo, width, n = self._tiles
+        i = min(max(math.floor((float(c[0]) - lo[0]) / width[0]), 0), n[0] - 1)
+        j = min(max(math.floor((float(c[1]) - lo[1]) / width[1]), 0), n[1] - 1)
+        return j * n[0] + i
+
+    def _flag(self, k: int, flag: int) -> None:
+        """Set candidate ``k``'s flag and its screening leaf (open only when active)."""
+        self.flag[k] = flag
+        z = self.zones[self.tile[k]]
+        leaf = self.state.rmin[k] if flag == ACTIVE else HIDDEN
+        tree_set(z.tree, z.members.shape[0], self.pos[k], leaf)
 
     def _register(self, k: int) -> None:
         c = self.state.centre[self.state.order[k]]
@@ -139,6 +209,7 @@ class SurfaceSweep:
         tile = self._tile_of(c)
         self.tile[k] = tile
         z = self.zones[tile]
+        self.pos[k] = z.append(k)
         z.bins.setdefault(b, []).append(k)
         if not z.seeded and (self.cur < 0 or b <= self.zones[self.cur].hi + self.nzone):
             # a column starts at its first candidate near the front (not at one that a
@@ -149,17 +220,17 @@ class SurfaceSweep:
             for bb, ks in z.bins.items():  # candidates filed before it join the zone
                 if z.lo <= bb <= z.hi:
                     for kk in ks:
-                        self.flag[kk] = ACTIVE
+                        self._flag(kk, ACTIVE)
         if b > z.hi:
-            self.flag[k] = FROZEN
+            self._flag(k, FROZEN)
         elif b < z.lo:
-            self.flag[k] = RETIRED
+            self._flag(k, RETIRED)
         else:
-            self.flag[k] = ACTIVE
+            self._flag(k, ACTIVE)
 
     def _retire_lowest(self, z: Zone) -> None:
         for k in z.bins.get(z.lo, ()):
-            self.flag[k] = RETIRED
+            self._flag(k, RETIRED)
         z.lo += 1
 
     def _raise(self, z: Zone) -> bool:
@@ -170,7 +241,7 @@ class SurfaceSweep:
         z.raises += 1
         for k in z.bins.get(z.hi, ()):
             if self.flag[k] == FROZEN:
-                self.flag[k] = ACTIVE
+                self._flag(k, ACTIVE)
         if z.hi - z.lo + 1 > self.nzone:
             self._retire_lowest(z)
         return True
@@ -179,10 +250,10 @@ class SurfaceSweep:
         for b in range(hi0 + 1, z.hi + 1):
             for k in z.bins.get(b, ()):
                 if self.flag[k] == ACTIVE:
-                    self.flag[k] = FROZEN
+                    self._flag(k, FROZEN)
         for b in range(lo0, z.lo):
             for k in z.bins.get(b, ()):
-                self.flag[k] = ACTIVE
+                self._flag(k, ACTIVE)
         z.lo = lo0
         z.hi = hi0
         z.raises -= raises
@@ -212,20 +283,20 @@ class SurfaceSweep:
     # ---------------------------------------------------------------- search
 
     def _screened(self, i: int, rng: np.random.Generator) -> tuple[int, FloatArray | None]:
-        st = self.state
-        c = st.count
-        open_ = (self.flag[:c] == ACTIVE) & (st.radius[i] < self.t * st.rmin[:c])
-        if len(self.zones) > 1:
-            open_ &= self.tile[:c] == self.cur
-        return st.scan(np.flatnonzero(open_), rng, tried=self.tried)
+        z = self.zones[self.cur]
+        return self.state.scan(z.members[: z.size], rng, tried=self.tried, tree=z.tree)
 
     def _exhaustive(self, i: int, rng: np.random.Generator) -> FloatArray | None:
         st = self.state
-        c = st.count
-        todo = (self.flag[:c] != RETIRED) & (self.tried[:c] != i)
-        if len(self.zones) > 1:
-            todo &= self.tile[:c] == self.cur
-        return st.scan(np.flatnonzero(todo), rng, screened=False, tried=self.tried)[1]
+        z = self.zones[self.cur]
+        members = z.members[: z.size]
+        todo = members[(self.flag[members] != RETIRED) & (self.tried[members] != i)]
+        x = st.scan(todo, rng, screened=False, tried=self.tried)[1]
+        # the active candidates it found empty have a new rmin: so have their leaves
+        seen = todo[(self.tried[todo] == i) & (self.flag[todo] == ACTIVE)]
+        if seen.shape[0]:
+            _set_leaves(z.tree, self.pos[seen], st.rmin[seen])
+        return x
 
     def _offer_to(self, i: int, z: Zone, rng: np.random.Generator) -> FloatArray | None:
         """Offer particle ``i`` to the current column: screened, rising, then exact."""

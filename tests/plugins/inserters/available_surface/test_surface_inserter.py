@@ -403,3 +403,37 @@ def test_columns_place_from_the_zone_not_from_the_exact_pass(
     packing = regopack.pack(_small_zone(8.0), verify=False)
     assert seen["sweep"].zones and len(seen["sweep"].zones) == 9
     assert seen["exact"] <= 0.1 * packing.n_placed
+
+
+def _screened_by_mask(self: Any, i: int, rng: np.random.Generator) -> Any:
+    """The screened search listing every placed candidate, as the sweep did before its trees."""
+    st = self.state
+    c = st.count
+    open_ = (self.flag[:c] == sweep_module.ACTIVE) & (st.radius[i] < self.t * st.rmin[:c])
+    open_ &= self.tile[:c] == self.cur
+    return st.scan(np.flatnonzero(open_), rng, tried=self.tried)
+
+
+def test_the_screening_trees_search_the_candidates_a_full_listing_finds(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    data = column_scene(8.0, "paced", count=200)
+    seen = _capture(monkeypatch)
+    fast = regopack.pack(data, verify=False)
+    sweep = seen["sweep"]
+    c = sweep.state.count
+    for k, zone in enumerate(sweep.zones):
+        members = zone.members[: zone.size]
+        assert np.array_equal(members, np.flatnonzero(sweep.tile[:c] == k))
+        leaves = zone.members.shape[0]
+        leaf = zone.tree[leaves : leaves + zone.size]
+        active = sweep.flag[members] == sweep_module.ACTIVE
+        assert np.array_equal(leaf[active], sweep.state.rmin[members[active]])
+        assert np.all(leaf[~active] == -np.inf)
+        inner = np.arange(1, leaves)
+        assert np.array_equal(
+            zone.tree[inner], np.maximum(zone.tree[2 * inner], zone.tree[2 * inner + 1])
+        )
+    monkeypatch.setattr(sweep_module.SurfaceSweep, "_screened", _screened_by_mask)
+    listed = regopack.pack(data, verify=False)
+    assert np.array_equal(fast.centre, listed.centre, equal_nan=True)

@@ -169,3 +169,73 @@ def test_spheres_and_polyhedra_together_are_refused_in_one_line() -> None:
     text = str(err.value)
     assert "phases.1.shape.kind: 'polyhedron' beside 'sphere' in phase 0" in text
     assert "spheres or polyhedra, not both" in text and "\n" not in text
+
+
+def _free_points(caps: np.ndarray, n: int, seed: int) -> np.ndarray:
+    x = np.random.default_rng(seed).normal(size=(n, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    return x[np.all(x @ caps[:, :3].T <= caps[:, 3], axis=1)]
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_the_bounding_cap_holds_every_free_point(seed: int) -> None:
+    # caps about random directions, large enough to leave a few small pieces free
+    from regopack.plugins.inserters.available_surface.spheres import bounding_cap
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(3, 9))
+    rows = rng.normal(size=(n, 3))
+    caps = _caps([(*v, h) for v, h in zip(rows, rng.uniform(-0.4, 0.3, n), strict=True)])
+    free = _free_points(caps, 100_000, seed)
+    arcs = free_arcs(caps, n, 1.0, 1e-12)
+    assert (arcs.shape[0] > 0) == (len(free) > 0)
+    if len(free) == 0:
+        return
+    ax, ay, az, cos_max = bounding_cap(caps, n, arcs, 1.0, 1e-12)
+    assert np.all(free @ np.array([ax, ay, az]) >= cos_max)
+
+
+def test_a_small_free_corner_is_sampled_uniformly_by_area_from_its_cap() -> None:
+    # three caps larger than hemispheres leave a small curved triangle about (1, 1, 1):
+    # the proposals come from a small cap, and the points stay uniform by area
+    from scipy.stats import ks_2samp
+
+    from regopack.plugins.inserters.available_surface.spheres import bounding_cap
+
+    caps = _caps([(-1, 0, 0, -0.5), (0, -1, 0, -0.5), (0, 0, -1, -0.5)])
+    ref = _free_points(caps, 1_000_000, 3)
+    assert 1000 < len(ref) < 0.01 * 1_000_000
+    arcs = free_arcs(caps, 3, 1.0, 1e-12)
+    *_, cos_max = bounding_cap(caps, 3, arcs, 1.0, 1e-12)
+    assert cos_max > 0.98  # a cap much smaller than the sphere
+    rng = np.random.default_rng(9)
+    got = np.array([sample_free(caps, 3, arcs, 1.0, 1e-12, rng) for _ in range(3000)])
+    assert np.all(got @ caps[:, :3].T <= caps[:, 3] + 1e-12)
+    for axis in range(3):  # the same distribution as uniform points filtered by the caps
+        assert ks_2samp(got[:, axis], ref[:, axis]).pvalue > 1e-4
+
+
+def test_free_pieces_on_opposite_sides_make_the_whole_sphere_the_cap() -> None:
+    from regopack.plugins.inserters.available_surface.spheres import bounding_cap
+
+    # a band of caps about the equator leaves two polar pieces
+    rows = [(math.cos(b), math.sin(b), 0.0, 0.6) for b in np.linspace(0, 2 * math.pi, 9)[:-1]]
+    caps = _caps(rows)
+    arcs = free_arcs(caps, 8, 1.0, 1e-12)
+    *_, cos_max = bounding_cap(caps, 8, arcs, 1.0, 1e-12)
+    assert cos_max == -1.0
+    rng = np.random.default_rng(4)
+    z = np.array([sample_free(caps, 8, arcs, 1.0, 1e-12, rng)[2] for _ in range(400)])
+    assert 120 < np.count_nonzero(z > 0) < 280  # both pieces, about equally
+
+
+def test_the_rest_of_a_sphere_beyond_a_small_cap_is_sampled_whole() -> None:
+    # the free arcs (one circle) all lie near the cap: the free set is the other side, and
+    # the point opposite the arcs' axis tells so
+    caps = _caps([(0, 0, 1, 0.9)])
+    arcs = free_arcs(caps, 1, 1.0, 1e-12)
+    rng = np.random.default_rng(2)
+    z = np.array([sample_free(caps, 1, arcs, 1.0, 1e-12, rng)[2] for _ in range(2000)])
+    assert np.all(z <= 0.9 + 1e-12)
+    counts, _ = np.histogram(z, bins=10, range=(-1.0, 0.9))
+    assert counts.min() > 120  # uniform heights on [-1, 0.9]: about 200 a bin
