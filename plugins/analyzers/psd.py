@@ -7,6 +7,13 @@ A particle's mass is taken as its area ``π r²`` in two dimensions and its
 volume ``4/3 π r³`` in three (every mineral at the same density); nothing
 else weights the mass.
 
+The classes are anchored on the scene's ``size.d_min`` (else the smallest
+drawn diameter), not on the length unit: a packing scaled by any factor,
+its scene with it, has the same classes and the same errors. A class with at
+least ``min_class_count`` drawn particles is *checked*: it holds when the
+relative errors of its number and of its mass share, placed against drawn,
+are both within ``tolerance`` (3 %).
+
 When the scene's size distribution has a method ``cdf(d)`` (the probability
 that a diameter is at most ``d``, as every built-in one has), the classes
 and the Kolmogorov–Smirnov distance are also compared with it.
@@ -39,6 +46,7 @@ __all__ = [
     "analytic_shares",
     "ks_distance",
     "masses",
+    "sampling_error",
     "scene_size_distribution",
     "unplaced_per_class",
 ]
@@ -58,8 +66,15 @@ class PsdConfig(BaseModel):
     min_class_count: int = Field(
         100,
         ge=1,
-        description="Only classes with at least this many drawn particles count for the "
-        "worst class errors.",
+        description="Classes with at least this many drawn particles are checked: they count "
+        "for the worst class errors and are held to the tolerance.",
+    )
+    tolerance: float = Field(
+        0.03,
+        ge=0,
+        allow_inf_nan=False,
+        description="A checked class holds when its number and mass shares, placed against "
+        "drawn, are both within this relative error.",
     )
     d_ref: float | None = Field(
         None,
@@ -171,6 +186,43 @@ def _worst(rel: FloatArray, ok: NDArray[np.bool_], edges: FloatArray) -> tuple[A
     return float(rel[j]), [float(edges[j]), float(edges[j + 1])]
 
 
+def _within(
+    number_rel: FloatArray, mass_rel: FloatArray, checked: NDArray[np.bool_], tolerance: float
+) -> NDArray[np.bool_]:
+    """Return the checked classes whose number and mass errors are both within ``tolerance``."""
+    with np.errstate(invalid="ignore"):
+        ok: NDArray[np.bool_] = (
+            checked & (np.abs(number_rel) <= tolerance) & (np.abs(mass_rel) <= tolerance)
+        )
+    return ok
+
+
+def sampling_error(
+    k: NDArray[np.int64], weight: FloatArray, n_classes: int, n_placed: int
+) -> FloatArray:
+    """Return the standard deviation of each class's relative share error by chance alone.
+
+    That is, if the ``n_placed`` placed particles were a uniformly random
+    subset of the drawn ones (classes ``k``, weights ``weight``: ones for
+    the number, masses for the mass): the share of a class in the subset is
+    a ratio estimator, whose variance is taken to first order with the
+    finite-population correction. By number this is the hypergeometric
+    ``sqrt((1 - p)(N - n) / ((N - 1) n p))`` of a class of share ``p``.
+    NaN for an empty class, or without two drawn and one placed particle.
+    """
+    n = len(k)
+    if n < 2 or n_placed < 1:
+        return np.full(n_classes, np.nan)
+    total = float(weight.sum())
+    share = np.bincount(k, weights=weight, minlength=n_classes) / total
+    w2 = np.bincount(k, weights=weight**2, minlength=n_classes)
+    spread = w2 * (1.0 - 2.0 * share) + share**2 * float((weight**2).sum())
+    var_mean = (1.0 - n_placed / n) * np.maximum(spread, 0.0) / (n - 1) / n_placed
+    with np.errstate(divide="ignore", invalid="ignore"):
+        out: FloatArray = np.where(share > 0, np.sqrt(var_mean) / (total / n) / share, np.nan)
+    return out
+
+
 def _none(x: float) -> float | None:
     return float(x) if math.isfinite(x) else None
 
@@ -225,9 +277,9 @@ class Psd(Measured):
             number_rel = share["number_share_placed"] / share["number_share_drawn"] - 1.0
             mass_rel = share["mass_share_placed"] / share["mass_share_drawn"] - 1.0
             fraction = np.where(drawn > 0, done / drawn, np.nan)
-        analytic_n, analytic_m, res_analytic = self._compare(
-            packing, edges, share["number_share_placed"], drawn, notes
-        )
+        checked = drawn >= self.config.min_class_count
+        within = _within(number_rel, mass_rel, checked, self.config.tolerance)
+        analytic_n, analytic_m, res_analytic = self._compare(packing, edges, share, checked, notes)
         self.classes = {
             "class": np.arange(m, dtype=np.int64),
             "d_lo": edges[:-1],
@@ -239,12 +291,20 @@ class Psd(Measured):
             "number_share_drawn": share["number_share_drawn"],
             "number_share_placed": share["number_share_placed"],
             "number_rel_error": number_rel,
+            "number_rel_error_sampling": sampling_error(k, np.ones(n), m, n_placed),
             "mass_share_drawn": share["mass_share_drawn"],
             "mass_share_placed": share["mass_share_placed"],
             "mass_rel_error": mass_rel,
+            "mass_rel_error_sampling": sampling_error(k, mass, m, n_placed),
             "number_share_analytic": analytic_n,
             "mass_share_analytic": analytic_m,
         }
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for key, predicted in (("number", analytic_n), ("mass", analytic_m)):
+                rel = share[f"{key}_share_placed"] / predicted - 1.0
+                self.classes[f"{key}_rel_error_analytic"] = rel
+        self.classes["checked"] = checked
+        self.classes["within"] = within
         for key in ("number", "mass"):
             for who in ("drawn", "placed", "analytic"):
                 self.classes[f"passing_{key}_{who}"] = 100.0 * np.cumsum(
@@ -258,9 +318,9 @@ class Psd(Measured):
             p_number = float(stats.ks_2samp(d[placed], d[~placed]).pvalue)
         elif n_placed == n and n:
             p_number = 1.0
-        ok = drawn >= self.config.min_class_count
-        worst_n = _worst(number_rel, ok, edges)
-        worst_m = _worst(mass_rel, ok, edges)
+        worst_n = _worst(number_rel, checked, edges)
+        worst_m = _worst(mass_rel, checked, edges)
+        outside = np.flatnonzero(checked & ~within)
         self._results = {
             "n_drawn": n,
             "n_placed": n_placed,
@@ -280,6 +340,11 @@ class Psd(Measured):
             "worst_number_class": worst_n[1],
             "worst_mass_rel_error": worst_m[0],
             "worst_mass_class": worst_m[1],
+            "tolerance": self.config.tolerance,
+            "n_classes_checked": int(checked.sum()),
+            "n_classes_within": int(within.sum()),
+            "classes_outside": [[float(edges[j]), float(edges[j + 1])] for j in outside],
+            "all_classes_within": bool(outside.size == 0) if checked.any() else None,
             **res_analytic,
             "notes": notes,
         }
@@ -289,8 +354,8 @@ class Psd(Measured):
         self,
         packing: Packing,
         edges: FloatArray,
-        placed_share: FloatArray,
-        drawn: NDArray[np.int64],
+        share: Mapping[str, FloatArray],
+        checked: NDArray[np.bool_],
         notes: list[str],
     ) -> tuple[FloatArray, FloatArray, dict[str, Any]]:
         """Class shares and KS tests against the scene's size distribution, when it has a CDF."""
@@ -305,6 +370,8 @@ class Psd(Measured):
             "ks_placed_vs_analytic_pvalue": None,
             "worst_analytic_number_rel_error": None,
             "worst_analytic_number_class": None,
+            "worst_analytic_mass_rel_error": None,
+            "worst_analytic_mass_class": None,
         }
         self.cdf = None
         if not self.config.analytic or self.diameter.size == 0:
@@ -330,10 +397,11 @@ class Psd(Measured):
         if ks_p is not None:
             res["ks_placed_vs_analytic"] = float(ks_p.statistic)
             res["ks_placed_vs_analytic_pvalue"] = float(ks_p.pvalue)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            rel = placed_share / number - 1.0
-        worst = _worst(rel, drawn >= self.config.min_class_count, edges)
-        res["worst_analytic_number_rel_error"], res["worst_analytic_number_class"] = worst
+        for key, predicted in (("number", number), ("mass", mass)):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rel = share[f"{key}_share_placed"] / predicted - 1.0
+            worst = _worst(rel, checked, edges)
+            res[f"worst_analytic_{key}_rel_error"], res[f"worst_analytic_{key}_class"] = worst
         return number, mass, res
 
     def tables(self) -> dict[str, dict[str, Any]]:

@@ -1,4 +1,4 @@
-"""Figure of the psd analyzer: percent passing and class shares, placed against requested."""
+"""Figure of the psd analyzer: percent passing, class shares and errors, placed vs requested."""
 
 from __future__ import annotations
 
@@ -75,15 +75,67 @@ def _shares(ax: Axes, psd: Psd, basis: str) -> None:
     ax.set_title(f"√2 classes by {basis}" + (measure if basis == "mass" else ""))
 
 
-def draw_psd(psd: Psd, unit: str = "µm") -> Figure:
-    """Percent passing by number and mass, and the class shares, placed against requested.
+def _errors(ax: Axes, psd: Psd, basis: str) -> None:
+    """Relative error of each class's share, placed against requested, with the tolerance band."""
+    c, res = psd.classes, psd.results()
+    tol = float(res["tolerance"])
+    rel = 100.0 * np.asarray(c[f"{basis}_rel_error"], dtype=np.float64)
+    checked = np.asarray(c["checked"], dtype=bool)
+    shown = np.abs(rel[checked & np.isfinite(rel)])
+    lim = 1.25 * max(200.0 * tol, float(shown.max()) if shown.size else 0.0, 1.0)
+    mid = np.sqrt(c["d_lo"] * c["d_hi"])
+    ax.axhspan(-100.0 * tol, 100.0 * tol, color="#e5e5e5", lw=0)
+    ax.axhline(0.0, color=TOTAL, lw=0.6)
+    y = np.clip(np.nan_to_num(rel, nan=0.0), -lim, lim)
+    chance = 200.0 * np.nan_to_num(np.asarray(c[f"{basis}_rel_error_sampling"], dtype=np.float64))
+    ax.errorbar(mid, y, yerr=chance, ls="none", color="#777777", elinewidth=0.7, capsize=0)
+    for sel, face in ((checked, PLACED), (~checked, "white")):
+        ax.plot(mid[sel], y[sel], ls="none", marker="o", ms=3.5, color=PLACED, mfc=face)
+    ax.set_ylim(-lim, lim)
+    ax.set_ylabel("placed / requested − 1 (%)", fontsize=7)
+    ax.set_title(f"class error by {basis}")
 
-    Diameters are labelled in ``unit``, the packing's length unit.
+
+def _verdict(ax: Axes, psd: Psd, unit: str) -> None:
+    """Write the classes held to the tolerance, in words, beside the error panels."""
+    res = psd.results()
+    ax.axis("off")
+    pct = 100.0 * float(res["tolerance"])
+    lines = [
+        f"{res['n_classes_checked']} classes with ≥ {res['min_class_count']} drawn",
+        "(filled markers);",
+        f"{res['n_classes_within']} of them within ±{pct:g} % (shaded)",
+        "by number and by mass;",
+        "bars: ± 2 σ of the error of a",
+        "random subset of the drawn.",
+        "",
+    ]
+    for basis in ("number", "mass"):
+        worst, where = res[f"worst_{basis}_rel_error"], res[f"worst_{basis}_class"]
+        if worst is not None:
+            lines.append(f"worst by {basis}: {100.0 * worst:+.2f} %")
+            lines.append(f"    in [{where[0]:.3g}, {where[1]:.3g}) {unit}")
+    text = ax.text(0.0, 1.0, "\n".join(lines), transform=ax.transAxes, va="top", ha="left")
+    text.set_in_layout(False)
+
+
+def draw_psd(psd: Psd, unit: str = "µm") -> Figure:
+    """Percent passing, class shares and class errors by number and mass, placed against requested.
+
+    Diameters are labelled in ``unit``, the packing's length unit. Under the
+    class shares, the relative error of each class's share with the tolerance
+    band; the classes held to it are filled.
     """
-    fig = Figure(figsize=(WIDTH, 2.9))
-    axes = fig.subplots(1, 3)
+    fig = Figure(figsize=(WIDTH, 4.6))
+    grid = fig.subplot_mosaic(
+        [["passing", "number", "mass"], ["verdict", "number_error", "mass_error"]],
+        height_ratios=[1.6, 1.0],
+    )
+    axes = [grid["passing"], grid["number"], grid["mass"]]
     c = psd.classes
     if len(c.get("class", [])) == 0 or psd.diameter.size == 0:
+        for ax in grid.values():
+            ax.axis("off")
         for ax in axes:
             ax.text(0.5, 0.5, "no particles", transform=ax.transAxes, ha="center")
         return fig
@@ -91,7 +143,10 @@ def draw_psd(psd: Psd, unit: str = "µm") -> Figure:
     _passing(axes[0], psd)
     _shares(axes[1], psd, "number")
     _shares(axes[2], psd, "mass")
-    for ax in axes:
+    _errors(grid["number_error"], psd, "number")
+    _errors(grid["mass_error"], psd, "mass")
+    _verdict(grid["verdict"], psd, unit)
+    for ax in (*axes, grid["number_error"], grid["mass_error"]):
         _log_d_axis(ax, lo, hi, unit)
     handles = [
         Line2D([], [], color=TOTAL, label="requested (all drawn)"),
