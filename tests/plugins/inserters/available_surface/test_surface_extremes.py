@@ -21,6 +21,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import regopack
+from regopack.base.limits import MAX_ZONE_BINS, LimitError
 from regopack.geometry.domain import Box, PeriodicBox
 from regopack.geometry.population import Population
 from regopack.packing.core import Packing
@@ -29,6 +30,7 @@ from regopack.plugins.inserters.available_surface.inserter import (
     AvailableSurface,
     AvailableSurfaceConfig,
 )
+from regopack.plugins.inserters.available_surface.sweep import ZONE_BINS
 from regopack.plugins.shapes.polyhedra.shape import PolyhedronConfig, RandomPolyhedron
 from regopack.plugins.shapes.sphere import Sphere
 from regopack.testing import extreme_radii
@@ -121,13 +123,25 @@ def domain(case: dict[str, Any], pop: Population) -> Box:
     return cls.centred(side, tall, 0.9 * side, (3.0 * scale, -2.0 * scale, 1.0 * scale))
 
 
-def pack(case: dict[str, Any]) -> tuple[Population, Packing]:
-    """Pack ``case`` with the available-surface inserter, straight from the population."""
+def pack(case: dict[str, Any]) -> tuple[Population, Packing | None]:
+    """Pack ``case`` with the available-surface inserter, straight from the population.
+
+    ``None`` for the one refusal a scene may meet: the sweep's zone (three
+    diameters of the largest particle by default) more than 13 107 times as
+    high as the box (a box 1 % taller than a first particle 10⁴ times smaller
+    than the largest), refused in one line as in 2D.
+    """
     rng = np.random.default_rng(case["seed"])
     pop = population(case, rng)
     box = domain(case, pop)
     inserter = AvailableSurface(AvailableSurfaceConfig(order=case["order"]))
-    result = inserter.pack(pop, box, EtaController(EtaConfig(eta=case["eta"])), rng)
+    try:
+        result = inserter.pack(pop, box, EtaController(EtaConfig(eta=case["eta"])), rng)
+    except LimitError as err:
+        zone = 6.0 * float(pop.radius.max())
+        assert case["order"] == "sweep" and err.field == "insertion.zone", str(err)
+        assert zone > MAX_ZONE_BINS / ZONE_BINS * box.size[2], str(err)
+        return pop, None
     return pop, Packing.from_parts(pop, result, box, {}, case["seed"])
 
 
@@ -180,6 +194,8 @@ def check(packing: Packing) -> None:
 @given(case=scenes)
 def test_no_overlap_nothing_outside_and_every_particle_touches(case: dict[str, Any]) -> None:
     _, packing = pack(case)
+    if packing is None:
+        return
     assert packing.n_placed >= (0 if case["thin"] else 1)
     check(packing)
 
@@ -192,7 +208,8 @@ def test_no_overlap_nothing_outside_and_every_particle_touches_at_length(
 ) -> None:
     case["n"] = case["n"] * 3
     _, packing = pack(case)
-    check(packing)
+    if packing is not None:
+        check(packing)
 
 
 @settings(FAST, max_examples=8)
@@ -200,6 +217,9 @@ def test_no_overlap_nothing_outside_and_every_particle_touches_at_length(
 def test_same_seed_same_packing_bit_for_bit(case: dict[str, Any]) -> None:
     _, a = pack(case)
     _, b = pack(case)
+    if a is None or b is None:
+        assert a is b
+        return
     assert np.array_equal(a.centre, b.centre, equal_nan=True)
     assert np.array_equal(a.insertion_index, b.insertion_index)
     keep = [k for k in a.stats if not k.endswith("_time_s")]
@@ -225,6 +245,9 @@ def test_a_scaled_scene_packs_the_same(case: dict[str, Any], s: float) -> None:
     _, one = pack(case)
     case["scale"] = s
     _, scaled = pack(case)
+    if one is None or scaled is None:
+        assert one is scaled
+        return
     exact = math.frexp(s)[0] == 0.5
     _same_up_to_scale(one, scaled, s, 0.0 if exact else SCALE_TOL)
 
@@ -237,6 +260,9 @@ def test_a_scaled_scene_packs_the_same_at_length(case: dict[str, Any], s: float)
     _, one = pack(case)
     case["scale"] = s
     _, scaled = pack(case)
+    if one is None or scaled is None:
+        assert one is scaled
+        return
     _same_up_to_scale(one, scaled, s, 0.0 if math.frexp(s)[0] == 0.5 else SCALE_TOL)
 
 
