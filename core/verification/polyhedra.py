@@ -585,8 +585,18 @@ class _Particles:
         return out
 
 
-_IMAGES = np.array([(a, b, c) for a in (-1, 0, 1) for b in (-1, 0, 1) for c in (-1, 0, 1)], float)
-"""The 27 periodic image shifts, in units of the box sides; index 13 is no shift."""
+def _image_shifts(reach: float, side: Float) -> Float:
+    """Periodic image shifts, in units of the box sides, that can bring a pair within ``reach``.
+
+    Two centres wrapped into the box lie less than a side apart along each
+    axis, so shifts of at most ``ceil(reach / side)`` sides (at least one)
+    find every pair closer than ``reach``: the 27 shifts of ``-1, 0, 1`` when
+    no two particles reach across a side. The list is symmetric (shift ``k``
+    and ``-k`` at ``len - 1 - k``), its middle entry no shift.
+    """
+    m = [max(1, math.ceil(reach / s)) for s in side]
+    axes = [np.arange(-k, k + 1, dtype=np.float64) for k in m]
+    return np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1).reshape(-1, 3)
 
 
 def _candidates(
@@ -601,29 +611,36 @@ def _candidates(
     """
     n = len(parts.volume)
     reach = parts.radius * (1.0 + 1e-9)
+    shifts = np.zeros((1, 3))
     if periodic:
         side = hi - lo
         wrap = np.floor((parts.centre - lo) / side)
         base = parts.centre - wrap * side
-        images = (base[None, :, :] + _IMAGES[:, None, :] * side).reshape(-1, 3)
+        halo = 2.0 * float(reach.max())
+        shifts = _image_shifts(halo, side)
+        images = (base[None, :, :] + shifts[:, None, :] * side).reshape(-1, 3)
+        # only the images within reach of the box can be within reach of a wrapped centre
+        index = np.flatnonzero(np.all((images >= lo - halo) & (images <= hi + halo), axis=1))
+        images = images[index]
     else:
         wrap = np.zeros((n, 3))
         base = parts.centre
         images = base
+        index = np.arange(n, dtype=np.int64)
     tree = cKDTree(images)
     found = tree.query_ball_point(base, reach + reach.max(), return_sorted=False)
     counts = np.fromiter((len(f) for f in found), dtype=np.int64, count=n)
     i = np.repeat(np.arange(n, dtype=np.int64), counts)
     hit = (
-        np.concatenate([np.asarray(f, dtype=np.int64) for f in found])
+        index[np.concatenate([np.asarray(f, dtype=np.int64) for f in found])]
         if counts.sum()
         else np.zeros(0, dtype=np.int64)
     )
     j, image = hit % n, hit // n
-    keep = (j > i) | ((j == i) & (image > 13))
+    keep = (j > i) | ((j == i) & (image > len(shifts) // 2))
     i, j, image = i[keep], j[keep], image[keep]
     if periodic:
-        t = (_IMAGES[image] + wrap[i] - wrap[j]) * (hi - lo)
+        t = (shifts[image] + wrap[i] - wrap[j]) * (hi - lo)
     else:
         t = np.zeros((len(i), 3))
     near = np.linalg.norm(parts.centre[j] + t - parts.centre[i], axis=1) <= reach[i] + reach[j]
@@ -718,8 +735,10 @@ def verify_polyhedra(
     plane of one of them separates share no volume; the others get their
     intersection volume from :func:`overlap_volume`'s computation (the same
     frame, the same flat tolerance). In a periodic box the second particle
-    of a pair is taken at each of its 27 images around the first (centres
-    wrapped into the box), and containment is not checked.
+    of a pair is taken at each of its images within reach of the first
+    (centres wrapped into the box; the 27 nearest images when no particle
+    is wider than half a side, more in a box thinner than its particles,
+    and a particle against its own images), and containment is not checked.
 
     Parameters
     ----------
@@ -734,9 +753,7 @@ def verify_polyhedra(
     box_lo, box_hi
         Opposite corners of the box.
     periodic
-        Whether the box is periodic in all three directions. Every particle
-        must then fit in a sphere of radius half the shortest side about its
-        bounding-box centre (so that 27 images find every contact).
+        Whether the box is periodic in all three directions.
     rel_tol
         A pair violates when its intersection volume exceeds ``rel_tol`` times
         the smaller of the two volumes; a particle violates when a vertex lies
@@ -754,8 +771,7 @@ def verify_polyhedra(
     PackingError
         When the arrays are malformed.
     GeometryError
-        When a particle is flat or has fewer than four vertices, or, in a
-        periodic box, is too large for the 27 images.
+        When a particle is flat or has fewer than four vertices.
 
     Examples
     --------
@@ -772,12 +788,6 @@ def verify_polyhedra(
     if n == 0:
         return Report3D(True, 0, 0, 0, (), 0.0, None, 0, None, periodic, rel_tol)
     parts = _Particles(raw)
-    if periodic and 2.0 * parts.radius.max() > (hi - lo).min():
-        raise GeometryError(
-            "a particle is wider than half the shortest side of the periodic box "
-            "(about its bounding-box centre); 27 images cannot find all its contacts"
-        )
-
     i, j, t = _candidates(parts, lo, hi, periodic)
     # what _overlap's first test would find, for all pairs at once
     small = np.minimum(parts.diagonal[i], parts.diagonal[j])

@@ -436,8 +436,6 @@ def test_bad_packing_input_is_refused():
         verify_polyhedra(np.vstack(cubes), np.array([0, 8, 7, 64]), (0, 0, 0), (2, 2, 2))
     with pytest.raises(GeometryError, match="particle 1"):
         verify_polyhedra([CUBE, CUBE[:3]], None, (0, 0, 0), (2, 2, 2))
-    with pytest.raises(GeometryError, match="27 images"):
-        verify_polyhedra([CUBE * 3], None, (0, 0, 0), (4, 4, 4), periodic=True)
 
 
 # ---------------------------------------------------------------- packings
@@ -540,6 +538,39 @@ def test_periodic_wrapping_of_far_particles():
         bad = verify_polyhedra([a, overlapping], None, (0, 0, 0), (10, 10, 10), periodic=True)
         assert bad.overlapping_pairs == ((0, 1),)
         assert bad.worst_overlap_fraction == pytest.approx(0.25, rel=1e-12)
+
+
+def _needle(centre, length=4.0, width=0.1):
+    """A square prism of the given length along (1, 0, 1), about ``centre``."""
+    u = np.array([1.0, 0.0, 1.0]) / math.sqrt(2.0)
+    v = np.array([-1.0, 0.0, 1.0]) / math.sqrt(2.0)
+    w = np.array([0.0, 1.0, 0.0])
+    signs = CUBE * 2 - 1
+    corners = signs[:, :1] * length / 2 * u + (signs[:, 1:2] * v + signs[:, 2:] * w) * width / 2
+    return corners + np.asarray(centre, float)
+
+
+@pytest.mark.parametrize("period", [1.0, 0.3])
+def test_particles_longer_than_the_periodic_box_are_checked_on_every_image(period):
+    """A slab thinner than its particles: pairs meet through images two or more periods away."""
+    lo, hi = (0.0, 0.0, 0.0), (20.0, 20.0, period)
+    a = _needle((10.0, 10.0, 0.5 * period))
+    # b is a moved along its own axis by k periods of z (and as much along x): the two overlap
+    # by 15 to 30 % of their length, and b's centre wraps to a's height, k periods of x away,
+    # so that only b's image k >= 2 periods down finds the overlap (at 0.3: 2.4 below the
+    # box, beyond half the reach of two needles)
+    shift = math.floor(2.5 / period) * period
+    b = a + (shift, 0.0, shift)
+    report = verify_polyhedra([a, b], None, lo, hi, periodic=True)
+    assert report.overlapping_pairs == ((0, 1),)
+    assert report.worst_overlap_fraction > 0.1
+    # moved half a period of z: parallel beside a (0.35 period apart, 0.1 thick): valid
+    apart = verify_polyhedra([a, b + (0, 0, 0.5 * period)], None, lo, hi, periodic=True)
+    assert apart.ok and apart.n_candidate_pairs > 0
+    # along z instead of the diagonal, a needle longer than the period meets its own images
+    upright = (CUBE - 0.5) * (0.1, 0.1, 1.5 * period) + (10.0, 10.0, 0.5 * period)
+    own = verify_polyhedra([upright], None, lo, hi, periodic=True)
+    assert own.overlapping_pairs == ((0, 0),)
 
 
 def test_periodic_touching_lattice_is_valid():

@@ -344,7 +344,8 @@ def _interferers(
 
     ``|c_j - c_k| < R_k + R_j + 2 R_Q + margin``: with the packing control's
     margin, a particle that the new one could come closer to than the margin
-    interferes too.
+    interferes too. In a periodic box the images are those one period away
+    (27), or more in a box thinner than that reach.
     """
     _, centre, circum, reach_max = placed
     period, lo, hi, _, _ = bounds
@@ -358,10 +359,16 @@ def _interferers(
         return _gather(
             g, ck, reach, np.zeros(3), ck, pk, i, centre, circum, near, at, count, margin
         )
+    # the centres lie in the box, less than a period apart along each axis: images
+    # up to ceil(reach / period) periods away (one, unless the box is thinner than
+    # the reach) hold every interferer
+    mx = max(1, math.ceil(reach / period[0]))
+    my = max(1, math.ceil(reach / period[1]))
+    mz = max(1, math.ceil(reach / period[2]))
     shift = np.empty(3)
-    for sx in (-1, 0, 1):
-        for sy in (-1, 0, 1):
-            for sz in (-1, 0, 1):
+    for sx in range(-mx, mx + 1):
+        for sy in range(-my, my + 1):
+            for sz in range(-mz, mz + 1):
                 shift[0] = sx * period[0]
                 shift[1] = sy * period[1]
                 shift[2] = sz * period[2]
