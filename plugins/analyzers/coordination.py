@@ -58,8 +58,8 @@ class CoordinationConfig(BaseModel):
         le=100,
         description=(
             "A particle with fewer contacts (counting only non-rattlers, removed in turn) is "
-            "a rattler; default: 2 in 2D (frictional particles; 3 for frictionless ones), "
-            "4 (d + 1) in 3D."
+            "a rattler; default: 2 in 2D and 3D (frictional particles: two opposite "
+            "contact forces can hold one); d + 1 (3 in 2D, 4 in 3D) for frictionless ones."
         ),
     )
 
@@ -129,7 +129,7 @@ def remove_rattlers(
     return members & ~alive, z.astype(np.int64), rounds
 
 
-RATTLER_MIN_CONTACTS = {2: 2, 3: 4}
+RATTLER_MIN_CONTACTS = {2: 2, 3: 2}
 """Default contacts (among non-rattlers) that a particle needs not to be a rattler, by dimension."""
 
 

@@ -55,7 +55,7 @@ def test_a_3d_run_reports_its_analyses_as_a_2d_run(run3d) -> None:
     coordination = summary["analyses"]["coordination3d"]
     # the sweep asked for, and the contact tolerance d_min / 40 (d_min = 3)
     assert coordination["tol_sweep"] == pytest.approx([0.05, 0.075, 0.2], rel=1e-12)
-    assert coordination["rattler_min_contacts"] == 4
+    assert coordination["rattler_min_contacts"] == 2
     assert summary["analyses"]["density3d"]["phi_domain"] == pytest.approx(summary["phi_domain"])
     files = run3d.analysis
     data = json.loads(files.results.read_text(encoding="utf-8"))

@@ -39,16 +39,18 @@ def test_the_centre_of_a_cube_lattice_has_the_known_z_at_every_tolerance(lattice
     assert r["n_per_mineral"] == {"pyroxene": 0, "glass": 1}
 
 
-def test_rattlers_need_four_contacts_in_3d(lattice) -> None:
-    # at tol 0.02 only the x faces touch: chains of three cubes, all rattlers with 4 (d + 1)
+def test_rattlers_need_two_contacts_in_3d_and_four_when_frictionless(lattice) -> None:
+    # at tol 0.02 only the x faces touch: chains of three cubes; with 2 (the default,
+    # frictional) the chains' ends go first, and then their middles: none is left
     chains = _coordination(lattice, 0.02, [0.02]).results()
-    assert chains["rattler_min_contacts"] == 4
+    assert chains["rattler_min_contacts"] == 2
     assert chains["rattlers"] == 27 and chains["z_mechanical"] is None
-    # with 2 the chains' ends go first, and then their middles: still none is left
-    assert _coordination(lattice, 0.02, [0.02], rattler_min_contacts=2).results()["rattlers"] == 27
-    # at 0.04 the x and y faces and the xy edges touch: each layer is a 3 x 3 king's graph,
-    # whose corners have 3 contacts; removing them takes the rest, round after round
-    layers = _coordination(lattice, 0.04, [0.04]).results()
+    # at 0.04 the x and y faces and the xy edges touch: each layer is a 3 x 3 king's graph
+    # (corners 3 contacts, sides 5, centre 8): two contacts hold every cube
+    frictional = _coordination(lattice, 0.04, [0.04]).results()
+    assert frictional["rattlers"] == 0 and frictional["z_mechanical"] == pytest.approx(40 / 9)
+    # with 4 (d + 1, frictionless) the corners go, and then the rest, round after round
+    layers = _coordination(lattice, 0.04, [0.04], rattler_min_contacts=4).results()
     assert layers["rattlers"] == 27 and layers["rattler_rounds"] == 3
     # with 3 every cube stays: 20 contacts in each layer of 9
     held = _coordination(lattice, 0.04, [0.04], rattler_min_contacts=3).results()
