@@ -55,8 +55,8 @@ at its centre, with the identity quaternion and the moments ``m d² / 10``.
   masses stay volume × ``density`` of the scene's unit. The log entries
   ``regopack/length_scale`` (the unit in the scene's unit: multiply a length
   of the file by it) and ``regopack/length_unit_m`` (the unit in metres)
-  say which. A 2D frame is written in the scene's unit
-  (``regopack/length_scale`` = 1).
+  say which. A 2D frame is written in the scene's unit and has no
+  ``regopack/length_scale``.
 
 ``gsd`` is an optional dependency (``pip install gsd``, or ``pip install '.[gsd]'``
 in regopack's source folder).
@@ -540,7 +540,8 @@ class GsdExporter(Exporter[AnyPacking]):
         frame.log["regopack/origin"] = np.concatenate([origin, np.zeros(3 - dim)])
         frame.log["regopack/density"] = np.array([density])
         frame.log["regopack/length_unit_m"] = np.array([METRES[length_unit(packing)] * scale])
-        frame.log["regopack/length_scale"] = np.array([scale])
+        if dim == 3:  # a 2D frame is in the scene's unit
+            frame.log["regopack/length_scale"] = np.array([scale])
         frame.log["regopack/periodic"] = np.array([int(periodic)], dtype=np.uint8)
         _write_frame(path, frame, hoomd)
         return path

@@ -416,7 +416,9 @@ def test_the_length_unit_is_logged_in_metres(walled, registry, tmp_path):
     for unit, metres in (("µm", 1e-6), ("mm", 1e-3)):
         p = replace(walled, scene={**walled.scene, "length_unit": unit})
         path = export_packing(p, "gsd", tmp_path / f"{metres}.gsd", registry=registry)
-        assert read(path).log["regopack/length_unit_m"][0] == metres
+        frame = read(path)
+        assert frame.log["regopack/length_unit_m"][0] == metres
+        assert "regopack/length_scale" not in frame.log  # 2D: the scene's unit
 
 
 # ---------------------------------------------------------------------------
