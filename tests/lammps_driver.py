@@ -4,7 +4,8 @@
 script's setup, then ``CHUNKS`` (comma-separated step counts) runs, and writes
 the atom count, whether positions, velocities and forces stayed finite, the
 positions before and after, the kinetic energy after each chunk, the time step
-and the core vertices at the end. A LAMMPS crash fails only the test that ran it.
+and the core vertices at the end (none for granular spheres), and each
+atom's radius (0 for a body). A LAMMPS crash fails only the test that ran it.
 """
 
 from __future__ import annotations
@@ -34,8 +35,10 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
     lmp = lammps.lammps(cmdargs=args)
     os.chdir(Path(script).parent)
     lmp.file(Path(script).name)
-    lmp.command("compute verts all body/local id 1 2")
-    lmp.command("dump verts all local 100000000 /dev/null c_verts[1]")
+    bodies = lmp.extract_atom("body") is not None  # granular spheres have no body
+    if bodies:
+        lmp.command("compute verts all body/local id 1 2 3")
+        lmp.command("dump verts all local 100000000 /dev/null c_verts[1]")
 
     def per_atom(name: str) -> np.ndarray:
         order = np.argsort(lmp.numpy.extract_atom("id"))
@@ -48,7 +51,11 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
         ke.append(lmp.get_thermo("ke"))
         finite = finite and all(np.isfinite(per_atom(n)).all() for n in ("x", "v", "f"))
     lmp.command("run 0 post no")
-    verts = np.array(lmp.numpy.extract_compute("verts", LMP_STYLE_LOCAL, LMP_TYPE_ARRAY))
+    verts = (
+        np.array(lmp.numpy.extract_compute("verts", LMP_STYLE_LOCAL, LMP_TYPE_ARRAY))
+        if bodies
+        else np.zeros((0, 4))
+    )
     report = {
         "natoms": int(lmp.get_natoms()),
         "finite": bool(finite),
@@ -57,6 +64,7 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
         "ke": ke,
         "dt": lmp.get_thermo("dt"),
         "vertices": verts.tolist(),
+        "radius": per_atom("radius").tolist() if not bodies else [],
     }
     lmp.close()
     Path(out).write_text(json.dumps(report))

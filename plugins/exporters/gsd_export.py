@@ -4,9 +4,10 @@ The frame holds the placed particles in draw order. Every particle has its
 own random shape, so every particle has its own **type**, named
 ``<mineral>_<index>`` (``index``: the particle's draw index in the packing
 file), whose entry of ``particles/type_shapes`` is its shape in the GSD
-shape schema. Lengths are in the scene's ``length_unit`` (GSD has no unit
-field); the log entry ``regopack/length_unit_m`` holds that unit in metres
-(``1e-6`` for micrometres).
+shape schema. Lengths are in the scene's ``length_unit`` in 2D and in a
+power of ten of it in 3D (see *Lengths of a 3D frame* below; GSD has no unit
+field); the log entry ``regopack/length_unit_m`` holds the file's unit in
+metres (``1e-6`` for micrometres).
 
 **2D packings.** A shape is ``{"type": "Polygon", "rounding_radius": rho,
 "vertices": [...]}``, the form in which HOOMD-blue writes the shapes of its
@@ -43,12 +44,27 @@ shapes of its ``ConvexPolyhedron`` integrator.
 A sphere (of a scene of spheres) is ``{"type": "Sphere", "diameter": d}``
 at its centre, with the identity quaternion and the moments ``m d² / 10``.
 
+- **Lengths of a 3D frame**: in a power of ten of the scene's unit,
+  :func:`shape_scale`, the smallest at least as large as the largest
+  particle's circumradius (100 µm for grains up to 200 µm across): every
+  shape is then at most 1 across its centre. OVITO builds the mesh of a
+  ``ConvexPolyhedron`` type as a convex hull whose tolerances do not follow
+  the shape's size, and draws a shape some units across (or thousands, or
+  thousandths) as a sphere. Positions, the box, ``regopack/origin``,
+  diameters and shapes are in that unit and moments in mass × its square;
+  masses stay volume × ``density`` of the scene's unit. The log entries
+  ``regopack/length_scale`` (the unit in the scene's unit: multiply a length
+  of the file by it) and ``regopack/length_unit_m`` (the unit in metres)
+  say which. A 2D frame is written in the scene's unit and has no
+  ``regopack/length_scale``.
+
 ``gsd`` is an optional dependency (``pip install gsd``, or ``pip install '.[gsd]'``
 in regopack's source folder).
 """
 
 from __future__ import annotations
 
+import math
 import os
 import tempfile
 from collections.abc import Iterable
@@ -81,6 +97,7 @@ __all__ = [
     "principal_frame",
     "quaternion_from_matrix",
     "shape_moments",
+    "shape_scale",
 ]
 
 FloatArray = NDArray[np.float64]
@@ -386,6 +403,47 @@ def _solids(packing: Packing[Box], origin: FloatArray, density: float) -> _Parti
     return out
 
 
+def shape_scale(diameter: FloatArray) -> float:
+    """Return the power of ten that the lengths of a 3D frame are written in (packing lengths).
+
+    The smallest power of ten at least the largest circumradius, so that
+    every shape is at most 1 across its centre: OVITO builds the mesh of a
+    ``ConvexPolyhedron`` with a convex hull whose tolerances are absolute, and
+    it draws as a sphere a shape that lies well outside about 0.01 to 2.
+
+    Examples
+    --------
+    >>> [shape_scale(np.array(d)) for d in ([4.0, 25.8], [0.004], [])]
+    [100.0, 0.01, 1.0]
+    """
+    if not diameter.size or not np.max(diameter) > 0:
+        return 1.0
+    return float(10.0 ** math.ceil(math.log10(0.5 * float(np.max(diameter)))))
+
+
+def _rescaled(p: _Particles, scale: float) -> _Particles:
+    """Return ``p`` with lengths divided by ``scale`` (masses kept, moments in the new length)."""
+    if scale == 1.0:
+        return p
+    shapes = [
+        {**sh, "diameter": sh["diameter"] / scale}
+        if sh["type"] == "Sphere"
+        else {**sh, "vertices": (np.asarray(sh["vertices"]) / scale).tolist()}
+        for sh in p.shapes
+    ]
+    return _Particles(
+        p.index,
+        p.types,
+        shapes,
+        p.position / scale,
+        p.orientation,
+        p.mass,
+        p.inertia / scale**2,
+        p.diameter / scale,
+        p.logs,
+    )
+
+
 def _wrap(
     pos: FloatArray, length: FloatArray, box: NDArray[np.float32], periodic: bool
 ) -> tuple[NDArray[np.float32], NDArray[np.int32]]:
@@ -443,9 +501,13 @@ class GsdExporter(Exporter[AnyPacking]):
         lo, hi = np.asarray(packing.domain.bounds(), dtype=np.float64).reshape(dim, 2).T
         length = hi - lo
         origin = 0.5 * (lo + hi)
+        scale = 1.0
         if packing.dimension == 3:
             periodic = bool(packing.domain.periodic)
             particles = _solids(packing, origin, density)
+            scale = shape_scale(particles.diameter)
+            particles = _rescaled(particles, scale)
+            length, origin = length / scale, origin / scale
         else:
             periodic = isinstance(packing.domain, PeriodicRectangle)
             particles = _polygons(packing, origin, density)
@@ -477,7 +539,9 @@ class GsdExporter(Exporter[AnyPacking]):
         frame.log.update(particles.logs)
         frame.log["regopack/origin"] = np.concatenate([origin, np.zeros(3 - dim)])
         frame.log["regopack/density"] = np.array([density])
-        frame.log["regopack/length_unit_m"] = np.array([METRES[length_unit(packing)]])
+        frame.log["regopack/length_unit_m"] = np.array([METRES[length_unit(packing)] * scale])
+        if dim == 3:  # a 2D frame is in the scene's unit
+            frame.log["regopack/length_scale"] = np.array([scale])
         frame.log["regopack/periodic"] = np.array([int(periodic)], dtype=np.uint8)
         _write_frame(path, frame, hoomd)
         return path

@@ -29,8 +29,29 @@ Beside ``<stem>.data`` the exporter writes ``<stem>.in``, an input script that
 reads it with the pair style ``body/rounded/polygon`` (``polyhedron``), walls
 (``wall/body/polygon``, ``wall/body/polyhedron``) or periodic boundaries from
 the domain, gravity along -y (-z in 3D), a time step from the lightest body's
-mass and the stiffness, and its parameters as LAMMPS ``index`` variables
-(``lmp -in packing.in -var k_n 1e5`` changes one).
+mass and the stiffness (t_c / 50 of a collision of the two lightest bodies
+in 2D, t_c / 20 in 3D: see :data:`STEPS_PER_COLLISION`), and its parameters
+as LAMMPS ``index`` variables (``lmp -in packing.in -var k_n 1e5`` changes
+one).
+
+**Packings of spheres** (3D packings whose particles are all spheres) are
+written, by default, as LAMMPS *granular* spheres rather than bodies:
+``atom_style sphere`` (each atom's diameter and density), ``pair_style
+granular`` with Hertz contacts from Young's modulus and Poisson's ratio
+(``hertz/material``), a restitution coefficient (``damping
+coeff_restitution``), Mindlin friction (``tangential mindlin``),
+``fix nve/sphere``, ``fix wall/gran`` walls of the same contact model on the
+six faces of a walled box (periodic boundaries for a periodic box), and a
+time step of :data:`RAYLEIGH_FRACTION` of the Rayleigh time of the sphere
+whose Rayleigh time is shortest. LAMMPS' granular pair styles are made for
+spheres, with Hertz-Mindlin contacts and history; a one-vertex body has the
+linear spring and dashpot of the body pair style only. ``spheres = "bodies"``
+writes them as one-vertex bodies, as before; a packing that mixes spheres
+and polyhedra is always written as bodies.
+
+**Densities.** Every grain has ``density``, or the density of its mineral in
+``mineral_density`` (by mineral name); in the bodies it sets the mass and
+the inertia, for granular spheres the atoms' density column.
 """
 
 from __future__ import annotations
@@ -38,7 +59,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -63,12 +84,15 @@ from regopack.registry.interfaces import Exporter
 from regopack.registry.plugin_types import misplaced_field
 
 __all__ = [
+    "GranularSpheres",
     "LammpsBodies",
     "LammpsConfig",
     "LammpsExporter",
     "PolyhedronBodies",
     "body_faces",
+    "granular_spheres",
     "lammps_bodies",
+    "mineral_densities",
     "polyhedron_bodies",
     "reference_body",
     "script_path",
@@ -76,8 +100,11 @@ __all__ = [
 
 FloatArray = NDArray[np.float64]
 
-STEPS_PER_COLLISION = 50
-"""Time steps per duration of a collision of the two lightest bodies (sets the time step)."""
+STEPS_PER_COLLISION = {2: 50, 3: 20}
+"""Time steps per duration of a collision of the two lightest bodies (sets the time step), by
+dimension. Settling polyhedra lost a body at 2.5 steps a collision and held at 5 (measured),
+so 20 keeps a margin of 4 to 8; a step of a polyhedron costs hundreds of times one of a
+polygon, whose scripts keep 50."""
 
 MAX_BODY_LINES = 32
 """Lines LAMMPS' read_data accepts for one body (its MAXBODY); long cores share lines."""
@@ -87,6 +114,9 @@ LINE_CHARS = 200
 as many lines as it likes, but a long line is cut (and its numbers with it) and
 a body may span at most :data:`MAX_BODY_LINES` lines, so the values are packed
 into lines of this length."""
+
+RAYLEIGH_FRACTION = 0.2
+"""Time step of granular spheres as a fraction of the Rayleigh time of the smallest sphere."""
 
 ROUNDING_TRIES = 8
 """Times the rounding radius of one body is halved when its eroded core vanishes."""
@@ -115,6 +145,28 @@ def default_length_scale(packing: Any, units: str) -> float:
     """
     target = UNIT_STYLE_LENGTH[units]
     return 1.0 if target is None else conversion(length_unit(packing), target)
+
+
+def mineral_densities(packing: Any, config: LammpsConfig) -> FloatArray:
+    """Density of the grains of each mineral: ``density`` or its entry of ``mineral_density``.
+
+    Raises
+    ------
+    ConfigError
+        One line, when ``mineral_density`` names a mineral the packing does not have.
+    """
+    names = [str(n) for n in packing.mineral_names]
+    unknown = sorted(set(config.mineral_density) - set(names))
+    if unknown:
+        raise ConfigError(
+            f"exporter 'lammps': mineral_density names {unknown[0]!r}, not a mineral of this "
+            f"packing (its minerals: {', '.join(names)})"
+        )
+    n = max(1, len(names), int(packing.mineral.max(initial=-1)) + 1)
+    out = np.full(n, config.density)
+    for k, name in enumerate(names):
+        out[k] = config.mineral_density.get(name, config.density)
+    return out
 
 
 class LammpsConfig(BaseModel):
@@ -203,6 +255,39 @@ class LammpsConfig(BaseModel):
         ),
     )
     steps: int = Field(10000, ge=0, description="Time steps the input script runs.")
+    mineral_density: dict[str, Annotated[float, Field(gt=0, allow_inf_nan=False)]] = Field(
+        default_factory=dict,
+        description=(
+            "Density of the grains of a mineral, by mineral name; minerals not listed get "
+            "`density`."
+        ),
+    )
+    spheres: Literal["granular", "bodies"] = Field(
+        "granular",
+        json_schema_extra={"dimensions": [3]},
+        description=(
+            "3D packings of spheres only: 'granular' writes granular spheres (atom_style "
+            "sphere, pair_style granular, Hertz contacts); 'bodies' writes one-vertex "
+            "rounded/polyhedron bodies, as for polyhedra."
+        ),
+    )
+    youngs_modulus: float = Field(
+        1.0e5,
+        gt=0,
+        allow_inf_nan=False,
+        json_schema_extra={"dimensions": [3]},
+        description=(
+            "Granular spheres only: Young's modulus E of the Hertz contacts (pressure; 1e5 = "
+            "0.1 GPa in units micro, a softened grain: 7e7 is basalt's 70 GPa)."
+        ),
+    )
+    poisson_ratio: float = Field(
+        0.25,
+        gt=0,
+        lt=0.5,
+        json_schema_extra={"dimensions": [3]},
+        description="Granular spheres only: Poisson's ratio of the grains.",
+    )
 
 
 @dataclass(frozen=True)
@@ -508,6 +593,14 @@ def _check_finite(given: str, checks: list[tuple[str, FloatArray]]) -> None:
             )
 
 
+def _density_note(cfg: LammpsConfig) -> str:
+    """Name the density in a comment of the data file: one number, or one per mineral."""
+    if not cfg.mineral_density:
+        return _num(cfg.density)
+    listed = ", ".join(f"{k} {_num(v)}" for k, v in sorted(cfg.mineral_density.items()))
+    return f"density ({listed}; others {_num(cfg.density)})"
+
+
 def _walls_2d(packing: Packing, s: float) -> tuple[str, list[str], str]:
     """Boundary, wall lines and note of a 2D domain (in LAMMPS lengths)."""
     d = packing.domain
@@ -529,12 +622,13 @@ def _polygon_layout(packing: Packing, cfg: LammpsConfig, s: float) -> _Layout:
     bodies = lammps_bodies(packing, cfg)
     thickness = length_scale(packing) if cfg.thickness is None else cfg.thickness
     boundary, walls, note = _walls_2d(packing, s)
-    lamina = cfg.density * thickness * s  # mass per unit area (LAMMPS lengths)
+    density = mineral_densities(packing, cfg)[packing.mineral[bodies.index]]
+    lamina = density * thickness * s  # mass per unit area (LAMMPS lengths)
     with np.errstate(over="ignore", under="ignore"):  # checked below
         mass = bodies.area * (np.float64(s) ** 2 * lamina)
-        per_area = np.float64(lamina) * np.float64(s) ** 4
-        inertia = np.stack([bodies.ixx, bodies.iyy, bodies.ixy], axis=1) * per_area
-    given = f"length_scale = {s}, thickness = {thickness}, density = {cfg.density}"
+        per_area = lamina * np.float64(s) ** 4
+        inertia = np.stack([bodies.ixx, bodies.iyy, bodies.ixy], axis=1) * per_area[:, None]
+    given = f"length_scale = {s}, thickness = {thickness}, density = {_density_note(cfg)}"
     _check_finite(given, [("mass", mass), ("moment of inertia", inertia[:, :2])])
     n = bodies.index.size
     counts = [c.shape[0] for c in bodies.core]
@@ -575,7 +669,7 @@ def _polygon_layout(packing: Packing, cfg: LammpsConfig, s: float) -> _Layout:
         d_min=float(2.0 * math.sqrt(bodies.area.min() / math.pi) * s) if n else 1.0,
         notes=(
             f"; the smallest body fills {_num(round(fill, 4))} of its particle",
-            f"area x {_num(thickness * s)} x {_num(cfg.density)}; {note}",
+            f"area x {_num(thickness * s)} x {_density_note(cfg)}; {note}",
         ),
         domain=[f"# Domain: {note}."],
     )
@@ -587,12 +681,13 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
     if misplaced is not None:
         raise ConfigError(f"exporter 'lammps': {misplaced[1]}")
     bodies = polyhedron_bodies(packing, cfg)
+    density = mineral_densities(packing, cfg)[packing.mineral[bodies.index]]
     with np.errstate(over="ignore", under="ignore"):  # checked below
-        mass = bodies.volume * (np.float64(s) ** 3 * cfg.density)
-        inertia = bodies.inertia * (np.float64(s) ** 5 * cfg.density)
+        mass = bodies.volume * (np.float64(s) ** 3 * density)
+        inertia = bodies.inertia * (np.float64(s) ** 5 * density)[:, None, None]
     diagonal = inertia[:, [0, 1, 2], [0, 1, 2]]
     _check_finite(
-        f"length_scale = {s}, density = {cfg.density}",
+        f"length_scale = {s}, density = {_density_note(cfg)}",
         [("mass", mass), ("moment of inertia", diagonal)],
     )
     # LAMMPS sizes every body's storage from Nmax as if it had Nmax vertices,
@@ -642,11 +737,71 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
         d_min=float(2.0 * packing.radius[bodies.index].min() * s) if n else 1.0,
         notes=(
             "",
-            f"particle volume x {_num(cfg.density)}; "
+            f"particle volume x {_density_note(cfg)}; "
             + ("periodic in x, y and z" if box.periodic else "walls on all six sides"),
         ),
         domain=[],
     )
+
+
+@dataclass(frozen=True)
+class GranularSpheres:
+    """The spheres of a packing of spheres as LAMMPS' ``atom_style sphere`` reads them.
+
+    ``index`` is the draw index of each sphere's particle; ``radius``,
+    ``position`` (its centre, wrapped into a periodic box), ``lo``, ``hi`` and
+    ``d_min`` are in LAMMPS lengths (``scale`` × the packing's), ``density``
+    is each sphere's mineral's and ``r_rho`` the least ``radius × √density``,
+    which sets the Rayleigh time step.
+    """
+
+    index: NDArray[np.int64]
+    radius: FloatArray
+    position: FloatArray
+    density: FloatArray
+    scale: float
+    lo: FloatArray
+    hi: FloatArray
+    periodic: bool
+
+    @property
+    def d_min(self) -> float:
+        """Smallest diameter."""
+        return float(2.0 * self.radius.min()) if self.radius.size else 1.0
+
+    @property
+    def r_rho(self) -> float:
+        """Least ``radius × √density``: the sphere of shortest Rayleigh time."""
+        return float(np.min(self.radius * np.sqrt(self.density))) if self.radius.size else 1.0
+
+
+def granular_spheres(
+    packing: Packing[Box], config: LammpsConfig | None = None, scale: float = 1.0
+) -> GranularSpheres | None:
+    """Return the placed spheres of a 3D packing of spheres alone; ``None`` if any is no sphere.
+
+    Raises
+    ------
+    ExportError
+        One line, when ``scale`` and the densities give a mass that is no
+        positive finite number.
+    """
+    cfg = config or LammpsConfig()
+    solids = placed_solids(packing, "lammps", spheres=True)
+    if not solids or any(p.rounding <= 0 or len(p.loops) for p in solids):
+        return None
+    index = np.array([p.index for p in solids], dtype=np.int64)
+    box = packing.domain
+    lo, hi = box.bounds().reshape(3, 2).T * scale
+    position = np.array([p.centre for p in solids], dtype=np.float64) * scale
+    if box.periodic:
+        position = lo + np.mod(position - lo, hi - lo)
+    radius = np.array([p.rounding for p in solids], dtype=np.float64) * scale
+    density = mineral_densities(packing, cfg)[packing.mineral[index]]
+    with np.errstate(over="ignore", under="ignore"):  # checked below
+        mass = 4.0 / 3.0 * np.pi * radius**3 * density
+    _check_finite(f"length_scale = {scale}, density = {_density_note(cfg)}", [("mass", mass)])
+    return GranularSpheres(index, radius, position, density, scale, lo, hi, box.periodic)
 
 
 class LammpsExporter(Exporter[AnyPacking]):
@@ -690,6 +845,12 @@ class LammpsExporter(Exporter[AnyPacking]):
             if cfg.length_scale is None
             else cfg.length_scale
         )
+        if packing.dimension == 3 and cfg.spheres == "granular":
+            spheres = granular_spheres(packing, cfg, s)
+            if spheres is not None:
+                _write_text(path, self._sphere_data(packing, spheres))
+                _write_text(script_path(path), self._sphere_script(packing, path, spheres))
+                return path
         if packing.dimension == 3:
             layout = _polyhedron_layout(packing, cfg, s)
         else:
@@ -744,6 +905,91 @@ class LammpsExporter(Exporter[AnyPacking]):
         ]
         return "\n".join(lines) + "\n"
 
+    def _sphere_data(self, packing: AnyPacking, g: GranularSpheres) -> str:
+        n = g.index.size
+        n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
+        atoms = [
+            f"{k + 1} {int(packing.mineral[j]) + 1} {_num(2.0 * g.radius[k])} "
+            f"{_num(g.density[k])} " + " ".join(_num(x) for x in g.position[k])
+            for k, j in enumerate(g.index.tolist())
+        ]
+        lines = [
+            f"LAMMPS data file from regopack {packing.version}: scene "
+            f"{packing.scene.get('name', '?')}, seed {packing.seed}, atom_style sphere",
+            "",
+            "# granular spheres: id, atom type (mineral index + 1), diameter, density, centre",
+            f"# lengths = packing lengths ({length_unit(packing)}) x {_num(g.scale)}; "
+            f"mass = sphere volume x {_density_note(self.config)}",
+            "",
+            f"{n} atoms",
+            f"{n_types} atom types",
+            "",
+            *(f"{_num(g.lo[i])} {_num(g.hi[i])} {a}lo {a}hi" for i, a in enumerate("xyz")),
+            "",
+            "Atoms # sphere",
+            "",
+            *atoms,
+        ]
+        return "\n".join(lines) + "\n"
+
+    def _sphere_script(self, packing: AnyPacking, path: Path, g: GranularSpheres) -> str:
+        cfg = self.config
+        model = (
+            "hertz/material ${E} ${e_n} ${nu} tangential mindlin NULL 1.0 ${mu} "
+            "damping coeff_restitution"
+        )
+        walls = [
+            f"fix          wall{i + 1} all wall/gran granular {model} "
+            f"{axis}plane {_num(g.lo[i])} {_num(g.hi[i])}"
+            for i, axis in enumerate("xyz")
+        ]
+        return "\n".join(
+            [
+                f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
+                f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+                f"# Run it in this folder: lmp -in {script_path(path).name}",
+                "# Change a parameter with -var, e.g. -var E 7e7 -var steps 50000.",
+                "# Domain: "
+                + ("periodic in x, y and z." if g.periodic else "walls on all six sides."),
+                "",
+                f"variable steps index {cfg.steps}",
+                f"variable E     index {_num(cfg.youngs_modulus)}   # Young's modulus (pressure)",
+                f"variable nu    index {_num(cfg.poisson_ratio)}   # Poisson's ratio",
+                f"variable e_n   index {_num(cfg.restitution)}   # coefficient of restitution",
+                f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
+                f"variable g     index {_num(cfg.gravity)}   # gravity along -z (acceleration)",
+                f"variable r_rho equal {_num(g.r_rho)}   "
+                "# radius x sqrt(density) of the sphere of shortest Rayleigh time",
+                "variable G     equal v_E/(2*(1+v_nu))   # shear modulus",
+                f"variable dt    equal {RAYLEIGH_FRACTION}*PI*v_r_rho/sqrt(v_G)"
+                "/(0.1631*v_nu+0.8766)   # of its Rayleigh time",
+                f"variable skin  equal {_num(0.1 * g.d_min)}",
+                "",
+                f"units        {cfg.units}",
+                "dimension    3",
+                f"boundary     {'p p p' if g.periodic else 'f f f'}",
+                "atom_style   sphere",
+                "atom_modify  map array",
+                f"read_data    {path.name}",
+                "",
+                "pair_style   granular",
+                f"pair_coeff   * * {model}",
+                "comm_modify  vel yes",
+                "neighbor     ${skin} bin",
+                "neigh_modify every 1 delay 0 check yes",
+                "timestep     ${dt}",
+                "",
+                "fix          integrate all nve/sphere",
+                *([] if g.periodic else walls),
+                "fix          weight all gravity ${g} vector 0 0 -1",
+                "",
+                "thermo_style custom step atoms ke pe",
+                "thermo       1000",
+                "run          ${steps}",
+                "",
+            ]
+        )
+
     def _script(self, packing: AnyPacking, path: Path, layout: _Layout) -> str:
         cfg = self.config
         style = layout.style
@@ -770,7 +1016,8 @@ class LammpsExporter(Exporter[AnyPacking]):
                 "variable zeta  equal -ln(v_e_n)/sqrt(PI^2+ln(v_e_n)^2)",
                 "variable c_n   equal 2*v_zeta*sqrt(0.5*v_m_min*v_k_n)   # normal damping",
                 "variable c_t   equal 0.5*v_c_n   # tangential damping",
-                f"variable dt    equal PI*sqrt(0.5*v_m_min/v_k_n)/{STEPS_PER_COLLISION}",
+                "variable dt    equal PI*sqrt(0.5*v_m_min/v_k_n)/"
+                f"{STEPS_PER_COLLISION[style.dimension]}",
                 f"variable skin  equal {_num(0.1 * d_min)}",
                 f"variable cut   equal {_num(0.5 * r_min)}",
                 "",

@@ -183,7 +183,7 @@ def test_a_2d_parameter_for_a_3d_packing_is_one_line(packing3d_file, tmp_path, c
     lines = capsys.readouterr().err.splitlines()
     assert lines[-1] == (
         f"regopack: error: --set: exporter {fmt!r}: thickness = 2.0: has no meaning for a 3D "
-        "packing, only for 2D ones"
+        "packing, only for 2D ones; its 3D parameters: spheres, youngs_modulus, poisson_ratio"
     )
     said = [line.split(" is deprecated")[0] for line in lines[:-1]]
     assert said == ([] if fmt == "lammps" else ["regopack: warning: the export kind 'lammps3d'"])

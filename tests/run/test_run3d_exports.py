@@ -109,7 +109,8 @@ def test_a_2d_parameter_of_a_3d_scene_is_refused_before_packing(tmp_path) -> Non
             {**scene3d(15.0), "outputs": {"exports": exports}}, out=tmp_path / "run"
         )
     assert str(err.value).endswith(
-        "outputs.exports.0.thickness = 2.0: has no meaning for a 3D packing, only for 2D ones"
+        "outputs.exports.0.thickness = 2.0: has no meaning for a 3D packing, only for 2D ones; "
+        "its 3D parameters: spheres, youngs_modulus, poisson_ratio"
     )
     assert not (tmp_path / "run").exists()
 

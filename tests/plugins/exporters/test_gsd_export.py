@@ -416,7 +416,9 @@ def test_the_length_unit_is_logged_in_metres(walled, registry, tmp_path):
     for unit, metres in (("µm", 1e-6), ("mm", 1e-3)):
         p = replace(walled, scene={**walled.scene, "length_unit": unit})
         path = export_packing(p, "gsd", tmp_path / f"{metres}.gsd", registry=registry)
-        assert read(path).log["regopack/length_unit_m"][0] == metres
+        frame = read(path)
+        assert frame.log["regopack/length_unit_m"][0] == metres
+        assert "regopack/length_scale" not in frame.log  # 2D: the scene's unit
 
 
 # ---------------------------------------------------------------------------
@@ -447,8 +449,9 @@ def test_box_types_and_one_shape_per_particle(polyhedra, solid_frame) -> None:
     idx = np.flatnonzero(polyhedra.placed)
     lo, hi = polyhedra.domain.bounds().reshape(3, 2).T
     assert solid_frame.configuration.dimensions == 3
-    np.testing.assert_allclose(solid_frame.configuration.box, [*(hi - lo), 0, 0, 0])
-    np.testing.assert_allclose(solid_frame.log["regopack/origin"], 0.5 * (lo + hi))
+    scale = solid_frame.log["regopack/length_scale"][0]
+    np.testing.assert_allclose(solid_frame.configuration.box * scale, [*(hi - lo), 0, 0, 0])
+    np.testing.assert_allclose(solid_frame.log["regopack/origin"] * scale, 0.5 * (lo + hi))
     assert solid_frame.particles.N == idx.size
     np.testing.assert_array_equal(solid_frame.particles.typeid, np.arange(idx.size))
     names = [f"{polyhedra.mineral_names[polyhedra.mineral[j]]}_{j}" for j in idx]
@@ -468,24 +471,24 @@ def test_shapes_rotated_by_the_quaternion_give_each_particle(polyhedra, solid_fr
         q = np.asarray(solid_frame.particles.orientation[i], dtype=np.float64)
         assert np.linalg.norm(q) == pytest.approx(1.0, abs=1e-6)
         world = rotate(q / np.linalg.norm(q), body) + solid_frame.particles.position[i] + origin
-        want = polyhedra.world_vertices(j)
+        want = polyhedra.world_vertices(j) / solid_frame.log["regopack/length_scale"][0]
         np.testing.assert_allclose(world, want, atol=2e-6 * polyhedra.domain.size[0])
 
 
 def test_positions_are_centroids_and_masses_volumes(polyhedra, solid_frame) -> None:
     idx = np.flatnonzero(polyhedra.placed)
     origin = np.asarray(solid_frame.log["regopack/origin"])
+    scale = solid_frame.log["regopack/length_scale"][0]
     solids = polyhedra.solids
     for i, j in enumerate(idx.tolist()):
         local, loops = solids.solid(j)
         volume, c, moments = mass_properties(local, loops)
-        pos = solid_frame.particles.position[i] + origin
+        pos = (solid_frame.particles.position[i] + origin) * scale
         np.testing.assert_allclose(pos, polyhedra.centre[j] + c, atol=1e-5)
         assert solid_frame.particles.mass[i] == pytest.approx(3.1 * volume, rel=1e-6)
         inertia = 3.1 * (np.trace(moments) * np.eye(3) - moments)
-        assert np.sort(solid_frame.particles.moment_inertia[i]) == pytest.approx(
-            np.linalg.eigvalsh(inertia), rel=1e-5
-        )
+        moment = solid_frame.particles.moment_inertia[i] * scale**2  # mass x (file length)²
+        assert np.sort(moment) == pytest.approx(np.linalg.eigvalsh(inertia), rel=1e-5)
 
 
 def test_the_body_frame_is_the_principal_frame(polyhedra, solid_frame) -> None:
@@ -517,7 +520,50 @@ def test_spheres_are_sphere_shapes_at_their_centres(tmp_path) -> None:
         frame = traj[0]
     idx = np.flatnonzero(spheres.placed)
     origin = np.asarray(frame.log["regopack/origin"])
-    want = [{"type": "Sphere", "diameter": 2 * spheres.radius[j]} for j in idx]
-    assert list(frame.particles.type_shapes) == want
-    np.testing.assert_allclose(frame.particles.position + origin, spheres.centre[idx], atol=1e-5)
+    scale = frame.log["regopack/length_scale"][0]
+    assert scale == 10.0  # spheres up to 12 µm across
+    shapes = frame.particles.type_shapes
+    assert {s["type"] for s in shapes} == {"Sphere"} and all(len(s) == 2 for s in shapes)
+    got = np.array([s["diameter"] for s in shapes])
+    np.testing.assert_allclose(got * scale, 2 * spheres.radius[idx], rtol=1e-14)
+    np.testing.assert_allclose(
+        (frame.particles.position + origin) * scale, spheres.centre[idx], atol=1e-5
+    )
     np.testing.assert_array_equal(frame.particles.orientation, [[1, 0, 0, 0]] * idx.size)
+
+
+OVITO_MESHES = """
+import json, sys
+from ovito.io import import_file
+from ovito.vis import ParticlesVis
+
+types = import_file(sys.argv[1]).compute().particles.particle_types.types
+mesh = ParticlesVis.Shape.Mesh
+print(json.dumps({t.name: t.shape == mesh and t.mesh is not None for t in types}))
+"""
+"""Print, for each particle type of a GSD file that OVITO reads, whether it got a mesh."""
+
+
+def test_ovito_draws_every_polyhedron_as_its_mesh(polyhedra, solid_frame, tmp_path) -> None:
+    """OVITO builds each type's mesh as a convex hull, which fails (and draws a sphere)
+    for shapes some units across: the frame's lengths keep every shape below 1."""
+    import importlib.util
+    import json
+    import subprocess
+    import sys
+
+    if importlib.util.find_spec("ovito") is None:
+        pytest.skip("the ovito package is not installed")
+    scale = solid_frame.log["regopack/length_scale"][0]
+    radius = [
+        np.linalg.norm(s["vertices"], axis=1).max() for s in solid_frame.particles.type_shapes
+    ]
+    assert scale == 10.0 and 0.1 < max(radius) <= 1.0  # grains up to 12 µm across
+    assert solid_frame.log["regopack/length_unit_m"][0] == pytest.approx(1e-5)
+    path = GsdExporter().export(polyhedra, tmp_path / "p.gsd")
+    done = subprocess.run(
+        [sys.executable, "-c", OVITO_MESHES, str(path)], capture_output=True, text=True, timeout=120
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    meshes = json.loads(done.stdout.strip().splitlines()[-1])
+    assert len(meshes) == polyhedra.n_placed and all(meshes.values()), done.stderr[-2000:]

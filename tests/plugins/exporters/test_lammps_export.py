@@ -528,6 +528,23 @@ def test_lammps_holds_polyhedra_still_without_external_force(hexahedra, tmp_path
     assert len(report["ke"]) == 2 and max(report["ke"]) < 1e-12 * hexahedra.n_placed
 
 
+def test_lammps_settles_polyhedra_under_gravity_inside_their_walls(hexahedra, tmp_path) -> None:
+    """400 steps of the script's time step under gravity: the bottom contacts take the
+    weight of the packing, and no body is lost or leaves the box (at 2.5 steps a collision
+    bodies pass the walls by more than a micrometre within 400 steps)."""
+    path = LammpsExporter().export(hexahedra, tmp_path / "p.data")
+    assert "PI*sqrt(0.5*v_m_min/v_k_n)/20" in script_path(path).read_text()
+    bodies = polyhedron_bodies(hexahedra)
+    report = simulate(path, [400], g=0.05)
+    assert report["natoms"] == hexahedra.n_placed and report["finite"]
+    assert np.median((report["x0"] - report["x"])[:, 2]) > 0.01  # gravity acts
+    verts = report["vertices"]
+    r = bodies.rounding[verts[:, 0].astype(int) - 1][:, None]
+    lo, hi = hexahedra.domain.bounds().reshape(3, 2).T
+    slack = 0.5 * r  # the contact springs let a body into a wall by a little
+    assert np.all(verts[:, 1:4] - r > lo - slack) and np.all(verts[:, 1:4] + r < hi + slack)
+
+
 def test_lammps_runs_many_faced_bodies(polyhedra, tmp_path) -> None:
     """Bodies of up to 24 vertices and 40 faces: LAMMPS sizes their storage from Nmax."""
     path = LammpsExporter().export(polyhedra, tmp_path / "p.data")
@@ -538,8 +555,10 @@ def test_lammps_runs_many_faced_bodies(polyhedra, tmp_path) -> None:
 
 
 def test_lammps_holds_a_packing_of_spheres_still(tmp_path) -> None:
+    """Spheres as one-vertex bodies, when asked for."""
     spheres = spheres3d()
-    path = LammpsExporter().export(spheres, tmp_path / "p.data")
+    path = LammpsExporter(LammpsConfig(spheres="bodies")).export(spheres, tmp_path / "p.data")
+    assert "atom_style   body rounded/polyhedron 1 1" in script_path(path).read_text()
     report = simulate(path, [2000])
     d_min = 2.0 * float(spheres.radius[spheres.placed].min())
     assert report["natoms"] == spheres.n_placed > 15 and report["finite"]
@@ -552,6 +571,124 @@ def test_the_thickness_of_a_lamina_is_refused_for_polyhedra(polyhedra, tmp_path)
     with pytest.raises(ConfigError) as err:
         LammpsExporter(LammpsConfig(thickness=2.0)).export(polyhedra, tmp_path / "p.data")
     assert str(err.value) == (
-        "exporter 'lammps': thickness = 2.0: has no meaning for a 3D packing, only for 2D ones"
+        "exporter 'lammps': thickness = 2.0: has no meaning for a 3D packing, only for 2D ones; "
+        "its 3D parameters: spheres, youngs_modulus, poisson_ratio"
     )
     assert not list(tmp_path.iterdir())
+
+
+# ---------------------------------------------------------------------------
+# 3D packings of spheres: granular spheres
+
+
+@pytest.fixture(scope="module")
+def sphere_packing() -> Packing:
+    """224 spheres of three minerals in a walled 30 µm box."""
+    return spheres3d(30.0)
+
+
+def sphere_atoms(text: str) -> np.ndarray:
+    """``id type diameter density x y z`` of each atom of a data file of spheres."""
+    rows = text.split("\nAtoms # sphere\n", 1)[1].split()
+    return np.array(rows, dtype=float).reshape(-1, 7)
+
+
+def test_a_packing_of_spheres_is_written_as_granular_spheres(sphere_packing, tmp_path) -> None:
+    cfg = LammpsConfig(mineral_density={"pyroxene": 3.4, "glass": 2.4})
+    path = LammpsExporter(cfg).export(sphere_packing, tmp_path / "p.data")
+    script = script_path(path).read_text()
+    assert "atom_style   sphere" in script and "body" not in script
+    assert "pair_style   granular" in script and "fix          integrate all nve/sphere" in script
+    assert script.count("wall/gran granular hertz/material ${E} ${e_n} ${nu}") == 3
+    atoms = sphere_atoms(path.read_text())
+    idx = np.flatnonzero(sphere_packing.placed)
+    assert atoms.shape == (idx.size, 7) and idx.size == sphere_packing.n_placed
+    np.testing.assert_array_equal(atoms[:, 0], np.arange(1, idx.size + 1))
+    np.testing.assert_array_equal(atoms[:, 1], sphere_packing.mineral[idx] + 1)
+    np.testing.assert_allclose(atoms[:, 2], 2 * sphere_packing.solids.rounding_radius[idx])
+    np.testing.assert_allclose(atoms[:, 4:], sphere_packing.centre[idx])
+    by_name = dict(zip(sphere_packing.mineral_names, (3.1, 3.4, 2.4), strict=True))
+    names = np.array(sphere_packing.mineral_names)[sphere_packing.mineral[idx]]
+    np.testing.assert_array_equal(atoms[:, 3], [by_name[n] for n in names])
+    # the time step: a fifth of the Rayleigh time of the sphere whose time is shortest
+    e, nu = cfg.youngs_modulus, cfg.poisson_ratio
+    rayleigh = (
+        np.pi * atoms[:, 2] / 2 * np.sqrt(atoms[:, 3] * 2 * (1 + nu) / e) / (0.1631 * nu + 0.8766)
+    )
+    lmp = _lammps()
+    cwd = os.getcwd()
+    try:
+        os.chdir(tmp_path)
+        lmp.commands_string("\n".join(s for s in script.splitlines() if not s.startswith("run")))
+        dt = lmp.get_thermo("dt")
+    finally:
+        os.chdir(cwd)
+        lmp.close()
+    assert dt == pytest.approx(0.2 * rayleigh.min(), rel=1e-12)
+    assert atoms[np.argmin(rayleigh), 3] != 3.1  # the densities decided it
+
+
+def test_spheres_in_a_periodic_box_mixed_packings_and_bodies_on_demand(
+    sphere_packing, tmp_path
+) -> None:
+    from regopack.geometry.domain import PeriodicBox
+
+    periodic = dataclasses.replace(
+        sphere_packing, domain=PeriodicBox(*sphere_packing.domain.bounds())
+    )
+    path = LammpsExporter().export(periodic, tmp_path / "p.data")
+    script = script_path(path).read_text()
+    assert "boundary     p p p" in script and "wall/gran" not in script
+    assert "atom_style   sphere" in script
+    lo, hi = periodic.domain.bounds().reshape(3, 2).T
+    xyz = sphere_atoms(path.read_text())[:, 4:]
+    assert np.all(xyz >= lo) and np.all(xyz < hi)
+    # a sphere among polyhedra, or spheres="bodies": one-vertex bodies
+    LammpsExporter().export(cube_and_sphere(), tmp_path / "m.data")
+    assert "rounded/polyhedron" in script_path(tmp_path / "m.data").read_text()
+    LammpsExporter(LammpsConfig(spheres="bodies")).export(sphere_packing, tmp_path / "b.data")
+    assert "rounded/polyhedron 1 1" in script_path(tmp_path / "b.data").read_text()
+
+
+def test_densities_per_mineral(polyhedra, tmp_path) -> None:
+    from regopack.base.errors import ConfigError
+
+    cfg = LammpsConfig(mineral_density={"glass": 2.0})
+    path = LammpsExporter(cfg).export(polyhedra, tmp_path / "p.data")
+    text = path.read_text()
+    assert "density (glass 2.0; others 3.1)" in text
+    rows = text.split("\nAtoms # body\n", 1)[1].split("\nBodies\n", 1)[0].split()
+    atoms = np.array(rows, dtype=float).reshape(-1, 7)
+    volume = polyhedra.solids.volume[np.flatnonzero(polyhedra.placed)]
+    glass = np.array(polyhedra.mineral_names)[polyhedra.mineral[polyhedra.placed]] == "glass"
+    assert glass.any() and (~glass).any()
+    np.testing.assert_allclose(atoms[:, 3], np.where(glass, 2.0, 3.1) * volume, rtol=1e-12)
+    with pytest.raises(ConfigError, match="mineral_density names 'olivine', not a mineral"):
+        LammpsExporter(LammpsConfig(mineral_density={"olivine": 3.3})).export(
+            polyhedra, tmp_path / "q.data"
+        )
+
+
+def test_lammps_holds_granular_spheres_still(sphere_packing, tmp_path) -> None:
+    """1 000 steps without gravity: no sphere lost, nothing NaN, nothing moves."""
+    path = LammpsExporter().export(sphere_packing, tmp_path / "p.data")
+    report = simulate(path, [500, 500])
+    d_min = 2.0 * float(sphere_packing.solids.rounding_radius[sphere_packing.placed].min())
+    assert report["natoms"] == sphere_packing.n_placed > 200 and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+    assert max(report["ke"]) < 1e-20 * sphere_packing.n_placed
+
+
+def test_granular_spheres_fall_and_stay_inside_their_walls(sphere_packing, tmp_path) -> None:
+    path = LammpsExporter().export(sphere_packing, tmp_path / "p.data")
+    g = 0.05
+    report = simulate(path, [100, 2900], g=g)
+    assert report["natoms"] == sphere_packing.n_placed and report["finite"]
+    drop = (report["x0"] - report["x"])[:, 2]
+    assert np.median(drop) > 0.5  # gravity acts ...
+    assert np.median(drop) < 0.5 * g * (3000 * report["dt"]) ** 2  # ... and the floor holds
+    r = np.array(report["radius"])[:, None]
+    lo, hi = sphere_packing.domain.bounds().reshape(3, 2).T
+    slack = 0.05 * r.min()  # the Hertz contacts let a sphere into a wall by a little
+    assert np.all(report["x"] - r > lo - slack) and np.all(report["x"] + r < hi + slack)
+    assert (report["x"][:, 2] - r[:, 0]).min() < lo[2] + 0.001  # it reached the floor
