@@ -396,12 +396,19 @@ def main() -> None:
           "overlapping pairs | worst overlap | outside |")  # fmt: skip
     print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for name, seconds, m in rows:
-        z = "–" if m["z_interior"] is None else f"{m['z_interior']:.2f}"
-        print(
-            f"| {name} | {m['placed']:,} | {seconds:.3g} | {m['phi_interior']:.3f} | "
-            f"{m['phi_domain']:.3f} | {z} | {m['overlaps']:,} | "
-            f"{m['worst_overlap']:.2g} | {m['outside']} |"
+        phi_in, phi, z = (
+            _cell(m[k], f)
+            for k, f in (("phi_interior", ".3f"), ("phi_domain", ".3f"), ("z_interior", ".2f"))
         )
+        print(
+            f"| {name} | {m['placed']:,} | {seconds:.3g} | {phi_in} | {phi} | {z} | "
+            f"{m['overlaps']:,} | {m['worst_overlap']:.2g} | {m['outside']} |"
+        )
+
+
+def _cell(value: float | None, spec: str) -> str:
+    """``value`` formatted by ``spec``, or a dash when there is none (an empty interior)."""
+    return "–" if value is None else format(value, spec)
 
 
 if __name__ == "__main__":

@@ -94,6 +94,7 @@ def test_peers_yade_runs_makecloud_in_yade_when_installed() -> None:
     import numpy as np
 
     from regopack.geometry.domain import Box
+    from regopack.verification.polyhedra import verify_spheres
 
     if shutil.which("yade") is None:
         pytest.skip("YADE is not installed (Debian package yade)")
@@ -106,8 +107,7 @@ def test_peers_yade_runs_makecloud_in_yade_when_installed() -> None:
     assert row["psd_scaling"] == 1.0 and row["radii"].size > 10
     assert row["radii"].min() >= radii.min() * (1 - 1e-9)  # back in µm
     assert row["radii"].max() <= radii.max() * (1 + 1e-9)
-    m = peers.measure(peers.sphere_packing(row["centres"], row["radii"], box))  # type: ignore[attr-defined]
-    assert m["overlaps"] == 0 and m["outside"] == 0
+    assert verify_spheres(row["centres"], row["radii"], [0, 0, 0], [30, 30, 30]).ok
 
 
 def test_peers_yade_refuses_a_box_too_small_in_one_line() -> None:
@@ -122,3 +122,13 @@ def test_peers_yade_refuses_a_box_too_small_in_one_line() -> None:
     last = run.stderr.strip().splitlines()[-1]
     assert last.startswith("peers_yade.py: error:") and "--side" in last, last
     assert "population" not in run.stdout  # nothing packed
+
+
+def test_peers_yade_says_why_yade_is_skipped(monkeypatch: pytest.MonkeyPatch) -> None:
+    import shutil
+
+    peers = _peers()
+    monkeypatch.setattr(shutil, "which", lambda name: None)
+    out, reason, wall = peers.run_yade({}, 1.0)  # type: ignore[attr-defined]
+    assert out is None and wall == 0.0 and "no `yade` on PATH" in reason
+    assert peers._cell(None, ".3f") == "–" and peers._cell(0.12345, ".3f") == "0.123"  # type: ignore[attr-defined]
