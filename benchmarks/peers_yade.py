@@ -316,10 +316,13 @@ def run_yade(cfg: dict[str, Any], timeout: float) -> tuple[dict[str, Any] | None
         script.write_text(YADE_SCRIPT)
         cfg_path.write_text(json.dumps(cfg))
         t = time.perf_counter()
-        done = subprocess.run(
-            [yade, "-n", "-x", str(script), str(cfg_path), str(out_path)],
-            capture_output=True, text=True, timeout=timeout,
-        )  # fmt: skip
+        try:
+            done = subprocess.run(
+                [yade, "-n", "-x", str(script), str(cfg_path), str(out_path)],
+                capture_output=True, text=True, timeout=timeout,
+            )  # fmt: skip
+        except subprocess.TimeoutExpired:
+            return None, f"yade took longer than --timeout {timeout:g} s", timeout
         wall = time.perf_counter() - t
         if done.returncode or not out_path.exists():
             tail = (done.stderr or done.stdout).strip().splitlines()[-3:]

@@ -132,3 +132,17 @@ def test_peers_yade_says_why_yade_is_skipped(monkeypatch: pytest.MonkeyPatch) ->
     out, reason, wall = peers.run_yade({}, 1.0)  # type: ignore[attr-defined]
     assert out is None and wall == 0.0 and "no `yade` on PATH" in reason
     assert peers._cell(None, ".3f") == "–" and peers._cell(0.12345, ".3f") == "0.123"  # type: ignore[attr-defined]
+
+
+def test_peers_yade_says_when_yade_runs_out_of_time(monkeypatch: pytest.MonkeyPatch) -> None:
+    import shutil
+
+    peers = _peers()
+
+    def late(cmd: list[str], **kw: object) -> None:
+        raise subprocess.TimeoutExpired(cmd, 2.5)
+
+    monkeypatch.setattr(shutil, "which", lambda name: "/usr/bin/yade")
+    monkeypatch.setattr(subprocess, "run", late)
+    out, reason, wall = peers.run_yade({"methods": []}, 2.5)  # type: ignore[attr-defined]
+    assert out is None and wall == 2.5 and reason == "yade took longer than --timeout 2.5 s"
