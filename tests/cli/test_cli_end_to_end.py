@@ -98,7 +98,7 @@ def test_run_table1_3d_end_to_end_in_a_smaller_box(tmp_path, capsys):
 def test_run_dem3d_end_to_end_in_a_smaller_box(tmp_path, capsys):
     """The 3D DEM scene packs by the sweep, verified, and its layers are measured."""
     out = tmp_path / "out"
-    sides = [f"domain.{k}=36" for k in ("width", "height", "depth")] + ["size.d_max=8"]
+    sides = [f"domain.{k}=24" for k in ("width", "height", "depth")] + ["size.d_max=6"]
     args = ["run", "dem3d", *[a for s in sides for a in ("--set", s)], "--out", str(out)]
     assert main([*args, "--quiet"]) == 0
     summary = json.loads((out / "summary.json").read_text())

@@ -295,6 +295,7 @@ def _top_band_against_bulk(
     return float(scale * top / bulk), float(scale * top_fine / bulk_fine)
 
 
+@pytest.mark.slow  # 12 s; the other lag tests run the paced closing in small boxes
 def test_the_paced_closing_keeps_the_lags_so_the_top_band_gets_its_fine_particles() -> None:
     """Four strips that reach the top at different times: the fine particles waiting for
     each are let go as its closing zone's top rises on, and the stream's own go on

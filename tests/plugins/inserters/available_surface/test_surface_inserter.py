@@ -287,7 +287,16 @@ def column_scene(strip: float, closing: str = "tail", kind: str = "box", **chang
     return data
 
 
-@pytest.mark.parametrize("closing", ["tail", "paced", "prompt"])
+@pytest.mark.parametrize(
+    "closing",
+    # 7 s each: the paced and prompt closings' columns run in the default suite through
+    # the screening-tree and periodic tests
+    [
+        "tail",
+        pytest.param("paced", marks=pytest.mark.slow),
+        pytest.param("prompt", marks=pytest.mark.slow),
+    ],
+)
 def test_columns_pack_touching_overlap_free_and_contained(closing: str) -> None:
     packing = _pack(column_scene(8.0, closing))
     stats = packing.stats
