@@ -203,26 +203,7 @@ def scene(side: float, seed: int, order: str, closing: str = "tail") -> dict[str
 
 def sphere_packing(centres: ArrayLike, radii: ArrayLike, domain: Box) -> Packing:
     """A regopack packing of the spheres ``radii`` at ``centres`` in ``domain``, all placed."""
-    c = np.asarray(centres, dtype=float).reshape(-1, 3)
-    r = np.asarray(radii, dtype=float).reshape(-1)
-    n = r.size
-    return Packing(
-        radius=r.copy(),
-        mineral=np.zeros(n, dtype=np.int64),
-        mineral_names=("sphere",),
-        vertices=np.zeros((n, 3)),
-        offsets=np.arange(n + 1, dtype=np.int64),
-        face_vertices=np.zeros(0, dtype=np.int64),
-        face_vertex_offsets=np.zeros(1, dtype=np.int64),
-        face_offsets=np.zeros(n + 1, dtype=np.int64),
-        normals=np.zeros((0, 3)),
-        support=np.zeros(0),
-        rotation=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
-        rounding=r.copy(),
-        centre=c,
-        insertion_index=np.arange(n, dtype=np.int64),
-        domain=domain,
-    )
+    return Packing.of_spheres(centres, radii, domain)
 
 
 def measure(packing: Packing) -> dict[str, Any]:

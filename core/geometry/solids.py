@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -95,6 +95,31 @@ class SolidBatch:
 
     def __len__(self) -> int:
         return int(self.offsets.shape[0] - 1)
+
+    @classmethod
+    def of_spheres(cls, radius: ArrayLike) -> SolidBatch:
+        """Spheres of radii ``radius``: each the vertex ``(0, 0, 0)`` rounded by its radius.
+
+        Raises
+        ------
+        ValueError
+            When ``radius`` is not one-dimensional.
+        """
+        r = np.array(radius, dtype=np.float64)
+        if r.ndim != 1:
+            raise ValueError(f"radius must be one-dimensional, not of shape {r.shape}")
+        n = int(r.shape[0])
+        return cls(
+            vertices=np.zeros((n, 3)),
+            offsets=np.arange(n + 1, dtype=np.int64),
+            face_vertices=np.zeros(0, dtype=np.int64),
+            face_vertex_offsets=np.zeros(1, dtype=np.int64),
+            face_offsets=np.zeros(n + 1, dtype=np.int64),
+            normals=np.zeros((0, 3)),
+            support=np.zeros(0),
+            rotation=np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (n, 1)),
+            rounding=r,
+        )
 
     def solid(self, j: int) -> tuple[FloatArray, list[IntArray]]:
         """Vertices of particle ``j`` and its faces as loops of local vertex indices."""

@@ -17,7 +17,7 @@ import re
 import stat as _stat
 import tempfile
 import zipfile
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import MISSING, dataclass, field, fields
 from pathlib import Path
@@ -725,6 +725,68 @@ class Packing(PlacedParticles, Generic[D]):
             orientation=np.asarray(shapes2.orientation, dtype=np.float64),
             centre=np.asarray(result.centre, dtype=np.float64).reshape(n, 2),
             **common,
+        )
+
+    @classmethod
+    def of_spheres(
+        cls,
+        centre: ArrayLike,
+        radius: ArrayLike,
+        domain: Box,
+        mineral: ArrayLike | None = None,
+        mineral_names: Sequence[str] = ("sphere",),
+    ) -> Packing[Box]:
+        """Return a packing of spheres, every one placed, in the order given.
+
+        For spheres that come from elsewhere (a DEM code's final state, a
+        lattice, another generator), so that every analysis, the oracle and
+        the exporters take them as they take a regopack packing.
+
+        Parameters
+        ----------
+        centre
+            ``(n, 3)`` centres.
+        radius
+            ``(n,)`` radii.
+        domain
+            The box.
+        mineral
+            ``(n,)`` indices into ``mineral_names``; all 0 by default.
+        mineral_names
+            The phases' names.
+
+        Examples
+        --------
+        >>> from regopack.geometry.domain import Box
+        >>> box = Box(0.0, 4.0, 0.0, 2.0, 0.0, 2.0)
+        >>> p = Packing.of_spheres([[1, 1, 1], [3, 1, 1]], [1, 1], box)
+        >>> p.n_placed, p.dimension
+        (2, 3)
+        """
+        c = np.array(centre, dtype=np.float64).reshape(-1, 3)
+        n = c.shape[0]
+        shapes = SolidBatch.of_spheres(np.array(radius, dtype=np.float64).reshape(n))
+        kinds = (
+            np.zeros(n, dtype=np.int64)
+            if mineral is None
+            else np.array(mineral, dtype=np.int64).reshape(n)
+        )
+        return Packing(
+            radius=np.array(shapes.rounding),
+            mineral=kinds,
+            mineral_names=tuple(mineral_names),
+            vertices=shapes.vertices,
+            offsets=shapes.offsets,
+            face_vertices=shapes.face_vertices,
+            face_vertex_offsets=shapes.face_vertex_offsets,
+            face_offsets=shapes.face_offsets,
+            normals=shapes.normals,
+            support=shapes.support,
+            rotation=shapes.rotation,
+            rounding=shapes.rounding,
+            centre=c,
+            insertion_index=np.arange(n, dtype=np.int64),
+            domain=domain,
         )
 
     def _plane_only(self, what: str, instead: str) -> None:

@@ -44,21 +44,7 @@ class Sphere(SolidGenerator):
 
     def generate(self, radius: FloatArray, rng: np.random.Generator) -> SolidBatch:
         """One sphere per radius: the vertex ``(0, 0, 0)`` rounded by the radius."""
-        r = np.asarray(radius, dtype=np.float64)
-        if r.ndim != 1:
-            raise ValueError(f"radius must be one-dimensional, not of shape {r.shape}")
-        n = int(r.shape[0])
-        return SolidBatch(
-            vertices=np.zeros((n, 3)),
-            offsets=np.arange(n + 1, dtype=np.int64),
-            face_vertices=np.zeros(0, dtype=np.int64),
-            face_vertex_offsets=np.zeros(1, dtype=np.int64),
-            face_offsets=np.zeros(n + 1, dtype=np.int64),
-            normals=np.zeros((0, 3)),
-            support=np.zeros(0),
-            rotation=np.tile(np.array([1.0, 0.0, 0.0, 0.0]), (n, 1)),
-            rounding=r.copy(),
-        )
+        return SolidBatch.of_spheres(radius)
 
 
 @hookimpl

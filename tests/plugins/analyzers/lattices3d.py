@@ -63,20 +63,5 @@ def sphere_lattice(shape: tuple[int, int, int], radius: float, gap: float) -> Pa
     idx = np.array([(a, b, c) for a in range(nx) for b in range(ny) for c in range(nz)], float)
     centre = 0.5 + radius + idx * step
     hi = centre.max(axis=0) + radius + 0.5
-    return Packing(
-        radius=np.full(n, radius),
-        mineral=np.zeros(n, dtype=np.int64),
-        mineral_names=("glass",),
-        vertices=np.zeros((n, 3)),
-        offsets=np.arange(n + 1, dtype=np.int64),
-        face_vertices=np.zeros(0, dtype=np.int64),
-        face_vertex_offsets=np.zeros(1, dtype=np.int64),
-        face_offsets=np.zeros(n + 1, dtype=np.int64),
-        normals=np.zeros((0, 3)),
-        support=np.zeros(0),
-        rotation=np.tile([1.0, 0.0, 0.0, 0.0], (n, 1)),
-        rounding=np.full(n, radius),
-        centre=centre,
-        insertion_index=np.arange(n, dtype=np.int64),
-        domain=Box(0.0, float(hi[0]), 0.0, float(hi[1]), 0.0, float(hi[2])),
-    )
+    box = Box(0.0, float(hi[0]), 0.0, float(hi[1]), 0.0, float(hi[2]))
+    return Packing.of_spheres(centre, np.full(n, radius), box, mineral_names=("glass",))
