@@ -316,6 +316,20 @@ def _no_rows(columns: int) -> Callable[[], FloatArray]:
     return lambda: np.zeros((0, columns), dtype=np.float64)
 
 
+def _solid_fields(shapes: SolidBatch) -> dict[str, Any]:
+    """Return the fields of a 3D packing that its solids give (all but their rounding)."""
+    return {
+        "vertices": shapes.vertices,
+        "offsets": shapes.offsets,
+        "face_vertices": shapes.face_vertices,
+        "face_vertex_offsets": shapes.face_vertex_offsets,
+        "face_offsets": shapes.face_offsets,
+        "normals": shapes.normals,
+        "support": shapes.support,
+        "rotation": shapes.rotation,
+    }
+
+
 @dataclass(frozen=True, eq=False)
 class Packing(PlacedParticles, Generic[D]):
     """All drawn particles of a run, in draw order, and where each was placed.
@@ -707,14 +721,7 @@ class Packing(PlacedParticles, Generic[D]):
             if not isinstance(shapes, SolidBatch):
                 raise PackingError("a 3D packing needs a population of solids")
             return cls(
-                vertices=shapes.vertices,
-                offsets=shapes.offsets,
-                face_vertices=shapes.face_vertices,
-                face_vertex_offsets=shapes.face_vertex_offsets,
-                face_offsets=shapes.face_offsets,
-                normals=shapes.normals,
-                support=shapes.support,
-                rotation=shapes.rotation,
+                **_solid_fields(shapes),
                 centre=np.asarray(result.centre, dtype=np.float64).reshape(n, 3),
                 **common,
             )
@@ -775,14 +782,7 @@ class Packing(PlacedParticles, Generic[D]):
             radius=np.array(shapes.rounding),
             mineral=kinds,
             mineral_names=tuple(mineral_names),
-            vertices=shapes.vertices,
-            offsets=shapes.offsets,
-            face_vertices=shapes.face_vertices,
-            face_vertex_offsets=shapes.face_vertex_offsets,
-            face_offsets=shapes.face_offsets,
-            normals=shapes.normals,
-            support=shapes.support,
-            rotation=shapes.rotation,
+            **_solid_fields(shapes),
             rounding=shapes.rounding,
             centre=c,
             insertion_index=np.arange(n, dtype=np.int64),
