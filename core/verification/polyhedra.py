@@ -437,6 +437,9 @@ class Report3D:
         Whether the box was periodic.
     rel_tol
         Tolerance used.
+    kind
+        What was checked, as the report names it: ``"convex polyhedra"`` or
+        ``"spheres"``.
     """
 
     ok: bool
@@ -450,6 +453,7 @@ class Report3D:
     worst_outside: tuple[int, float] | None
     periodic: bool
     rel_tol: float
+    kind: str = "convex polyhedra"
 
     def __bool__(self) -> bool:
         """Return whether the packing is valid."""
@@ -459,7 +463,7 @@ class Report3D:
         box = "a periodic box" if self.periodic else "a walled box"
         status = "valid" if self.ok else "INVALID"
         parts = [
-            f"Checked {self.n_checked} convex polyhedra in {box} "
+            f"Checked {self.n_checked} {self.kind} in {box} "
             f"({self.n_candidate_pairs} pairs with overlapping bounding boxes, "
             f"rel_tol {self.rel_tol:g}): {status}."
         ]
@@ -928,4 +932,5 @@ def verify_spheres(
         worst_outside=worst_out,
         periodic=periodic,
         rel_tol=rel_tol,
+        kind="spheres",
     )

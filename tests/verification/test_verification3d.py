@@ -21,6 +21,7 @@ from regopack.verification.polyhedra import (
     overlap_volume,
     separating_gap,
     verify_polyhedra,
+    verify_spheres,
 )
 
 CUBE = np.array([(x, y, z) for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
@@ -675,3 +676,10 @@ def test_the_sphere_oracle_finds_overlaps_images_and_walls() -> None:
     img = verify_spheres([[0.5, 5, 5], [9.6, 5, 5]], [0.5, 0.5], lo, hi, periodic=True)
     assert not img.ok and img.overlapping_pairs == ((0, 1),)
     assert verify_spheres([[0.5, 5, 5], [9.5, 5, 5]], [0.5, 0.5], lo, hi, periodic=True).ok
+
+
+def test_a_report_names_what_it_checked() -> None:
+    spheres = verify_spheres([[0, 0, 0], [2, 0, 0]], [1, 1], [-1, -1, -1], [3, 1, 1])
+    assert str(spheres).startswith("Checked 2 spheres in a walled box")
+    solids = verify_polyhedra([CUBE, CUBE + [1.0, 0, 0]], None, [0, 0, 0], [2, 1, 1])
+    assert str(solids).startswith("Checked 2 convex polyhedra in a walled box")
