@@ -118,6 +118,7 @@ def test_docstring_examples():
     assert doctest.testmod(figure_style).failed == 0
 
 
+@pytest.mark.slow  # 7 s; every default figure is drawn in the default run (below)
 def test_write_analysis_draws_what_figures_for_draws(packing, analyzers, tmp_path):
     from regopack.plugins.analyzers.figure_specs import STEMS as OF_ANALYZER
 

@@ -171,6 +171,7 @@ def test_a_graded_pattern_has_a_negative_density_trend():
     assert abs(res["mean_d_slope_per_100"]) < 1e-9  # every square has the same size
 
 
+@pytest.mark.slow  # 7 s; the layers' errors and slopes are checked in the default run too
 def test_uniform_points_have_no_height_trend_and_a_gradient_has_one():
     """The layers (2D height profile): flat for a uniform pattern, falling for a graded one."""
     rng = np.random.default_rng(5)
