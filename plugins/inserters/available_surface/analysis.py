@@ -43,7 +43,12 @@ from regopack.plugins.inserters.available_surface.free_surface import (
 )
 from regopack.plugins.inserters.available_surface.halfspaces import halfspaces_of_arcs
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
-from regopack.plugins.inserters.available_surface.spheres import EPS, free_arcs, sample_free
+from regopack.plugins.inserters.available_surface.spheres import (
+    EPS,
+    drop_contained,
+    free_arcs,
+    sample_free,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -440,6 +445,7 @@ def analyse_sphere(
             caps[nc, ax] = side
             caps[nc, 3] = h
             nc += 1
+    nc = drop_contained(caps, nc, big_r, tau)
     arcs = free_arcs(caps, nc, big_r, tau)
     if nc > 0 and arcs.shape[0] == 0:
         return EMPTY

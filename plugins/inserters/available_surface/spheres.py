@@ -162,6 +162,55 @@ def _arc_has_width(
     return False
 
 
+CONTAINED_MARGIN = 1e-9
+"""Margin of :func:`drop_contained`'s cosine test (a cap must lie clearly inside another)."""
+
+
+@numba.njit(cache=True)
+def drop_contained(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> int:
+    """Drop every cap that lies inside another one; return how many are left.
+
+    Cap ``q`` (closed, ``n_q · u >= h_q``, angular radius ``theta_q``) lies
+    inside the open cap ``p`` as :func:`free_arcs` and :func:`is_free` read
+    it (``n_p · u > h_p + tau``, ``theta_p``) when the angle between their
+    axes is less than ``theta_p - theta_q``, tested by cosines with a margin
+    of :data:`CONTAINED_MARGIN`. Such a cap bounds no free arc, covers no
+    point of any circle that ``p`` leaves free, and frees no point ``p``
+    covers: the free arcs, :func:`is_free` and so the drawn centre are the
+    same without it. The rows left keep their order, at the front of
+    ``caps``. In a dense packing about 40 % of the caps are dropped.
+    """
+    cos_q = np.empty(ncaps)
+    sin_q = np.empty(ncaps)
+    cos_p = np.empty(ncaps)
+    sin_p = np.empty(ncaps)
+    for j in range(ncaps):
+        c = caps[j, 3] / big_r
+        cos_q[j] = c
+        sin_q[j] = math.sqrt(max(1.0 - c * c, 0.0))
+        c = (caps[j, 3] + tau) / big_r
+        cos_p[j] = c
+        sin_p[j] = math.sqrt(max(1.0 - c * c, 0.0))
+    keep = np.ones(ncaps, dtype=np.bool_)
+    for q in range(ncaps):
+        for p in range(ncaps):
+            # theta_p > theta_q, and cos(angle) > cos(theta_p - theta_q); a dropped p
+            # lies inside a larger cap that holds q too
+            if p == q or not cos_p[p] < cos_q[q]:
+                continue
+            dot = caps[p, 0] * caps[q, 0] + caps[p, 1] * caps[q, 1] + caps[p, 2] * caps[q, 2]
+            if dot > cos_p[p] * cos_q[q] + sin_p[p] * sin_q[q] + CONTAINED_MARGIN:
+                keep[q] = False
+                break
+    m = 0
+    for q in range(ncaps):
+        if keep[q]:
+            for c in range(4):
+                caps[m, c] = caps[q, c]
+            m += 1
+    return m
+
+
 @numba.njit(cache=True)
 def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatArray:
     """Free arcs of every cap's boundary circle.

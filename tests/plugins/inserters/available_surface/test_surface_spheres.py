@@ -239,3 +239,69 @@ def test_the_rest_of_a_sphere_beyond_a_small_cap_is_sampled_whole() -> None:
     assert np.all(z <= 0.9 + 1e-12)
     counts, _ = np.histogram(z, bins=10, range=(-1.0, 0.9))
     assert counts.min() > 120  # uniform heights on [-1, 0.9]: about 200 a bin
+
+
+def _arc_geometry(caps: np.ndarray, arcs: np.ndarray) -> np.ndarray:
+    """Free arcs as (cap row, start, end), independent of the caps' positions."""
+    return np.c_[caps[arcs[:, 0].astype(np.int64)], arcs[:, 1:]]
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_dropping_contained_caps_changes_no_arc_and_no_drawn_centre(seed: int) -> None:
+    # a crowd of caps of every size, many inside others, some nearly touching them from
+    # inside: the free arcs, the free points and the centres drawn are the same without
+    # the contained ones
+    from regopack.plugins.inserters.available_surface.spheres import drop_contained
+
+    rng = np.random.default_rng(seed)
+    big_r, tau = 2.5, 2.5e-12
+    n = int(rng.integers(4, 40))
+    axes = rng.normal(size=(n, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    h = big_r * rng.uniform(-0.2, 0.98, n)
+    for q in range(n // 3):  # caps just inside a larger one, within a few tolerances
+        p = int(rng.integers(n))
+        tp, tq = math.acos(h[p] / big_r), 0.5 * math.acos(h[p] / big_r)
+        tilt = tp - tq - float(rng.choice([1e-3, 1e-8, 1e-10]))
+        side = np.cross(axes[p], rng.normal(size=3))
+        side /= np.linalg.norm(side)
+        axes[q] = math.cos(tilt) * axes[p] + math.sin(tilt) * side
+        h[q] = big_r * math.cos(tq)
+    caps = np.c_[axes, h]
+    kept = caps.copy()
+    m = drop_contained(kept, n, big_r, tau)
+    kept = kept[:m]
+    assert m <= n
+    before = free_arcs(caps, n, big_r, tau)
+    after = free_arcs(kept, m, big_r, tau)
+    assert np.array_equal(_arc_geometry(caps, before), _arc_geometry(kept, after))
+    u = rng.normal(size=(2000, 3))
+    u *= big_r / np.linalg.norm(u, axis=1)[:, None]
+    for x in u:
+        assert is_free(caps, n, *x, tau) == is_free(kept, m, *x, tau)
+    if before.shape[0]:
+        a = sample_free(caps, n, before, big_r, tau, np.random.default_rng(seed))
+        b = sample_free(kept, m, after, big_r, tau, np.random.default_rng(seed))
+        assert a == b
+
+
+def test_a_cap_inside_another_is_dropped_and_one_that_reaches_out_is_kept() -> None:
+    from regopack.plugins.inserters.available_surface.spheres import drop_contained
+
+    tau = 1e-12
+    big = (0.0, 0.0, 1.0, math.cos(0.8))  # angular radius 0.8 about +z
+    rows = [
+        big,
+        (math.sin(0.3), 0.0, math.cos(0.3), math.cos(0.4)),  # 0.3 + 0.4 < 0.8: inside
+        (math.sin(0.5), 0.0, math.cos(0.5), math.cos(0.4)),  # 0.5 + 0.4 > 0.8: crosses
+        (math.sin(0.4), 0.0, math.cos(0.4), math.cos(0.4 - 1e-13)),  # touches from inside
+        (0.0, 0.0, -1.0, 0.5),  # elsewhere
+        big,  # the same cap twice: neither holds the other strictly
+    ]
+    caps = np.array(rows)
+    m = drop_contained(caps, len(rows), 1.0, tau)
+    assert m == 5
+    assert np.array_equal(caps[:m], np.array([rows[0], rows[2], rows[3], rows[4], rows[5]]))
+    # a larger cap does not hold a smaller one whose axis it does not reach
+    far = np.array([(0.0, 0.0, 1.0, 0.0), (0.0, 0.0, -1.0, 0.9)])
+    assert drop_contained(far, 2, 1.0, tau) == 2
