@@ -286,6 +286,77 @@ def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatAr
     return out[:nout]
 
 
+COVER_MARGIN = 1e-9
+"""Depth, in fractions of ``R``, by which :func:`covers` wants every point covered."""
+
+
+@numba.njit(cache=True)
+def covers(caps: FloatArray, ncaps: int, big_r: float, depth: float) -> bool:
+    """Whether the caps, each shrunk by ``depth``, cover the whole sphere.
+
+    Strict: any gap, however thin, counts as free (no :data:`THIN` or
+    :data:`WIDTH` rule), and covers that only share an end leave that point
+    free. Every point then lies deeper than ``depth`` inside some cap. The
+    shrunk caps ``{u : n · u > h + depth}`` cover the sphere exactly when each
+    one's boundary circle lies in the union of the others (see the module
+    docstring); the test stops at the first gap.
+    """
+    if ncaps == 0:
+        return False
+    lo = np.empty(2 * ncaps + 2)
+    hi = np.empty(2 * ncaps + 2)
+    two_pi = 2.0 * math.pi
+    for j in range(ncaps):
+        if caps[j, 3] + depth <= -big_r:
+            return True  # one cap holds the whole sphere
+    for j in range(ncaps):
+        nx, ny, nz = caps[j, 0], caps[j, 1], caps[j, 2]
+        hj = caps[j, 3] + depth
+        if hj >= big_r:
+            continue  # shrunk to nothing: no circle
+        rc = math.sqrt(big_r * big_r - hj * hj)
+        e1x, e1y, e1z, e2x, e2y, e2z = _frame(nx, ny, nz)
+        m = 0
+        whole = False
+        for q in range(ncaps):
+            if q == j:
+                continue
+            mx, my, mz = caps[q, 0], caps[q, 1], caps[q, 2]
+            a = rc * (mx * e1x + my * e1y + mz * e1z)
+            b = rc * (mx * e2x + my * e2y + mz * e2z)
+            c = caps[q, 3] + depth - hj * (mx * nx + my * ny + mz * nz)
+            amp = math.sqrt(a * a + b * b)
+            if c >= amp:
+                continue
+            if c < -amp:
+                whole = True
+                break
+            mid = math.atan2(b, a)
+            half = math.acos(c / amp)
+            start = (mid - half) % two_pi
+            lo[m] = start
+            hi[m] = start + 2.0 * half
+            m += 1
+            if start + 2.0 * half > two_pi:  # its copy one turn lower covers the start
+                lo[m] = start - two_pi
+                hi[m] = start + 2.0 * half - two_pi
+                m += 1
+        if whole:
+            continue
+        if m == 0:
+            return False
+        order = np.argsort(lo[:m])
+        first = lo[order[0]]
+        reach = hi[order[0]]
+        for idx in range(1, m):
+            if lo[order[idx]] >= reach:
+                return False  # a gap (open covers: a shared end is not covered)
+            reach = max(reach, hi[order[idx]])
+        if not reach > first + two_pi:
+            return False
+    return True
+
+
 @numba.njit(cache=True)
 def is_free(caps: FloatArray, ncaps: int, ux: float, uy: float, uz: float, tau: float) -> bool:
     """Whether ``u`` lies in no open cap (within ``tau``)."""
