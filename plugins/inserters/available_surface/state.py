@@ -27,6 +27,7 @@ from regopack.plugins.inserters.available_surface.analysis import (
     grid_add,
     grid_for,
     scan,
+    scan_spheres,
     solids_of,
 )
 from regopack.plugins.inserters.available_surface.envelope import EdgeArcs, edge_arcs
@@ -223,6 +224,14 @@ class SurfaceState:
         placed = Placed(self.order, self.centre, self.circum, self.reach_max)
         bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
         begin = 0
+        if self.spheres:
+            code, at = scan_spheres(
+                cands, begin, i, screen, self.grid, placed, bounds, self.eta, self._xi, rng,
+                self._out, self._no_tree if tree is None else tree,
+            )  # fmt: skip
+            if code == FOUND:
+                return int(cands[at]), self._out.copy()
+            return -1, None
         while True:
             code, at = scan(
                 cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
