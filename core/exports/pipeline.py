@@ -112,6 +112,41 @@ def check_exporter_dimension(
     raise ConfigError(f"{source}: {text}" if source else text)
 
 
+def _without_prefix(
+    params: dict[str, Any], kind: str, fields: Mapping[str, Any], source: str | None
+) -> dict[str, Any]:
+    """Accept the exporter's own name as a prefix: ``lammps.steps`` for ``steps``.
+
+    As ``analyze --set psd.tolerance=...`` takes an analyzer's parameters;
+    the prefixed key may also come nested (``{"lammps": {"steps": 5}}``).
+
+    Raises
+    ------
+    ConfigError
+        When a parameter is given both with the prefix and without it.
+    """
+    if kind in fields:
+        return params
+    prefix = f"{kind}."
+    moved: list[tuple[str, Any]] = []
+    out: dict[str, Any] = {}
+    for key, value in params.items():
+        if key == kind and isinstance(value, Mapping):
+            moved.extend((str(k), v) for k, v in value.items())
+        elif isinstance(key, str) and key.startswith(prefix):
+            moved.append((key[len(prefix) :], value))
+        else:
+            out[key] = value
+    for key, value in moved:
+        if key in out:
+            where = f"{source}: " if source else ""
+            raise ConfigError(
+                f"{where}exporter {kind!r}: {key} given twice, as {prefix}{key} and as {key}"
+            )
+        out[key] = value
+    return out
+
+
 def build_exporter(
     registry: Registry,
     kind: str,
@@ -154,8 +189,9 @@ def build_exporter(
     exporter 'svg': widht_px = 300: unknown field; did you mean 'width_px'? allowed: ...
     """
     spec = registry.get("export", kind)
+    given = _without_prefix(dict(params or {}), kind, spec.config_model.model_fields, source)
     try:
-        config = spec.config_model.model_validate(dict(params or {}))
+        config = spec.config_model.model_validate(given)
     except ValidationError as err:
         text = describe_validation_error(err, source=None, model=spec.config_model)
         where = f"{source}: " if source else ""

@@ -39,15 +39,17 @@ def _reach(packing: Packing[Box], placed: IntArray, s_max: float) -> FloatArray:
 
     A solid grown by ``s`` along its face normals lies in the ball of radius
     ``R (1 + s / h)`` (``R`` its circumradius, ``h`` its smallest support
-    value), widened by a relative 1e-9.
+    value), a sphere (no faces) in that of radius ``R + s``; widened by a
+    relative 1e-9.
     """
     counts = np.diff(packing.face_offsets)
     smallest = np.full(packing.n_particles, np.inf)
     smallest[counts > 0] = np.minimum.reduceat(
         packing.support, packing.face_offsets[:-1][counts > 0]
     )
-    reach = (packing.solids.circumradius * (1.0 + s_max / smallest))[placed] * (1.0 + 1e-9)
-    return np.asarray(reach, dtype=np.float64)
+    circum = packing.solids.circumradius
+    grown = np.where(counts > 0, circum * (1.0 + s_max / smallest), circum + s_max)
+    return np.asarray(grown[placed] * (1.0 + 1e-9), dtype=np.float64)
 
 
 def candidate_pairs(packing: Packing[Box], s_max: float) -> tuple[IntArray, IntArray]:
@@ -289,15 +291,22 @@ def _sphere_contacts(p3: Packing[Box], tol: float, tol_max: float) -> FoundConta
     solids = p3.solids
     r_all = solids.rounding_radius
     c_all = np.nan_to_num(p3.centre) + solids.vertices[solids.offsets[:-1]]
-    c, r = c_all[placed], r_all[placed]
-    reach = 2.0 * float(r.max()) + tol_max if len(placed) else 0.0
-    found = np.array(sorted(cKDTree(c).query_pairs(reach)), dtype=np.int64).reshape(-1, 2)
-    delta = c[found[:, 1]] - c[found[:, 0]]
+    if p3.domain.periodic:
+        # every image among the 27 about the cell, as for polyhedra: a pair may meet
+        # through two images in a box a few spheres wide, a sphere its own image
+        pi, pj, shift = periodic_pairs(p3, 0.5 * tol_max)
+        pairs = np.column_stack([pi, pj]).astype(np.int64)
+        delta = c_all[pj] + shift - c_all[pi]
+    else:
+        c, r = c_all[placed], r_all[placed]
+        reach = 2.0 * float(r.max()) + tol_max if len(placed) else 0.0
+        found = np.array(sorted(cKDTree(c).query_pairs(reach)), dtype=np.int64).reshape(-1, 2)
+        pairs = placed[found]
+        delta = c[found[:, 1]] - c[found[:, 0]]
     dist = np.linalg.norm(delta, axis=1)
-    gap = dist - r[found[:, 0]] - r[found[:, 1]]
+    gap = dist - r_all[pairs[:, 0]] - r_all[pairs[:, 1]]
     keep = gap < tol_max
-    found, delta, dist, gap = found[keep], delta[keep], dist[keep], gap[keep]
-    pairs = placed[found]
+    pairs, delta, dist, gap = pairs[keep], delta[keep], dist[keep], gap[keep]
     order = np.lexsort((pairs[:, 1], pairs[:, 0]))
     pairs, delta, dist, gap = pairs[order], delta[order], dist[order], gap[order]
     pair_normal = delta / dist[:, None]

@@ -220,3 +220,16 @@ def test_an_old_3d_name_warns_and_writes_the_same_files(packing3d_file, tmp_path
     files = {p.name: p.read_bytes() for p in (tmp_path / new).iterdir()}
     assert len(files) == (2 if new == "lammps" else 1)
     assert {p.name: p.read_bytes() for p in (tmp_path / old).iterdir()} == files
+
+
+def test_the_exporter_name_as_a_prefix_is_accepted_once(packing_file, tmp_path, capsys):
+    # as analyze takes psd.tolerance: lammps.steps is lammps' steps
+    out = tmp_path / "p.data"
+    args = ["export", str(packing_file), "--to", "lammps", "--out", str(out)]
+    assert main([*args, "--set", "lammps.steps=5"]) == 0
+    assert "variable steps index 5" in out.with_suffix(".in").read_text()
+    capsys.readouterr()
+    assert main([*args, "--force", "--set", "lammps.steps=5", "--set", "steps=6"]) == 2
+    assert "steps given twice, as lammps.steps and as steps" in one_error_line(capsys)
+    assert main([*args, "--force", "--set", "lammps.stepz=5"]) == 2
+    assert "stepz = 5: unknown field; did you mean 'steps'?" in one_error_line(capsys)

@@ -43,7 +43,14 @@ from regopack.plugins.inserters.available_surface.free_surface import (
 )
 from regopack.plugins.inserters.available_surface.halfspaces import halfspaces_of_arcs
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
-from regopack.plugins.inserters.available_surface.spheres import EPS, free_arcs, sample_free
+from regopack.plugins.inserters.available_surface.spheres import (
+    COVER_MARGIN,
+    EPS,
+    covers,
+    drop_contained,
+    free_arcs,
+    sample_free,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -142,6 +149,9 @@ class Screening(NamedTuple):
     rmin: FloatArray
     tried: IntArray
     counters: IntArray
+    levels: FloatArray
+    """Spheres: ascending radii at which an empty candidate is tried for shutting
+    (:func:`sphere_shut`); ``levels[0]`` the population's smallest (empty: none)."""
 
 
 def solids_of(polys: list[Polyhedron]) -> Solids:
@@ -387,6 +397,63 @@ def _interferers(
 
 
 @numba.njit(cache=True)
+def _sphere_caps(
+    ck: FloatArray,
+    big_r: float,
+    r: float,
+    count: int,
+    near: IntArray,
+    at: FloatArray,
+    circum: FloatArray,
+    wall_lo: FloatArray,
+    wall_hi: FloatArray,
+    margin: float,
+    tau: float,
+    caps: FloatArray,
+) -> int:
+    """Fill ``caps`` for a sphere of radius ``r`` touching one of ``big_r - r`` at ``ck``.
+
+    Interferers ``near[:count]`` at ``at``; the centre must stay within
+    ``wall_lo``/``wall_hi`` (infinite: no wall). Returns the number of caps,
+    or -1 when one of them holds the whole sphere (but a point).
+    """
+    nc = int(np.int64(0))  # not a literal 0 (second compilations of free_arcs, sample_free)
+    for m in range(count):
+        dx = at[m, 0] - ck[0]
+        dy = at[m, 1] - ck[1]
+        dz = at[m, 2] - ck[2]
+        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
+        rho = circum[near[m]] + r + margin
+        h = (big_r * big_r + dist * dist - rho * rho) / (2.0 * dist)
+        if h >= big_r - tau:
+            continue  # the ball misses the sphere, or touches it
+        if h <= -big_r + tau:
+            return -1  # it holds the whole sphere (but a point)
+        caps[nc, 0] = dx / dist
+        caps[nc, 1] = dy / dist
+        caps[nc, 2] = dz / dist
+        caps[nc, 3] = h
+        nc += 1
+    for ax in range(3):
+        for side in (-1.0, 1.0):
+            bound = wall_lo[ax] + margin if side < 0 else wall_hi[ax] - margin
+            if not math.isfinite(bound):
+                continue
+            h = side * (bound - ck[ax])
+            if h >= big_r - tau:
+                continue
+            if h <= -big_r + tau:
+                return -1
+            caps[nc, 0] = 0.0
+            caps[nc, 1] = 0.0
+            caps[nc, 2] = 0.0
+            caps[nc, ax] = side
+            caps[nc, 3] = h
+            nc += 1
+    return nc
+
+
+@numba.njit(cache=True)
 def analyse_sphere(
     k: int,
     i: int,
@@ -399,7 +466,6 @@ def analyse_sphere(
 ) -> int:
     """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`."""
     order, centre, circum, _ = placed
-    adm_lo, adm_hi = bounds.adm_lo, bounds.adm_hi
     pk = order[k]
     ck = centre[pk]
     r = circum[i]
@@ -407,39 +473,12 @@ def analyse_sphere(
     tau = EPS * big_r
     count, near, at = _interferers(g, pk, i, placed, bounds, margin)
     caps = np.empty((count + 6, 4))
-    nc = int(np.int64(0))  # not a literal 0 (second compilations of free_arcs, sample_free)
-    for m in range(count):
-        dx = at[m, 0] - ck[0]
-        dy = at[m, 1] - ck[1]
-        dz = at[m, 2] - ck[2]
-        dist = math.sqrt(dx * dx + dy * dy + dz * dz)
-        rho = circum[near[m]] + r + margin
-        h = (big_r * big_r + dist * dist - rho * rho) / (2.0 * dist)
-        if h >= big_r - tau:
-            continue  # the ball misses the sphere, or touches it
-        if h <= -big_r + tau:
-            return EMPTY  # it holds the whole sphere (but a point)
-        caps[nc, 0] = dx / dist
-        caps[nc, 1] = dy / dist
-        caps[nc, 2] = dz / dist
-        caps[nc, 3] = h
-        nc += 1
-    for ax in range(3):
-        for side in (-1.0, 1.0):
-            bound = adm_lo[ax] + margin if side < 0 else adm_hi[ax] - margin
-            if not math.isfinite(bound):
-                continue
-            h = side * (bound - ck[ax])
-            if h >= big_r - tau:
-                continue
-            if h <= -big_r + tau:
-                return EMPTY
-            caps[nc, 0] = 0.0
-            caps[nc, 1] = 0.0
-            caps[nc, 2] = 0.0
-            caps[nc, ax] = side
-            caps[nc, 3] = h
-            nc += 1
+    nc = _sphere_caps(
+        ck, big_r, r, count, near, at, circum, bounds.adm_lo, bounds.adm_hi, margin, tau, caps
+    )
+    if nc < 0:
+        return EMPTY
+    nc = drop_contained(caps, nc, big_r, tau)
     arcs = free_arcs(caps, nc, big_r, tau)
     if nc > 0 and arcs.shape[0] == 0:
         return EMPTY
@@ -448,6 +487,38 @@ def analyse_sphere(
     out[1] = ck[1] + uy
     out[2] = ck[2] + uz
     return FOUND
+
+
+@numba.njit(cache=True)
+def sphere_shut(k: int, i: int, g: Grid, placed: Placed, bounds: Bounds, level: float) -> bool:
+    """Whether no sphere of radius ``level`` or more can touch candidate ``k`` any more.
+
+    Asked after an analysis of ``k`` for particle ``i`` (radius above
+    ``level``, no packing control) found no free area: the caps that
+    ``i``'s interferers (a superset of a smaller sphere's) and the walls
+    a sphere of radius ``level`` keeps to cut from its sphere of centres
+    must cover it with room to spare (:func:`.spheres.covers`). A smaller
+    sphere fits wherever a larger one does (shrink it towards the contact
+    point) and particles are only added, so every later analysis of ``k``
+    for a sphere of radius ``level`` or more would find nothing.
+    """
+    order, centre, circum, _ = placed
+    pk = order[k]
+    ck = centre[pk]
+    shift = circum[i] - level  # the admissible box of a sphere of radius level
+    big_r = circum[pk] + level
+    depth = COVER_MARGIN * big_r
+    count, near, at = _interferers(g, pk, i, placed, bounds, 0.0)
+    caps = np.empty((count + 6, 4))
+    nc = _sphere_caps(
+        ck, big_r, level, count, near, at, circum,
+        bounds.adm_lo - shift, bounds.adm_hi + shift, 0.0, -depth, caps,
+    )  # fmt: skip
+    # -1: a ball holds the whole sphere, deeper than depth (the tolerance given is -depth)
+    if nc < 0:
+        return True
+    # a cap inside another shrunk by depth stays inside it when both are shrunk
+    return covers(caps, drop_contained(caps, nc, big_r, depth), big_r, depth)
 
 
 @numba.njit(cache=True)
@@ -593,6 +664,46 @@ def eta_margin(eta: float, xi: float, r: float) -> float:
 
 
 @numba.njit(cache=True)
+def _shut_below(
+    k: int,
+    i: int,
+    g: Grid,
+    placed: Placed,
+    bounds: Bounds,
+    levels: FloatArray,
+    t: float,
+    r: float,
+    rmin: FloatArray,
+    counters: IntArray,
+) -> None:
+    """After an empty analysis at ``r``: try to shut ``k`` from the next level below.
+
+    The largest level under ``t * r`` is tried (:func:`sphere_shut`); when
+    ``k`` is shut from it, ``rmin[k]`` becomes the least value whose
+    screening ``r' < t * rmin[k]`` lets only radii below that level pass, or
+    ``-inf`` from the smallest level (no particle of the population passes).
+    """
+    lv = -1
+    for m in range(levels.shape[0]):
+        if levels[m] < t * r:
+            lv = m
+    if lv < 0:
+        return
+    level = levels[lv]
+    counters[2] += 1
+    if not sphere_shut(k, i, g, placed, bounds, level):
+        return
+    counters[3] += 1
+    if lv == 0:
+        rmin[k] = -np.inf
+        return
+    v = level / t
+    while t * v < level:
+        v = np.nextafter(v, np.inf)
+    rmin[k] = v
+
+
+@numba.njit(cache=True)
 def scan(
     candidates: IntArray,
     begin: int,
@@ -622,7 +733,7 @@ def scan(
     ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
     from the interferers and walls (:func:`eta_margin`). With ``spheres`` the
     population is spheres (:func:`analyse_sphere`). ``counters``
-    counts analyses and empty ones; ``xi[0]`` holds a drawn ``xi`` across a
+    counts analyses, empty ones and (spheres) shut ones; ``xi[0]`` holds a drawn ``xi`` across a
     :data:`FULL` return (negative: none). Returns ``(code, position)``: :data:`FOUND`
     and the candidate's position (the centre in ``out``), :data:`EMPTY` and
     ``len(candidates)``, or :data:`FULL` and the position to resume from
@@ -635,9 +746,13 @@ def scan(
     for one hidden from it; the scan descends it to the next candidate that
     passes, so a search costs the candidates analysed, not the candidates
     listed. An empty analysis sets the leaf to ``radius[i]`` as it sets
-    ``rmin``.
+    ``rmin``. For spheres with a ``floor`` (and ``eta = 0``), an empty
+    analysis that also shows no sphere of the floor radius fits
+    (:data:`SHUT`, see :func:`analyse_sphere`) sets ``rmin[k] = -inf``: the
+    candidate is never analysed again, which changes no packing (every
+    analysis it saves would find nothing and draws no random number).
     """
-    t, radius, rmin, tried, counters = screen
+    t, radius, rmin, tried, counters, levels = screen
     r = radius[i]
     leaves = tree.shape[0] // 2
     m = begin - 1
@@ -671,6 +786,50 @@ def scan(
             return FOUND, m
         counters[1] += 1
         rmin[k] = r
+        if spheres and margin == 0.0 and levels.shape[0] > 0 and math.isfinite(t):
+            _shut_below(k, i, g, placed, bounds, levels, t, r, rmin, counters)
         if leaves > 0:
-            tree_set(tree, leaves, m, r)
+            tree_set(tree, leaves, m, rmin[k])
     return EMPTY, candidates.shape[0]
+
+
+@numba.njit(cache=True)
+def _no_solids() -> tuple[EdgeArcs, Solids, Arcs, HalfspaceCache]:
+    """Empty polyhedron arrays of the types :func:`scan` takes (spheres need none)."""
+    i0 = np.zeros(0, dtype=np.int64)
+    i1 = np.zeros(1, dtype=np.int64)
+    f1 = np.zeros(0)
+    f3 = np.zeros((0, 3))
+    q_arcs = EdgeArcs(i0, i0, f3, np.zeros((0, 6)))
+    s = Solids(f3, i1, f3, f1, i1, i0, i1, i0, i1)
+    a = Arcs(i0, i0, f3, np.zeros((0, 6)), i1, np.zeros(0, dtype=np.bool_))
+    cache = HalfspaceCache(f3, f1, i0, i0, i0, i1)
+    return q_arcs, s, a, cache
+
+
+@numba.njit(cache=True)
+def scan_spheres(
+    candidates: IntArray,
+    begin: int,
+    i: int,
+    screen: Screening,
+    g: Grid,
+    placed: Placed,
+    bounds: Bounds,
+    eta: float,
+    xi: FloatArray,
+    rng: np.random.Generator,
+    out: FloatArray,
+    tree: FloatArray,
+) -> tuple[int, int]:
+    """:func:`scan` for spheres, with only the arrays spheres read.
+
+    A compiled call unpacks every array it is given (about a microsecond
+    each): this entry takes half of :func:`scan`'s and makes the polyhedron
+    arrays, empty, inside.
+    """
+    q_arcs, s, a, cache = _no_solids()
+    return scan(
+        candidates, begin, i, screen, q_arcs, s, a, g, cache, placed, bounds, eta, xi, True,
+        rng, out, tree,
+    )  # fmt: skip

@@ -29,8 +29,15 @@ Candidates are offered in the paper's order (``order = "paper"``) or in
 the sweep order (``order = "sweep"``, :mod:`.sweep`); the box may be walled
 or periodic (:class:`.state.SurfaceState`); the ``eta`` controller keeps
 the free surface a margin from what covers it
-(:func:`.analysis.eta_margin`). This version packs sharp polyhedra; spheres
-come next.
+(:func:`.analysis.eta_margin`). Spheres are analysed in closed form
+(:mod:`.spheres`); after an empty analysis of a sphere candidate, the
+candidate is tried for *shutting* from the next of a few levels of radius
+below (quantiles of the population's radii, :func:`.state.shut_levels`):
+when the caps of a sphere of that radius cover its sphere of centres with
+room to spare, no sphere of that radius or more will ever touch it
+(:func:`.analysis.sphere_shut`), and its screening radius is lowered to
+match — the same packing, with fewer analyses (the 3D counterpart of the
+disks' bounds in 2D).
 """
 
 from __future__ import annotations
@@ -218,6 +225,7 @@ class AvailableSurface(InsertionStrategy):
         stats = {
             "candidate_analyses": float(st.analyses),
             "empty_analyses": float(st.empty),
+            **({"shut_tests": float(st.shut_tests), "shut": float(st.shut)} if st.spheres else {}),
             **stats,
             "insert_time_s": time.perf_counter() - started,
         }

@@ -27,6 +27,7 @@ from regopack.plugins.inserters.available_surface.analysis import (
     grid_add,
     grid_for,
     scan,
+    scan_spheres,
     solids_of,
 )
 from regopack.plugins.inserters.available_surface.envelope import EdgeArcs, edge_arcs
@@ -55,6 +56,15 @@ def polyhedra_of(shapes: SolidBatch) -> list[Polyhedron]:
             )
         )
     return polys
+
+
+LEVELS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8, 0.9)
+"""Quantiles of the population's radii at which empty sphere candidates are tried for shutting."""
+
+
+def shut_levels(radius: FloatArray) -> FloatArray:
+    """Distinct radii at the :data:`LEVELS` quantiles of ``radius`` (ascending)."""
+    return np.unique(np.quantile(radius, LEVELS, method="inverted_cdf"))
 
 
 class SurfaceState:
@@ -99,6 +109,8 @@ class SurfaceState:
         self.rounding = rounding
         self.polys = [] if self.spheres else polyhedra_of(shapes)
         self.circum = shapes.circumradius
+        self.levels = shut_levels(self.circum) if self.spheres else np.zeros(0)
+        """Spheres: radii at which an empty candidate is tried for shutting."""
         self.radius = radius
         self.lo = lo
         self.hi = hi
@@ -107,7 +119,7 @@ class SurfaceState:
         self.order = np.full(n, -1, dtype=np.int64)
         self.rmin = np.full(n, np.inf)
         self.count = 0
-        self.counters = np.zeros(2, dtype=np.int64)
+        self.counters = np.zeros(4, dtype=np.int64)
         self._no_tried = np.zeros(0, dtype=np.int64)
         self._no_tree = np.zeros(0)
         self._no_arcs = EdgeArcs(
@@ -202,11 +214,24 @@ class SurfaceState:
         cands = np.ascontiguousarray(candidates, dtype=np.int64)
         t = self.t if screened else np.inf
         screen = Screening(
-            t, self.radius, self.rmin, self._no_tried if tried is None else tried, self.counters
+            t,
+            self.radius,
+            self.rmin,
+            self._no_tried if tried is None else tried,
+            self.counters,
+            self.levels,
         )
         placed = Placed(self.order, self.centre, self.circum, self.reach_max)
         bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
         begin = 0
+        if self.spheres:
+            code, at = scan_spheres(
+                cands, begin, i, screen, self.grid, placed, bounds, self.eta, self._xi, rng,
+                self._out, self._no_tree if tree is None else tree,
+            )  # fmt: skip
+            if code == FOUND:
+                return int(cands[at]), self._out.copy()
+            return -1, None
         while True:
             code, at = scan(
                 cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
@@ -230,6 +255,16 @@ class SurfaceState:
     def empty(self) -> int:
         """Analyses that found no free area."""
         return int(self.counters[1])
+
+    @property
+    def shut_tests(self) -> int:
+        """Empty analyses after which a candidate was tried for shutting (spheres)."""
+        return int(self.counters[2])
+
+    @property
+    def shut(self) -> int:
+        """Tries that shut their candidate from a level down (spheres)."""
+        return int(self.counters[3])
 
     def _grow_cache(self) -> None:
         """Double the half-space cache, keeping its rows."""

@@ -436,3 +436,30 @@ def test_a_lattice_of_touching_spheres_has_the_known_contacts() -> None:
     )
     assert apart.threshold == pytest.approx([0.03]) and len(apart.i) == 1
     assert apart.count_per_particle(0.02).sum() == 0
+
+
+def test_periodic_spheres_touch_across_the_sides_and_their_own_images() -> None:
+    from regopack.geometry.domain import PeriodicBox
+    from regopack.geometry.sphere_volume import lens_volume
+
+    # a simple cubic lattice of 3 x 3 x 3 touching unit spheres, as a periodic cell: every
+    # sphere has six neighbours, those across the cell's faces included
+    side = 6.0
+    axis = np.arange(3) * 2.0 + 1.0
+    c = np.stack(np.meshgrid(axis, axis, axis, indexing="ij"), axis=-1).reshape(-1, 3)
+    lattice = Packing.of_spheres(c, np.ones(27), PeriodicBox(0, side, 0, side, 0, side))
+    res = Contacts(ContactsConfig(tol=0.05, margin=0.0)).compute(lattice, {})
+    assert len(res.pairs) == 27 * 6 // 2
+    assert np.all(res.count_per_particle() == 6)
+    assert np.allclose(res.threshold, 0.0, atol=1e-12)
+    assert np.allclose(res.volume, lens_volume(1.025, 1.025, 2.0))
+    # one sphere in a cell of its diameter touches its six images, three pairs of them
+    lone = Packing.of_spheres([[1.0, 1.0, 1.0]], [1.0], PeriodicBox(0, 2, 0, 2, 0, 2))
+    res = Contacts(ContactsConfig(tol=0.05, margin=0.0)).compute(lone, {})
+    assert res.pairs.tolist() == [[0, 0]] * 3 and res.count_per_particle().tolist() == [6]
+    # the same spheres shifted by half a period: the same contacts
+    moved = Packing.of_spheres(
+        np.mod(c + 3.0, side), np.ones(27), PeriodicBox(0, side, 0, side, 0, side)
+    )
+    again = Contacts(ContactsConfig(tol=0.05, margin=0.0)).compute(moved, {})
+    assert len(again.pairs) == 81 and np.all(again.count_per_particle() == 6)

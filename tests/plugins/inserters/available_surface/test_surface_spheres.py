@@ -239,3 +239,169 @@ def test_the_rest_of_a_sphere_beyond_a_small_cap_is_sampled_whole() -> None:
     assert np.all(z <= 0.9 + 1e-12)
     counts, _ = np.histogram(z, bins=10, range=(-1.0, 0.9))
     assert counts.min() > 120  # uniform heights on [-1, 0.9]: about 200 a bin
+
+
+def _arc_geometry(caps: np.ndarray, arcs: np.ndarray) -> np.ndarray:
+    """Free arcs as (cap row, start, end), independent of the caps' positions."""
+    return np.c_[caps[arcs[:, 0].astype(np.int64)], arcs[:, 1:]]
+
+
+@pytest.mark.parametrize("seed", range(16))
+def test_dropping_contained_caps_changes_no_arc_and_no_drawn_centre(seed: int) -> None:
+    # a crowd of caps of every size, many inside others, some nearly touching them from
+    # inside: the free arcs, the free points and the centres drawn are the same without
+    # the contained ones
+    from regopack.plugins.inserters.available_surface.spheres import drop_contained
+
+    rng = np.random.default_rng(seed)
+    big_r, tau = 2.5, 2.5e-12
+    n = int(rng.integers(4, 40))
+    axes = rng.normal(size=(n, 3))
+    axes /= np.linalg.norm(axes, axis=1)[:, None]
+    h = big_r * rng.uniform(-0.2, 0.98, n)
+    for q in range(n // 3):  # caps just inside a larger one, within a few tolerances
+        p = int(rng.integers(n))
+        tp, tq = math.acos(h[p] / big_r), 0.5 * math.acos(h[p] / big_r)
+        tilt = tp - tq - float(rng.choice([1e-3, 1e-8, 1e-10]))
+        side = np.cross(axes[p], rng.normal(size=3))
+        side /= np.linalg.norm(side)
+        axes[q] = math.cos(tilt) * axes[p] + math.sin(tilt) * side
+        h[q] = big_r * math.cos(tq)
+    caps = np.c_[axes, h]
+    kept = caps.copy()
+    m = drop_contained(kept, n, big_r, tau)
+    kept = kept[:m]
+    assert m <= n
+    before = free_arcs(caps, n, big_r, tau)
+    after = free_arcs(kept, m, big_r, tau)
+    assert np.array_equal(_arc_geometry(caps, before), _arc_geometry(kept, after))
+    u = rng.normal(size=(2000, 3))
+    u *= big_r / np.linalg.norm(u, axis=1)[:, None]
+    for x in u:
+        assert is_free(caps, n, *x, tau) == is_free(kept, m, *x, tau)
+    if before.shape[0]:
+        a = sample_free(caps, n, before, big_r, tau, np.random.default_rng(seed))
+        b = sample_free(kept, m, after, big_r, tau, np.random.default_rng(seed))
+        assert a == b
+
+
+def test_a_cap_inside_another_is_dropped_and_one_that_reaches_out_is_kept() -> None:
+    from regopack.plugins.inserters.available_surface.spheres import drop_contained
+
+    tau = 1e-12
+    big = (0.0, 0.0, 1.0, math.cos(0.8))  # angular radius 0.8 about +z
+    rows = [
+        big,
+        (math.sin(0.3), 0.0, math.cos(0.3), math.cos(0.4)),  # 0.3 + 0.4 < 0.8: inside
+        (math.sin(0.5), 0.0, math.cos(0.5), math.cos(0.4)),  # 0.5 + 0.4 > 0.8: crosses
+        (math.sin(0.4), 0.0, math.cos(0.4), math.cos(0.4 - 1e-13)),  # touches from inside
+        (0.0, 0.0, -1.0, 0.5),  # elsewhere
+        big,  # the same cap twice: neither holds the other strictly
+    ]
+    caps = np.array(rows)
+    m = drop_contained(caps, len(rows), 1.0, tau)
+    assert m == 5
+    assert np.array_equal(caps[:m], np.array([rows[0], rows[2], rows[3], rows[4], rows[5]]))
+    # a larger cap does not hold a smaller one whose axis it does not reach
+    far = np.array([(0.0, 0.0, 1.0, 0.0), (0.0, 0.0, -1.0, 0.9)])
+    assert drop_contained(far, 2, 1.0, tau) == 2
+
+
+@pytest.mark.parametrize("seed", range(12))
+def test_covers_agrees_with_the_free_arcs_and_its_cover_leaves_no_free_point(seed: int) -> None:
+    from regopack.plugins.inserters.available_surface.spheres import covers
+
+    rng = np.random.default_rng(100 + seed)
+    n = int(rng.integers(3, 12))
+    rows = rng.normal(size=(n, 3))
+    caps = _caps([(*v, h) for v, h in zip(rows, rng.uniform(-0.5, 0.2, n), strict=True)])
+    free = _free_points(caps + np.array([0.0, 0.0, 0.0, 1e-6]), 100_000, seed)
+    shut = covers(caps, n, 1.0, 1e-6)
+    if shut:
+        assert len(free) == 0  # every point lies deeper than the margin in some cap
+    if len(_free_points(caps, 100_000, seed)) == 0:
+        assert free_arcs(caps, n, 1.0, 1e-12).shape[0] == 0
+    # no free arc (beyond slivers) and no free point: covered with any small margin
+    if free_arcs(caps, n, 1.0, 1e-12).shape[0] == 0 and len(free) == 0:
+        assert covers(caps, n, 1.0, 1e-9)
+
+
+def test_covers_needs_every_circle_covered_and_counts_a_shared_end_as_a_gap() -> None:
+    from regopack.plugins.inserters.available_surface.spheres import covers
+
+    h = 1.0 / math.sqrt(3.0)
+    cube = [
+        (s * (a == 0), s * (a == 1), s * (a == 2), h * 0.999) for a in range(3) for s in (-1, 1)
+    ]
+    assert covers(_caps(cube), 6, 1.0, 1e-9)
+    assert not covers(_caps(cube), 6, 1.0, 1e-3 * h)  # shrunk by more than it overlaps
+    assert not covers(_caps(cube[:5]), 5, 1.0, 1e-9)  # a face missing
+    # two hemispheres meeting along the equator: the equator is a shared end
+    assert not covers(_caps([(0, 0, 1, 0.0), (0, 0, -1, 0.0)]), 2, 1.0, 0.0)
+    assert covers(_caps([(0, 0, 1, -1e-3), (0, 0, -1, -1e-3)]), 2, 1.0, 1e-6)
+    assert covers(_caps([(1, 0, 0, -1.0 + 1e-12)]), 1, 1.0, -1e-9)  # one cap holds it all
+    assert not covers(np.zeros((0, 4)), 0, 1.0, 0.0)
+
+
+def _run_state(monkeypatch: pytest.MonkeyPatch, data: dict[str, Any], levels: bool) -> tuple:
+    """Pack ``data``; return the packing and its insertion's :class:`SurfaceState`."""
+    from regopack.plugins.inserters.available_surface import state as state_module
+
+    seen: list[Any] = []
+    real = state_module.SurfaceState.__init__
+
+    def spy(self: Any, *args: Any, **kwargs: Any) -> None:
+        real(self, *args, **kwargs)
+        if not levels:
+            self.levels = np.zeros(0)
+        seen.append(self)
+
+    with monkeypatch.context() as m:
+        m.setattr(state_module.SurfaceState, "__init__", spy)
+        packing = regopack.pack(data, verify=False)
+    return packing, seen[-1]
+
+
+@pytest.mark.parametrize(
+    ("kind", "order", "count"),
+    [("box", "sweep", 700), ("periodic-box", "sweep", 700), ("box", "paper", 200)],
+)
+def test_shutting_candidates_changes_no_packing_and_shut_ones_take_no_sphere(
+    monkeypatch: pytest.MonkeyPatch, kind: str, order: str, count: int
+) -> None:
+    data = scene(
+        count=count,
+        domain={"kind": kind, "width": 12.0, "height": 12.0, "depth": 12.0},
+        size={"kind": "uniform", "d_min": 1.0, "d_max": 4.0},
+        insertion={"kind": "available-surface", "order": order},
+    )
+    plain, st0 = _run_state(monkeypatch, data, levels=False)
+    packing, st = _run_state(monkeypatch, data, levels=True)
+    assert np.array_equal(plain.centre, packing.centre, equal_nan=True)
+    assert st0.shut_tests == 0 and st.analyses < st0.analyses
+    # every candidate shut from a level takes no sphere of that radius now: directions
+    # all about it, against every placed sphere and the walls
+    placed = np.flatnonzero(np.isfinite(st.centre[:, 0]))
+    c, r = st.centre[placed], st.circum[placed]
+    rmin = st.rmin[st.index[placed]]
+    at = np.where(np.isneginf(rmin), st.levels[0], st.t * rmin)
+    near = np.abs(at[:, None] - st.levels[None, :]) <= 4 * np.spacing(st.levels)[None, :]
+    shut = np.flatnonzero(near.any(axis=1))
+    assert len(shut) >= 20
+    rng = np.random.default_rng(0)
+    u = rng.normal(size=(10_000, 3))
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    for a in shut[:: max(1, len(shut) // 30)]:
+        rf = float(st.levels[near[a]][0])
+        x = c[a] + (r[a] + rf) * u
+        d0 = c - c[a]
+        if st.period is not None:
+            d0 -= st.period * np.round(d0 / st.period)
+        reach = np.linalg.norm(d0, axis=1) < r[a] + r + 2 * rf
+        reach[a] = False
+        d = x[:, None, :] - (c[a] + d0[reach])[None, :, :]
+        slack = (np.linalg.norm(d, axis=2) - r[reach][None, :] - rf).min(axis=1, initial=np.inf)
+        if st.period is None:
+            slack = np.minimum(slack, (x - st.lo - rf).min(axis=1))
+            slack = np.minimum(slack, (st.hi - rf - x).min(axis=1))
+        assert slack.max() < 1e-9 * rf, (a, rf)
