@@ -124,8 +124,8 @@ class AvailableSurfaceConfig(BaseModel):
             "The shape of the sweep's front: 'bottom-up' (flat, rising along z: a deposited "
             "layer whose contact normals lean vertical) or 'faceted' (a field of square "
             "pyramids whose faces slope at a cube's corner angle and move along their "
-            "normals: an isotropic fabric, for a representative volume). Ignored by "
-            "order = 'paper'."
+            "normals: a fabric far less anisotropic, for a representative volume). Only "
+            "with order = 'sweep'."
         ),
     )
     facet: float = Field(
@@ -134,8 +134,8 @@ class AvailableSurfaceConfig(BaseModel):
         allow_inf_nan=False,
         description=(
             "Side of the faceted front's pyramids (length units): the box's floor is cut "
-            "into equal squares of about this side; 0: FACET_PER_DIAMETER times the largest "
-            "equivalent diameter. Only with front = 'faceted'."
+            "into equal squares of about this side; 0: four times the largest equivalent "
+            "diameter. Only with front = 'faceted'."
         ),
     )
 
