@@ -48,7 +48,7 @@ from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from regopack.base.errors import ConfigError
 from regopack.geometry.domain import Box, Domain
@@ -72,6 +72,9 @@ IntArray = NDArray[np.int64]
 
 PROGRESS_EVERY = 500
 """Particles between progress reports."""
+
+FACET_PER_DIAMETER = 4.0
+"""Default side of the faceted front's pyramids, in largest equivalent diameters."""
 
 
 class AvailableSurfaceConfig(BaseModel):
@@ -122,6 +125,37 @@ class AvailableSurfaceConfig(BaseModel):
             "floor. Ignored by order = 'paper'."
         ),
     )
+    front: Literal["bottom-up", "faceted"] = Field(
+        "bottom-up",
+        description=(
+            "The shape of the sweep's front: 'bottom-up' (flat, rising along z: a deposited "
+            "layer whose contact normals lean vertical) or 'faceted' (a field of square "
+            "pyramids whose faces slope at a cube's corner angle and move along their "
+            "normals: a fabric far less anisotropic, for a representative volume). Only "
+            "with order = 'sweep'."
+        ),
+    )
+    facet: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description=(
+            "Side of the faceted front's pyramids (length units): the box's floor is cut "
+            "into equal squares of about this side; 0: four times the largest equivalent "
+            "diameter. Only with front = 'faceted'."
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _facet_with_its_front(self) -> AvailableSurfaceConfig:
+        if self.facet > 0.0 and self.front != "faceted":
+            raise ValueError(
+                f"facet = {self.facet} sizes the faceted front's pyramids: give "
+                "front = 'faceted' with it, or leave facet out"
+            )
+        if self.front == "faceted" and self.order != "sweep":
+            raise ValueError("front = 'faceted' is a front of the sweep: give order = 'sweep'")
+        return self
 
 
 class AvailableSurface(InsertionStrategy):
@@ -208,7 +242,10 @@ class AvailableSurface(InsertionStrategy):
                 # columns at least two circumradii of the largest particle wide: a
                 # narrower column's own candidates cannot hold up a front
                 strip = max(strip, 2.0 * float(np.max(shapes.circumradius)))
-            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip)
+            facet = 0.0
+            if cfg.front == "faceted":
+                facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
+            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
             sweep.run(rng, progress, PROGRESS_EVERY)
             refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
             stats = {

@@ -22,6 +22,19 @@ over them (:class:`Zone`): the leaf of an active candidate is its ``rmin``,
 that of a frozen or retired one ``-inf``, so the screened search descends the
 tree to the candidates that pass instead of listing the whole packing for
 every particle: its cost does not grow with the number placed.
+
+The *faceted* front (``front = "faceted"``) measures a candidate's height
+along a field of square pyramids instead of along ``z``: over squares of
+side ``facet`` on the floor, the height of a centre is ``(z + sqrt(2) g) /
+sqrt(3)``, with ``g`` the larger of its distances along ``x`` and ``y`` from
+the middle of its square. The front is then a field of pyramids whose faces
+slope at ``sqrt(2)`` (the angle of a cube's corner) and move along their
+normals ``(±sqrt(2), 0, 1) / sqrt(3)`` and ``(0, ±sqrt(2), 1) / sqrt(3)``,
+whose second moment is isotropic: each face deposits a layer whose fabric
+leans along its normal, and the four faces' fabrics average to an isotropic
+one, while the front keeps its shape and area as it rises (the sample stays
+homogeneous). The first particle still goes to the floor below the box's
+centre, the apex of a pyramid.
 """
 
 from __future__ import annotations
@@ -49,6 +62,7 @@ ZONE_BINS = 80
 
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
 CLOSINGS = ("paced", "prompt", "tail")
+FRONTS = ("bottom-up", "faceted")
 STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
 
 
@@ -128,18 +142,48 @@ class SurfaceSweep:
         Width of the columns (length units): the box's floor is cut into
         equal tiles of about this width, each column with its own zone, as the
         2D strips; 0: one zone over the whole floor.
+    front
+        ``"bottom-up"`` (heights along ``z``) or ``"faceted"`` (heights
+        along a field of pyramids; see the module docstring).
+    facet
+        Side of the faceted front's pyramids (length units, > 0 with it): the
+        floor is cut into equal squares of about this side.
     """
 
     def __init__(
-        self, state: SurfaceState, t: float, zone: float, closing: str, strip: float = 0.0
+        self,
+        state: SurfaceState,
+        t: float,
+        zone: float,
+        closing: str,
+        strip: float = 0.0,
+        front: str = "bottom-up",
+        facet: float = 0.0,
     ) -> None:
         if closing not in CLOSINGS:
             raise ValueError(f"closing must be one of {CLOSINGS}, not {closing!r}")
+        if front not in FRONTS:
+            raise ValueError(f"front must be one of {FRONTS}, not {front!r}")
         self.state = state
         self.t = t
         height = float(state.hi[2] - state.lo[2])
         self.z0 = float(state.lo[2])
         span = state.hi[:2] - state.lo[:2]
+        self.faceted = front == "faceted"
+        self._facets = (0.0, 0.0, 1.0, 1.0)
+        if self.faceted:
+            if not facet > 0:
+                raise ValueError(f"a faceted front needs facet > 0, not {facet!r}")
+            side = span / np.maximum(1.0, np.round(span / facet))
+            middle = 0.5 * (state.lo[:2] + state.hi[:2])
+            # squares centred on the box's middle (their pattern repeats with a periodic box)
+            self._facets = (
+                float(middle[0]),
+                float(middle[1]),
+                float(side[0]),
+                float(side[1]),
+            )
+            height = (height + math.sqrt(2.0) * 0.5 * float(side.max())) / math.sqrt(3.0)
         self.ntile = np.array(
             [
                 strip_count(float(span[0]), strip, MAX_TILES),
@@ -183,6 +227,16 @@ class SurfaceSweep:
 
     # ------------------------------------------------------------------ bins
 
+    def _level(self, c: FloatArray) -> float:
+        """Return a centre's height for the zone: ``z``, or along the faceted front."""
+        if not self.faceted:
+            return float(c[2])
+        mx, my, sx, sy = self._facets
+        u = float(c[0]) - mx
+        v = float(c[1]) - my
+        g = max(abs(u - sx * round(u / sx)), abs(v - sy * round(v / sy)))
+        return self.z0 + (float(c[2]) - self.z0 + math.sqrt(2.0) * g) / math.sqrt(3.0)
+
     def _bin_of(self, z: float) -> int:
         b = math.floor((z - self.z0) / self.delta)
         return min(max(b, 0), self.nbins - 1)
@@ -205,7 +259,7 @@ class SurfaceSweep:
 
     def _register(self, k: int) -> None:
         c = self.state.centre[self.state.order[k]]
-        b = self._bin_of(float(c[2]))
+        b = self._bin_of(self._level(c))
         tile = self._tile_of(c)
         self.tile[k] = tile
         z = self.zones[tile]
@@ -334,7 +388,7 @@ class SurfaceSweep:
                     self.cur = self._tile_of(first)
                     z = self.zones[self.cur]
                     z.seeded = True
-                    z.hi = self._bin_of(float(first[2]))
+                    z.hi = self._bin_of(self._level(first))
                     self._register(st.insert(i, first))
                     self.status[i] = STATUS_PLACED
                     return

@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import regopack
+from regopack.base.errors import ConfigError
 from regopack.packing.core import Packing
 from regopack.plugins.inserters.available_surface import sweep as sweep_module
 from regopack.verification.polyhedra import separating_gap, verify_polyhedra
@@ -446,3 +447,95 @@ def test_the_screening_trees_search_the_candidates_a_full_listing_finds(
     monkeypatch.setattr(sweep_module.SurfaceSweep, "_screened", _screened_by_mask)
     listed = regopack.pack(data, verify=False)
     assert np.array_equal(fast.centre, listed.centre, equal_nan=True)
+
+
+def faceted_scene(kind: str = "box", count: int = 320, **insertion: Any) -> dict[str, Any]:
+    """A cube of spheres packed by the sweep with a faceted front of one pyramid."""
+    return scene(
+        count=count,
+        domain={"kind": kind, "width": 16.0, "height": 16.0, "depth": 16.0},
+        size={"kind": "uniform", "d_min": 1.5, "d_max": 3.0},
+        phases=[{"name": "s", "fraction": 1.0, "shape": {"kind": "sphere"}}],
+        insertion={
+            "kind": "available-surface",
+            "order": "sweep",
+            "zone": 4.0,
+            "front": "faceted",
+            "facet": 16.0,
+            **insertion,
+        },
+    )
+
+
+def _order_correlations(packing: Packing) -> dict[str, float]:
+    """Rank correlations of the insertion order with ``z``, the faceted level and ``g``."""
+    order = packing.placed_in_order()
+    c = packing.centre[order]
+    g = np.max(np.abs(c[:, :2]), axis=1)  # from the pyramid's axis (the box's middle)
+    level = (c[:, 2] - packing.domain.zmin + np.sqrt(2.0) * g) / np.sqrt(3.0)
+    n = np.arange(len(order))
+    return {
+        name: _rank_correlation(n, values)
+        for name, values in (("z", c[:, 2]), ("level", level), ("g", g))
+    }
+
+
+def _rank_correlation(a: np.ndarray, b: np.ndarray) -> float:
+    ra = np.argsort(np.argsort(a)).astype(float)
+    rb = np.argsort(np.argsort(b)).astype(float)
+    return float(np.corrcoef(ra, rb)[0, 1])
+
+
+def test_a_faceted_front_rises_along_its_pyramids_not_along_z() -> None:
+    faceted = _pack(faceted_scene())
+    assert regopack.verify(faceted).ok
+    first = faceted.placed_in_order()[0]
+    centre = faceted.centre[first]
+    # the first at the apex of the pyramid: on the floor below the box's centre
+    assert centre[:2].tolist() == [0.0, 0.0]
+    assert centre[2] == pytest.approx(faceted.domain.zmin + faceted.radius[first], abs=1e-9)
+    assert faceted.n_placed > 280
+    along = _order_correlations(faceted)
+    # placed in the order of the faceted level, and the sides of the box after its axis
+    assert along["level"] > along["z"] + 0.1
+    assert along["g"] > 0.35
+
+
+def test_a_faceted_front_in_a_periodic_box_is_overlap_free() -> None:
+    packing = _pack(faceted_scene("periodic-box", facet=7.0))
+    assert regopack.verify(packing).ok
+    assert packing.n_placed > 0.9 * packing.n_particles
+
+
+def test_the_faceted_level_rises_along_the_faces_of_the_pyramids(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    seen: list[sweep_module.SurfaceSweep] = []
+    run = sweep_module.SurfaceSweep.run
+
+    def keep(self: sweep_module.SurfaceSweep, *args: Any, **kwargs: Any) -> None:
+        seen.append(self)
+        run(self, *args, **kwargs)
+
+    monkeypatch.setattr(sweep_module.SurfaceSweep, "run", keep)
+    # a floor of 16 x 16 in squares of about 7: two of 8 each way, centred on the middle
+    _pack(faceted_scene(count=5, facet=7.0))
+    sweep = seen[0]
+    z0 = -8.0
+    r2, r3 = np.sqrt(2.0), np.sqrt(3.0)
+    for point, level in (
+        ((0.0, 0.0, z0), z0),  # an apex on the floor
+        ((8.0, -8.0, z0 + 3.0), z0 + 3.0 / r3),  # the next apex, higher
+        ((4.0, 1.0, z0), z0 + r2 * 4.0 / r3),  # on an edge between two squares
+        ((-1.0, -2.5, z0 + 1.0), z0 + (1.0 + r2 * 2.5) / r3),  # on a face
+    ):
+        assert sweep._level(np.array(point)) == pytest.approx(level, abs=1e-12)
+    # the bins reach the highest level: the box's top above an edge of a square
+    assert sweep.nbins * sweep.delta >= (16.0 + r2 * 4.0) / r3
+
+
+def test_the_faceted_front_and_its_facet_are_checked_by_the_config() -> None:
+    with pytest.raises(ConfigError, match=r"facet = 5.0 sizes the faceted front's pyramids"):
+        regopack.pack(faceted_scene(front="bottom-up", facet=5.0), verify=False)
+    with pytest.raises(ConfigError, match=r"front = 'faceted' is a front of the sweep"):
+        regopack.pack(faceted_scene(order="paper"), verify=False)
