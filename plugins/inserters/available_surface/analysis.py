@@ -152,6 +152,9 @@ class Screening(NamedTuple):
     levels: FloatArray
     """Spheres: ascending radii at which an empty candidate is tried for shutting
     (:func:`sphere_shut`); ``levels[0]`` the population's smallest (empty: none)."""
+    shut: FloatArray
+    """Spheres: per candidate, the radius from which no sphere fits any more
+    (:func:`sphere_shut`; ``inf``: none known)."""
 
 
 def solids_of(polys: list[Polyhedron]) -> Solids:
@@ -673,34 +676,28 @@ def _shut_below(
     levels: FloatArray,
     t: float,
     r: float,
-    rmin: FloatArray,
+    shut: FloatArray,
     counters: IntArray,
 ) -> None:
     """After an empty analysis at ``r``: try to shut ``k`` from the next level below.
 
-    The largest level under ``t * r`` is tried (:func:`sphere_shut`); when
-    ``k`` is shut from it, ``rmin[k]`` becomes the least value whose
-    screening ``r' < t * rmin[k]`` lets only radii below that level pass, or
-    ``-inf`` from the smallest level (no particle of the population passes).
+    The largest level under ``t * r`` (and not above particle ``i``'s radius,
+    whose interferers :func:`sphere_shut` reads) is tried when it lies below
+    ``shut[k]``; when ``k`` is shut from it, ``shut[k]`` becomes that level.
     """
     lv = -1
     for m in range(levels.shape[0]):
-        if levels[m] < t * r:
+        if levels[m] < t * r and levels[m] <= placed.circum[i]:
             lv = m
     if lv < 0:
         return
     level = levels[lv]
+    if not level < shut[k]:
+        return
     counters[2] += 1
-    if not sphere_shut(k, i, g, placed, bounds, level):
-        return
-    counters[3] += 1
-    if lv == 0:
-        rmin[k] = -np.inf
-        return
-    v = level / t
-    while t * v < level:
-        v = np.nextafter(v, np.inf)
-    rmin[k] = v
+    if sphere_shut(k, i, g, placed, bounds, level):
+        counters[3] += 1
+        shut[k] = level
 
 
 @numba.njit(cache=True)
@@ -733,7 +730,8 @@ def scan(
     ``max(0, eta + xi - 1) / 100`` of the particle's equivalent diameter away
     from the interferers and walls (:func:`eta_margin`). With ``spheres`` the
     population is spheres (:func:`analyse_sphere`). ``counters``
-    counts analyses, empty ones and (spheres) shut ones; ``xi[0]`` holds a drawn ``xi`` across a
+    counts analyses, empty ones, shut tests, shut candidates and analyses saved;
+    ``xi[0]`` holds a drawn ``xi`` across a
     :data:`FULL` return (negative: none). Returns ``(code, position)``: :data:`FOUND`
     and the candidate's position (the centre in ``out``), :data:`EMPTY` and
     ``len(candidates)``, or :data:`FULL` and the position to resume from
@@ -746,13 +744,17 @@ def scan(
     for one hidden from it; the scan descends it to the next candidate that
     passes, so a search costs the candidates analysed, not the candidates
     listed. An empty analysis sets the leaf to ``radius[i]`` as it sets
-    ``rmin``. For spheres with a ``floor`` (and ``eta = 0``), an empty
-    analysis that also shows no sphere of the floor radius fits
-    (:data:`SHUT`, see :func:`analyse_sphere`) sets ``rmin[k] = -inf``: the
-    candidate is never analysed again, which changes no packing (every
-    analysis it saves would find nothing and draws no random number).
+    ``rmin``.
+
+    For spheres, an empty analysis (without a margin) may shut the
+    candidate from a level of radius below (:func:`_shut_below`,
+    ``shut[k]``): a later sphere at least that large that passes the
+    screening is not analysed but taken as empty, with all that an empty
+    analysis does (its ``xi`` drawn, ``tried``, ``rmin`` and the leaf set).
+    The screening, the random numbers and so the packing stay those of the
+    analyses themselves; ``counters[4]`` counts the analyses saved.
     """
-    t, radius, rmin, tried, counters, levels = screen
+    t, radius, rmin, tried, counters, levels, shut = screen
     r = radius[i]
     leaves = tree.shape[0] // 2
     m = begin - 1
@@ -772,24 +774,29 @@ def scan(
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
                 xi[0] = rng.random()
             margin = eta_margin(eta, xi[0], r)
-        if spheres:
-            code = analyse_sphere(k, i, g, placed, bounds, margin, rng, out)
+        if spheres and placed.circum[i] >= shut[k]:
+            code = EMPTY  # certified: no sphere this large fits (sphere_shut)
+            counters[4] += 1
         else:
-            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
-        if code == FULL:
-            return FULL, m
+            if spheres:
+                code = analyse_sphere(k, i, g, placed, bounds, margin, rng, out)
+            else:
+                code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
+            if code == FULL:
+                return FULL, m
+            counters[0] += 1
+            if code == EMPTY:
+                counters[1] += 1
         xi[0] = -1.0
-        counters[0] += 1
         if tried.shape[0] > 0:
             tried[k] = i
         if code == FOUND:
             return FOUND, m
-        counters[1] += 1
         rmin[k] = r
         if spheres and margin == 0.0 and levels.shape[0] > 0 and math.isfinite(t):
-            _shut_below(k, i, g, placed, bounds, levels, t, r, rmin, counters)
+            _shut_below(k, i, g, placed, bounds, levels, t, r, shut, counters)
         if leaves > 0:
-            tree_set(tree, leaves, m, rmin[k])
+            tree_set(tree, leaves, m, r)
     return EMPTY, candidates.shape[0]
 
 

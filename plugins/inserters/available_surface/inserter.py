@@ -35,9 +35,10 @@ candidate is tried for *shutting* from the next of a few levels of radius
 below (quantiles of the population's radii, :func:`.state.shut_levels`):
 when the caps of a sphere of that radius cover its sphere of centres with
 room to spare, no sphere of that radius or more will ever touch it
-(:func:`.analysis.sphere_shut`), and its screening radius is lowered to
-match — the same packing, with fewer analyses (the 3D counterpart of the
-disks' bounds in 2D).
+(:func:`.analysis.sphere_shut`): a later sphere that large that the
+screening lets through is taken as an empty analysis without one — the
+same screening, random numbers and packing, with fewer analyses (the 3D
+counterpart of the disks' bounds in 2D).
 """
 
 from __future__ import annotations
@@ -262,7 +263,15 @@ class AvailableSurface(InsertionStrategy):
         stats = {
             "candidate_analyses": float(st.analyses),
             "empty_analyses": float(st.empty),
-            **({"shut_tests": float(st.shut_tests), "shut": float(st.shut)} if st.spheres else {}),
+            **(
+                {
+                    "shut_tests": float(st.shut_tests),
+                    "shut": float(st.shut),
+                    "analyses_saved": float(st.saved),
+                }
+                if st.spheres
+                else {}
+            ),
             **stats,
             "insert_time_s": time.perf_counter() - started,
         }

@@ -118,8 +118,10 @@ class SurfaceState:
         self.index = np.full(n, -1, dtype=np.int64)
         self.order = np.full(n, -1, dtype=np.int64)
         self.rmin = np.full(n, np.inf)
+        self.shut_from = np.full(n, np.inf)
+        """Spheres: per candidate, the radius from which no sphere fits any more."""
         self.count = 0
-        self.counters = np.zeros(4, dtype=np.int64)
+        self.counters = np.zeros(5, dtype=np.int64)
         self._no_tried = np.zeros(0, dtype=np.int64)
         self._no_tree = np.zeros(0)
         self._no_arcs = EdgeArcs(
@@ -220,6 +222,7 @@ class SurfaceState:
             self._no_tried if tried is None else tried,
             self.counters,
             self.levels,
+            self.shut_from,
         )
         placed = Placed(self.order, self.centre, self.circum, self.reach_max)
         bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
@@ -265,6 +268,11 @@ class SurfaceState:
     def shut(self) -> int:
         """Tries that shut their candidate from a level down (spheres)."""
         return int(self.counters[3])
+
+    @property
+    def saved(self) -> int:
+        """Analyses not run because their candidate was shut (spheres): each an empty one."""
+        return int(self.counters[4])
 
     def _grow_cache(self) -> None:
         """Double the half-space cache, keeping its rows."""

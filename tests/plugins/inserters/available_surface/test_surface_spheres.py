@@ -378,21 +378,21 @@ def test_shutting_candidates_changes_no_packing_and_shut_ones_take_no_sphere(
     plain, st0 = _run_state(monkeypatch, data, levels=False)
     packing, st = _run_state(monkeypatch, data, levels=True)
     assert np.array_equal(plain.centre, packing.centre, equal_nan=True)
-    assert st0.shut_tests == 0 and st.analyses < st0.analyses
+    # the screening is that of the analyses themselves: a saved one counts as empty
+    assert np.array_equal(st0.rmin, st.rmin)
+    assert st0.shut_tests == 0 and st.saved > 0 and st.analyses + st.saved == st0.analyses
     # every candidate shut from a level takes no sphere of that radius now: directions
     # all about it, against every placed sphere and the walls
     placed = np.flatnonzero(np.isfinite(st.centre[:, 0]))
     c, r = st.centre[placed], st.circum[placed]
-    rmin = st.rmin[st.index[placed]]
-    at = np.where(np.isneginf(rmin), st.levels[0], st.t * rmin)
-    near = np.abs(at[:, None] - st.levels[None, :]) <= 4 * np.spacing(st.levels)[None, :]
-    shut = np.flatnonzero(near.any(axis=1))
-    assert len(shut) >= 20
+    level = st.shut_from[st.index[placed]]
+    shut = np.flatnonzero(np.isfinite(level))
+    assert len(shut) >= 20 and np.all(np.isin(level[shut], st.levels))
     rng = np.random.default_rng(0)
     u = rng.normal(size=(10_000, 3))
     u /= np.linalg.norm(u, axis=1)[:, None]
     for a in shut[:: max(1, len(shut) // 30)]:
-        rf = float(st.levels[near[a]][0])
+        rf = float(level[a])
         x = c[a] + (r[a] + rf) * u
         d0 = c - c[a]
         if st.period is not None:
@@ -405,3 +405,29 @@ def test_shutting_candidates_changes_no_packing_and_shut_ones_take_no_sphere(
             slack = np.minimum(slack, (x - st.lo - rf).min(axis=1))
             slack = np.minimum(slack, (st.hi - rf - x).min(axis=1))
         assert slack.max() < 1e-9 * rf, (a, rf)
+
+
+@pytest.mark.parametrize(
+    ("seed", "kind", "t", "eta"),
+    [(50, "box", 0.95, 0.0), (41, "periodic-box", 0.9, 0.0), (1, "box", 0.999, 0.5)],
+)
+def test_shutting_keeps_the_screening_and_the_random_numbers_of_the_analyses(
+    monkeypatch: pytest.MonkeyPatch, seed: int, kind: str, t: float, eta: float
+) -> None:
+    # below t = 1, an analysis saved must still lower rmin as the empty one would (a
+    # sphere a little smaller that the screening then refuses could fit); with eta > 0
+    # it must still draw its xi
+    data = scene(
+        seed=seed,
+        count=250,
+        domain={"kind": kind, "width": 12.0, "height": 12.0, "depth": 12.0},
+        size={"kind": "uniform", "d_min": 1.0, "d_max": 4.0},
+        insertion={"kind": "available-surface", "t": t},
+        density={"kind": "eta", "eta": eta},
+    )
+    plain, st0 = _run_state(monkeypatch, data, levels=False)
+    packing, st = _run_state(monkeypatch, data, levels=True)
+    assert np.array_equal(plain.centre, packing.centre, equal_nan=True)
+    assert np.array_equal(st0.rmin, st.rmin)
+    assert st.saved > 0
+    assert st.analyses + st.saved == st0.analyses
