@@ -342,6 +342,32 @@ def height_profile(
     return out
 
 
+SHELL_QUANTITIES: tuple[tuple[str, str], ...] = (
+    ("density", "number_density"),
+    ("mean_d", "mean_d"),
+)
+"""The quantities of a 3D window's shells that carry sampling errors (prefix, column)."""
+
+
+def shell_profile(
+    shells: Mapping[str, Any], overall: Mapping[str, float]
+) -> dict[str, float | None]:
+    """Compare a 3D window's shells with the whole window, as :func:`height_profile` the layers.
+
+    For number density and mean diameter: the largest relative deviation of a
+    shell from the window's value (``shell_<q>_max_rel_dev``) and the χ² per
+    degree of freedom of the shells about their weighted mean
+    (``shell_<q>_chi2_dof``: about 1 when they differ by their sampling errors only).
+    """
+    out: dict[str, float | None] = {}
+    for prefix, column in SHELL_QUANTITIES:
+        values = np.asarray(shells[column], dtype=np.float64)
+        err = np.asarray(shells[f"{column}_err"], dtype=np.float64)
+        out[f"shell_{prefix}_max_rel_dev"] = _max_rel_dev(values, overall[column])
+        out[f"shell_{prefix}_chi2_dof"] = _chi2_dof(values, err)
+    return out
+
+
 class Homogeneity(Measured):
     """Number density, φ, mean diameter (and mineral fractions) over the regions of the window.
 
@@ -411,6 +437,7 @@ class Homogeneity(Measured):
                     per_length,
                 )
             )
+            self._results.update(shell_profile(self.shells, overall))
             return self
         self.centre = packing.domain.center
         names = packing.mineral_names

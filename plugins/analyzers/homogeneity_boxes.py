@@ -133,6 +133,7 @@ def layers_and_shells(
         half = 0.5 * np.array(w.size)
         steps = np.linspace(0.0, 1.0, n_shells + 1)
         inner_solid, inner_volume = 0.0, 0.0
+        shell_errors: dict[str, list[float]] = {"density": [], "mean_diameter": []}
         reach = np.max(np.abs(centre - c) / np.where(half > 0, half, np.inf), axis=1)
         for lo, hi in itertools.pairwise(steps if w.volume > 0 else []):
             box = Box(*(v for a in range(3) for v in (c[a] - hi * half[a], c[a] + hi * half[a])))
@@ -147,6 +148,13 @@ def layers_and_shells(
                 strict=True,
             ):
                 shells[key].append(float(value))
+            d = 2.0 * p3.radius[sel]
+            shell_errors["density"].append(
+                math.sqrt(max(n, 1)) / shell_volume if shell_volume > 0 else math.nan
+            )
+            shell_errors["mean_diameter"].append(
+                float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.nan
+            )
             inner_solid, inner_volume = solid, box.volume
 
     def clean(values: list[float]) -> list[float | None]:
@@ -185,8 +193,15 @@ def layers_and_shells(
             "mean_d_err": np.asarray(errors["mean_diameter"]),
         }
     )
-    tables = {
-        "homogeneity_layers": layer_table,
-        "homogeneity_shells": {k: np.asarray(v) for k, v in shells.items()},
-    }
+    shell_table = {k: np.asarray(v) for k, v in shells.items()}
+    # as the layers: the columns under the names of the 2D tables, with their sampling errors
+    shell_table.update(
+        {
+            "number_density": shell_table["density"],
+            "number_density_err": np.asarray(shell_errors["density"]),
+            "mean_d": shell_table["mean_diameter"],
+            "mean_d_err": np.asarray(shell_errors["mean_diameter"]),
+        }
+    )
+    tables = {"homogeneity_layers": layer_table, "homogeneity_shells": shell_table}
     return tables, results

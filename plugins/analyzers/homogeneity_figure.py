@@ -238,6 +238,10 @@ def draw_homogeneity(packing: Any, h: Homogeneity) -> Figure:
     return fig
 
 
+SHELL_ERRORS = {"density": "number_density_err", "mean_diameter": "mean_d_err"}
+"""The shells' columns drawn with their sampling errors, and the errors' columns."""
+
+
 def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figure:
     """Draw number density, φ and mean diameter over the layers (top) and shells (bottom).
 
@@ -288,8 +292,19 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
         for col, (key, ylabel) in enumerate(columns):
             ax = axes[row, col]
             y = np.asarray(table[key], dtype=float)
+            err_key = SHELL_ERRORS.get(key)
             if x.size:
                 ax.plot(x, y, marker="o", markersize=3, linewidth=0.9, color="#0072B2")
+                if err_key is not None and err_key in table:
+                    ax.errorbar(
+                        x,
+                        y,
+                        yerr=np.asarray(table[err_key], dtype=float),
+                        fmt="none",
+                        ecolor="#0072B2",
+                        elinewidth=0.7,
+                        capsize=2,
+                    )
                 finite = y[np.isfinite(y)]
                 if finite.size:
                     mean = float(finite.mean())
@@ -302,7 +317,7 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
             ax.set_ylabel(ylabel)
     fig.suptitle(
         "Interior window: layers along z (± 1 standard error; dotted: the whole window), "
-        "shells about the centre",
+        "shells about the centre (± 1 standard error)",
         fontsize=8,
     )
     return fig

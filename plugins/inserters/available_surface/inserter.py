@@ -107,11 +107,15 @@ class AvailableSurfaceConfig(BaseModel):
         ),
     )
     zone: SweepZone = 0.0
-    closing: Literal["paced", "prompt", "tail"] = Field(
+    closing: Literal["paced", "prompt", "tail", "even"] = Field(
         "paced",
         description=(
             "How the sweep ends under the top wall, as in 2D: 'paced', 'prompt' or 'tail' "
-            "(see the available-arc inserter). Ignored by order = 'paper'."
+            "(see the available-arc inserter); or 'even': paced, but once a column's zone "
+            "has reached the top a particle whose sqrt(2) size class is placed in a larger "
+            "share of those offered than the least placed class is held back, so that the "
+            "particles not placed are spread over the sizes (the placed sizes true to the "
+            "drawn ones, the top band looser and coarser). Ignored by order = 'paper'."
         ),
     )
     strip: float = Field(
@@ -205,6 +209,7 @@ class AvailableSurface(InsertionStrategy):
         from regopack.geometry.solids import SolidBatch
         from regopack.plugins.inserters.available_surface.state import SurfaceState
         from regopack.plugins.inserters.available_surface.sweep import (
+            STATUS_HELD,
             STATUS_REFUSED,
             SurfaceSweep,
         )
@@ -249,12 +254,14 @@ class AvailableSurface(InsertionStrategy):
             sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
             sweep.run(rng, progress, PROGRESS_EVERY)
             refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
+            held = int(np.count_nonzero(sweep.status[:n] == STATUS_HELD))
             stats = {
                 "zone": float(sweep.zone),
                 "zone_raises": float(sweep.raises),
                 "strips": float(len(sweep.zones)),
                 "refused": float(refused),
-                "not_offered": float(n - st.count - refused),
+                **({"held": float(held)} if cfg.closing == "even" else {}),
+                "not_offered": float(n - st.count - refused - held),
             }
         else:
             _pack_paper(st, rng, progress)

@@ -11,7 +11,12 @@ height of rises that did not help, the rises are undone (the zone keeps its
 top once it has reached the top of the box) and the particle is analysed
 exactly, without screening, at every candidate not retired; it is *refused*
 when none has free area. The closings (``paced``, ``prompt``, ``tail``) are
-those of 2D.
+those of 2D; ``even`` is the paced closing that, once a column's zone has
+reached the top, holds back a particle whose size class (:func:`size_classes`)
+has been placed in a larger share of the particles offered than the least
+placed class (:func:`held_back`): the coarse particles refused under the top
+are matched by finer ones left out, so that the placed sizes stay a sample of
+the drawn ones.
 
 A candidate analysed for a particle keeps its answer while that particle is
 being placed (nothing changes in between), so the exact pass skips the
@@ -61,9 +66,14 @@ ZONE_BINS = 80
 
 
 FROZEN, ACTIVE, RETIRED = 0, 1, 2
-CLOSINGS = ("paced", "prompt", "tail")
+CLOSINGS = ("paced", "prompt", "tail", "even")
 FRONTS = ("bottom-up", "faceted")
-STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED = 0, 1, 2
+STATUS_NOT_OFFERED, STATUS_PLACED, STATUS_REFUSED, STATUS_HELD = 0, 1, 2, 3
+
+EVEN_CLASS_SIZE = 100
+"""Fewest drawn particles of a size class of the ``even`` closing: coarser classes pool."""
+EVEN_MIN_OFFERED = 25
+"""Offered particles a size class needs before its share sets the ``even`` closing's floor."""
 
 
 MAX_TILES = 1 << 10
@@ -72,6 +82,46 @@ MAX_TILES = 1 << 10
 
 HIDDEN = -np.inf
 """Screening leaf of a candidate hidden from the search (no radius passes it)."""
+
+
+def size_classes(radius: FloatArray, fewest: int = EVEN_CLASS_SIZE) -> IntArray:
+    """Each radius's size class: sqrt(2) classes from the smallest radius, the coarsest pooled.
+
+    Class ``k`` holds the radii in ``[r_min 2^(k/2), r_min 2^((k+1)/2))``; from the
+    coarsest down, a class of fewer than ``fewest`` radii joins the one below it,
+    so that the sparse coarse tail (most of the mass) is counted as one class.
+    """
+    if radius.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    ratio = radius / float(np.min(radius))
+    cls = np.floor(2.0 * np.log2(ratio) + 1e-12).astype(np.int64)
+    counts = np.bincount(cls)
+    top = counts.shape[0] - 1
+    pooled = int(counts[top])
+    while top > 0 and pooled < fewest:
+        top -= 1
+        pooled += int(counts[top])
+    pooled_cls: IntArray = np.minimum(cls, top)
+    return pooled_cls
+
+
+def held_back(offered: IntArray, placed: IntArray, c: int) -> bool:
+    """Whether the ``even`` closing holds back a particle of size class ``c``.
+
+    ``offered`` and ``placed`` count, per class, the particles offered (held
+    ones included) and placed so far. The particle is held when its class has
+    been placed in a larger share of those offered than the least placed class
+    of at least :data:`EVEN_MIN_OFFERED` offered: the coarse particles refused
+    under the top are then matched by finer ones left out, so that the
+    particles not placed are spread over the sizes as a random subset is.
+    """
+    if offered[c] == 0:
+        return False
+    big = offered >= EVEN_MIN_OFFERED
+    if not big.any():
+        return False
+    floor = float(np.min(placed[big] / offered[big]))
+    return bool(placed[c] > floor * offered[c])
 
 
 @numba.njit(cache=True)
@@ -219,6 +269,13 @@ class SurfaceSweep:
         self.cur = -1
         self.done = self.started = False
         self.refused = 0
+        self.held = 0
+        # the even closing: each particle's sqrt(2) size class (from the smallest drawn),
+        # with the particles of each class offered and placed so far
+        self.size_class = size_classes(state.radius[: state.n])
+        ncls = int(self.size_class.max()) + 1 if state.n else 1
+        self.class_offered = np.zeros(ncls, dtype=np.int64)
+        self.class_placed = np.zeros(ncls, dtype=np.int64)
 
     @property
     def raises(self) -> int:
@@ -376,9 +433,25 @@ class SurfaceSweep:
 
     def offer(self, i: int, rng: np.random.Generator) -> None:
         """Offer particle ``i`` (after the run has closed it is not offered)."""
-        st = self.state
         if self.done:
             return
+        if self.closing != "even":
+            self._offer(i, rng)
+            return
+        c = int(self.size_class[i])
+        closing = any(z.full for z in self.zones)
+        if closing and held_back(self.class_offered, self.class_placed, c):
+            self.class_offered[c] += 1
+            self.status[i] = STATUS_HELD
+            self.held += 1
+            return
+        self._offer(i, rng)
+        if self.status[i] != STATUS_NOT_OFFERED:
+            self.class_offered[c] += 1
+            self.class_placed[c] += int(self.status[i] == STATUS_PLACED)
+
+    def _offer(self, i: int, rng: np.random.Generator) -> None:
+        st = self.state
         if not self.started:
             if st.begin(i):
                 first = np.clip(0.5 * (st.lo + st.hi), st.adm_lo, st.adm_hi)
@@ -406,7 +479,7 @@ class SurfaceSweep:
             tried.add(k)
             self.cur = k
             z = self.zones[k]
-            if z.full and self.closing == "paced":
+            if z.full and self.closing in ("paced", "even"):
                 # the lowest bin retires after as many offers as a bin took to pass before
                 z.since += 1
                 if z.since > z.pace:

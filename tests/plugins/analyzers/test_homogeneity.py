@@ -445,6 +445,43 @@ def test_a_graded_3d_lattice_shows_its_height_trend() -> None:
     assert h.layers["number_density_err"].min() > 0
 
 
+def test_3d_shells_carry_sampling_errors_and_their_deviation_from_the_window(
+    packing3d,
+) -> None:
+    h = Homogeneity(HomogeneityConfig(layers=4, shells=3)).compute(packing3d, {})
+    shells, r = h.shells, h.results()
+    n = shells["n"]
+    half = np.array([0, 1, 2, 3]) / 3 * np.array(h.window.size)[:, None] / 2
+    volume = np.diff(np.prod(2 * half, axis=0))
+    # Poisson for the number density, std / sqrt(n) for the mean diameter, as the layers'
+    np.testing.assert_allclose(shells["number_density"], n / volume, rtol=1e-12)
+    np.testing.assert_allclose(
+        shells["number_density_err"], np.sqrt(np.maximum(n, 1)) / volume, rtol=1e-12
+    )
+    window = packing3d.domain.interior(6.0)
+    placed = packing3d.placed
+    c = np.asarray(window.center)
+    reach = np.max(np.abs(packing3d.centre - c) / (0.5 * np.array(window.size)), axis=1)
+    d = 2.0 * packing3d.radius
+    expected = []
+    for k in range(3):
+        sel = placed & (reach >= k / 3) & (reach < (k + 1) / 3)
+        m = int(sel.sum())
+        expected.append(d[sel].std(ddof=1) / np.sqrt(m) if m > 1 else np.nan)
+    np.testing.assert_allclose(shells["mean_d_err"], expected, rtol=1e-12)
+    assert np.isfinite(shells["mean_d_err"]).sum() >= 2  # the fixture has a chi2 to check
+    dev = np.max(np.abs(shells["number_density"] / r["number_density"] - 1.0))
+    assert r["shell_density_max_rel_dev"] == pytest.approx(dev, rel=1e-12)
+    dev = np.nanmax(np.abs(shells["mean_d"] / r["mean_d"] - 1.0))
+    assert r["shell_mean_d_max_rel_dev"] == pytest.approx(dev, rel=1e-12)
+    ok = np.isfinite(shells["mean_d_err"]) & (shells["mean_d_err"] > 0)
+    w = 1.0 / shells["mean_d_err"][ok] ** 2
+    mean = np.sum(w * shells["mean_d"][ok]) / w.sum()
+    chi2 = np.sum(w * (shells["mean_d"][ok] - mean) ** 2) / (ok.sum() - 1)
+    assert r["shell_mean_d_chi2_dof"] == pytest.approx(chi2, rel=1e-12)
+    assert r["shell_density_chi2_dof"] is not None
+
+
 def test_a_periodic_cell_counts_the_solids_that_cross_its_faces_in_their_images() -> None:
     import dataclasses
 
