@@ -296,10 +296,13 @@ def draw_layers_and_shells(homogeneity: Homogeneity, unit: str = "µm") -> Figur
             if x.size:
                 ax.plot(x, y, marker="o", markersize=3, linewidth=0.9, color="#0072B2")
                 if err_key is not None and err_key in table:
+                    err = np.asarray(table[err_key], dtype=float)
+                    # counts and diameters are not negative: the bar stops at zero
+                    low = np.where(np.isfinite(y), np.minimum(err, np.maximum(y, 0.0)), err)
                     ax.errorbar(
                         x,
                         y,
-                        yerr=np.asarray(table[err_key], dtype=float),
+                        yerr=np.vstack([low, err]),
                         fmt="none",
                         ecolor="#0072B2",
                         elinewidth=0.7,
