@@ -84,6 +84,47 @@ def _frame(nx: float, ny: float, nz: float) -> tuple[float, float, float, float,
     return e1x, e1y, e1z, ny * e1z - nz * e1y, nz * e1x - nx * e1z, nx * e1y - ny * e1x
 
 
+MISSES, HOLDS, CROSSES = 0, 1, 2
+"""How a cap meets a circle (:func:`_cover_of`)."""
+
+
+@numba.njit(cache=True, inline="always")
+def _cover_of(
+    caps: FloatArray,
+    q: int,
+    shrink: float,
+    rc: float,
+    hj: float,
+    nx: float,
+    ny: float,
+    nz: float,
+    e1x: float,
+    e1y: float,
+    e1z: float,
+    e2x: float,
+    e2y: float,
+    e2z: float,
+) -> tuple[int, float, float]:
+    """How cap ``q``, shrunk by ``shrink``, covers the circle ``n · u = hj`` (radius ``rc``).
+
+    Returns :data:`MISSES`, :data:`HOLDS` (the whole circle), or
+    :data:`CROSSES` with the covered open arc's start in ``[0, 2 pi)`` and
+    its length (angles in the circle's frame ``e1``, ``e2``).
+    """
+    mx, my, mz = caps[q, 0], caps[q, 1], caps[q, 2]
+    a = rc * (mx * e1x + my * e1y + mz * e1z)
+    b = rc * (mx * e2x + my * e2y + mz * e2z)
+    c = caps[q, 3] + shrink - hj * (mx * nx + my * ny + mz * nz)
+    amp = math.sqrt(a * a + b * b)
+    if c >= amp:
+        return MISSES, 0.0, 0.0
+    if c < -amp:
+        return HOLDS, 0.0, 0.0
+    mid = math.atan2(b, a)
+    half = math.acos(c / amp)
+    return CROSSES, (mid - half) % (2.0 * math.pi), 2.0 * half
+
+
 @numba.njit(cache=True)
 def _has_width(
     caps: FloatArray,
@@ -234,20 +275,15 @@ def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatAr
         for q in range(ncaps):
             if q == j:
                 continue
-            mx, my, mz, hq = caps[q, 0], caps[q, 1], caps[q, 2], caps[q, 3]
-            a = rc * (mx * e1x + my * e1y + mz * e1z)
-            b = rc * (mx * e2x + my * e2y + mz * e2z)
-            c = hq + tau - hj * (mx * nx + my * ny + mz * nz)
-            amp = math.sqrt(a * a + b * b)
-            if c >= amp:
+            kind, s, length = _cover_of(
+                caps, q, tau, rc, hj, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z
+            )
+            if kind == MISSES:
                 continue  # cap q misses the circle
-            if c < -amp:
+            if kind == HOLDS:
                 whole = True
                 break
-            mid = math.atan2(b, a)
-            half = math.acos(c / amp)
-            s = (mid - half) % two_pi
-            e = s + 2.0 * half
+            e = s + length
             if e > two_pi:  # through angle 0: two pieces
                 lo[m] = s
                 hi[m] = two_pi
@@ -321,25 +357,20 @@ def covers(caps: FloatArray, ncaps: int, big_r: float, depth: float) -> bool:
         for q in range(ncaps):
             if q == j:
                 continue
-            mx, my, mz = caps[q, 0], caps[q, 1], caps[q, 2]
-            a = rc * (mx * e1x + my * e1y + mz * e1z)
-            b = rc * (mx * e2x + my * e2y + mz * e2z)
-            c = caps[q, 3] + depth - hj * (mx * nx + my * ny + mz * nz)
-            amp = math.sqrt(a * a + b * b)
-            if c >= amp:
+            kind, start, length = _cover_of(
+                caps, q, depth, rc, hj, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z
+            )
+            if kind == MISSES:
                 continue
-            if c < -amp:
+            if kind == HOLDS:
                 whole = True
                 break
-            mid = math.atan2(b, a)
-            half = math.acos(c / amp)
-            start = (mid - half) % two_pi
             lo[m] = start
-            hi[m] = start + 2.0 * half
+            hi[m] = start + length
             m += 1
-            if start + 2.0 * half > two_pi:  # its copy one turn lower covers the start
+            if start + length > two_pi:  # its copy one turn lower covers the start
                 lo[m] = start - two_pi
-                hi[m] = start + 2.0 * half - two_pi
+                hi[m] = start + length - two_pi
                 m += 1
         if whole:
             continue
