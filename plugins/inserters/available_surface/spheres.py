@@ -84,45 +84,63 @@ def _frame(nx: float, ny: float, nz: float) -> tuple[float, float, float, float,
     return e1x, e1y, e1z, ny * e1z - nz * e1y, nz * e1x - nx * e1z, nx * e1y - ny * e1x
 
 
-MISSES, HOLDS, CROSSES = 0, 1, 2
-"""How a cap meets a circle (:func:`_cover_of`)."""
-
-
-@numba.njit(cache=True, inline="always")
-def _cover_of(
+@numba.njit(cache=True)
+def _circle_covers(
     caps: FloatArray,
-    q: int,
-    shrink: float,
-    rc: float,
+    ncaps: int,
+    j: int,
     hj: float,
-    nx: float,
-    ny: float,
-    nz: float,
-    e1x: float,
-    e1y: float,
-    e1z: float,
-    e2x: float,
-    e2y: float,
-    e2z: float,
-) -> tuple[int, float, float]:
-    """How cap ``q``, shrunk by ``shrink``, covers the circle ``n · u = hj`` (radius ``rc``).
+    rc: float,
+    shrink: float,
+    lo: FloatArray,
+    hi: FloatArray,
+    below: bool,
+) -> int:
+    """Fill ``lo``/``hi`` with the open arcs of circle ``j`` that the other caps cover.
 
-    Returns :data:`MISSES`, :data:`HOLDS` (the whole circle), or
-    :data:`CROSSES` with the covered open arc's start in ``[0, 2 pi)`` and
-    its length (angles in the circle's frame ``e1``, ``e2``).
+    The circle is ``n_j · u = hj`` (radius ``rc``), the other caps are read
+    shrunk by ``shrink``; angles in the circle's frame (:func:`_frame`), each
+    arc starting in ``[0, 2 pi)``. An arc through angle 0 is cut there into
+    two (``below`` False), or kept whole with a copy one turn lower
+    (``below`` True). Returns the number of arcs, or -1 when one cap holds
+    the whole circle.
     """
-    mx, my, mz = caps[q, 0], caps[q, 1], caps[q, 2]
-    a = rc * (mx * e1x + my * e1y + mz * e1z)
-    b = rc * (mx * e2x + my * e2y + mz * e2z)
-    c = caps[q, 3] + shrink - hj * (mx * nx + my * ny + mz * nz)
-    amp = math.sqrt(a * a + b * b)
-    if c >= amp:
-        return MISSES, 0.0, 0.0
-    if c < -amp:
-        return HOLDS, 0.0, 0.0
-    mid = math.atan2(b, a)
-    half = math.acos(c / amp)
-    return CROSSES, (mid - half) % (2.0 * math.pi), 2.0 * half
+    two_pi = 2.0 * math.pi
+    nx, ny, nz = caps[j, 0], caps[j, 1], caps[j, 2]
+    e1x, e1y, e1z, e2x, e2y, e2z = _frame(nx, ny, nz)
+    m = 0
+    for q in range(ncaps):
+        if q == j:
+            continue
+        mx, my, mz = caps[q, 0], caps[q, 1], caps[q, 2]
+        a = rc * (mx * e1x + my * e1y + mz * e1z)
+        b = rc * (mx * e2x + my * e2y + mz * e2z)
+        c = caps[q, 3] + shrink - hj * (mx * nx + my * ny + mz * nz)
+        amp = math.sqrt(a * a + b * b)
+        if c >= amp:
+            continue  # cap q misses the circle
+        if c < -amp:
+            return -1
+        mid = math.atan2(b, a)
+        half = math.acos(c / amp)
+        s = (mid - half) % two_pi
+        e = s + 2.0 * half
+        if e > two_pi and not below:  # through angle 0: two pieces
+            lo[m] = s
+            hi[m] = two_pi
+            m += 1
+            lo[m] = 0.0
+            hi[m] = e - two_pi
+            m += 1
+            continue
+        lo[m] = s
+        hi[m] = e
+        m += 1
+        if e > two_pi:  # its copy one turn lower covers the start
+            lo[m] = s - two_pi
+            hi[m] = e - two_pi
+            m += 1
+    return m
 
 
 @numba.njit(cache=True)
@@ -270,33 +288,9 @@ def free_arcs(caps: FloatArray, ncaps: int, big_r: float, tau: float) -> FloatAr
         if rc <= THIN * big_r:
             continue
         e1x, e1y, e1z, e2x, e2y, e2z = _frame(nx, ny, nz)
-        m = 0
-        whole = False
-        for q in range(ncaps):
-            if q == j:
-                continue
-            kind, s, length = _cover_of(
-                caps, q, tau, rc, hj, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z
-            )
-            if kind == MISSES:
-                continue  # cap q misses the circle
-            if kind == HOLDS:
-                whole = True
-                break
-            e = s + length
-            if e > two_pi:  # through angle 0: two pieces
-                lo[m] = s
-                hi[m] = two_pi
-                m += 1
-                lo[m] = 0.0
-                hi[m] = e - two_pi
-                m += 1
-            else:
-                lo[m] = s
-                hi[m] = e
-                m += 1
-        if whole:
-            continue
+        m = _circle_covers(caps, ncaps, j, hj, rc, tau, lo, hi, False)
+        if m < 0:
+            continue  # inside another cap
         order = np.argsort(lo[:m])
         at = 0.0
         min_angle = THIN * big_r / rc
@@ -346,34 +340,13 @@ def covers(caps: FloatArray, ncaps: int, big_r: float, depth: float) -> bool:
         if caps[j, 3] + depth <= -big_r:
             return True  # one cap holds the whole sphere
     for j in range(ncaps):
-        nx, ny, nz = caps[j, 0], caps[j, 1], caps[j, 2]
         hj = caps[j, 3] + depth
         if hj >= big_r:
             continue  # shrunk to nothing: no circle
         rc = math.sqrt(big_r * big_r - hj * hj)
-        e1x, e1y, e1z, e2x, e2y, e2z = _frame(nx, ny, nz)
-        m = 0
-        whole = False
-        for q in range(ncaps):
-            if q == j:
-                continue
-            kind, start, length = _cover_of(
-                caps, q, depth, rc, hj, nx, ny, nz, e1x, e1y, e1z, e2x, e2y, e2z
-            )
-            if kind == MISSES:
-                continue
-            if kind == HOLDS:
-                whole = True
-                break
-            lo[m] = start
-            hi[m] = start + length
-            m += 1
-            if start + length > two_pi:  # its copy one turn lower covers the start
-                lo[m] = start - two_pi
-                hi[m] = start + length - two_pi
-                m += 1
-        if whole:
-            continue
+        m = _circle_covers(caps, ncaps, j, hj, rc, depth, lo, hi, True)
+        if m < 0:
+            continue  # inside another cap
         if m == 0:
             return False
         order = np.argsort(lo[:m])
