@@ -31,6 +31,11 @@ from numpy.typing import NDArray
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.base.limits import derived_count
 from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.inserters.available_surface.cap_cover import (
+    COVERED,
+    UNSURE,
+    cover_by_vertices,
+)
 from regopack.plugins.inserters.available_surface.envelope import (
     EdgeArcs,
     edge_arcs,
@@ -57,6 +62,10 @@ IntArray = NDArray[np.int64]
 
 SEPARATION_EPS = 1e-9
 """Relative margin of the face-plane test that drops interferers (see :func:`_separated`)."""
+CERTAIN = 1e-9
+"""Depth, relative to ``R``, by which a sphere analysis wants every point covered before it
+takes the vertices' certificate (:func:`.cap_cover.cover_by_vertices`) for an empty answer:
+far beyond the rounding of :func:`.spheres.free_arcs`, which then finds no arc either."""
 FOUND, EMPTY, FULL = 1, 0, -1
 """Return codes of :func:`analyse`: a centre, no free area, the cache needs more room."""
 
@@ -460,21 +469,26 @@ def _sphere_caps(
 def analyse_sphere(
     k: int,
     i: int,
-    g: Grid,
+    count: int,
+    near: IntArray,
+    at: FloatArray,
     placed: Placed,
     bounds: Bounds,
     margin: float,
     rng: np.random.Generator,
     out: FloatArray,
 ) -> int:
-    """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`."""
+    """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`.
+
+    ``near[:count]``, at ``at``, are candidate ``k``'s interferers for
+    particle ``i`` with this ``margin`` (:func:`_interferers`).
+    """
     order, centre, circum, _ = placed
     pk = order[k]
     ck = centre[pk]
     r = circum[i]
     big_r = circum[pk] + r
     tau = EPS * big_r
-    count, near, at = _interferers(g, pk, i, placed, bounds, margin)
     caps = np.empty((count + 6, 4))
     nc = _sphere_caps(
         ck, big_r, r, count, near, at, circum, bounds.adm_lo, bounds.adm_hi, margin, tau, caps
@@ -482,6 +496,8 @@ def analyse_sphere(
     if nc < 0:
         return EMPTY
     nc = drop_contained(caps, nc, big_r, tau)
+    if nc > 0 and cover_by_vertices(caps, nc, big_r, tau, CERTAIN * big_r) == COVERED:
+        return EMPTY  # covered deeper than CERTAIN: free_arcs would find no arc
     arcs = free_arcs(caps, nc, big_r, tau)
     if nc > 0 and arcs.shape[0] == 0:
         return EMPTY
@@ -493,7 +509,16 @@ def analyse_sphere(
 
 
 @numba.njit(cache=True)
-def sphere_shut(k: int, i: int, g: Grid, placed: Placed, bounds: Bounds, level: float) -> bool:
+def sphere_shut(
+    k: int,
+    i: int,
+    count: int,
+    near: IntArray,
+    at: FloatArray,
+    placed: Placed,
+    bounds: Bounds,
+    level: float,
+) -> bool:
     """Whether no sphere of radius ``level`` or more can touch candidate ``k`` any more.
 
     Asked after an analysis of ``k`` for particle ``i`` (radius above
@@ -503,7 +528,8 @@ def sphere_shut(k: int, i: int, g: Grid, placed: Placed, bounds: Bounds, level: 
     must cover it with room to spare (:func:`.spheres.covers`). A smaller
     sphere fits wherever a larger one does (shrink it towards the contact
     point) and particles are only added, so every later analysis of ``k``
-    for a sphere of radius ``level`` or more would find nothing.
+    for a sphere of radius ``level`` or more would find nothing. ``near[:count]``,
+    at ``at``, are ``k``'s interferers for ``i`` without a margin.
     """
     order, centre, circum, _ = placed
     pk = order[k]
@@ -511,7 +537,6 @@ def sphere_shut(k: int, i: int, g: Grid, placed: Placed, bounds: Bounds, level: 
     shift = circum[i] - level  # the admissible box of a sphere of radius level
     big_r = circum[pk] + level
     depth = COVER_MARGIN * big_r
-    count, near, at = _interferers(g, pk, i, placed, bounds, 0.0)
     caps = np.empty((count + 6, 4))
     nc = _sphere_caps(
         ck, big_r, level, count, near, at, circum,
@@ -521,7 +546,11 @@ def sphere_shut(k: int, i: int, g: Grid, placed: Placed, bounds: Bounds, level: 
     if nc < 0:
         return True
     # a cap inside another shrunk by depth stays inside it when both are shrunk
-    return covers(caps, drop_contained(caps, nc, big_r, depth), big_r, depth)
+    nc = drop_contained(caps, nc, big_r, depth)
+    answer = cover_by_vertices(caps, nc, big_r, depth, 0.0)
+    if answer == UNSURE:
+        return covers(caps, nc, big_r, depth)
+    return answer == COVERED
 
 
 @numba.njit(cache=True)
@@ -671,6 +700,9 @@ def _shut_below(
     k: int,
     i: int,
     g: Grid,
+    count: int,
+    near: IntArray,
+    at: FloatArray,
     placed: Placed,
     bounds: Bounds,
     levels: FloatArray,
@@ -684,6 +716,8 @@ def _shut_below(
     The largest level under ``t * r`` (and not above particle ``i``'s radius,
     whose interferers :func:`sphere_shut` reads) is tried when it lies below
     ``shut[k]``; when ``k`` is shut from it, ``shut[k]`` becomes that level.
+    ``near[:count]`` are the interferers the analysis gathered (``count < 0``:
+    none, they are gathered when a level is tried).
     """
     lv = -1
     for m in range(levels.shape[0]):
@@ -695,7 +729,9 @@ def _shut_below(
     if not level < shut[k]:
         return
     counters[2] += 1
-    if sphere_shut(k, i, g, placed, bounds, level):
+    if count < 0:
+        count, near, at = _interferers(g, placed.order[k], i, placed, bounds, 0.0)
+    if sphere_shut(k, i, count, near, at, placed, bounds, level):
         counters[3] += 1
         shut[k] = level
 
@@ -757,6 +793,8 @@ def scan(
     t, radius, rmin, tried, counters, levels, shut = screen
     r = radius[i]
     leaves = tree.shape[0] // 2
+    near = np.empty(0, dtype=np.int64)
+    at = np.empty((0, 3))
     m = begin - 1
     while True:
         m += 1
@@ -774,12 +812,27 @@ def scan(
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
                 xi[0] = rng.random()
             margin = eta_margin(eta, xi[0], r)
+        count = -1  # interferers not gathered
+        shutting = spheres and margin == 0.0 and levels.shape[0] > 0 and math.isfinite(t)
+        first = shutting and not math.isfinite(rmin[k])  # shut tried after the analysis
+        if spheres and not first and placed.circum[i] < shut[k]:
+            count, near, at = _interferers(g, placed.order[k], i, placed, bounds, margin)
+            if shutting:
+                # a candidate found empty before: try to shut it first, and when it
+                # shuts below this sphere the analysis would find nothing (certified)
+                _shut_below(
+                    k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
+                )  # fmt: skip
         if spheres and placed.circum[i] >= shut[k]:
             code = EMPTY  # certified: no sphere this large fits (sphere_shut)
             counters[4] += 1
         else:
             if spheres:
-                code = analyse_sphere(k, i, g, placed, bounds, margin, rng, out)
+                if count < 0:
+                    count, near, at = _interferers(
+                        g, placed.order[k], i, placed, bounds, margin
+                    )  # fmt: skip
+                code = analyse_sphere(k, i, count, near, at, placed, bounds, margin, rng, out)
             else:
                 code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
             if code == FULL:
@@ -793,8 +846,10 @@ def scan(
         if code == FOUND:
             return FOUND, m
         rmin[k] = r
-        if spheres and margin == 0.0 and levels.shape[0] > 0 and math.isfinite(t):
-            _shut_below(k, i, g, placed, bounds, levels, t, r, shut, counters)
+        if first:
+            _shut_below(
+                k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
+            )  # fmt: skip
         if leaves > 0:
             tree_set(tree, leaves, m, r)
     return EMPTY, candidates.shape[0]
