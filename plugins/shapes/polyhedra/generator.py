@@ -163,7 +163,10 @@ def polyhedra_from_support(
             f"polyhedron {i}: the vertex enumeration failed (status {int(status[i])}); "
             "its support values are nearly degenerate for this direction set"
         )
-    scale = np.cbrt(4.0 / 3.0 * math.pi * r**3 / vol)
+    # r times the cube root of a number without a unit: a radius scaled by a power of two
+    # scales every length by exactly that power (the cube root of r**3 / vol would not:
+    # libm's cbrt rounds x and x * 2**(3k) differently when their exponents differ in sign)
+    scale = r * np.cbrt(4.0 / 3.0 * math.pi / vol)
     local = (verts - cen[:, None, :]) * scale[:, None, None]
     vmask = np.arange(vcap) < nvert[:, None]
     world = np.einsum("nij,nvj->nvi", rot, local)
@@ -187,7 +190,7 @@ def polyhedra_from_support(
         face_vertices=np.ascontiguousarray(fverts[fvmask]),
         face_vertex_offsets=np.concatenate([zero, np.cumsum(sizes)]),
         face_direction=face_direction,
-        volume=vol * scale**3,
+        volume=vol * scale * scale * scale,  # products, not pow: exact under powers of two
         circumradius=distance.max(axis=1, initial=0.0),
         inradius=inradius.min(axis=1, initial=np.inf),
         directions=d,

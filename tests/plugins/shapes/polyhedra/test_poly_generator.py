@@ -136,6 +136,21 @@ def test_radius_scales_exactly(r: float) -> None:
     assert np.allclose(scaled.volume, r**3 * one.volume, rtol=1e-13, atol=0)
 
 
+@pytest.mark.parametrize("s", [2.0**-20, 2.0**20])
+def test_radius_times_a_power_of_two_scales_bit_for_bit(s: float) -> None:
+    """No hidden unit: every length times ``s``, the volume times ``s**3``, without rounding.
+
+    The scale is ``r`` times the cube root of a number without a unit; the cube
+    root of ``r**3 / volume`` rounded differently at ``2**-20`` on glibc.
+    """
+    radius = np.exp(np.random.default_rng(1).uniform(-8.0, 8.0, 500))
+    one = _generate(0.5, 0.5, radius, seed=3)
+    scaled = _generate(0.5, 0.5, s * radius, seed=3)
+    for name in ("vertices", "support", "circumradius", "inradius", "direction_support"):
+        assert np.array_equal(getattr(scaled, name), s * getattr(one, name)), name
+    assert np.array_equal(scaled.volume, s**3 * one.volume)
+
+
 def test_same_seed_gives_identical_arrays_and_other_seeds_differ() -> None:
     radius = np.linspace(1.0, 3.0, 300)
     a = _fields(_generate(0.5, 1 / 3, radius, seed=9))
