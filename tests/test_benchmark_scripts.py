@@ -36,6 +36,22 @@ def test_study_homogeneity_refuses_bad_input_in_one_line(args: list[str], says: 
     assert "seed" not in run.stdout  # nothing packed
 
 
+@pytest.mark.parametrize("side", ["nan", "-5", "0", "inf"])
+def test_bench_sphere_scale_refuses_a_bad_side_in_one_line(side: str) -> None:
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "bench_sphere_scale.py"), side],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert run.returncode == 2, run.stderr
+    assert "Traceback" not in run.stderr
+    last = run.stderr.strip().splitlines()[-1]
+    assert last.startswith("bench_sphere_scale.py: error: side must be a positive length"), last
+    assert run.stdout == ""  # nothing packed
+
+
 def _peers() -> object:
     """``benchmarks/peers_yade.py`` as a module."""
     import importlib.util
