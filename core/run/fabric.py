@@ -182,6 +182,12 @@ def fabric_rows(block: Mapping[str, Any]) -> list[tuple[str, str]]:
         value += f" ± {_plain(err, f'.{digits}f')}"
     share = block.get("rattler_fraction")
     rattlers = "n/a" if share is None else f"{100.0 * share:.1f} %"
+    v = block.get("principal_direction")
+    n = block.get("n_fabric_contacts")
+    if a is not None and v and len(v) in CHANCE and isinstance(n, int) and n > 0:
+        if not a > 2.0 * _by_chance(block, len(v)):
+            # a norm is never below what random normals give: this one says nothing
+            value += f" (no more than chance gives {n} contact{'s' if n != 1 else ''})"
     return [
         ("fabric anisotropy", value + _direction(block)),
         (

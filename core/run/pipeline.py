@@ -42,6 +42,7 @@ from regopack.exports.pipeline import run_exports
 from regopack.geometry.population import FloatArray, IntArray, Population, concat_shapes
 from regopack.geometry.solids import SolidBatch, concat_solids
 from regopack.packing.core import Packing, save, write_json_atomic
+from regopack.packing.phi_references import references_3d, references_row
 from regopack.packing.sieve import unplaced_per_class
 from regopack.packing.solid_fraction import phi_in_box
 from regopack.packing.solid_fraction import phi_in_window as phi_in_window
@@ -624,6 +625,8 @@ def _run(
     }
     if note:
         summary["phi_interior_note"] = note
+    if packing.dimension == 3:
+        summary["phi_references"] = references_3d()
     if n_placed < packing.n_particles:
         summary["not_placed_by_class"] = [
             row for row in unplaced_per_class(packing) if row["not_placed"] > 0
@@ -776,6 +779,11 @@ def summary_rows(summary: Mapping[str, Any]) -> list[tuple[str, str]]:
         (
             f"φ interior (margin {summary['interior_margin']:g})",
             fmt(summary["phi_interior"], ".4f"),
+        ),
+        *(
+            [("φ references", references_row())]
+            if summary.get("dimension") == 3 and "phi_references" in summary
+            else []
         ),
         (
             "insertion time",

@@ -219,7 +219,7 @@ def test_an_isotropic_fabric_shows_no_direction(dimension: int) -> None:
             "z_mechanical": 4.0,
             "rattler_fraction": 0.0,
         }
-        shown += fabric_rows(block)[0][1].endswith(")")
+        shown += fabric_rows(block)[0][1].endswith(("vertical)", "horizontal)"))
     assert shown <= 5
     # a fabric of normals mostly along the vertical keeps its direction
     normals = np.zeros((300, dimension))
@@ -233,3 +233,26 @@ def test_an_isotropic_fabric_shows_no_direction(dimension: int) -> None:
         principal_direction=principal_direction(fabric),
     )
     assert fabric_rows(block)[0][1].endswith("(vertical)")
+
+
+def test_an_anisotropy_no_larger_than_chance_says_so() -> None:
+    one = {"anisotropy": 7.5, "anisotropy_error": None, "n_fabric_contacts": 1,
+           "principal_direction": [0.6, -0.2, 0.8], "z": 3.0, "z_mechanical": 3.5,
+           "rattler_fraction": 0.3}  # fmt: skip
+    assert dict(fabric_rows(one))["fabric anisotropy"] == (
+        "7.500 (no more than chance gives 1 contact)"
+    )
+    many = {**one, "anisotropy": 0.3, "anisotropy_error": 0.01, "n_fabric_contacts": 10_000}
+    assert dict(fabric_rows(many))["fabric anisotropy"] == "0.300 ± 0.010 (37° from vertical)"
+    low = {**many, "anisotropy": 0.1}  # under twice 7.5 / 100
+    assert dict(fabric_rows(low))["fabric anisotropy"] == (
+        "0.100 ± 0.010 (no more than chance gives 10000 contacts)"
+    )
+
+
+def test_a_3d_run_lists_the_reference_fractions(registry) -> None:  # type: ignore[no-untyped-def]
+    summary = regopack.pack_and_summarise(SCENE3D, verify=False, registry=registry).summary
+    labels = [r["label"] for r in summary["phi_references"]]
+    assert labels == ["random sequential addition", "Williams–Philipse", "random close packing"]
+    row = dict(summary_rows(summary))["φ references"]
+    assert "0.36–0.40" in row and "0.61" in row and "0.64" in row
