@@ -11,6 +11,23 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 
 
+def _refused(script: str, args: list[str]) -> tuple[subprocess.CompletedProcess[str], str]:
+    """Run ``benchmarks/script`` on ``args``; it must stop with code 2 and no traceback.
+
+    Returns the run and the last line of its standard error.
+    """
+    run = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / script), *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        cwd=ROOT,
+    )
+    assert run.returncode == 2, run.stderr
+    assert "Traceback" not in run.stderr
+    return run, run.stderr.strip().splitlines()[-1]
+
+
 @pytest.mark.parametrize(
     ("args", "says"),
     [
@@ -22,32 +39,14 @@ ROOT = Path(__file__).resolve().parent.parent
     ],
 )
 def test_study_homogeneity_refuses_bad_input_in_one_line(args: list[str], says: str) -> None:
-    run = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "study_homogeneity.py"), *args],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=ROOT,
-    )
-    assert run.returncode == 2, run.stderr
-    assert "Traceback" not in run.stderr
-    last = run.stderr.strip().splitlines()[-1]
+    run, last = _refused("study_homogeneity.py", args)
     assert last.startswith("study_homogeneity.py: error:") and says in last, last
     assert "seed" not in run.stdout  # nothing packed
 
 
 @pytest.mark.parametrize("side", ["nan", "-5", "0", "inf"])
 def test_bench_sphere_scale_refuses_a_bad_side_in_one_line(side: str) -> None:
-    run = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "bench_sphere_scale.py"), side],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        cwd=ROOT,
-    )
-    assert run.returncode == 2, run.stderr
-    assert "Traceback" not in run.stderr
-    last = run.stderr.strip().splitlines()[-1]
+    run, last = _refused("bench_sphere_scale.py", [side])
     assert last.startswith("bench_sphere_scale.py: error: side must be a positive length"), last
     assert run.stdout == ""  # nothing packed
 
