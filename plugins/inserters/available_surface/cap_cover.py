@@ -3,7 +3,9 @@ r"""Whether caps cover a sphere, certified from the vertices of their arrangemen
 The caps are open, ``{u : n_q · u > h_q}`` on the sphere ``|u| = R``, each
 read shrunk by ``shrink`` and by a further ``margin``: ``D_q = {n_q · u >
 h_q + shrink + margin}``. When the sphere is not covered, the uncovered set
-``S \ ∪ D_q`` is closed, not the whole sphere (there is a cap), and so has a
+``S \ ∪ D_q`` is closed, not the whole sphere (there is a cap left after the
+shrinking: when every cap shrinks to nothing the whole sphere is free and the
+answer is :data:`OPEN`), and so has a
 boundary; that boundary is made of arcs of the caps' circles and either
 passes through a *vertex* (a point where two circles meet) or is a whole
 circle that meets no other. Hence the sphere is covered when
@@ -95,16 +97,21 @@ def cover_by_vertices(
     :data:`COVERED` (certain), :data:`OPEN` (a vertex, or a circle, lies in
     no other cap: not covered, up to rounding) or :data:`UNSURE` (a pair of
     circles too near tangency for the rounding bound, or a vertex within its
-    error of a cap's edge). Without caps: :data:`OPEN`.
+    error of a cap's edge). Without caps, or with every cap shrunk to nothing:
+    :data:`OPEN`.
     """
     if ncaps == 0:
         return OPEN
     lift = shrink + margin
     r2 = big_r * big_r
     unit = ROUNDING * big_r
+    live = False
     for q in range(ncaps):
         if caps[q, 3] + lift < -big_r - unit:
             return COVERED  # one cap holds the whole sphere
+        live = live or caps[q, 3] + lift < big_r
+    if not live:
+        return OPEN  # every cap shrunk to nothing: the whole sphere is left
     met = np.zeros(ncaps, dtype=np.bool_)
     answer = COVERED
     hint = 0

@@ -336,9 +336,13 @@ def covers(caps: FloatArray, ncaps: int, big_r: float, depth: float) -> bool:
     lo = np.empty(2 * ncaps + 2)
     hi = np.empty(2 * ncaps + 2)
     two_pi = 2.0 * math.pi
+    live = False
     for j in range(ncaps):
         if caps[j, 3] + depth <= -big_r:
             return True  # one cap holds the whole sphere
+        live = live or caps[j, 3] + depth < big_r
+    if not live:
+        return False  # every cap shrunk to nothing: the whole sphere is free
     for j in range(ncaps):
         hj = caps[j, 3] + depth
         if hj >= big_r:

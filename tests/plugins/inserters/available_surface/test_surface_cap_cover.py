@@ -146,3 +146,41 @@ def test_a_hole_at_either_pole_is_found_from_either_vertex_of_a_pair(pole: float
     assert free_arcs(caps, 4, 1.0, 1e-12).shape[0] > 0
     plug = _caps(np.array([(0.0, 0.0, -pole)]), np.array([0.9]))
     assert cover_by_vertices(np.vstack([caps, plug]), 5, 1.0, 0.0, 1e-9) == COVERED
+
+
+@pytest.mark.parametrize("scale", [1e-6, 1.0, 1e6])
+def test_caps_all_shrunk_to_nothing_leave_the_whole_sphere_free(scale: float) -> None:
+    # caps narrower than the shrinking (h < R <= h + shrink + margin) cover nothing:
+    # the uncovered set is the whole sphere, which has no boundary to find
+    caps = _caps(np.array([(0.0, 0.0, 1.0), (1.0, 0.0, 0.0)]), np.full(2, (1.0 - 5e-10) * scale))
+    tau = 1e-12 * scale
+    assert free_arcs(caps, 2, scale, tau).shape[0] > 0
+    assert cover_by_vertices(caps, 2, scale, tau, 1e-9 * scale) == OPEN
+    assert not covers(caps, 2, scale, 1e-9 * scale)
+    # one cap left after the shrinking decides as before
+    wide = np.vstack([caps, _caps(np.array([(0.0, 1.0, 0.0)]), np.array([0.5 * scale]))])
+    assert cover_by_vertices(wide, 3, scale, tau, 1e-9 * scale) == OPEN
+
+
+def test_a_sphere_whose_caps_are_all_narrower_than_the_margin_is_analysed() -> None:
+    # a periodic cube just under two diameters wide: the first sphere's own images cut
+    # six caps from its sphere of centres, each narrower than the certificate's margin;
+    # the other spheres still touch it (as the exact arcs say)
+    import regopack
+
+    d = 10.0
+    side = 2.0 * d * (1.0 - 5e-10)
+    overrides = {f"phases.{i}.shape": {"kind": "sphere"} for i in range(6)}
+    overrides.update(
+        {
+            "size": {"kind": "monodisperse", "d": d},
+            "domain.kind": "periodic-box",
+            "domain.width": side,
+            "domain.height": side,
+            "domain.depth": side,
+            "insertion.order": "paper",
+            "count": 4,
+        }
+    )
+    packing = regopack.pack(regopack.scene("dem3d", **overrides), verify=False)
+    assert np.isfinite(np.asarray(packing.centre)).all()
