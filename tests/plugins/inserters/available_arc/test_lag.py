@@ -148,6 +148,7 @@ def test_only_a_lagged_particle_is_overtaken_and_only_after_the_front_rose() -> 
     assert np.median(rise) > 0.5 * 40 * sw.delta
 
 
+@pytest.mark.slow
 def test_every_domain_kind_without_overlap_with_lags() -> None:
     for kind, domain in DOMAINS.items():
         n = round(1.1 * domain.area / (0.25 * Change5(Change5Config()).mean_area))
@@ -232,6 +233,7 @@ def test_drawing_what_fits_places_every_particle_with_lags() -> None:
         assert out.packing.n_placed + s["refused"] == 6900
 
 
+@pytest.mark.slow
 def test_every_strip_gets_its_share_of_the_lagged_particles() -> None:
     """Each waiting particle belongs to the strip it would have gone to when drawn."""
     from regopack.api.functions import pack as pack_scene
