@@ -782,11 +782,13 @@ def scan(
     listed. An empty analysis sets the leaf to ``radius[i]`` as it sets
     ``rmin``.
 
-    For spheres, an empty analysis (without a margin) may shut the
-    candidate from a level of radius below (:func:`_shut_below`,
-    ``shut[k]``): a later sphere at least that large that passes the
-    screening is not analysed but taken as empty, with all that an empty
-    analysis does (its ``xi`` drawn, ``tried``, ``rmin`` and the leaf set).
+    For spheres without a margin, a candidate is tried for shutting from a
+    level of radius below (:func:`_shut_below`, ``shut[k]``): after its
+    first analysis when that finds it empty, and before every later one
+    (its ``rmin`` is finite), where a shut below the sphere stands for the
+    analysis. A sphere at least ``shut[k]`` large that passes the screening
+    is not analysed but taken as empty, with all that an empty analysis
+    does (its ``xi`` drawn, ``tried``, ``rmin`` and the leaf set).
     The screening, the random numbers and so the packing stay those of the
     analyses themselves; ``counters[4]`` counts the analyses saved.
     """

@@ -30,7 +30,8 @@ the sweep order (``order = "sweep"``, :mod:`.sweep`); the box may be walled
 or periodic (:class:`.state.SurfaceState`); the ``eta`` controller keeps
 the free surface a margin from what covers it
 (:func:`.analysis.eta_margin`). Spheres are analysed in closed form
-(:mod:`.spheres`); after an empty analysis of a sphere candidate, the
+(:mod:`.spheres`); after a sphere candidate's first analysis finds it
+empty, and before each later analysis, the
 candidate is tried for *shutting* from the next of a few levels of radius
 below (quantiles of the population's radii, :func:`.state.shut_levels`):
 when the caps of a sphere of that radius cover its sphere of centres with

@@ -261,7 +261,7 @@ class SurfaceState:
 
     @property
     def shut_tests(self) -> int:
-        """Empty analyses after which a candidate was tried for shutting (spheres)."""
+        """Tries to shut a candidate (spheres): after an empty first analysis, before later ones."""
         return int(self.counters[2])
 
     @property
