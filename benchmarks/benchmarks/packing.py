@@ -152,6 +152,33 @@ class Threads(_Slow):
         regopack.pack(self.scene, verify=False)
 
 
+class Threads3D(_Slow):
+    """3D: one kernel thread against two (the partner thread of the polyhedron scans).
+
+    ``dem3d``'s polyhedra (sizes 2-12 µm) in a 60 µm cube, the sweep with the
+    tail closing and columns of 45 µm, and the paper's order in a 40 µm cube.
+    """
+
+    params = (["sweep", "paper"], [1, 2])
+    param_names = ["order", "threads"]
+
+    def setup(self, _cache: Any, order: str, threads: int) -> None:
+        self.before = numba.get_num_threads()
+        numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+        common.warm_3d("polyhedra")
+        if order == "sweep":
+            over = {"insertion.closing": "tail", "insertion.strip": 45.0}
+            self.scene = common.scene_3d("polyhedra", 60.0, base="dem3d", **over)
+        else:
+            self.scene = common.scene_3d("polyhedra", 40.0)
+
+    def teardown(self, _cache: Any, order: str, threads: int) -> None:
+        numba.set_num_threads(self.before)
+
+    def time_pack(self, _cache: Any, order: str, threads: int) -> None:
+        regopack.pack(self.scene, verify=False)
+
+
 class NeighbourLists(_Slow):
     """``insertion.neighbour_lists`` on and off: the paper's order, 800 µm (same packing)."""
 

@@ -245,13 +245,13 @@ class PartnerThread:
 
 
 @numba.njit(cache=True, inline="always")
-def _idle(p: Partner, polls: int) -> None:
+def _idle(ctl: IntArray, polls: int) -> None:
     """Wait after ``polls`` empty polls in a row.
 
     Sleep when parked; else spin, then yield, then sleep (the caller is busy
     elsewhere, or compiling).
     """
-    if load_acquire(p.ctl, C_PARK) != 0:
+    if load_acquire(ctl, C_PARK) != 0:
         sleep_us(PARKED_SLEEP_US)
     elif polls < SPINS:
         spin_hint()
@@ -290,7 +290,7 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
                 word = v
         if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
             idle += 1
-            _idle(p, idle)
+            _idle(p.ctl, idle)
             continue
         idle = 0
         base = best * PAD
@@ -335,7 +335,7 @@ def serve_bounds(s: K.Packed, scratch: FloatArray, p: Partner) -> None:
             idle = 0
             continue
         idle += 1
-        _idle(p, idle)
+        _idle(p.ctl, idle)
 
 
 @numba.njit(cache=True, inline="always")

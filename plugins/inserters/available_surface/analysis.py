@@ -610,6 +610,7 @@ def analyse(
     margin: float,
     rng: np.random.Generator,
     out: FloatArray,
+    draw: bool = True,
 ) -> int:
     """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
 
@@ -619,7 +620,8 @@ def analyse(
     Returns :data:`FOUND` (the
     centre in ``out``), :data:`EMPTY`, or :data:`FULL` when the half-space
     cache has no room for an interferer (nothing was drawn; grow it and call
-    again).
+    again). With ``draw`` False a free surface gives :data:`FOUND` with
+    nothing drawn (``rng`` and ``out`` untouched): the answer alone.
     """
     order, centre, circum, _ = placed
     adm_lo, adm_hi = bounds.adm_lo, bounds.adm_hi
@@ -673,6 +675,8 @@ def analyse(
         adm_hi = adm_hi - margin
     surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
     if surface.area > 0.0:
+        if not draw:
+            return FOUND
         u1 = rng.random()  # three uniforms in the order of rng.random(3)
         u2 = rng.random()
         u3 = rng.random()
@@ -836,7 +840,9 @@ def scan(
                     )  # fmt: skip
                 code = analyse_sphere(k, i, count, near, at, placed, bounds, margin, rng, out)
             else:
-                code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
+                code = analyse(
+                    k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out, True
+                )  # fmt: skip
             if code == FULL:
                 return FULL, m
             counters[0] += 1

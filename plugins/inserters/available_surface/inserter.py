@@ -67,6 +67,7 @@ from regopack.registry.interfaces import (
 from regopack.registry.plugin_types import InserterSpec
 
 if TYPE_CHECKING:
+    from regopack.geometry.solids import SolidBatch
     from regopack.plugins.inserters.available_surface.state import SurfaceState
 
 FloatArray = NDArray[np.float64]
@@ -209,11 +210,6 @@ class AvailableSurface(InsertionStrategy):
         """Insert the solids one by one; see the module docstring."""
         from regopack.geometry.solids import SolidBatch
         from regopack.plugins.inserters.available_surface.state import SurfaceState
-        from regopack.plugins.inserters.available_surface.sweep import (
-            STATUS_HELD,
-            STATUS_REFUSED,
-            SurfaceSweep,
-        )
 
         started = time.perf_counter()
         shapes = population.shapes
@@ -241,31 +237,15 @@ class AvailableSurface(InsertionStrategy):
         st = SurfaceState(
             shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta
         )
-        stats: dict[str, float] = {}
-        if cfg.order == "sweep":
-            zone = sweep_zone(cfg.zone, radius)
-            strip = cfg.strip
-            if strip > 0.0 and n:
-                # columns at least two circumradii of the largest particle wide: a
-                # narrower column's own candidates cannot hold up a front
-                strip = max(strip, 2.0 * float(np.max(shapes.circumradius)))
-            facet = 0.0
-            if cfg.front == "faceted":
-                facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
-            sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
-            sweep.run(rng, progress, PROGRESS_EVERY)
-            refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
-            held = int(np.count_nonzero(sweep.status[:n] == STATUS_HELD))
-            stats = {
-                "zone": float(sweep.zone),
-                "zone_raises": float(sweep.raises),
-                "strips": float(len(sweep.zones)),
-                "refused": float(refused),
-                **({"held": float(held)} if cfg.closing == "even" else {}),
-                "not_offered": float(n - st.count - refused - held),
-            }
-        else:
-            _pack_paper(st, rng, progress)
+        partner = st.start_partner()
+        try:
+            stats = _insert(st, shapes, radius, cfg, n, rng, progress)
+        finally:
+            failure = st.stop_partner()
+        # an error that ended the partner is raised once the insertion is over, unless
+        # the insertion itself failed (its own error then went on)
+        if failure is not None:
+            raise failure
         if progress is not None:
             progress(n, st.count, n)
         stats = {
@@ -281,9 +261,54 @@ class AvailableSurface(InsertionStrategy):
                 else {}
             ),
             **stats,
+            "partner": float(partner),
             "insert_time_s": time.perf_counter() - started,
         }
         return InsertionResult(centre=st.centre, insertion_index=st.index, stats=stats)
+
+
+def _insert(
+    st: SurfaceState,
+    shapes: SolidBatch,
+    radius: FloatArray,
+    cfg: AvailableSurfaceConfig,
+    n: int,
+    rng: np.random.Generator,
+    progress: ProgressCallback | None,
+) -> dict[str, float]:
+    """Insert the population in the configured order; return the order's own statistics."""
+    from regopack.plugins.inserters.available_surface.sweep import (
+        STATUS_HELD,
+        STATUS_REFUSED,
+        SurfaceSweep,
+    )
+
+    stats: dict[str, float] = {}
+    if cfg.order == "sweep":
+        zone = sweep_zone(cfg.zone, radius)
+        strip = cfg.strip
+        if strip > 0.0 and n:
+            # columns at least two circumradii of the largest particle wide: a
+            # narrower column's own candidates cannot hold up a front
+            strip = max(strip, 2.0 * float(np.max(shapes.circumradius)))
+        facet = 0.0
+        if cfg.front == "faceted":
+            facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
+        sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
+        sweep.run(rng, progress, PROGRESS_EVERY)
+        refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
+        held = int(np.count_nonzero(sweep.status[:n] == STATUS_HELD))
+        stats = {
+            "zone": float(sweep.zone),
+            "zone_raises": float(sweep.raises),
+            "strips": float(len(sweep.zones)),
+            "refused": float(refused),
+            **({"held": float(held)} if cfg.closing == "even" else {}),
+            "not_offered": float(n - st.count - refused - held),
+        }
+    else:
+        _pack_paper(st, rng, progress)
+    return stats
 
 
 def _pack_paper(

@@ -23,6 +23,7 @@ from regopack.plugins.inserters.available_surface.analysis import (
     Placed,
     Screening,
     arcs_for,
+    arcs_of,
     cache_for,
     grid_add,
     grid_for,
@@ -32,6 +33,12 @@ from regopack.plugins.inserters.available_surface.analysis import (
 )
 from regopack.plugins.inserters.available_surface.envelope import EdgeArcs, edge_arcs
 from regopack.plugins.inserters.available_surface.halfspaces import minkowski_halfspaces
+from regopack.plugins.inserters.available_surface.partner import (
+    PartnerThread,
+    SurfacePartner,
+    grown,
+    scan_shared,
+)
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
 
 FloatArray = NDArray[np.float64]
@@ -141,6 +148,40 @@ class SurfaceState:
         self._q_arcs: Any = None
         self.adm_lo = lo
         self.adm_hi = hi
+        self._partner: PartnerThread | None = None
+        self._shared: SurfacePartner | None = None
+
+    def start_partner(self) -> bool:
+        """Have a partner thread analyse candidates ahead of the scans; False when none serves.
+
+        A partner serves polyhedra scanned without a packing control margin
+        (:mod:`.partner`), where numba has two threads or more and threads can
+        sleep (POSIX). The packing is the same with it or without it.
+        """
+        from regopack.base.threads import kernel_threads
+        from regopack.plugins.inserters.available_arc.partner import available
+
+        if self.spheres or self.eta > 0.0 or self.n == 0:
+            return False
+        if self._partner is None:
+            if kernel_threads() < 2 or not available():
+                return False
+            self._partner = PartnerThread(
+                self.solids, self.arcs, self.grid, cache_for(self.n, 4096), self.order,
+                self.centre, self.circum, self._period, self.lo, self.hi,
+            )  # fmt: skip
+        self._shared = self._partner.start()
+        return True
+
+    def stop_partner(self) -> BaseException | None:
+        """Stop the partner thread, if one runs; return the error that ended it, if any."""
+        partner, self._partner, self._shared = self._partner, None, None
+        return None if partner is None else partner.stop()
+
+    @property
+    def partner_analyses(self) -> int:
+        """Analyses the running partner thread has made (those the scans dropped included)."""
+        return 0 if self._partner is None else self._partner.served
 
     def begin(self, i: int) -> bool:
         """Start on particle ``i``; False when it is larger than the box.
@@ -235,7 +276,19 @@ class SurfaceState:
             if code == FOUND:
                 return int(cands[at]), self._out.copy()
             return -1, None
+        shared = self._shared
         while True:
+            if shared is not None:
+                code, at = scan_shared(
+                    cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
+                    self.cache, placed, bounds, rng, self._out,
+                    self._no_tree if tree is None else tree, shared,
+                )  # fmt: skip
+                if code != FULL:
+                    break
+                self._grow_cache()
+                begin = at
+                continue
             code, at = scan(
                 cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
                 self.cache, placed, bounds, self.eta, self._xi, self.spheres, rng, self._out,
@@ -276,14 +329,7 @@ class SurfaceState:
 
     def _grow_cache(self) -> None:
         """Double the half-space cache, keeping its rows."""
-        old = self.cache
-        rows = 2 * old.support.shape[0]
-        new = cache_for(self.n, rows)
-        new.normals[: old.support.shape[0]] = old.normals
-        new.support[: old.support.shape[0]] = old.support
-        for name in ("stamp", "start", "size", "fill"):
-            getattr(new, name)[:] = getattr(old, name)
-        self.cache = new
+        self.cache = grown(self.cache)
 
     def insert(self, i: int, x: FloatArray) -> int:
         """Place particle ``i`` at ``x`` (wrapped into a periodic box); return its index."""
@@ -295,6 +341,10 @@ class SurfaceState:
         self.index[i] = k
         self.order[k] = i
         self.count += 1
+        if not self.spheres:
+            # the edge arcs of a placed particle, made here once: a partner's analyses
+            # read them and write nothing the scans read (.partner)
+            arcs_of(self.arcs, self.solids, i)
         grid_add(self.grid, i, self.centre[i])
         self.reach_max = max(self.reach_max, float(self.circum[i]))
         return k

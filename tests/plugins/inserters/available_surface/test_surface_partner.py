@@ -1,0 +1,187 @@
+"""The partner thread of the 3D scans: the packing of one thread, bit for bit."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numba
+import numpy as np
+import pytest
+from numpy.typing import NDArray
+from test_surface_inserter import scene, sweep_scene
+
+import regopack
+from regopack.plugins.common.atomics import compare_swap, load_acquire, spin_hint
+from regopack.plugins.inserters.available_arc.partner import available
+from regopack.plugins.inserters.available_surface import partner
+from regopack.plugins.inserters.available_surface import state as state_module
+from regopack.plugins.inserters.available_surface.analysis import cache_for
+
+pytestmark = pytest.mark.skipif(not available(), reason="the partner needs POSIX")
+
+SCENES = {
+    "paper": lambda: scene(count=120, domain={"kind": "box", "width": 16.0, "height": 16.0,
+                                              "depth": 16.0}),
+    "sweep": lambda: sweep_scene(),
+    "periodic": lambda: sweep_scene(
+        domain={"kind": "periodic-box", "width": 12.0, "height": 14.0, "depth": 12.0}
+    ),
+}  # fmt: skip
+
+
+def _run(
+    monkeypatch: pytest.MonkeyPatch, data: dict[str, Any], threads: int
+) -> tuple[bytes, dict[str, Any], list[int]]:
+    """Pack ``data`` as on ``threads`` threads; the key, the stats, the partners' analyses."""
+    served: list[int] = []
+    stop = partner.PartnerThread.stop
+
+    def counted(self: partner.PartnerThread) -> BaseException | None:
+        served.append(self.served)
+        return stop(self)
+
+    with monkeypatch.context() as m:
+        m.setattr(numba, "get_num_threads", lambda: threads)
+        m.setattr(partner.PartnerThread, "stop", counted)
+        p = regopack.pack(data, verify=False)
+    return p.centre.tobytes() + p.insertion_index.tobytes(), dict(p.stats), served
+
+
+def _defer(m: pytest.MonkeyPatch) -> None:
+    """Leave every analysis ahead of the order to the partner."""
+    shared = partner.new_surface_partner
+
+    def deferring() -> partner.SurfacePartner:
+        p = shared()
+        p.ctl[partner.C_DEFER] = 1
+        return p
+
+    m.setattr(partner, "new_surface_partner", deferring)
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_a_partner_gives_the_packing_of_one_thread(
+    monkeypatch: pytest.MonkeyPatch, name: str
+) -> None:
+    data = SCENES[name]()
+    alone, alone_stats, none = _run(monkeypatch, data, 1)
+    assert alone_stats["partner"] == 0 and none == []
+    key, stats, served = _run(monkeypatch, data, 2)
+    assert stats["partner"] == 1 and len(served) == 1
+    assert key == alone
+    for count in ("candidate_analyses", "empty_analyses"):
+        assert stats[count] == alone_stats[count]
+    with monkeypatch.context() as m:
+        _defer(m)
+        key, stats, served = _run(m, data, 2)
+    assert key == alone
+    assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
+    # deferred to, the partner makes every analysis but the caller's own at a free surface
+    assert served[0] >= alone_stats["empty_analyses"]
+
+
+def test_caches_that_fill_grow_on_both_threads(monkeypatch: pytest.MonkeyPatch) -> None:
+    data = SCENES["paper"]()
+    alone, alone_stats, _ = _run(monkeypatch, data, 1)
+    with monkeypatch.context() as m:
+        m.setattr(state_module, "cache_for", lambda n, rows: cache_for(n, 8))
+        for defer in (False, True):
+            with m.context() as inner:
+                if defer:
+                    _defer(inner)
+                key, stats, _ = _run(inner, data, 2)
+            assert key == alone
+            assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
+
+
+@numba.njit(nogil=True)
+def _stalling(ctl: NDArray[np.int64], state: NDArray[np.int64], claims: int) -> None:
+    """Claim ``claims`` posted slots and never analyse them (a partner without a processor).
+
+    It waits until the caller takes each back, then claims the next; then it stops.
+    """
+    while claims > 0 and load_acquire(ctl, partner.C_STOP) == 0:
+        for sl in range(partner.SLOTS):
+            v = load_acquire(state, sl * partner.PAD)
+            if v & partner.TAG == partner.POSTED:
+                held = v - partner.POSTED + partner.PARTNER
+                if compare_swap(state, sl * partner.PAD, v, held):
+                    claims -= 1
+                    while load_acquire(state, sl * partner.PAD) == held:
+                        if load_acquire(ctl, partner.C_STOP) != 0:
+                            return
+                        spin_hint()
+        spin_hint()
+
+
+def test_the_caller_takes_back_what_a_stalled_partner_holds(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    data = SCENES["sweep"]()
+    alone, alone_stats, _ = _run(monkeypatch, data, 1)
+
+    def stalling(*args: Any) -> None:
+        p = args[10]
+        _stalling(p.ctl, p.state, 0 if p.ctl[partner.C_STOP] else 5)
+
+    with monkeypatch.context() as m:
+        m.setattr(partner, "serve", stalling)
+        key, stats, _ = _run(m, data, 2)
+    assert key == alone
+    assert stats["candidate_analyses"] == alone_stats["candidate_analyses"]
+
+
+def test_a_failing_partner_leaves_the_scans_to_the_caller_and_is_reported(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    data = SCENES["paper"]()
+    alone, _, _ = _run(monkeypatch, data, 1)
+
+    def broken(*args: Any) -> None:
+        if args[10].ctl[partner.C_STOP] == 0:  # serving, not the entry that compiles the loop
+            raise RuntimeError("partner failed")
+
+    with monkeypatch.context() as m:
+        m.setattr(partner, "serve", broken)
+        _defer(m)  # deferring to a dead partner must not wait for it
+        with pytest.raises(RuntimeError, match="partner failed"):
+            _run(m, data, 2)
+        # and the packing up to the report is the caller's own: the same one
+        m.setattr(partner.PartnerThread, "stop", lambda self: None)
+        m.setattr(numba, "get_num_threads", lambda: 2)
+        p = regopack.pack(data, verify=False)
+    assert p.centre.tobytes() + p.insertion_index.tobytes() == alone
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"density": {"kind": "eta", "eta": 0.9}},
+        {"phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}]},
+    ],
+    ids=["eta", "spheres"],
+)
+def test_no_partner_for_spheres_nor_with_a_margin(
+    monkeypatch: pytest.MonkeyPatch, changes: dict[str, Any]
+) -> None:
+    _, stats, served = _run(monkeypatch, scene(count=30, **changes), 2)
+    assert stats["partner"] == 0 and served == []
+
+
+def test_a_partner_left_running_is_stopped_at_exit() -> None:
+    """stop_all (registered with atexit) ends a partner whose insertion never stopped it."""
+    from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+    solids = regopack.pack(scene(count=5), verify=False).solids
+    lo, hi = np.zeros(3), np.full(3, 30.0)
+    st = SurfaceState(solids, np.ones(len(solids)), lo, hi)
+    team = partner.PartnerThread(
+        st.solids, st.arcs, st.grid, cache_for(st.n, 16), st.order, st.centre, st.circum,
+        np.zeros(0), lo, hi,
+    )  # fmt: skip
+    team.start()
+    thread = team._thread
+    assert thread is not None and thread.is_alive() and team in partner._RUNNING
+    partner.stop_all()
+    assert not thread.is_alive() and team._thread is None
+    assert team not in partner._RUNNING
