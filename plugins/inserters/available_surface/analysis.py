@@ -741,6 +741,59 @@ def _shut_below(
 
 
 @numba.njit(cache=True)
+def sphere_turn(
+    k: int,
+    i: int,
+    first: bool,
+    shutting: bool,
+    t: float,
+    r: float,
+    g: Grid,
+    placed: Placed,
+    bounds: Bounds,
+    levels: FloatArray,
+    shut: FloatArray,
+    counters: IntArray,
+    rng: np.random.Generator,
+    out: FloatArray,
+) -> int:
+    """Candidate ``k``'s turn for sphere ``i`` in a scan without a margin (see :func:`scan`).
+
+    The shut tests before and after the analysis and the analysis itself:
+    ``shut[k]`` is ``k``'s shutting radius (read and written), ``counters``
+    those of :func:`scan` (added to). ``first``: ``k`` has not been found
+    empty before (its shut test follows an empty analysis); ``shutting``:
+    the scan shuts candidates. Returns :data:`FOUND` (the centre in ``out``)
+    or :data:`EMPTY`.
+    """
+    count = -1  # interferers not gathered
+    near = np.empty(0, dtype=np.int64)
+    at = np.empty((0, 3))
+    if not first and placed.circum[i] < shut[k]:
+        count, near, at = _interferers(g, placed.order[k], i, placed, bounds, 0.0)
+        if shutting:
+            # a candidate found empty before: try to shut it first, and when it
+            # shuts below this sphere the analysis would find nothing (certified)
+            _shut_below(
+                k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
+            )  # fmt: skip
+    if placed.circum[i] >= shut[k]:
+        counters[4] += 1  # certified: no sphere this large fits (sphere_shut)
+        return EMPTY
+    if count < 0:
+        count, near, at = _interferers(g, placed.order[k], i, placed, bounds, 0.0)
+    code = analyse_sphere(k, i, count, near, at, placed, bounds, 0.0, rng, out)
+    counters[0] += 1
+    if code == EMPTY:
+        counters[1] += 1
+        if first:
+            _shut_below(
+                k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
+            )  # fmt: skip
+    return code
+
+
+@numba.njit(cache=True)
 def scan(
     candidates: IntArray,
     begin: int,
@@ -799,8 +852,6 @@ def scan(
     t, radius, rmin, tried, counters, levels, shut = screen
     r = radius[i]
     leaves = tree.shape[0] // 2
-    near = np.empty(0, dtype=np.int64)
-    at = np.empty((0, 3))
     m = begin - 1
     while True:
         m += 1
@@ -818,26 +869,19 @@ def scan(
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
                 xi[0] = rng.random()
             margin = eta_margin(eta, xi[0], r)
-        count = -1  # interferers not gathered
-        shutting = spheres and margin == 0.0 and levels.shape[0] > 0 and math.isfinite(t)
-        first = shutting and not math.isfinite(rmin[k])  # shut tried after the analysis
-        if spheres and not first and placed.circum[i] < shut[k]:
-            count, near, at = _interferers(g, placed.order[k], i, placed, bounds, margin)
-            if shutting:
-                # a candidate found empty before: try to shut it first, and when it
-                # shuts below this sphere the analysis would find nothing (certified)
-                _shut_below(
-                    k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
-                )  # fmt: skip
-        if spheres and placed.circum[i] >= shut[k]:
-            code = EMPTY  # certified: no sphere this large fits (sphere_shut)
+        if spheres and margin == 0.0:
+            shutting = levels.shape[0] > 0 and math.isfinite(t)
+            first = shutting and not math.isfinite(rmin[k])  # shut tried after the analysis
+            code = sphere_turn(
+                k, i, first, shutting, t, r, g, placed, bounds, levels, shut, counters, rng,
+                out,
+            )  # fmt: skip
+        elif spheres and placed.circum[i] >= shut[k]:
+            code = EMPTY  # certified by an earlier shut test (a margin only takes more away)
             counters[4] += 1
         else:
             if spheres:
-                if count < 0:
-                    count, near, at = _interferers(
-                        g, placed.order[k], i, placed, bounds, margin
-                    )  # fmt: skip
+                count, near, at = _interferers(g, placed.order[k], i, placed, bounds, margin)
                 code = analyse_sphere(k, i, count, near, at, placed, bounds, margin, rng, out)
             else:
                 code = analyse(
@@ -854,10 +898,6 @@ def scan(
         if code == FOUND:
             return FOUND, m
         rmin[k] = r
-        if first:
-            _shut_below(
-                k, i, g, count, near, at, placed, bounds, levels, t, r, shut, counters
-            )  # fmt: skip
         if leaves > 0:
             tree_set(tree, leaves, m, r)
     return EMPTY, candidates.shape[0]

@@ -250,7 +250,7 @@ def _cancel(p: SurfacePartner, head: int, tail: int) -> None:
                 break
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def scan_shared(
     candidates: IntArray,
     begin: int,
@@ -270,7 +270,9 @@ def scan_shared(
 ) -> tuple[int, int]:
     """:func:`.analysis.scan` of a polyhedron without a margin, with the partner (same result).
 
-    Returns ``(code, position)`` as :func:`.analysis.scan` does.
+    Returns ``(code, position)`` as :func:`.analysis.scan` does. It releases
+    Python's lock: a partner thread that ends (its wrapper marks it dead) is
+    seen while the scan waits for it.
     """
     t, radius, rmin, tried, counters, _, _ = screen
     r = radius[i]
@@ -286,6 +288,8 @@ def scan_shared(
     tail = 0  # slots posted
     found = -1  # the first slot known to have a free surface
     while True:
+        if found >= 0 and found < head:
+            found = -1  # read (and screened out) in the order: post on
         for q in range(head + 1, tail):  # a free surface found ahead: post nothing beyond
             if found >= 0:
                 break
@@ -306,31 +310,33 @@ def scan_shared(
         if head == tail:
             return NOTHING, candidates.shape[0]
         sl = head % SLOTS
-        v = load_acquire(p.state, sl * PAD)
-        if v >> 3 != p.task[sl * PAD + T_ID]:
+        base = sl * PAD
+        v = load_acquire(p.state, base)
+        if v >> 3 != p.task[base + T_ID]:
             raise AssertionError("partner: a slot holds the state of another post")
         tag = v & TAG
         m = p.k[sl]
         k = candidates[m]
+        if not r < t * rmin[k]:
+            # listed again after an earlier position found it empty: screened out now, as
+            # the plain scan screens it when it comes to it
+            _cancel(p, head, head + 1)
+            head += 1
+            continue
         if tag == POSTED and not defer:
-            if not compare_swap(p.state, sl * PAD, v, v - POSTED + CALLER):
+            if not compare_swap(p.state, base, v, v - POSTED + CALLER):
                 continue  # the partner has just claimed it
             tag = CALLER
         elif tag == PARTNER or tag == POSTED:
             # the partner holds it (or, deferred to, has yet to claim it): take it back when
             # the partner has died, or has held it too long (it has no processor)
             if load_acquire(p.ctl, C_DEAD) != 0 or (waits >= TAKEOVER and not defer):
-                if not compare_swap(p.state, sl * PAD, v, v - tag + CALLER):
+                if not compare_swap(p.state, base, v, v - tag + CALLER):
                     continue  # it has just changed: read it again
                 tag = CALLER
             else:
                 waits = _steal(candidates, head, tail, found, i, q_arcs, s, a, g, cache,
                                placed, bounds, rng, out, p, defer, waits)  # fmt: skip
-                if waits == 0:
-                    for q in range(head + 1, tail):
-                        if p.state[(q % SLOTS) * PAD] & TAG == FREE:
-                            found = q
-                            break
                 continue
         waits = 0
         if tag == CALLER or tag == FREE:
@@ -339,24 +345,24 @@ def scan_shared(
             if code == FULL:
                 _cancel(p, head, tail)
                 return FULL, m
-            store_release(p.state, sl * PAD, v - (v & TAG) + (FREE if code == FOUND else EMPTY))
+            counters[0] += 1
+            if code == NOTHING:
+                counters[1] += 1
         elif tag == EMPTY:
             code = NOTHING
+            counters[0] += 1
+            counters[1] += 1
         else:
             raise AssertionError("partner: the slot the scan reads was cancelled")
-        counters[0] += 1
         if tried.shape[0] > 0:
             tried[k] = i
         if code == FOUND:
             _cancel(p, head + 1, tail)
             return FOUND, m
-        counters[1] += 1
         rmin[k] = r
         if leaves > 0:
             tree_set(tree, leaves, m, r)
         head += 1
-        if found >= 0 and found < head:
-            found = -1
 
 
 @numba.njit(cache=True)

@@ -19,12 +19,13 @@ from regopack.plugins.inserters.available_surface.analysis import cache_for
 
 pytestmark = pytest.mark.skipif(not available(), reason="the partner needs POSIX")
 
+SPHERES = [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}]
 SCENES = {
     "paper": lambda: scene(count=120, domain={"kind": "box", "width": 16.0, "height": 16.0,
                                               "depth": 16.0}),
     "sweep": lambda: sweep_scene(),
     "periodic": lambda: sweep_scene(
-        domain={"kind": "periodic-box", "width": 12.0, "height": 14.0, "depth": 12.0}
+        count=120, domain={"kind": "periodic-box", "width": 12.0, "height": 14.0, "depth": 12.0}
     ),
 }  # fmt: skip
 
@@ -121,7 +122,7 @@ def test_the_caller_takes_back_what_a_stalled_partner_holds(
     alone, alone_stats, _ = _run(monkeypatch, data, 1)
 
     def stalling(*args: Any) -> None:
-        p = args[10]
+        p = args[-2]
         _stalling(p.ctl, p.state, 0 if p.ctl[partner.C_STOP] else 5)
 
     with monkeypatch.context() as m:
@@ -138,7 +139,7 @@ def test_a_failing_partner_leaves_the_scans_to_the_caller_and_is_reported(
     alone, _, _ = _run(monkeypatch, data, 1)
 
     def broken(*args: Any) -> None:
-        if args[10].ctl[partner.C_STOP] == 0:  # serving, not the entry that compiles the loop
+        if args[-2].ctl[partner.C_STOP] == 0:  # serving, not the entry that compiles the loop
             raise RuntimeError("partner failed")
 
     with monkeypatch.context() as m:
@@ -155,10 +156,7 @@ def test_a_failing_partner_leaves_the_scans_to_the_caller_and_is_reported(
 
 @pytest.mark.parametrize(
     "changes",
-    [
-        {"density": {"kind": "eta", "eta": 0.9}},
-        {"phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}]},
-    ],
+    [{"density": {"kind": "eta", "eta": 0.9}}, {"phases": SPHERES}],
     ids=["eta", "spheres"],
 )
 def test_no_partner_for_spheres_nor_with_a_margin(
@@ -168,20 +166,108 @@ def test_no_partner_for_spheres_nor_with_a_margin(
     assert stats["partner"] == 0 and served == []
 
 
-def test_a_partner_left_running_is_stopped_at_exit() -> None:
+def test_a_partner_left_running_is_stopped_at_exit(monkeypatch: pytest.MonkeyPatch) -> None:
     """stop_all (registered with atexit) ends a partner whose insertion never stopped it."""
     from regopack.plugins.inserters.available_surface.state import SurfaceState
 
     solids = regopack.pack(scene(count=5), verify=False).solids
-    lo, hi = np.zeros(3), np.full(3, 30.0)
-    st = SurfaceState(solids, np.ones(len(solids)), lo, hi)
-    team = partner.PartnerThread(
-        st.solids, st.arcs, st.grid, cache_for(st.n, 16), st.order, st.centre, st.circum,
-        np.zeros(0), lo, hi,
-    )  # fmt: skip
-    team.start()
+    st = SurfaceState(solids, np.ones(len(solids)), np.zeros(3), np.full(3, 30.0))
+    monkeypatch.setattr(numba, "get_num_threads", lambda: 2)
+    assert st.start_partner()
+    team = st._partner
+    assert team is not None
     thread = team._thread
     assert thread is not None and thread.is_alive() and team in partner._RUNNING
     partner.stop_all()
     assert not thread.is_alive() and team._thread is None
     assert team not in partner._RUNNING
+
+
+def test_a_candidate_listed_twice_is_screened_as_by_one_thread(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """A candidate posted ahead before its earlier copy was found empty is screened out when
+    the scan reaches it, as one thread screens it (the same counts)."""
+    from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+    box = {"kind": "box", "width": 16.0, "height": 16.0, "depth": 16.0}
+    packing = regopack.pack(scene(count=80, seed=5, domain=box), verify=False)
+    radius = np.cbrt(3.0 * packing.solids.volume / (4.0 * np.pi))
+    lo, hi = np.zeros(3) - 8.0, np.zeros(3) + 8.0
+    order = packing.placed_in_order()
+    results = []
+    for threads in (1, 2):
+        monkeypatch.setattr(numba, "get_num_threads", lambda threads=threads: threads)
+        st = SurfaceState(packing.solids, radius, lo, hi)
+        assert st.start_partner() == (threads == 2)
+        try:
+            for j in order[:20]:
+                st.begin(int(j))
+                st.insert(int(j), packing.centre[j])
+            st.begin(int(order[20]))
+            k, x = st.scan(np.repeat(np.arange(20), 2), np.random.default_rng(1))
+        finally:
+            assert st.stop_partner() is None
+        assert x is not None
+        results.append((k, x.tobytes(), st.analyses, st.empty))
+    assert results[0] == results[1]
+    assert results[0][2] > results[0][3] > 0
+
+
+def test_deferring_to_a_partner_that_ends_mid_scan_does_not_hang(tmp_path: Any) -> None:
+    """The scan releases Python's lock, so a partner's wrapper can mark it dead while the
+    scan waits for a slot it holds; the error is then reported. (The partner answers
+    its first fifty posts 'free' at once, which has the scan analyse them itself in its
+    order, then holds one and ends.)"""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "ending.py"
+    script.write_text(
+        "import numba\n"
+        "import regopack\n"
+        "from test_surface_inserter import scene\n"
+        "from regopack.plugins.common.atomics import compare_swap, load_acquire, spin_hint\n"
+        "from regopack.plugins.inserters.available_surface import partner\n"
+        "numba.get_num_threads = lambda: 2\n"
+        "@numba.njit(nogil=True)\n"
+        "def claim_one(ctl, state):\n"
+        "    while load_acquire(ctl, partner.C_STOP) == 0:\n"
+        "        for sl in range(partner.SLOTS):\n"
+        "            v = load_acquire(state, sl * partner.PAD)\n"
+        "            if v & partner.TAG == partner.POSTED:\n"
+        "                if compare_swap(state, sl * partner.PAD, v, v + 1):\n"
+        "                    if v >> 3 > 50:\n"
+        "                        return\n"
+        "                    # answers 'free': the scan then analyses it in its order\n"
+        "                    compare_swap(state, sl * partner.PAD, v + 1, v + 4)\n"
+        "        spin_hint()\n"
+        "serve = partner.serve\n"
+        "def ending(*args):\n"
+        "    p = args[-2]\n"
+        "    if p.ctl[partner.C_STOP]:\n"
+        "        return serve(*args)\n"
+        "    claim_one(p.ctl, p.state)\n"
+        "    raise RuntimeError('partner ended')\n"
+        "shared = partner.new_surface_partner\n"
+        "def deferring():\n"
+        "    p = shared()\n"
+        "    p.ctl[partner.C_DEFER] = 1\n"
+        "    return p\n"
+        "partner.serve = ending\n"
+        "partner.new_surface_partner = deferring\n"
+        "try:\n"
+        "    regopack.pack(scene(count=60), verify=False)\n"
+        "    print('no error')\n"
+        "except RuntimeError as exc:\n"
+        "    print('reported:', exc)\n"
+    )
+    import os
+
+    env = {**os.environ, "PYTHONPATH": str(Path(__file__).parent)}
+    done = subprocess.run(
+        [sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=240
+    )
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "reported: partner ended" in done.stdout
