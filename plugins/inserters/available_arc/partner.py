@@ -261,6 +261,24 @@ def _idle(ctl: IntArray, polls: int) -> None:
         sleep_us(IDLE_SLEEP_US)
 
 
+@numba.njit(cache=True, inline="always")
+def claim(state: IntArray, slots: int) -> tuple[int, int]:
+    """Claim the oldest of ``slots`` posted slots for the partner: ``(slot, its word)``.
+
+    ``(-1, 0)`` when none is posted, or when the caller claimed it first.
+    """
+    best = -1
+    word = 0
+    for sl in range(slots):
+        v = load_acquire(state, sl * PAD)
+        if v & TAG == POSTED and (best < 0 or v < word):
+            best = sl
+            word = v
+    if best < 0 or not compare_swap(state, best * PAD, word, word - POSTED + PARTNER):
+        return -1, 0
+    return best, word
+
+
 @numba.njit(cache=True, nogil=True)
 def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -> None:
     """Claim posted slots and analyse them until asked to stop (the partner's loop)."""
@@ -281,14 +299,8 @@ def serve(g: K.Outlines, s: K.Packed, h: Helpers, p: Partner, rounded: object) -
     )  # fmt: skip
     idle = 0
     while load_acquire(p.ctl, C_STOP) == 0:
-        best = -1
-        word = 0
-        for sl in range(SLOTS):
-            v = load_acquire(p.state, sl * PAD)
-            if v & TAG == POSTED and (best < 0 or v < word):
-                best = sl
-                word = v
-        if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
+        best, word = claim(p.state, SLOTS)
+        if best < 0:
             idle += 1
             _idle(p.ctl, idle)
             continue

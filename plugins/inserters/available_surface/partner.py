@@ -67,6 +67,7 @@ from regopack.plugins.inserters.available_arc.partner import (
     TAG,
     _idle,
     _wait,
+    claim,
 )
 from regopack.plugins.inserters.available_surface.analysis import EMPTY as NOTHING
 from regopack.plugins.inserters.available_surface.analysis import (
@@ -175,14 +176,8 @@ def serve(
     )  # fmt: skip
     idle = 0
     while load_acquire(p.ctl, C_STOP) == 0:
-        best = -1
-        word = 0
-        for sl in range(SLOTS):
-            v = load_acquire(p.state, sl * PAD)
-            if v & TAG == POSTED and (best < 0 or v < word):
-                best = sl
-                word = v
-        if best < 0 or not compare_swap(p.state, best * PAD, word, word - POSTED + PARTNER):
+        best, word = claim(p.state, SLOTS)
+        if best < 0:
             idle += 1
             _idle(p.ctl, idle)
             continue
