@@ -259,6 +259,20 @@ def cache_for(n: int, rows: int) -> HalfspaceCache:
 
 
 @numba.njit(cache=True)
+def grown(cache: HalfspaceCache) -> HalfspaceCache:
+    """Return a half-space cache of twice the rows, holding ``cache``'s rows and records."""
+    rows = cache.support.shape[0]
+    normals = np.zeros((2 * rows, 3))
+    support = np.zeros(2 * rows)
+    normals[:rows] = cache.normals
+    support[:rows] = cache.support
+    return HalfspaceCache(
+        normals, support, cache.stamp.copy(), cache.start.copy(), cache.size.copy(),
+        cache.fill.copy(),
+    )  # fmt: skip
+
+
+@numba.njit(cache=True)
 def solid(s: Solids, j: int) -> Polyhedron:
     """Particle ``j`` as a :class:`Polyhedron` (views of the flat arrays)."""
     return Polyhedron(
@@ -741,6 +755,29 @@ def _shut_below(
 
 
 @numba.njit(cache=True)
+def next_screened(
+    candidates: IntArray,
+    m: int,
+    r: float,
+    t: float,
+    rmin: FloatArray,
+    tree: FloatArray,
+    leaves: int,
+) -> int:
+    """Return the first position from ``m`` whose candidate passes the screening, or -1."""
+    while True:
+        if leaves > 0:
+            m = first_candidate(tree, leaves, m, candidates.shape[0], r, t, False)
+            if m < 0:
+                return -1
+        elif m >= candidates.shape[0]:
+            return -1
+        if r < t * rmin[candidates[m]]:
+            return m
+        m += 1
+
+
+@numba.njit(cache=True)
 def sphere_turn(
     k: int,
     i: int,
@@ -854,16 +891,10 @@ def scan(
     leaves = tree.shape[0] // 2
     m = begin - 1
     while True:
-        m += 1
-        if leaves > 0:
-            m = first_candidate(tree, leaves, m, candidates.shape[0], r, t, False)
-            if m < 0:
-                break
-        elif m >= candidates.shape[0]:
+        m = next_screened(candidates, m + 1, r, t, rmin, tree, leaves)
+        if m < 0:
             break
         k = candidates[m]
-        if not r < t * rmin[k]:
-            continue
         margin = 0.0
         if eta > 0.0:
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows

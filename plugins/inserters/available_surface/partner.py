@@ -45,7 +45,7 @@ from regopack.plugins.common.atomics import (
     store_release,
 )
 from regopack.plugins.common.borrowed import borrowed
-from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
+from regopack.plugins.inserters.available_arc.candidates import tree_set
 from regopack.plugins.inserters.available_arc.partner import (
     ARCS,
     C_DEAD,
@@ -81,6 +81,8 @@ from regopack.plugins.inserters.available_surface.analysis import (
     Screening,
     Solids,
     analyse,
+    grown,
+    next_screened,
     solid,
 )
 from regopack.plugins.inserters.available_surface.envelope import EdgeArcs, edge_arcs
@@ -125,20 +127,6 @@ def new_surface_partner() -> SurfacePartner:
         k=np.zeros(SLOTS, dtype=np.int64),
         fpar=np.zeros(PAD),
     )
-
-
-@numba.njit(cache=True)
-def grown(cache: HalfspaceCache) -> HalfspaceCache:
-    """Return a half-space cache of twice the rows, holding ``cache``'s rows and records."""
-    rows = cache.support.shape[0]
-    normals = np.zeros((2 * rows, 3))
-    support = np.zeros(2 * rows)
-    normals[:rows] = cache.normals
-    support[:rows] = cache.support
-    return HalfspaceCache(
-        normals, support, cache.stamp.copy(), cache.start.copy(), cache.size.copy(),
-        cache.fill.copy(),
-    )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
@@ -205,29 +193,6 @@ def serve(
 
 
 @numba.njit(cache=True)
-def _next(
-    candidates: IntArray,
-    m: int,
-    r: float,
-    t: float,
-    rmin: FloatArray,
-    tree: FloatArray,
-    leaves: int,
-) -> int:
-    """Return the first position from ``m`` whose candidate passes the screening, or -1."""
-    while True:
-        if leaves > 0:
-            m = first_candidate(tree, leaves, m, candidates.shape[0], r, t, False)
-            if m < 0:
-                return -1
-        elif m >= candidates.shape[0]:
-            return -1
-        if r < t * rmin[candidates[m]]:
-            return m
-        m += 1
-
-
-@numba.njit(cache=True)
 def _cancel(p: SurfacePartner, head: int, tail: int) -> None:
     """Cancel the slots ``head .. tail - 1``: posted or held by the partner, at once.
 
@@ -278,7 +243,7 @@ def scan_shared(
         p.fpar[F_ADM + ax] = bounds.adm_lo[ax]
         p.fpar[F_ADM + 3 + ax] = bounds.adm_hi[ax]
     waits = 0  # polls in a row that found nothing to do
-    nxt = _next(candidates, begin, r, t, rmin, tree, leaves)
+    nxt = next_screened(candidates, begin, r, t, rmin, tree, leaves)
     head = 0  # the next posted slot to read (in the scan's order)
     tail = 0  # slots posted
     found = -1  # the first slot known to have a free surface
@@ -301,7 +266,7 @@ def scan_shared(
             p.task[base + T_I] = i
             store_release(p.state, base, pid * 8 + POSTED)
             tail += 1
-            nxt = _next(candidates, nxt + 1, r, t, rmin, tree, leaves)
+            nxt = next_screened(candidates, nxt + 1, r, t, rmin, tree, leaves)
         if head == tail:
             return NOTHING, candidates.shape[0]
         sl = head % SLOTS

@@ -27,6 +27,7 @@ from regopack.plugins.inserters.available_surface.analysis import (
     cache_for,
     grid_add,
     grid_for,
+    grown,
     scan,
     scan_spheres,
     solids_of,
@@ -36,7 +37,6 @@ from regopack.plugins.inserters.available_surface.halfspaces import minkowski_ha
 from regopack.plugins.inserters.available_surface.partner import (
     PartnerThread,
     SurfacePartner,
-    grown,
     scan_shared,
 )
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron

@@ -271,3 +271,40 @@ def test_deferring_to_a_partner_that_ends_mid_scan_does_not_hang(tmp_path: Any) 
     )
     assert done.returncode == 0, done.stderr[-2000:]
     assert "reported: partner ended" in done.stdout
+
+
+@pytest.mark.parametrize("layer", ["omp", "workqueue"])
+def test_a_process_that_leaves_a_partner_running_exits(tmp_path: Any, layer: str) -> None:
+    """A script that never stops its partner still ends at once after its last line,
+    whichever threading layer numba runs (the partner is a daemon thread of its own)."""
+    import os
+    import subprocess
+    import sys
+    import time
+    from pathlib import Path
+
+    script = tmp_path / "leave.py"
+    script.write_text(
+        "import numpy as np\n"
+        "import regopack\n"
+        "from test_surface_inserter import scene\n"
+        "from regopack.plugins.inserters.available_surface.state import SurfaceState\n"
+        "solids = regopack.pack(scene(count=5), verify=False).solids\n"
+        "st = SurfaceState(solids, np.ones(len(solids)), np.zeros(3), np.full(3, 30.0))\n"
+        "assert st.start_partner() and st._partner._thread.is_alive()\n"
+        "print('last line', flush=True)\n"
+    )
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(Path(__file__).parent),
+        "NUMBA_NUM_THREADS": "2",
+        "NUMBA_THREADING_LAYER": layer,
+    }
+    proc = subprocess.Popen(
+        [sys.executable, str(script)], stdout=subprocess.PIPE, text=True, env=env
+    )
+    assert proc.stdout is not None
+    assert proc.stdout.readline() == "last line\n"
+    last = time.monotonic()
+    assert proc.wait(timeout=60) == 0
+    assert time.monotonic() - last < 10.0
