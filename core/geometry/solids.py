@@ -121,6 +121,24 @@ class SolidBatch:
             rounding=r,
         )
 
+    def head(self, m: int) -> SolidBatch:
+        """Return the solids of the first ``m`` particles (``0 <= m <= len(self)``)."""
+        if not 0 <= m <= len(self):
+            raise ValueError(f"m must be between 0 and {len(self)}, not {m}")
+        faces = int(self.face_offsets[m])
+        loops = self.face_vertex_offsets[: faces + 1]
+        return SolidBatch(
+            vertices=self.vertices[: int(self.offsets[m])],
+            offsets=self.offsets[: m + 1],
+            face_vertices=self.face_vertices[: int(loops[-1])],
+            face_vertex_offsets=loops,
+            face_offsets=self.face_offsets[: m + 1],
+            normals=self.normals[:faces],
+            support=self.support[:faces],
+            rotation=self.rotation[:m],
+            rounding=None if self.rounding is None else self.rounding[:m],
+        )
+
     def solid(self, j: int) -> tuple[FloatArray, list[IntArray]]:
         """Vertices of particle ``j`` and its faces as loops of local vertex indices."""
         verts = self.vertices[self.offsets[j] : self.offsets[j + 1]]

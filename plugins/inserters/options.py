@@ -7,13 +7,13 @@ cannot drift apart.
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-__all__ = ["ZONE_PER_RADIUS", "ScreeningCoefficient", "SweepZone", "sweep_zone"]
+__all__ = ["ZONE_PER_RADIUS", "ScreeningCoefficient", "SweepLag", "SweepZone", "sweep_zone"]
 
 ZONE_PER_RADIUS = 6.0
 """Default sweep zone height over the largest equivalent radius (three diameters)."""
@@ -33,6 +33,20 @@ SweepZone = Annotated[
     ),
 ]
 """Height of the sweep's zone, 0 for the default of :func:`sweep_zone`."""
+
+SweepLag = Annotated[
+    Literal["pilot", "none"],
+    Field(
+        description=(
+            "When the sweep offers each particle: 'pilot' (after the front has risen by "
+            "the depth below the zone top at which particles of its size land in the "
+            "steady state, measured by a small pilot sweep first: no band of fine "
+            "particles at the bottom, at the cost of the pilot) or 'none' (at its turn "
+            "in the stream). Ignored by order = 'paper'."
+        ),
+    ),
+]
+"""When the sweep offers each particle (see ``regopack.plugins.inserters.available_arc.lag``)."""
 
 
 def sweep_zone(zone: float, radius: NDArray[np.float64]) -> float:

@@ -23,7 +23,12 @@ from regopack.base.threads import kernel_threads
 from regopack.geometry.domain import Domain, Rectangle
 from regopack.geometry.population import Population
 from regopack.plugins.inserters.options import ZONE_PER_RADIUS as ZONE_PER_RADIUS
-from regopack.plugins.inserters.options import ScreeningCoefficient, SweepZone, sweep_zone
+from regopack.plugins.inserters.options import (
+    ScreeningCoefficient,
+    SweepLag,
+    SweepZone,
+    sweep_zone,
+)
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -132,16 +137,7 @@ class AvailableArcConfig(BaseModel):
             "whole width. Ignored by order = 'paper'."
         ),
     )
-    lag: Literal["pilot", "none"] = Field(
-        "pilot",
-        description=(
-            "When the sweep offers each particle: 'pilot' (after the front has risen by "
-            "the depth below the zone top at which particles of its size land in the "
-            "steady state, measured by a small pilot sweep first: no band of fine "
-            "particles at the bottom, at the cost of the pilot) or 'none' (at its turn "
-            "in the stream). Ignored by order = 'paper'."
-        ),
-    )
+    lag: SweepLag = "pilot"
     search: Literal["indexed", "linear"] = Field(
         "indexed",
         description=(
@@ -278,7 +274,7 @@ def _pack_sweep(
 ) -> InsertionResult:
     """Insert in the sweep order (see :mod:`regopack.plugins.inserters.available_arc.sweep`)."""
     from regopack.plugins.inserters.available_arc import batches, kernel, sweep
-    from regopack.plugins.inserters.available_arc.lag import pilot_lags
+    from regopack.plugins.inserters.available_arc.lag import head, pilot_generator, pilot_lags
 
     n = len(population)
     bounds = domain.bounds()
@@ -298,16 +294,17 @@ def _pack_sweep(
     lag_info: dict[str, Any] = {}
     if cfg.lag == "pilot":
 
-        def run_pilot(
-            sub: Population, pilot: Rectangle, zone: float
-        ) -> tuple[FloatArray, IntArray, float]:
-            pst = new_state(sub, pilot)
-            psw = sweep.Sweep(len(sub), pilot.height, zone, closing="tail", width=pilot.width)
-            _run_sweep(pst, psw, len(sub), _child(rng), None, None)
-            y = pst.packed.cy[: len(sub)] - pilot.ymin
-            return y, psw.lags.top_at[: len(sub)], psw.delta
+        def run_pilot(m: int, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, IntArray, float]:
+            pilot = Rectangle(float(lo[0]), float(hi[0]), float(lo[1]), float(hi[1]))
+            pst = new_state(head(population, m), pilot)
+            psw = sweep.Sweep(m, pilot.height, zone, closing="tail", width=pilot.width)
+            _run_sweep(pst, psw, m, pilot_generator(rng), None, None)
+            y = pst.packed.cy[:m] - pilot.ymin
+            return y, psw.lags.top_at[:m], psw.delta
 
-        lags, lag_info = pilot_lags(population, domain, zone, sw.delta, run_pilot)
+        lags, lag_info = pilot_lags(
+            population.radius, bounds[0::2], bounds[1::2], zone, sw.delta, run_pilot
+        )
         sw.set_lags(lags)
     threads = min(kernel_threads(), batches.MAX_THREADS) if n else 1
     helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
@@ -362,17 +359,6 @@ def _partner_for(st: ArcState) -> PartnerThread | None:
             return None
         return partner.PartnerThread(st.work, st.packed, bounds=True)
     return partner.PartnerThread(st.work, st.packed)
-
-
-def _child(rng: np.random.Generator) -> np.random.Generator:
-    """Return an independent generator spawned from ``rng``, which keeps its own stream."""
-    try:
-        return rng.spawn(1)[0]
-    except (TypeError, ValueError):  # a generator without a seed sequence
-        # seeded from a copy of ``rng``, whose own stream stays untouched
-        twin = type(rng.bit_generator)()
-        twin.state = rng.bit_generator.state
-        return np.random.default_rng(np.random.Generator(twin).integers(2**63))
 
 
 def _run_sweep(

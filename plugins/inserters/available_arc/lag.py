@@ -13,9 +13,15 @@ top.
 
 The depths are a property of the materials and the zone, not known before a
 packing, so a *pilot* measures them: the first particles of the stream are
-swept into a small walled rectangle at the bottom of the domain (two zone
-heights wide, three high), and the depth of every particle placed once the
-pilot's zone top is two zone heights up is averaged per √2 size class.
+swept into a small walled box at the bottom of the domain (three zone heights
+high; in 2D a rectangle two zone heights wide, in 3D a square floor one zone
+height a side), and the depth of every particle placed once the pilot's zone
+top is two zone heights up is averaged per √2 size class. The same pilot
+serves both dimensions (:func:`pilot_lags`): only the sweep that runs it
+differs. In 3D the floor is narrower than in 2D because a square of two zone
+heights would make the pilot four times as costly (twelve zone volumes),
+while one zone height a side already gives each fine class thousands of
+placements to average.
 """
 
 from __future__ import annotations
@@ -27,23 +33,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.geometry.domain import Domain, Rectangle
 from regopack.geometry.population import Population, ShapeBatch
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-PILOT_WIDTH = 2.0
-"""Width of the pilot's rectangle, in zone heights (at most the domain's width)."""
+PILOT_WIDTH = {2: 2.0, 3: 1.0}
+"""Sides of the pilot's floor, in zone heights, by dimension (at most the domain's)."""
 PILOT_HEIGHT = 3.0
-"""Height of the pilot's rectangle, in zone heights."""
+"""Height of the pilot's box, in zone heights."""
 MEASURE_FROM = 2.0
 """Placements count once the pilot's zone top is this many zone heights up: its
 zone has then left the pilot's own first zone height, which has no lags."""
 MIN_HEIGHT = 2.5
 """Domains lower than this many zone heights get no lags (no steady state to learn from)."""
 PILOT_FILL = 1.0
-"""Particle area given to the pilot, over its rectangle's area (it fills about 0.87)."""
+"""Particle area (volume in 3D) given to the pilot, over its box's (2D: it fills about 0.87)."""
 MIN_LAG = 0.1
 """Mean depths under this many zone heights are no lag (about the depth at which the
 coarse particles that make the front land)."""
@@ -113,41 +118,51 @@ def class_lags(
     return lag, samples
 
 
+def ball_measure(radius: FloatArray, dimension: int) -> FloatArray:
+    """Area (2D) or volume (3D) of the disks or balls of ``radius``."""
+    if dimension == 2:
+        return math.pi * radius**2
+    return (4.0 / 3.0) * math.pi * radius**3
+
+
 def pilot_lags(
-    population: Population,
-    domain: Domain,
+    radius: FloatArray,
+    lo: FloatArray,
+    hi: FloatArray,
     zone: float,
     delta: float,
-    run_pilot: Callable[[Population, Rectangle, float], tuple[FloatArray, IntArray, float]],
+    run_pilot: Callable[[int, FloatArray, FloatArray], tuple[FloatArray, IntArray, float]],
 ) -> tuple[IntArray, dict[str, Any]]:
     """Lag of every particle, in bins of height ``delta``, learned from a pilot sweep.
 
     Parameters
     ----------
-    population
-        The particles of the run, in stream order.
-    domain
-        The run's domain; the pilot is a walled rectangle at the bottom of its box.
+    radius
+        Equivalent radius of the particles of the run, in stream order.
+    lo, hi
+        Lower and upper corners of the run's domain box (2 or 3 coordinates,
+        the last one the height); the pilot is a walled box on its floor, at
+        its lower corner.
     zone
         The run's zone height.
     delta
         The run's bin height.
     run_pilot
-        Sweeps a population into a rectangle with the run's settings and zone;
-        returns the placed centres' heights above the rectangle's bottom
-        (NaN where not placed), each particle's zone top (bin, -1 where not
-        measured, see ``Lags.top_at``) and the pilot's bin height.
+        ``run_pilot(m, lo, hi)`` sweeps the stream's first ``m`` particles into
+        the walled box ``lo``, ``hi`` with the run's settings and zone; returns
+        the placed centres' heights above the box's floor (NaN where not
+        placed), each particle's zone top (bin, -1 where not measured, see
+        ``Lags.top_at``) and the pilot's bin height.
 
     Returns
     -------
     lag, info
         ``(n,)`` lags in bins, and what the pilot measured (for the summary).
     """
-    n = len(population)
+    n = radius.shape[0]
+    dim = lo.shape[0]
     lag = np.zeros(n, dtype=np.int64)
-    bounds = domain.bounds()
-    width = float(bounds[1] - bounds[0])
-    height = float(bounds[3] - bounds[2])
+    height = float(hi[-1] - lo[-1])
     info: dict[str, Any] = {
         "lag_pilot_particles": 0,
         "lag_samples": 0,
@@ -156,20 +171,24 @@ def pilot_lags(
     }
     if n == 0 or not zone > 0 or height < MIN_HEIGHT * zone:
         return lag, info
-    pw = min(width, PILOT_WIDTH * zone)
-    ph = min(height, PILOT_HEIGHT * zone)
+    side = PILOT_WIDTH[dim] * zone
+    extent = [min(float(hi[a] - lo[a]), side) for a in range(dim - 1)]
+    extent.append(min(height, PILOT_HEIGHT * zone))
     # enough of the stream's first particles to fill the pilot, whatever the run's count
-    mean_area = math.pi * float(np.mean(population.radius**2))
-    m = min(n, math.ceil(PILOT_FILL * pw * ph / mean_area))
-    x0 = float(bounds[0])
-    y0 = float(bounds[2])
-    pilot = Rectangle(x0, x0 + pw, y0, y0 + ph)
-    y, top_at, pdelta = run_pilot(head(population, m), pilot, zone)
+    cell = math.prod(extent)
+    if dim == 2:
+        mean = math.pi * float(np.mean(radius**2))
+    else:
+        mean = float(np.mean(ball_measure(radius, dim)))
+    m = min(n, math.ceil(PILOT_FILL * cell / mean))
+    plo = np.array(lo, dtype=np.float64)
+    phi = plo + np.array(extent)
+    y, top_at, pdelta = run_pilot(m, plo, phi)
     measured = (top_at >= 0) & ((top_at + 1.0) * pdelta >= MEASURE_FROM * zone)
     depth = (top_at[measured] + 1.0) * pdelta - y[measured]
-    r_min = float(population.radius.min())
-    lags, _ = class_lags(population.radius[:m][measured], depth, r_min, MIN_LAG * zone)
-    cls = size_class(population.radius, r_min)
+    r_min = float(radius.min())
+    lags, _ = class_lags(radius[:m][measured], depth, r_min, MIN_LAG * zone)
+    cls = size_class(radius, r_min)
     known = cls < lags.shape[0]
     lag[known] = np.rint(lags[cls[known]] / delta).astype(np.int64)
     info["lag_pilot_particles"] = m
@@ -177,3 +196,18 @@ def pilot_lags(
     info["lagged"] = int(np.count_nonzero(lag))
     info["lag_max"] = float(lags.max()) if lags.size else 0.0
     return lag, info
+
+
+def pilot_generator(rng: np.random.Generator) -> np.random.Generator:
+    """Return an independent generator spawned from ``rng``, which keeps its own stream.
+
+    The pilot draws from it, so that the run's own stream is the same with
+    and without lags.
+    """
+    try:
+        return rng.spawn(1)[0]
+    except (TypeError, ValueError):  # a generator without a seed sequence
+        # seeded from a copy of ``rng``, whose own stream stays untouched
+        twin = type(rng.bit_generator)()
+        twin.state = rng.bit_generator.state
+        return np.random.default_rng(np.random.Generator(twin).integers(2**63))

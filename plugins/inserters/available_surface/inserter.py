@@ -56,7 +56,12 @@ from regopack.base.errors import ConfigError
 from regopack.geometry.domain import Box, Domain
 from regopack.geometry.population import Population
 from regopack.plugins.inserters.options import ZONE_PER_RADIUS as ZONE_PER_RADIUS
-from regopack.plugins.inserters.options import ScreeningCoefficient, SweepZone, sweep_zone
+from regopack.plugins.inserters.options import (
+    ScreeningCoefficient,
+    SweepLag,
+    SweepZone,
+    sweep_zone,
+)
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import (
     DensityController,
@@ -69,6 +74,7 @@ from regopack.registry.plugin_types import InserterSpec
 if TYPE_CHECKING:
     from regopack.geometry.solids import SolidBatch
     from regopack.plugins.inserters.available_surface.state import SurfaceState
+    from regopack.plugins.inserters.available_surface.sweep import SurfaceSweep
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -132,6 +138,7 @@ class AvailableSurfaceConfig(BaseModel):
             "floor. Ignored by order = 'paper'."
         ),
     )
+    lag: SweepLag = "pilot"
     front: Literal["bottom-up", "faceted"] = Field(
         "bottom-up",
         description=(
@@ -295,10 +302,17 @@ def _insert(
         if cfg.front == "faceted":
             facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
         sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
+        if cfg.lag == "pilot":
+            piloted = time.perf_counter()
+            lags, info = _pilot_lags(st, shapes, radius, cfg, sweep, rng)
+            sweep.set_lags(lags)
+            stats.update({k: float(v) for k, v in info.items()})
+            stats["pilot_time_s"] = time.perf_counter() - piloted
         sweep.run(rng, progress, PROGRESS_EVERY)
         refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
         held = int(np.count_nonzero(sweep.status[:n] == STATUS_HELD))
         stats = {
+            **stats,
             "zone": float(sweep.zone),
             "zone_raises": float(sweep.raises),
             "strips": float(len(sweep.zones)),
@@ -309,6 +323,32 @@ def _insert(
     else:
         _pack_paper(st, rng, progress)
     return stats
+
+
+def _pilot_lags(
+    st: SurfaceState,
+    shapes: SolidBatch,
+    radius: FloatArray,
+    cfg: AvailableSurfaceConfig,
+    sweep: SurfaceSweep,
+    rng: np.random.Generator,
+) -> tuple[IntArray, dict[str, float]]:
+    """Return each particle's lag in the run's bins, and what the pilot measured.
+
+    The pilot sweep (:mod:`regopack.plugins.inserters.available_arc.lag`) runs with the
+    run's settings in a walled box on the floor and draws from a generator of its own.
+    """
+    from regopack.plugins.inserters.available_arc.lag import pilot_generator, pilot_lags
+    from regopack.plugins.inserters.available_surface.state import SurfaceState
+    from regopack.plugins.inserters.available_surface.sweep import SurfaceSweep
+
+    def run_pilot(m: int, lo: FloatArray, hi: FloatArray) -> tuple[FloatArray, IntArray, float]:
+        pst = SurfaceState(shapes.head(m), radius[:m], lo, hi, t=cfg.t, eta=st.eta)
+        psw = SurfaceSweep(pst, cfg.t, sweep.zone, "tail")
+        psw.run(pilot_generator(rng))
+        return pst.centre[:, 2] - lo[2], psw.top_at[:m], psw.delta
+
+    return pilot_lags(radius, st.lo, st.hi, sweep.zone, sweep.delta, run_pilot)
 
 
 def _pack_paper(

@@ -28,6 +28,20 @@ that of a frozen or retired one ``-inf``, so the screened search descends the
 tree to the candidates that pass instead of listing the whole packing for
 every particle: its cost does not grow with the number placed.
 
+Particles may be offered after a *lag* (:meth:`SurfaceSweep.set_lags`, learned
+by the pilot of :mod:`regopack.plugins.inserters.available_arc.lag`), by the
+rules of the 2D sweep: a particle with a lag waits until the zone top of the
+column it would be offered to (its *home*) has risen by that many bins (a
+full zone's top rising on as its lowest bins retire, :meth:`SurfaceSweep._top`);
+the waiting particles that are due are offered, to their home column first,
+before the next particle of the stream. In the prompt and tail closings no
+particle waits once every zone is at the top, and all waiting ones are
+offered then; so is every waiting particle when the stream ends below the
+top. In the paced and even closings the lags go on by the rising tops, and
+when the stream ends each column's top rises on to its waiting particles'
+bins in turn, retiring the bins below; a waiting particle whose column
+closed before it was due is not offered.
+
 The *faceted* front (``front = "faceted"``) measures a candidate's height
 along a field of square pyramids instead of along ``z``: over squares of
 side ``facet`` on the floor, the height of a centre is ``(z + sqrt(2) g) /
@@ -45,6 +59,7 @@ centre, the apex of a pyramid.
 from __future__ import annotations
 
 import math
+from collections import deque
 from collections.abc import Callable
 
 import numba
@@ -276,6 +291,30 @@ class SurfaceSweep:
         ncls = int(self.size_class.max()) + 1 if state.n else 1
         self.class_offered = np.zeros(ncls, dtype=np.int64)
         self.class_placed = np.zeros(ncls, dtype=np.int64)
+        # the lags: per particle the bins the front rises before its offer, and the bin of
+        # its column's zone top when it was placed with the zone at full height (the
+        # pilot's measure; -1 otherwise); per column the particles waiting, by the bin of
+        # the top they wait for, and the lowest bin still waited for
+        self.lag = np.zeros(n, dtype=np.int64)
+        self.top_at = np.full(n, -1, dtype=np.int64)
+        self.queues: list[dict[int, deque[int]]] = [{} for _ in self.zones]
+        self.qbin = [0] * len(self.zones)
+        self.waiting = 0
+        self.flush = 0  # 1: every waiting particle is due; 2: the stream has ended (paced)
+        # a full zone's top rises on for a zone height while its bins retire
+        self.nwait = self.nbins + 2 * self.nzone + 1
+
+    def set_lags(self, lag: IntArray) -> None:
+        """Offer each particle ``lag[i]`` bins of the front's rise after its turn.
+
+        All zeros (the default) offers every particle at its turn.
+        """
+        self.lag[: lag.shape[0]] = lag
+
+    @property
+    def paced(self) -> bool:
+        """Whether the closing is paced (``paced`` or ``even``): the lags go on to the top."""
+        return self.closing in ("paced", "even")
 
     @property
     def raises(self) -> int:
@@ -344,6 +383,12 @@ class SurfaceSweep:
             self._flag(k, RETIRED)
         z.lo += 1
 
+    def _retire(self, z: Zone) -> None:
+        """Retire zone ``z``'s lowest bin; close the column when no bin is left."""
+        self._retire_lowest(z)
+        if z.lo > z.hi:
+            z.closed = True
+
     def _raise(self, z: Zone) -> bool:
         """Raise zone ``z`` by one bin; False when its top is the box's top already."""
         if z.hi + 1 >= self.nbins:
@@ -391,6 +436,98 @@ class SurfaceSweep:
                         return k
         return best
 
+    # ------------------------------------------------------------------ lags
+
+    def _top(self, z: Zone) -> int:
+        """Bin of zone ``z``'s top, rising on as a full zone's lowest bins retire."""
+        if z.full:
+            return max(z.hi, z.lo + self.nzone - 1)
+        return z.hi
+
+    def _all_full(self) -> bool:
+        """Whether every open column's zone is at the box's top (False for none)."""
+        seen = False
+        for z in self.zones:
+            if z.seeded and not z.closed:
+                seen = True
+                if not z.full:
+                    return False
+        return seen
+
+    def _wait(self, i: int, home: int) -> bool:
+        """Queue particle ``i`` until column ``home``'s zone top has risen by its lag.
+
+        Returns False when ``i`` is to be offered now: no lag, before the first
+        particle, no open column, or once the waiting particles have been let go.
+        """
+        if self.lag[i] <= 0 or not self.started or self.flush != 0 or home < 0:
+            return False
+        z = self.zones[home]
+        # not below the lowest bin still waited for, which the release has passed
+        b = min(max(self._top(z) + int(self.lag[i]), self.qbin[home]), self.nwait - 1)
+        self.queues[home].setdefault(b, deque()).append(i)
+        self.waiting += 1
+        return True
+
+    def _due(self) -> tuple[int, int]:
+        """Column and bin of the next waiting particle to offer, (-1, -1) for none.
+
+        The first started column, in index order, whose lowest waiting bin its
+        zone top has reached (any waiting bin once they are let go, or once the
+        column has closed).
+        """
+        for k, z in enumerate(self.zones):
+            queue = self.queues[k]
+            if not z.seeded or not queue:
+                continue
+            if self.flush != 0 or z.closed:
+                limit = self.nwait - 1
+            else:
+                limit = min(self._top(z), self.nwait - 1)
+            # the release passes only bins up to the top: a particle queued later
+            # never waits below it
+            b = self.qbin[k]
+            while b <= limit and b not in queue:
+                b += 1
+            self.qbin[k] = b
+            if b <= limit:
+                return k, b
+        return -1, -1
+
+    def _release(self, rng: np.random.Generator, ended: bool) -> None:
+        """Offer the waiting particles that are due (``ended``: the stream has ended)."""
+        while self.waiting > 0 and not self.done:
+            if self.flush == 0:
+                full = self._all_full()
+                if full and self.paced:
+                    # the lags go on by the rising tops; when the stream ends the tops
+                    # rise on without it (below)
+                    if ended:
+                        self.flush = 2
+                elif full or ended:
+                    # the prompt and tail closings leave out a random tail of the
+                    # stream: every particle drawn before it is offered once every zone
+                    # is at the top; so is every particle when the stream ends below it
+                    self.flush = 1
+            k, b = self._due()
+            if k < 0:
+                return
+            queue = self.queues[k]
+            q = queue[b].popleft()
+            if not queue[b]:
+                del queue[b]
+            self.waiting -= 1
+            if self.paced and self.flush != 1:
+                z = self.zones[k]
+                if self.flush == 2:
+                    # the stream has ended: the column's top rises on to the particle's
+                    # bin, as the stream would have raised it, retiring the bins below
+                    while not z.closed and self._top(z) < b:
+                        self._retire(z)
+                if z.closed:
+                    continue  # its column closed before it was due: not offered
+            self.offer(q, rng, queued=True, prefer=k)
+
     # ---------------------------------------------------------------- search
 
     def _screened(self, i: int, rng: np.random.Generator) -> tuple[int, FloatArray | None]:
@@ -431,12 +568,19 @@ class SurfaceSweep:
 
     # ------------------------------------------------------------------ loop
 
-    def offer(self, i: int, rng: np.random.Generator) -> None:
-        """Offer particle ``i`` (after the run has closed it is not offered)."""
+    def offer(
+        self, i: int, rng: np.random.Generator, queued: bool = False, prefer: int = -1
+    ) -> None:
+        """Offer particle ``i`` (after the run has closed it is not offered).
+
+        ``queued``: ``i`` waited for its lag, so an earlier particle of the
+        stream; its refusal does not close a column (tail) nor retire bins
+        (prompt). ``prefer``: a column to offer it to first, if open.
+        """
         if self.done:
             return
         if self.closing != "even":
-            self._offer(i, rng)
+            self._offer(i, rng, queued, prefer)
             return
         c = int(self.size_class[i])
         closing = any(z.full for z in self.zones)
@@ -445,12 +589,12 @@ class SurfaceSweep:
             self.status[i] = STATUS_HELD
             self.held += 1
             return
-        self._offer(i, rng)
+        self._offer(i, rng, queued, prefer)
         if self.status[i] != STATUS_NOT_OFFERED:
             self.class_offered[c] += 1
             self.class_placed[c] += int(self.status[i] == STATUS_PLACED)
 
-    def _offer(self, i: int, rng: np.random.Generator) -> None:
+    def _offer(self, i: int, rng: np.random.Generator, queued: bool, prefer: int) -> None:
         st = self.state
         if not self.started:
             if st.begin(i):
@@ -474,6 +618,8 @@ class SurfaceSweep:
         fits = True
         while True:
             k = self._choose(tried)
+            if prefer >= 0 and prefer not in tried and self._open(prefer):
+                k = prefer
             if k < 0:
                 break
             tried.add(k)
@@ -484,9 +630,8 @@ class SurfaceSweep:
                 z.since += 1
                 if z.since > z.pace:
                     z.since = 0
-                    self._retire_lowest(z)
-                    if z.lo > z.hi:
-                        z.closed = True
+                    self._retire(z)
+                    if z.closed:
                         continue
             elif not z.full:
                 z.offered += 1
@@ -497,7 +642,7 @@ class SurfaceSweep:
             x = self._offer_to(i, z, rng) if fits else None
             if x is not None:
                 break
-            if was_full and self.closing == "tail":
+            if was_full and self.closing == "tail" and not queued:
                 z.closed = True  # the first refusal under the top closes the column
             if not fits:
                 break  # larger than the box
@@ -508,20 +653,27 @@ class SurfaceSweep:
         if x is None:
             self.status[i] = STATUS_REFUSED
             self.refused += 1
-            if self.closing == "prompt":
+            if self.closing == "prompt" and not queued:
                 # the refusal stands for the rise each full column that refused it
-                # would have made
+                # would have made (a waiting particle's does not: the run could close
+                # while particles drawn before it still wait)
                 for k in sorted(tried):
                     z = self.zones[k]
                     if z.full and not z.closed:
-                        self._retire_lowest(z)
-                        if z.lo > z.hi:
-                            z.closed = True
+                        self._retire(z)
             if self.closing in ("tail", "prompt") and self._choose(set()) < 0:
                 self.done = True
             return
+        z = self.zones[self.cur]
+        if not z.full and z.hi - z.lo + 1 >= self.nzone:
+            self.top_at[i] = z.hi
         self._register(st.insert(i, x))
         self.status[i] = STATUS_PLACED
+
+    def _open(self, k: int) -> bool:
+        """Whether column ``k`` has started and not closed."""
+        z = self.zones[k]
+        return z.seeded and not z.closed
 
     def run(
         self,
@@ -529,11 +681,18 @@ class SurfaceSweep:
         progress: Callable[[int, int, int], None] | None = None,
         every: int = 500,
     ) -> None:
-        """Offer every particle in population order."""
+        """Offer every particle in population order, each after its lag."""
         n = self.state.n
-        for i in range(n):
-            if progress is not None and i % every == 0:
+        for i in range(n + 1):
+            if progress is not None and i % every == 0 and i < n:
                 progress(i, self.state.count, n)
             if self.done:
                 break
+            self._release(rng, ended=i == n)
+            if i == n or self.done:
+                break
+            # no particle waits once every zone is at the top, but in the paced closings
+            waits = self.paced or not self._all_full()
+            if waits and self._wait(i, self._choose(set())):
+                continue
             self.offer(i, rng)
