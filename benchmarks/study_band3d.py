@@ -5,9 +5,18 @@ and the tail closing, and prints, per seed and on average, the number of
 particle centres per µm of height in slabs over the floor, relative to the
 bulk (from 150 µm to 120 µm under the top), for all particles and for the
 finest √2 class (2–2.8 µm), centres farther than 20 µm from the side walls.
+The scene draws ``--count`` particles (20 000: more than fill the default
+box, so that the front reaches the top and the bulk is the steady state; a
+stream that ends below the top leaves its last particles, and with lags the
+fine ones still waiting, in a band under the front).
 Run from the repository root::
 
-    python benchmarks/study_band3d.py --width 110 --height 480 --seeds 1 2
+    python benchmarks/study_band3d.py --width 110 --height 480 --seeds 1 2 [--lag none]
+
+``--shape sphere`` packs every phase as spheres.
+
+``--lag none`` offers every particle at its turn (no pilot); the default learns
+the lags with the pilot, as a scene does.
 """
 
 from __future__ import annotations
@@ -19,6 +28,7 @@ import time
 import numpy as np
 
 from regopack.api.functions import pack_and_summarise
+from regopack.scenes.model import load_scene
 
 SLABS = ((20.0, 60.0), (60.0, 100.0), (100.0, 150.0))
 """Heights over the floor (µm) whose density is compared with the bulk's."""
@@ -32,14 +42,25 @@ def main() -> None:
     parser.add_argument("--width", type=float, default=110.0)
     parser.add_argument("--height", type=float, default=480.0)
     parser.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
+    parser.add_argument("--lag", choices=["pilot", "none"], default="pilot")
+    parser.add_argument("--count", type=int, default=20000)
+    parser.add_argument("--shape", choices=["polyhedron", "sphere"], default="polyhedron")
     args = parser.parse_args()
     w, h = args.width, args.height
+    # every phase of the scene as spheres (--shape sphere), or its polyhedra
+    phases = load_scene("table1-3d").phases
+    shapes = (
+        {f"phases.{k}.shape": {"kind": "sphere"} for k in range(len(phases))}
+        if args.shape == "sphere"
+        else {}
+    )
     rows = []
     for seed in args.seeds:
         started = time.perf_counter()
         out = pack_and_summarise(
             "table1-3d",
             seed=seed,
+            count=args.count,
             verify=False,
             **{
                 "domain.width": w,
@@ -47,6 +68,8 @@ def main() -> None:
                 "domain.height": h,
                 "insertion.order": "sweep",
                 "insertion.closing": "tail",
+                "insertion.lag": args.lag,
+                **shapes,
             },
         )
         p = out.packing
@@ -68,7 +91,8 @@ def main() -> None:
             )
         rows.append(row)
         print(
-            f"seed {seed}: {int(p.placed.sum())} placed in {time.perf_counter() - started:.1f} s,"
+            f"seed {seed}: {int(p.placed.sum())} placed in {time.perf_counter() - started:.1f} s"
+            f" (pilot {out.summary.get('pilot_time_s', 0.0):.1f} s),"
             f" {int(np.sum(bulk & fine))} finest in the bulk;"
             + "".join(
                 f"  {a:g}-{b:g} um: all {r[0]:.2f}, finest {r[1]:.2f}"

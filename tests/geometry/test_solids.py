@@ -142,3 +142,24 @@ def test_volumes_of_random_hulls_agree_with_qhull(seed: int) -> None:
     """Every particle's volume, all faces at once, is Qhull's (each face belongs to its owner)."""
     batch, volumes = _hulls(seed, 7)
     assert batch.volume.tolist() == pytest.approx(volumes, rel=1e-12)
+
+
+@pytest.mark.parametrize("m", [0, 1, 4, 7])
+def test_the_head_of_a_batch_keeps_its_first_solids(m: int) -> None:
+    batch, volumes = _hulls(5, 7)
+    head = batch.head(m)
+    assert len(head) == m
+    for j in range(m):
+        verts, loops = head.solid(j)
+        want_verts, want_loops = batch.solid(j)
+        assert np.array_equal(verts, want_verts)
+        assert [loop.tolist() for loop in loops] == [loop.tolist() for loop in want_loops]
+    assert head.volume.tolist() == pytest.approx(volumes[:m])
+    faces = int(batch.face_offsets[m])
+    assert np.array_equal(head.normals, batch.normals[:faces])
+    assert np.array_equal(head.support, batch.support[:faces])
+    assert head.rounding is None
+    spheres = _spheres([1.0, 2.0, 3.0]).head(2)
+    assert spheres.rounding is not None and spheres.rounding.tolist() == [1.0, 2.0]
+    with pytest.raises(ValueError, match="between 0 and 7"):
+        batch.head(8)

@@ -20,8 +20,10 @@ top is two zone heights up is averaged per √2 size class. The same pilot
 serves both dimensions (:func:`pilot_lags`): only the sweep that runs it
 differs. In 3D the floor is narrower than in 2D because a square of two zone
 heights would make the pilot four times as costly (twelve zone volumes),
-while one zone height a side already gives each fine class thousands of
-placements to average.
+while one zone height a side already gives the fine classes of the Chang'e-5
+sizes thousands of placements to average. A size distribution with few fine
+particles gives the pilot few of them: the classes finer than every class it
+measured well take that class's lag (:func:`class_lags`).
 """
 
 from __future__ import annotations
@@ -53,7 +55,8 @@ MIN_LAG = 0.1
 """Mean depths under this many zone heights are no lag (about the depth at which the
 coarse particles that make the front land)."""
 MIN_SAMPLES = 20
-"""Placements a size class needs in the pilot to get a lag (fewer: no lag)."""
+"""Placements a size class needs in the pilot to get a lag of its own (fewer: no lag, or
+the lag of the finest class with enough when it is finer than all of them)."""
 
 
 def head(population: Population, m: int) -> Population:
@@ -100,7 +103,10 @@ def class_lags(
         Shallower means are no lag: the particles that make the front land
         about their own size below the top.
     min_samples
-        Classes with fewer placements get no lag.
+        Classes with fewer placements get no lag, but for those finer than
+        every class with enough placements, which take the finest such class's
+        lag (a size distribution with few fine particles gives the pilot few of
+        them to measure).
 
     Returns
     -------
@@ -115,6 +121,11 @@ def class_lags(
     ok = samples >= min_samples
     lag[ok] = total[ok] / samples[ok]
     lag[lag < min_lag] = 0.0
+    if ok.any():
+        # the classes finer than every measured one land at least as deep as the
+        # finest measured class: they take its lag rather than none
+        first = int(np.argmax(ok))
+        lag[:first] = lag[first]
     return lag, samples
 
 

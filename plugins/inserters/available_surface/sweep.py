@@ -37,10 +37,11 @@ the waiting particles that are due are offered, to their home column first,
 before the next particle of the stream. In the prompt and tail closings no
 particle waits once every zone is at the top, and all waiting ones are
 offered then; so is every waiting particle when the stream ends below the
-top. In the paced and even closings the lags go on by the rising tops, and
-when the stream ends each column's top rises on to its waiting particles'
-bins in turn, retiring the bins below; a waiting particle whose column
-closed before it was due is not offered.
+top (in the even closing too, so that every particle left out is one it held
+back by its class counts). In the paced closing the lags go on by the rising
+tops, and when the stream ends each column's top rises on to its waiting
+particles' bins in turn, retiring the bins below; a waiting particle whose
+column closed before it was due is not offered.
 
 The *faceted* front (``front = "faceted"``) measures a candidate's height
 along a field of square pyramids instead of along ``z``: over squares of
@@ -202,7 +203,7 @@ class SurfaceSweep:
     zone
         Zone height (length units, > 0).
     closing
-        ``"paced"``, ``"prompt"`` or ``"tail"``.
+        ``"paced"``, ``"prompt"``, ``"tail"`` or ``"even"``.
     strip
         Width of the columns (length units): the box's floor is cut into
         equal tiles of about this width, each column with its own zone, as the
@@ -313,8 +314,13 @@ class SurfaceSweep:
 
     @property
     def paced(self) -> bool:
-        """Whether the closing is paced (``paced`` or ``even``): the lags go on to the top."""
-        return self.closing in ("paced", "even")
+        """Whether the lags go on once every zone is at the top (the ``paced`` closing).
+
+        The ``even`` closing lets its waiting particles go at once then, as
+        ``tail`` and ``prompt`` do: a waiting particle left out at the end would
+        escape the class counts by which it keeps the placed sizes true.
+        """
+        return self.closing == "paced"
 
     @property
     def raises(self) -> int:
@@ -691,7 +697,7 @@ class SurfaceSweep:
             self._release(rng, ended=i == n)
             if i == n or self.done:
                 break
-            # no particle waits once every zone is at the top, but in the paced closings
+            # no particle waits once every zone is at the top, but in the paced closing
             waits = self.paced or not self._all_full()
             if waits and self._wait(i, self._choose(set())):
                 continue

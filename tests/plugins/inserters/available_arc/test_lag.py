@@ -29,6 +29,17 @@ def test_class_lags_are_mean_depths_and_ignore_thin_or_shallow_classes() -> None
     assert lags.tolist() == [15.0, 0.0, 0.0, 0.0]
 
 
+def test_classes_finer_than_every_measured_one_take_the_finest_measured_lag() -> None:
+    radius = np.array([1.0] * 5 + [1.5] * 12 + [2.1] * 30 + [3.0] * 30)
+    depth = np.array([9.0] * 5 + [8.0] * 12 + [6.0] * 30 + [0.5] * 30)
+    lags, samples = lag.class_lags(radius, depth, 1.0, min_lag=1.0, min_samples=20)
+    assert samples.tolist() == [5, 12, 30, 30]
+    assert lags.tolist() == [6.0, 6.0, 6.0, 0.0]
+    # none measured: no lags
+    lags, _ = lag.class_lags(radius[:17], depth[:17], 1.0, min_lag=1.0, min_samples=20)
+    assert lags.tolist() == [0.0, 0.0]
+
+
 def test_the_head_of_a_population_keeps_its_particles() -> None:
     pop, _ = change5_population(50, 1)
     sub = lag.head(pop, 20)

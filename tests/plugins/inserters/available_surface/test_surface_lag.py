@@ -14,6 +14,7 @@ from regopack.plugins.inserters.available_surface.state import SurfaceState
 from regopack.plugins.inserters.available_surface.sweep import (
     STATUS_NOT_OFFERED,
     STATUS_PLACED,
+    STATUS_REFUSED,
     SurfaceSweep,
 )
 from regopack.verification.polyhedra import verify_polyhedra
@@ -201,3 +202,109 @@ def test_lagged_polyhedra_stay_overlap_free() -> None:
     ]
     report = verify_polyhedra(world, None, lo, hi)
     assert report.ok, str(report)
+
+
+def _spheres_sweep(
+    radius: np.ndarray, closing: str, strip: float = 0.0
+) -> tuple[SurfaceState, SurfaceSweep]:
+    lo, hi = np.array([-6.0, -6.0, -20.0]), np.array([6.0, 6.0, 20.0])
+    st = SurfaceState(SolidBatch.of_spheres(radius), radius, lo, hi)
+    return st, SurfaceSweep(st, 0.999, 12.0, closing, strip)
+
+
+@pytest.mark.parametrize("closing", ["tail", "prompt"])
+@pytest.mark.parametrize("queued", [True, False])
+def test_only_a_refusal_at_its_turn_closes_a_column_or_retires_a_bin(
+    closing: str, queued: bool
+) -> None:
+    radius = np.r_[np.full(40, 1.0), 50.0]  # the last one fits nowhere
+    _, sw = _spheres_sweep(radius, closing)
+    rng = np.random.default_rng(1)
+    for i in range(40):
+        sw.offer(i, rng)
+    z = sw.zones[0]
+    z.full = True  # as if its zone had reached the top
+    lo = z.lo
+    sw.offer(40, rng, queued=queued)
+    assert sw.status[40] == STATUS_REFUSED
+    if queued:
+        assert not z.closed and z.lo == lo
+    elif closing == "tail":
+        assert z.closed
+    else:
+        assert z.lo == lo + 1
+
+
+def test_a_waiting_particle_goes_to_its_home_column_first() -> None:
+    radius = np.full(80, 1.0)
+    _, sw = _spheres_sweep(radius, "paced", strip=6.0)
+    rng = np.random.default_rng(2)
+    for i in range(60):
+        sw.offer(i, rng)
+    tops = [z.hi if z.seeded else -1 for z in sw.zones]
+    home = int(np.argmax(tops))  # the highest: the one a particle at its turn goes to last
+    assert home != sw._choose(set())
+    sw.offer(60, rng, queued=True, prefer=home)
+    assert sw.status[60] == STATUS_PLACED and sw.cur == home
+
+
+def test_waiting_particles_are_offered_once_the_top_reaches_their_bin_not_later(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """After each release, no particle still waits for a bin its column's top has reached
+    (the top rising on as a full zone's bins retire), and none was offered before."""
+    n = 420  # more than fill the box: the paced closing runs too
+    rng = np.random.default_rng(8)
+    radius = rng.uniform(0.5, 2.0, n)
+    _, sw = _spheres_sweep(radius, "paced", strip=6.0)
+    sw.set_lags(np.where(radius < 1.0, 30, 0).astype(np.int64))
+    waited: dict[int, tuple[int, int]] = {}
+    checks = {"released": 0, "offered": 0}
+
+    def top(z: Any) -> int:
+        return max(z.hi, z.lo + sw.nzone - 1) if z.full else z.hi
+
+    wait, release, offer = SurfaceSweep._wait, SurfaceSweep._release, SurfaceSweep.offer
+
+    def spy_wait(self: SurfaceSweep, i: int, home: int) -> bool:
+        queued = wait(self, i, home)
+        if queued:
+            b = next(b for b, q in self.queues[home].items() if q and q[-1] == i)
+            waited[i] = (home, b)
+        return queued
+
+    def spy_release(self: SurfaceSweep, rng: np.random.Generator, ended: bool) -> None:
+        release(self, rng, ended)
+        if self.flush or self.done:
+            return
+        for k, z in enumerate(self.zones):
+            if z.seeded and not z.closed:
+                assert all(b > top(z) for b in self.queues[k]), (k, top(z))
+        checks["released"] += 1
+
+    def spy_offer(self: SurfaceSweep, i: int, *args: Any, **kwargs: Any) -> None:
+        if kwargs.get("queued") and self.flush != 1:
+            home, b = waited[i]
+            assert kwargs.get("prefer") == home
+            assert top(self.zones[home]) >= b
+            checks["offered"] += 1
+        offer(self, i, *args, **kwargs)
+
+    monkeypatch.setattr(SurfaceSweep, "_wait", spy_wait)
+    monkeypatch.setattr(SurfaceSweep, "_release", spy_release)
+    monkeypatch.setattr(SurfaceSweep, "offer", spy_offer)
+    sw.run(rng)
+    assert checks["offered"] > 30 and checks["released"] > 100
+    assert any(z.full for z in sw.zones)
+
+
+def test_the_even_closing_with_lags_leaves_no_particle_out() -> None:
+    """Its waiting particles go at once when every zone is full: each left out is held."""
+    data = scene(closing="even")
+    data["seed"] = 4
+    data["domain"] = {"kind": "box", "width": 16.0, "height": 64.0, "depth": 16.0}
+    packing = _pack(data)
+    s = packing.stats
+    assert s["lagged"] > 0 and s["held"] > 0
+    assert s["not_offered"] == 0
+    assert packing.n_placed + s["refused"] + s["held"] == packing.n_particles
