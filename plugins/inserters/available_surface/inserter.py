@@ -138,7 +138,9 @@ class AvailableSurfaceConfig(BaseModel):
             "floor. Ignored by order = 'paper'."
         ),
     )
-    lag: SweepLag = "pilot"
+    # 'none' by default in 3D: with the paced closing the lags leave the top loose
+    # (docs/development/2026-12-07-3d-lags.md)
+    lag: SweepLag = "none"
     front: Literal["bottom-up", "faceted"] = Field(
         "bottom-up",
         description=(

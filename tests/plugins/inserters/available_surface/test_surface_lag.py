@@ -29,7 +29,13 @@ def scene(**insertion: Any) -> dict[str, Any]:
         "domain": {"kind": "box", "width": 16.0, "height": 44.0, "depth": 16.0},
         "size": {"kind": "uniform", "d_min": 1.0, "d_max": 4.0},
         "phases": [{"name": "a", "fraction": 1.0, "shape": {"kind": "sphere"}}],
-        "insertion": {"kind": "available-surface", "order": "sweep", "zone": 16.0, **insertion},
+        "insertion": {
+            "kind": "available-surface",
+            "order": "sweep",
+            "zone": 16.0,
+            "lag": "pilot",
+            **insertion,
+        },
         "density": {"kind": "eta"},
     }
 
