@@ -314,3 +314,47 @@ def test_the_even_closing_with_lags_leaves_no_particle_out() -> None:
     assert s["lagged"] > 0 and s["held"] > 0
     assert s["not_offered"] == 0
     assert packing.n_placed + s["refused"] + s["held"] == packing.n_particles
+
+
+@pytest.mark.parametrize("closing", ["tail", "prompt", "even"])
+def test_no_particle_waits_once_every_zone_is_at_the_top(closing: str) -> None:
+    """These closings let every waiting particle go when the last zone reaches the top
+    (the particles left out are then the stream's tail), and none waits after."""
+    n = 700  # more than fill the box
+    rng = np.random.default_rng(5)
+    radius = rng.uniform(0.5, 2.0, n)
+    _, sw = _spheres_sweep(radius, closing, strip=6.0)
+    sw.set_lags(np.where(radius < 1.2, 30, 0).astype(np.int64))
+    full_seen = waited = 0
+    for i in range(n):  # the loop of SurfaceSweep.run
+        if sw.done:
+            break
+        sw._release(rng, ended=False)
+        if sw._all_full():
+            full_seen += 1
+            assert sw.waiting == 0 and sw.flush == 1
+        if sw.done:
+            break
+        waits = sw.paced or not sw._all_full()
+        if waits and sw._wait(i, sw._choose(set())):
+            waited += 1
+            continue
+        sw.offer(i, rng)
+    assert full_seen > 0 and waited > 20
+
+
+def test_the_paced_closing_passes_over_only_particles_that_waited() -> None:
+    """Particles still waiting when their column closes, or when the run ends, are left
+    out; a particle without a lag never is (but for the stream's tail)."""
+    n = 700  # more than fill the box
+    rng = np.random.default_rng(5)
+    radius = rng.uniform(0.5, 2.0, n)
+    _, sw = _spheres_sweep(radius, "paced", strip=6.0)
+    lags = np.where(radius < 1.2, 30, 0).astype(np.int64)
+    sw.set_lags(lags)
+    sw.run(rng)
+    status = sw.status[:n]
+    last = int(np.flatnonzero(status != STATUS_NOT_OFFERED).max())
+    skipped = np.flatnonzero(status[:last] == STATUS_NOT_OFFERED)
+    # only particles that waited are passed over, and some are
+    assert skipped.shape[0] > 0 and (lags[skipped] > 0).all()
