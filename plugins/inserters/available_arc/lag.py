@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.geometry.population import Population, ShapeBatch
+from regopack.geometry.solids import sphere_volume
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -129,13 +130,6 @@ def class_lags(
     return lag, samples
 
 
-def ball_measure(radius: FloatArray, dimension: int) -> FloatArray:
-    """Area (2D) or volume (3D) of the disks or balls of ``radius``."""
-    if dimension == 2:
-        return math.pi * radius**2
-    return (4.0 / 3.0) * math.pi * radius**3
-
-
 def pilot_lags(
     radius: FloatArray,
     lo: FloatArray,
@@ -190,7 +184,7 @@ def pilot_lags(
     if dim == 2:
         mean = math.pi * float(np.mean(radius**2))
     else:
-        mean = float(np.mean(ball_measure(radius, dim)))
+        mean = float(np.mean(sphere_volume(radius)))
     m = min(n, math.ceil(PILOT_FILL * cell / mean))
     plo = np.array(lo, dtype=np.float64)
     phi = plo + np.array(extent)

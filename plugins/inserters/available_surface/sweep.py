@@ -698,7 +698,8 @@ class SurfaceSweep:
             if i == n or self.done:
                 break
             # no particle waits once every zone is at the top, but in the paced closing
-            waits = self.paced or not self._all_full()
-            if waits and self._wait(i, self._choose(set())):
-                continue
+            # (a particle without a lag, as every one with lag = "none", skips the test)
+            if self.lag[i] > 0 and (self.paced or not self._all_full()):
+                if self._wait(i, self._choose(set())):
+                    continue
             self.offer(i, rng)
