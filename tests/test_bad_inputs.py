@@ -161,6 +161,11 @@ CASES: list[tuple[str, list[str], str]] = [
         "--set: insertion.lag = \"pilots\": Input should be 'pilot' or 'none'",
     ),
     (
+        "set-unknown-lag-3d",
+        ["run", "dem3d", "--set", "count=5", "--set", "insertion.lag=pilots", "--quiet"],
+        "--set: insertion.lag = \"pilots\": Input should be 'pilot' or 'none'",
+    ),
+    (
         "set-string-for-size-float",
         ["config", "small", "--set", 'size.d_min="2"'],
         '--set: size.d_min = "2": Input should be a valid number',
