@@ -162,6 +162,9 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
     # three dimensions
     (
         "plugins/inserters/available_surface/test_*.py",
+        "cli/test_cli_export.py",
+        "plugins/analyzers/test_figures.py",
+        "plugins/exporters/test_gsd_export.py",
         "plugins/shapes/polyhedra/test_*.py",
         "plugins/analyzers/test_contacts.py",
         "plugins/analyzers/test_coordination.py",

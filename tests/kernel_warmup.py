@@ -6,9 +6,10 @@ first tests need (the paper's loop for sharp polygons on several threads, the
 contacts) while this one compiles, stage by stage (:data:`STAGE_STEPS`, in
 the order of ``KERNEL_STAGES`` in ``conftest.py``), the paper's loop for
 sharp polygons on one thread (what worker processes run) with the other 2D
-analyses and the exports, the paper's loop for disks, the 3D scan and
-analyses, then the loops of exact refusals and RSA and the four variants of
-the sweep (sharp polygons or rounded particles, on one thread or several).
+analyses and the exports, the paper's loop for disks, the 3D scans
+(polyhedra on two threads and on one, spheres) and analyses, then the loops
+of exact refusals and RSA and the sweep (sharp polygons or rounded
+particles, on one thread or several).
 Both processes write the same on-disk cache (:mod:`regopack.base.jit`).
 
 After each stage the script writes the stage's number into the file named by
@@ -42,8 +43,9 @@ from regopack.scenes.analysis_plan import dimensions_of
 
 DISKS: dict[str, Any] = {"phases.0.shape": {"kind": "disk"}}
 SWEEP: dict[str, Any] = {"insertion.order": "sweep"}
-BOX: dict[str, Any] = next(c for label, c in VARIANTS if label.endswith("(3D)"))
+BOX: dict[str, Any] = dict(VARIANTS)["polyhedra in a box (3D)"]
 """A tiny 3D packing (given every 3D analysis)."""
+SPHERES: dict[str, Any] = dict(VARIANTS)["spheres in a box (3D)"]
 
 Step = tuple[dict[str, Any], int, bool]
 """Changes to the tiny ``small`` scene, numba's threads, and whether the packing is
@@ -55,8 +57,8 @@ STAGE_STEPS: tuple[tuple[Step, ...], ...] = (
     (({}, 1, True),),
     # 1: the paper's loop for disks
     ((DISKS, 2, False), (DISKS, 1, True)),
-    # 2: three dimensions
-    ((BOX, 1, True),),
+    # 2: three dimensions: polyhedra with the partner thread and without, spheres
+    ((BOX, 2, False), (BOX, 1, True), (SPHERES, 1, False)),
     # 3: exact refusals, RSA and the sweep (sharp or rounded, on threads or one)
     (
         ({"insertion.screening": "exact"}, 1, False),

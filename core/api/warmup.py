@@ -74,6 +74,17 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
             "count": 12,
         },
     ),
+    (
+        "spheres in a box (3D)",
+        {
+            "domain.kind": "box",
+            "domain.depth": 60.0,
+            "domain.center": [0.0, 0.0, 0.0],
+            "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}],
+            "insertion": {"kind": "available-surface"},
+            "count": 12,
+        },
+    ),
     ("exact refusals", {"insertion.screening": "exact"}),
     ("random sequential addition", {"insertion": {"kind": "rsa"}}),
 )

@@ -307,7 +307,7 @@ def _pack_sweep(
         )
         sw.set_lags(lags)
     threads = min(kernel_threads(), batches.MAX_THREADS) if n else 1
-    helpers = batches.new_helpers(st.work, st.packed, threads) if threads > 1 else None
+    helpers = batches.new_helpers(st.work, st.packed, threads if threads > 1 else 0)
     team = _partner_for(st)
     piloted = time.perf_counter()
     try:

@@ -97,8 +97,13 @@ PADDED = ("rx", "ry", "rex", "rey", "rang", "wx", "wy", "wex", "wey", "va")
 
 
 def new_helpers(work: K.Work, packed: K.Packed, threads: int) -> Helpers:
-    """Scratch for ``threads`` threads, shaped like ``work`` and ``packed``'s scratch."""
-    t = max(1, threads)
+    """Scratch for ``threads`` threads, shaped like ``work`` and ``packed``'s scratch.
+
+    ``threads = 0`` gives helpers of no threads (every array empty along its first axis): a
+    run on one thread passes them where it would pass none, so that one compiled variant
+    of a loop serves both.
+    """
+    t = max(0, threads)
 
     def stack(a: NDArray[Any], pad: int = 0) -> NDArray[Any]:
         out = np.zeros((t, a.shape[0] + pad, *a.shape[1:]), dtype=a.dtype)

@@ -49,7 +49,7 @@ from regopack.plugins.common.atomics import store_release
 from regopack.plugins.common.borrowed import borrowed
 from regopack.plugins.common.walls import WALL_BOX, WALL_PERIODIC, point_fits
 from regopack.plugins.inserters.available_arc import kernel as K
-from regopack.plugins.inserters.available_arc.batches import Helpers, try_batch
+from regopack.plugins.inserters.available_arc.batches import Helpers, new_helpers, try_batch
 from regopack.plugins.inserters.available_arc.candidates import tree_set
 from regopack.plugins.inserters.available_arc.neighbours import release_row
 from regopack.plugins.inserters.available_arc.partner import (
@@ -223,6 +223,10 @@ class Sweep:
         that analyses the screened search's next candidates ahead of it (see
         :mod:`~regopack.plugins.inserters.available_arc.partner`). The packing is the same.
         """
+        if helpers is None:
+            # a run on one thread: helpers of no threads, one compiled variant of the sweep
+            # for both (checked at run time in _exhaustive)
+            helpers = new_helpers(w, s, 0)
         if partner is not None:
             shared = partner.attach(g, s, rounded)
         else:
@@ -240,7 +244,7 @@ class Sweep:
         w: K.Work,
         rng: np.random.Generator,
         rounded: object,
-        helpers: Helpers | None,
+        helpers: Helpers,
         shared: Partner,
     ) -> int:
         # sweep_range releases the GIL (for the partner thread); sweeps run from several
@@ -356,14 +360,14 @@ def _exhaustive(
     st: int,
     lo: int,
     bn: Bins,
-    helpers: Helpers | None = None,
+    helpers: Helpers,
 ) -> int:
     """Analyse exactly, unscreened, every candidate of strip ``st`` in bins ``lo`` and up.
 
-    With ``helpers`` the candidates go a batch at a time to threads (see
+    With ``helpers`` of some threads the candidates go a batch at a time to them (see
     :mod:`~regopack.plugins.inserters.available_arc.batches`), with the same result.
     """
-    if helpers is None:
+    if helpers.ks.shape[0] == 0:
         for b in range(lo, bn.head.shape[1]):
             e = bn.head[st, b]
             while e >= 0:
@@ -668,7 +672,7 @@ def _offer(
     sz: IntArray,
     bn: Bins,
     rounded: object,
-    helpers: Helpers | None,
+    helpers: Helpers,
     partner: Partner,
 ) -> int:
     """Offer particle ``i`` to strip ``st``: the screened zone search, rising, then exact.
@@ -720,7 +724,7 @@ def _step(
     tried: IntArray,
     lags: Lags,
     rounded: object,
-    helpers: Helpers | None,
+    helpers: Helpers,
     partner: Partner,
 ) -> int:
     """Offer particle ``i`` to the strips; return 1 when it is placed, else 0.
@@ -916,7 +920,7 @@ def sweep_range(
     tried: IntArray,
     lags: Lags,
     rounded: object,
-    helpers: Helpers | None,
+    helpers: Helpers,
     partner: Partner,
 ) -> int:
     """Offer particles ``begin`` to ``end - 1`` in the sweep order; return how many were placed.

@@ -624,7 +624,6 @@ def analyse(
     margin: float,
     rng: np.random.Generator,
     out: FloatArray,
-    draw: bool = True,
 ) -> int:
     """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
 
@@ -634,8 +633,10 @@ def analyse(
     Returns :data:`FOUND` (the
     centre in ``out``), :data:`EMPTY`, or :data:`FULL` when the half-space
     cache has no room for an interferer (nothing was drawn; grow it and call
-    again). With ``draw`` False a free surface gives :data:`FOUND` with
-    nothing drawn (``rng`` and ``out`` untouched): the answer alone.
+    again). With an empty ``out`` a free surface gives :data:`FOUND` with
+    nothing drawn (``rng`` untouched): the answer alone. (A flag would do, but
+    numba compiles a function once for each constant passed to it: every caller
+    would compile the analysis again.)
     """
     order, centre, circum, _ = placed
     adm_lo, adm_hi = bounds.adm_lo, bounds.adm_hi
@@ -689,7 +690,7 @@ def analyse(
         adm_hi = adm_hi - margin
     surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
     if surface.area > 0.0:
-        if not draw:
+        if out.shape[0] == 0:
             return FOUND
         u1 = rng.random()  # three uniforms in the order of rng.random(3)
         u2 = rng.random()
@@ -915,9 +916,7 @@ def scan(
                 count, near, at = _interferers(g, placed.order[k], i, placed, bounds, margin)
                 code = analyse_sphere(k, i, count, near, at, placed, bounds, margin, rng, out)
             else:
-                code = analyse(
-                    k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out, True
-                )  # fmt: skip
+                code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, margin, rng, out)
             if code == FULL:
                 return FULL, m
             counters[0] += 1
@@ -970,7 +969,10 @@ def scan_spheres(
     arrays, empty, inside.
     """
     q_arcs, s, a, cache = _no_solids()
+    # no polyhedra (one offset): True, but known only when it runs, not a constant (numba
+    # compiles a function once for each constant passed to it; Python passes a flag)
+    spheres = s.face_offsets.shape[0] == 1
     return scan(
-        candidates, begin, i, screen, q_arcs, s, a, g, cache, placed, bounds, eta, xi, True,
+        candidates, begin, i, screen, q_arcs, s, a, g, cache, placed, bounds, eta, xi, spheres,
         rng, out, tree,
     )  # fmt: skip

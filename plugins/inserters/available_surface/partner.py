@@ -156,7 +156,7 @@ def serve(
     )  # fmt: skip
     period, lo, hi, p = borrowed(period), borrowed(lo), borrowed(hi), borrowed(p)
     cache = own
-    out = np.empty(3)
+    nothing = np.empty(0)  # the answer alone: no centre drawn
     last = -1
     q_arcs = EdgeArcs(
         np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros((0, 3)),
@@ -181,10 +181,10 @@ def serve(
             period, lo, hi, p.fpar[F_ADM : F_ADM + 3].copy(), p.fpar[F_ADM + 3 : F_ADM + 6].copy()
         )
         k = p.task[base + T_PK]  # the candidate's insertion index
-        code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, out, False)
+        code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, nothing)
         while code == FULL:
             cache = grown(cache)
-            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, out, False)
+            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, nothing)
         p.ctl[C_SERVED] += 1
         # published only if the caller has not taken the slot back meanwhile
         claimed = word - POSTED + PARTNER
@@ -301,7 +301,7 @@ def scan_shared(
         waits = 0
         if tag == CALLER or tag == FREE:
             # in the scan's order: the plain scan's own analysis (it draws the centre)
-            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, out, True)
+            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, out)
             if code == FULL:
                 _cancel(p, head, tail)
                 return FULL, m
@@ -360,7 +360,8 @@ def _steal(
             break
         if u & TAG == POSTED and compare_swap(p.state, sq * PAD, u, u - POSTED + CALLER):
             k = candidates[p.k[sq]]
-            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, out, False)
+            nothing = out[:0]  # the answer alone: no centre drawn
+            code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, nothing)
             if code == FULL:
                 return 0
             store_release(p.state, sq * PAD, u - POSTED + (FREE if code == FOUND else EMPTY))

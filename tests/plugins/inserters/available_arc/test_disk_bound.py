@@ -266,7 +266,7 @@ def test_an_exact_scan_counts_the_candidates_it_passes_over_as_the_sequential_on
         sw.run(0, 300, st_.outlines, st_.packed, st_.work, np.random.default_rng(8), st_.rounded)
         placed = st_.packed.order[: st_.counter(kernel.I_COUNT)]
         st_.packed.shut[placed[shut_from:]] = 0.0  # shut for every disk
-        helpers = batches.new_helpers(st_.work, st_.packed, threads) if threads else None
+        helpers = batches.new_helpers(st_.work, st_.packed, threads)
         before = st_.counter(kernel.I_ANALYSES)
         mq = st_.begin_particle(350)
         k = sweep._exhaustive(
