@@ -70,6 +70,7 @@ def tiny(tmp_path_factory: pytest.TempPathFactory) -> Any:
     patch.setattr(common, "SCENE_SIDE", 50.0)
     patch.setattr(common, "WARM_SIDE_2D", 30.0)
     patch.setattr(common, "WARM_SIDE_3D", 14.0)
+    patch.setattr(common, "THREADS_SIDES_3D", {"sweep": 24.0, "paper": 16.0})
     patch.setattr(
         common, "SHARED_SIDES", {"reference": 60.0, "dem": 60.0, "polyhedra": 18.0, "spheres": 18.0}
     )

@@ -51,6 +51,9 @@ WARM_SIDE_PERIODIC = 150.0
 WARM_SIDE_3D = 20.0
 """Side (µm) of the tiny 3D boxes that load the kernels before a timing."""
 
+THREADS_SIDES_3D: dict[str, float] = {"sweep": 60.0, "paper": 40.0}
+"""Side (µm) of the cubes of ``packing.Threads3D``: the sweep's and the paper's order's."""
+
 SHARED_SIDES: dict[str, float] = {
     "reference": 800.0,  # table1 itself: 16 579 drawn, 15 261 placed
     "dem": 800.0,  # dem itself: 16 579 drawn, about 14 700 placed

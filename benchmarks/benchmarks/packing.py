@@ -168,9 +168,10 @@ class Threads3D(_Slow):
         common.warm_3d("polyhedra")
         if order == "sweep":
             over = {"insertion.closing": "tail", "insertion.strip": 45.0}
-            self.scene = common.scene_3d("polyhedra", 60.0, base="dem3d", **over)
+            side = common.THREADS_SIDES_3D["sweep"]
+            self.scene = common.scene_3d("polyhedra", side, base="dem3d", **over)
         else:
-            self.scene = common.scene_3d("polyhedra", 40.0)
+            self.scene = common.scene_3d("polyhedra", common.THREADS_SIDES_3D["paper"])
 
     def teardown(self, _cache: Any, order: str, threads: int) -> None:
         numba.set_num_threads(self.before)
