@@ -44,6 +44,20 @@ def test_study_homogeneity_refuses_bad_input_in_one_line(args: list[str], says: 
     assert "seed" not in run.stdout  # nothing packed
 
 
+@pytest.mark.parametrize(
+    ("args", "says"),
+    [
+        (["--set", "novalue"], "expected key=value"),
+        (["--set", "insertion.zone=-1"], "insertion.zone"),
+        (["--scene", "no-such-scene"], "no-such-scene"),
+    ],
+)
+def test_study_dem3d_refuses_bad_input_in_one_line(args: list[str], says: str) -> None:
+    run, last = _refused("study_dem3d.py", args)
+    assert last.startswith("study_dem3d.py: error:") and says in last, last
+    assert run.stdout == ""  # nothing packed
+
+
 @pytest.mark.parametrize("side", ["nan", "-5", "0", "inf"])
 def test_bench_sphere_scale_refuses_a_bad_side_in_one_line(side: str) -> None:
     run, last = _refused("bench_sphere_scale.py", [side])
