@@ -161,6 +161,20 @@ CASES: list[tuple[str, list[str], str]] = [
         "--set: insertion.lag = \"pilots\": Input should be 'pilot' or 'none'",
     ),
     (
+        "set-centre-beyond-float-precision",
+        ["run", "small", "--set", "domain.center=[1e20, 0]", "--quiet"],
+        "--set: domain: center = [1e+20, 0] is too far from the origin for a domain whose "
+        "smallest side is 200: 64-bit floats are 1.6e+04 apart there, more than 1e-09 of that "
+        "side; put the centre within 9e+08 of the origin",
+    ),
+    (
+        "set-centre-beyond-float-precision-3d",
+        ["config", "dem3d", "--set", "domain.center=[0, 3e9, 0]"],
+        "--set: domain: center = [0, 3e+09, 0] is too far from the origin for a domain whose "
+        "smallest side is 150: 64-bit floats are 4.8e-07 apart there, more than 1e-09 of that "
+        "side; put the centre within 6.8e+08 of the origin",
+    ),
+    (
         "set-unknown-lag-3d",
         ["run", "dem3d", "--set", "count=5", "--set", "insertion.lag=pilots", "--quiet"],
         "--set: insertion.lag = \"pilots\": Input should be 'pilot' or 'none'",

@@ -72,6 +72,11 @@ DEFAULT_SCENE = "table1"
 FRACTION_TOLERANCE = 1e-3
 """Largest allowed distance of the sum of the phase fractions from 1."""
 
+CENTER_PRECISION = 1e-9
+"""How finely 64-bit floats must resolve a domain's sides where it lies, as a share of its
+smallest side: a centre farther from the origin than about ``CENTER_PRECISION / 2.2e-16``
+smallest sides is refused (its particles would touch and overlap only to rounding)."""
+
 ANALYSIS_FOLDER = "analysis"
 """Folder of the analysis files inside a run folder (when the scene lists analyses)."""
 
@@ -181,6 +186,7 @@ class Domain(BaseModel):
                     f"({'[x, y, z]' if points == 3 else '[x, y]'}), not {len(self.center)}"
                 )
             object.__setattr__(self, "center", (0.0,) * points)
+        self._check_center_precision()
         try:
             domain = self.to_domain()
         except GeometryError as err:
@@ -204,6 +210,30 @@ class Domain(BaseModel):
                 "give a smaller domain"
             )
         return self
+
+    def _check_center_precision(self) -> None:
+        """Refuse a centre so far from the origin that floats no longer resolve the sides."""
+        if "center" not in self._FIELDS[self.kind]:
+            return
+        if self.kind == "circle":
+            assert self.radius is not None
+            sides = [2.0 * self.radius]
+        else:
+            sides = [self.width, self.height] + ([self.depth] if self.dimension == 3 else [])
+        side = min(sides)
+        # the centre's own offset: the extents are checked against the particles elsewhere
+        far = max(abs(float(c)) for c in self.center)
+        if not (side > 0 and math.isfinite(far)):
+            return  # the fields' own bounds speak for these
+        if math.ulp(far) > CENTER_PRECISION * side:
+            reach = CENTER_PRECISION * side / math.ulp(1.0)
+            given = "[" + ", ".join(f"{float(c):g}" for c in self.center) + "]"
+            raise ValueError(
+                f"center = {given} is too far from the origin for a domain whose smallest side "
+                f"is {side:g}: 64-bit floats are {math.ulp(far):.2g} apart there, more than "
+                f"{CENTER_PRECISION:g} of that side; put the centre within {reach:.2g} of the "
+                "origin"
+            )
 
     @property
     def dimension(self) -> int:
