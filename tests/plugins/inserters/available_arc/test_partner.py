@@ -24,8 +24,10 @@ pytestmark = pytest.mark.skipif(not partner.available(), reason="the partner nee
 def _threads(monkeypatch: pytest.MonkeyPatch, threads: int, defer: bool = False) -> None:
     """Run the sweep as on ``threads`` threads; ``defer``: leave every analysis to the partner."""
     make = batches.new_helpers
+    # helpers of ``threads`` threads; none (the sequential scans) where a run on one thread
+    # asks for none
     monkeypatch.setattr(
-        batches, "new_helpers", lambda work, packed, _threads: make(work, packed, threads)
+        batches, "new_helpers", lambda work, packed, n: make(work, packed, threads if n else 0)
     )
     monkeypatch.setattr(numba, "get_num_threads", lambda: threads)
     if defer:
