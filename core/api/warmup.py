@@ -26,6 +26,19 @@ __all__ = ["TINY", "VARIANTS", "compile_kernels"]
 TINY: dict[str, Any] = {"domain.width": 60.0, "domain.height": 60.0, "count": 60}
 """Overrides that make the ``small`` scene tiny (a fraction of a second once compiled)."""
 
+
+def _tiny_box(shape: str) -> dict[str, Any]:
+    """Return overrides that make the tiny scene a box of twelve particles of one 3D ``shape``."""
+    return {
+        "domain.kind": "box",
+        "domain.depth": 60.0,
+        "domain.center": [0.0, 0.0, 0.0],
+        "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": shape}}],
+        "insertion": {"kind": "available-surface"},
+        "count": 12,
+    }
+
+
 VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
     ("polygons in a walled rectangle", {}),
     ("a circle", {"domain": {"kind": "circle", "radius": 30.0}}),
@@ -63,28 +76,8 @@ VARIANTS: tuple[tuple[str, dict[str, Any]], ...] = (
         "disks among polygons, the sweep order",
         {"insertion.order": "sweep", "phases.0.shape": {"kind": "disk"}},
     ),
-    (
-        "polyhedra in a box (3D)",
-        {
-            "domain.kind": "box",
-            "domain.depth": 60.0,
-            "domain.center": [0.0, 0.0, 0.0],
-            "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "polyhedron"}}],
-            "insertion": {"kind": "available-surface"},
-            "count": 12,
-        },
-    ),
-    (
-        "spheres in a box (3D)",
-        {
-            "domain.kind": "box",
-            "domain.depth": 60.0,
-            "domain.center": [0.0, 0.0, 0.0],
-            "phases": [{"name": "glass", "fraction": 1.0, "shape": {"kind": "sphere"}}],
-            "insertion": {"kind": "available-surface"},
-            "count": 12,
-        },
-    ),
+    ("polyhedra in a box (3D)", _tiny_box("polyhedron")),
+    ("spheres in a box (3D)", _tiny_box("sphere")),
     ("exact refusals", {"insertion.screening": "exact"}),
     ("random sequential addition", {"insertion": {"kind": "rsa"}}),
 )
