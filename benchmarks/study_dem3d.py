@@ -21,29 +21,19 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-import tomllib
 from typing import Any
 
 import regopack
 from regopack.api.functions import pack_and_summarise
 from regopack.base.errors import RegopackError
+from regopack.registry.manager import default_registry
+from regopack.scenes.model import load_scene, resolve_scene
 
 
-def _override(text: str) -> tuple[str, Any]:
-    """Split ``key=value`` (the value read as TOML, else kept as text)."""
-    key, sep, raw = text.partition("=")
-    if not sep or not key.strip():
-        raise argparse.ArgumentTypeError(f"--set {text!r}: expected key=value")
-    try:
-        value = tomllib.loads("v = " + raw.strip())["v"]
-    except tomllib.TOMLDecodeError:
-        value = raw.strip()
-    return key.strip(), value
-
-
-def row(scene: str, seed: int, overrides: dict[str, Any]) -> dict[str, Any]:
-    """Pack ``scene`` with ``seed`` and ``overrides``; return the measured values."""
-    out = pack_and_summarise(scene, seed=seed, verify=False, **overrides)
+def row(scene: str, seed: int, overrides: list[str]) -> dict[str, Any]:
+    """Pack ``scene`` with ``seed`` and ``--set`` ``overrides``; return the measured values."""
+    resolved = resolve_scene(load_scene(scene, [*overrides, f"seed={seed}"]), default_registry())
+    out = pack_and_summarise(resolved, verify=False)
     packing, summary = out.packing, out.summary
     results = regopack.analyze(packing, ["psd", "homogeneity"])
     psd, layers = results["psd"].scalars, results["homogeneity"].scalars
@@ -75,12 +65,11 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scene", default="dem3d")
     parser.add_argument("--seeds", type=int, nargs="+", default=[1])
-    parser.add_argument("--set", dest="overrides", type=_override, action="append", default=[])
+    parser.add_argument("--set", dest="overrides", action="append", default=[])
     args = parser.parse_args()
-    overrides = dict(args.overrides)
     for seed in args.seeds:
         try:
-            values = row(args.scene, seed, overrides)
+            values = row(args.scene, seed, args.overrides)
         except RegopackError as error:
             print(f"study_dem3d.py: error: {error}", file=sys.stderr)
             raise SystemExit(2) from None

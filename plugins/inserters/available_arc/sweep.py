@@ -186,6 +186,7 @@ class Sweep:
         self.bins = Bins(self.bin_head, self.bin_next, self.flag)
         self.tried = np.full(self.nstrip, -2, dtype=np.int64)  # last particle offered
         self._alone: Partner | None = None  # the shared arrays of a run without a partner
+        self._no_helpers: Helpers | None = None  # the helpers of a run on one thread
         # waiting particles by the bin of the front they wait for; a full zone's front
         # rises on for a zone height while its bins retire (see _top)
         nwait = nbins + 2 * int(self.zs[Z_NZONE]) + 1
@@ -225,8 +226,10 @@ class Sweep:
         """
         if helpers is None:
             # a run on one thread: helpers of no threads, one compiled variant of the sweep
-            # for both (checked at run time in _exhaustive)
-            helpers = new_helpers(w, s, 0)
+            # for both (checked at run time in _exhaustive); empty, so made once
+            if self._no_helpers is None:
+                self._no_helpers = new_helpers(w, s, 0)
+            helpers = self._no_helpers
         if partner is not None:
             shared = partner.attach(g, s, rounded)
         else:
