@@ -1,10 +1,12 @@
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import os
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from fnmatch import fnmatchcase
 from pathlib import Path
 
@@ -24,6 +26,14 @@ _waited: dict[int, float] = {}
 """Seconds the tests waited for the warm-up, by stage."""
 _staged: list[bool] = []
 """Set when the session runs in stages (:func:`pytest_collection_modifyitems`)."""
+
+WARMUP_ENV = "REGOPACK_TEST_WARMUP_RUN"
+"""Environment variable through which the session's workers learn of the warm-up: a
+JSON list of ``[pid, progress file]`` per warm-up process (set by the process that started it)."""
+
+WORKERS = 2
+"""Processes that run a whole suite on a machine with at least as many CPUs
+(``pytest-xdist``; a smaller session runs in the pytest process itself)."""
 
 
 def _version(dist: str) -> str:
@@ -82,9 +92,11 @@ def _usable_cpus() -> int:
     return len(affinity(0)) if affinity is not None else os.cpu_count() or 1
 
 
-def _start_warmup() -> None:
-    """Start ``kernel_warmup.py`` on a second core, once, unless it has run on this cache.
+def _start_warmup(parts: int = 1) -> None:
+    """Start ``kernel_warmup.py`` in ``parts`` processes, once, unless it has run on this cache.
 
+    Each process compiles its share of every stage (``kernel_warmup.py``); the
+    session's workers learn of them through :data:`WARMUP_ENV`.
     ``REGOPACK_TEST_WARMUP=0`` turns it off.
     """
     if _warmup or _usable_cpus() < 2 or os.environ.get("REGOPACK_TEST_WARMUP") == "0":
@@ -93,39 +105,75 @@ def _start_warmup() -> None:
     if marker is None or marker.exists():
         return
     script = Path(__file__).with_name("kernel_warmup.py")
-    progress = marker.with_name(f"{marker.name}.{os.getpid()}.stage")
     with open(marker.with_name(WARMUP_LOG), "wb") as log:
-        _warmup.append(
-            subprocess.Popen(
-                [sys.executable, str(script), str(os.getpid()), str(marker), str(progress)],
-                stdin=subprocess.DEVNULL,
-                stdout=log,
-                stderr=subprocess.STDOUT,
+        for part in range(parts):
+            progress = marker.with_name(f"{marker.name}.{os.getpid()}.{part}.stage")
+            command = [str(script), str(os.getpid()), str(marker), str(progress)]
+            _warmup.append(
+                subprocess.Popen(
+                    [sys.executable, *command, str(part), str(parts)],
+                    stdin=subprocess.DEVNULL,
+                    stdout=log,
+                    stderr=subprocess.STDOUT,
+                )
             )
-        )
-    _progress.append(progress)
+            _progress.append(progress)
+    listed = [[w.pid, str(f)] for w, f in zip(_warmup, _progress, strict=True)]
+    os.environ[WARMUP_ENV] = json.dumps(listed)
 
 
-def _warmed_stage() -> int:
-    """Return the last stage the warm-up has finished (-1: none yet)."""
+def _warmup_parts() -> list[tuple[Callable[[], bool], Path]]:
+    """Return, per warm-up process of this session, whether it runs and its progress file.
+
+    The processes this one started, or in a worker those its controller started.
+    """
+    if _warmup:
+        return [(lambda w=w: w.poll() is None, f) for w, f in zip(_warmup, _progress, strict=True)]
+    if not os.environ.get("PYTEST_XDIST_WORKER"):
+        return []
     try:
-        return int(_progress[0].read_text())
-    except (IndexError, OSError, ValueError):
+        listed = json.loads(os.environ.get(WARMUP_ENV, "[]"))
+        return [(lambda pid=int(pid): _alive(pid), Path(f)) for pid, f in listed]
+    except (TypeError, ValueError):
+        return []
+
+
+def _alive(pid: int) -> bool:
+    """Say whether process ``pid`` runs (a process ended but not yet reaped is a zombie)."""
+    try:
+        stat = Path(f"/proc/{pid}/stat").read_text()
+    except OSError:
+        try:
+            os.kill(pid, 0)
+        except OSError:
+            return False
+        return True
+    return stat.rpartition(")")[2].split()[0] != "Z"
+
+
+def _warmed_stage(progress: Path) -> int:
+    """Return the last stage a warm-up process has finished (-1: none yet)."""
+    try:
+        return int(progress.read_text())
+    except (OSError, ValueError):
         return -1
 
 
 def _wait_for_warmup(stage: int) -> None:
-    """Wait while the warm-up runs and has not finished ``stage`` (at most ``WARMUP_WAIT_MAX``).
+    """Wait while a warm-up process runs that has not finished ``stage`` (at most
+    ``WARMUP_WAIT_MAX``).
 
     Compiling the kernels the warm-up is compiling would take the test process
     longer than waiting for them (the warm-up is part way through), and would
     slow both on a machine with two cores.
     """
-    if not _warmup or stage in _waited or any(s >= WARMUP_WAIT_MAX for s in _waited.values()):
+    if stage in _waited or any(s >= WARMUP_WAIT_MAX for s in _waited.values()):
+        return
+    parts = _warmup_parts()
+    if not parts:
         return
     start = time.monotonic()
-    proc = _warmup[0]
-    while proc.poll() is None and _warmed_stage() < stage:
+    while any(runs() and _warmed_stage(progress) < stage for runs, progress in parts):
         if time.monotonic() - start >= WARMUP_WAIT_MAX:
             break
         time.sleep(0.1)
@@ -137,16 +185,35 @@ def pytest_configure(config: pytest.Config) -> None:
 
     A selection by keyword (``-k``) waits for the collection: it may pick a few tests.
     """
+    if hasattr(config, "workerinput") or not _whole_suite(config):
+        return
+    # with workers (pytest-xdist), as many warm-up processes: the stages are ready sooner
+    _start_warmup(max(1, int(getattr(config.option, "numprocesses", 0) or 0)))
+
+
+def _whole_suite(config: pytest.Config) -> bool:
+    """Say whether the session runs the whole suite (no ``-k``, no paths but ``tests/``)."""
     here = Path(__file__).resolve().parent
     if config.getoption("keyword", ""):
-        return
-    if config.args and all(Path(arg).resolve() == here for arg in config.args):
-        _start_warmup()
+        return False
+    return bool(config.args) and all(Path(arg).resolve() == here for arg in config.args)
+
+
+@pytest.hookimpl(optionalhook=True)
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """Run the whole suite in :data:`WORKERS` processes where the CPUs allow, else in this one.
+
+    The warm-up compiles beside them (:func:`_start_warmup`); each worker waits
+    for the stages it reaches, as a single test process would.
+    """
+    if _usable_cpus() < WORKERS or not _whole_suite(config):
+        return 0
+    return WORKERS
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:
     """Start the warm-up for any other session of at least ``WARMUP_MIN_TESTS`` tests."""
-    if len(session.items) >= WARMUP_MIN_TESTS:
+    if len(session.items) >= WARMUP_MIN_TESTS and not hasattr(session.config, "workerinput"):
         _start_warmup()
 
 
@@ -241,7 +308,7 @@ def pytest_collection_modifyitems(session: pytest.Session, items: list[pytest.It
 
 def pytest_runtest_setup(item: pytest.Item) -> None:
     """Let the first test of a stage wait for the warm-up to finish that stage's kernels."""
-    if _staged and _warmup:
+    if _staged and _warmup_parts():
         stage = _stage(item.path, Path(__file__).resolve().parent)
         if stage > 0:
             _wait_for_warmup(stage)
@@ -255,7 +322,14 @@ def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
 
 
 def pytest_unconfigure(config: pytest.Config) -> None:
-    """Stop the warm-up if it is still compiling (also after ``--markers`` or a failed start)."""
+    """Stop the warm-up if it is still compiling (also after ``--markers`` or a failed start).
+
+    Of several warm-up processes that have all ended well, mark the cache warm.
+    """
+    marker = _warmup_marker() if len(_warmup) > 1 else None
+    if marker is not None and all(proc.poll() == 0 for proc in _warmup):
+        if all(_warmed_stage(f) == len(KERNEL_STAGES) for f in _progress):
+            marker.touch()
     for proc in _warmup:
         if proc.poll() is None:
             proc.terminate()

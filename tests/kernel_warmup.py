@@ -12,13 +12,16 @@ of exact refusals and RSA and the sweep (sharp polygons or rounded
 particles, on one thread or several).
 Both processes write the same on-disk cache (:mod:`regopack.base.jit`).
 
+With a fourth and fifth argument, ``part`` and ``parts``, it compiles only its
+share of each stage (:func:`steps_of`): a session of two workers starts two.
 After each stage the script writes the stage's number into the file named by
 its third argument; the first test of a stage waits for that number while
 this process runs (``conftest.py``), rather than compiling the same kernels
 at the same time. Between steps the script stops once the process named by
 its first argument (the test session) has gone; at the end it creates the
 file named by its second argument, which tells later sessions that the cache
-is warm.
+is warm (of several processes, the session creates it once all have ended
+well).
 
 The imports are made here, not in :func:`main`: the suite imports this module
 (``tests/test_kernel_warmup.py``), so that a name that moves fails a test
@@ -75,6 +78,21 @@ STAGE_STEPS: tuple[tuple[Step, ...], ...] = (
 ``KERNEL_STAGES`` (``conftest.py``) compile first; index 0 what the unlisted modules
 compile after their first tests."""
 
+SECOND_PART = frozenset({(2, 0), (2, 1), (2, 2), (3, 0), (3, 1), (3, 2), (3, 3)})
+"""The ``(stage, step)`` pairs that the second of two warm-up processes compiles (the 3D
+scans, the exact refusals, RSA and the sweep of sharp polygons); the first compiles the
+rest (about three minutes each on an idle machine, against six for one process)."""
+
+
+def steps_of(part: int, parts: int) -> list[list[Step]]:
+    """Return, per stage, the steps that process ``part`` of ``parts`` compiles."""
+    if parts <= 1:
+        return [list(steps) for steps in STAGE_STEPS]
+    return [
+        [step for m, step in enumerate(steps) if ((n, m) in SECOND_PART) == (part == 1)]
+        for n, steps in enumerate(STAGE_STEPS)
+    ]
+
 
 def _finish(packing: Any) -> None:
     """Give ``packing`` every analysis of its dimension and, in 2D, write it with every
@@ -107,8 +125,10 @@ def main() -> None:
     """Pack each step's tiny scene once (compiling or loading its kernels)."""
     parent = int(sys.argv[1]) if len(sys.argv) > 1 else os.getppid()
     progress = Path(sys.argv[3]) if len(sys.argv) > 3 else None
+    part = int(sys.argv[4]) if len(sys.argv) > 4 else 0
+    parts = int(sys.argv[5]) if len(sys.argv) > 5 else 1
     most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
-    for stage, steps in enumerate(STAGE_STEPS):
+    for stage, steps in enumerate(steps_of(part, parts)):
         for changes, threads, finish in steps:
             if os.getppid() != parent:
                 return
@@ -117,7 +137,7 @@ def main() -> None:
             if finish:
                 _finish(packing)
         _record(progress, stage)
-    if len(sys.argv) > 2:
+    if len(sys.argv) > 2 and parts <= 1:  # of several, the session marks the cache warm
         Path(sys.argv[2]).touch()
 
 

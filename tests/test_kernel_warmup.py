@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import importlib.util
+import json
+import os
 from fnmatch import fnmatchcase
 from pathlib import Path
 from types import ModuleType
@@ -92,3 +94,59 @@ def test_a_stage_waits_for_the_warmup_only_while_it_compiles_that_stage(
     assert conftest._waited[3] >= 0.3
     conftest._wait_for_warmup(4)  # after a wait that long the tests wait no more
     assert 4 not in conftest._waited
+
+
+def test_two_warmup_processes_share_every_step_once() -> None:
+    one = kernel_warmup.steps_of(0, 1)
+    first, second = kernel_warmup.steps_of(0, 2), kernel_warmup.steps_of(1, 2)
+    assert [list(s) for s in kernel_warmup.STAGE_STEPS] == one
+    for n, steps in enumerate(one):
+        assert sorted(map(repr, first[n] + second[n])) == sorted(map(repr, steps))
+    assert any(second) and any(first)
+
+
+def test_a_stage_waits_for_every_warmup_process_that_compiles_it(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    conftest = _suite_conftest()
+
+    class Process:
+        def __init__(self, code: int | None) -> None:
+            self.code = code
+
+        def poll(self) -> int | None:
+            return self.code
+
+    ahead, behind = tmp_path / "ahead", tmp_path / "behind"
+    ahead.write_text("3")
+    behind.write_text("1")
+    monkeypatch.setattr(conftest, "_warmup", [Process(None), Process(None)])
+    monkeypatch.setattr(conftest, "_progress", [ahead, behind])
+    monkeypatch.setattr(conftest, "_waited", {})
+    monkeypatch.setattr(conftest, "WARMUP_WAIT_MAX", 0.3)
+    conftest._wait_for_warmup(1)  # both have finished stage 1
+    assert conftest._waited[1] < 0.2
+    conftest._wait_for_warmup(2)  # the second still compiles stage 2
+    assert conftest._waited[2] >= 0.3
+    monkeypatch.setattr(conftest, "_warmup", [Process(None), Process(1)])
+    monkeypatch.setattr(conftest, "_waited", {})
+    conftest._wait_for_warmup(3)  # the one behind has ended (failed): no wait for it
+    assert conftest._waited[3] < 0.2
+
+
+def test_a_worker_finds_the_warmup_its_controller_started(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    conftest = _suite_conftest()
+    progress = tmp_path / "progress"
+    progress.write_text("2")
+    monkeypatch.setattr(conftest, "_warmup", [])
+    monkeypatch.setenv("PYTEST_XDIST_WORKER", "gw0")
+    monkeypatch.setenv(conftest.WARMUP_ENV, json.dumps([[os.getpid(), str(progress)]]))
+    parts = conftest._warmup_parts()
+    assert [(runs(), f) for runs, f in parts] == [(True, progress)]
+    monkeypatch.setenv(conftest.WARMUP_ENV, "not json")
+    assert conftest._warmup_parts() == []
+    monkeypatch.delenv("PYTEST_XDIST_WORKER")
+    monkeypatch.setenv(conftest.WARMUP_ENV, json.dumps([[os.getpid(), str(progress)]]))
+    assert conftest._warmup_parts() == []  # not a worker: it starts its own
