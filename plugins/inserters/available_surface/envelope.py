@@ -243,9 +243,25 @@ def edge_arcs(p: Polyhedron, sign: float) -> EdgeArcs:
 
 
 @numba.njit(cache=True)
+def dots3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Return ``a @ b.T`` for rows of three coordinates, summed in a plain loop.
+
+    Not ``np.dot``: the BLAS it calls costs more than the sum for such small
+    matrices, its threads wait spinning on a core after each call, and its
+    rounding depends on the CPU's kernel.
+    """
+    out = np.empty((a.shape[0], b.shape[0]))
+    for i in range(a.shape[0]):
+        x, y, z = a[i, 0], a[i, 1], a[i, 2]
+        for j in range(b.shape[0]):
+            out[i, j] = x * b[j, 0] + y * b[j, 1] + z * b[j, 2]
+    return out
+
+
+@numba.njit(cache=True)
 def _sides(t: FloatArray, normals: FloatArray, sign: float) -> NDArray[np.int8]:
     """Side (``-1, 0, +1``, within :data:`ANGLE_EPS`) of each ``sign * normal`` for each ``t``."""
-    dots = np.dot(t, np.ascontiguousarray(normals.T))
+    dots = dots3(t, normals)
     out = np.empty(dots.shape, dtype=np.int8)
     for e in range(dots.shape[0]):
         for g in range(dots.shape[1]):
@@ -577,8 +593,8 @@ def minkowski_envelope(p: Polyhedron, q: Polyhedron) -> Polyhedron:
     )
 
     # support values of P and -Q in every candidate direction
-    dp = np.dot(cand[:nc], np.ascontiguousarray(vp.T))
-    dq = np.dot(cand[:nc], np.ascontiguousarray(vq.T))
+    dp = dots3(cand[:nc], vp)
+    dq = dots3(cand[:nc], vq)
 
     # faces: normal, support, loop of vertex keys i * kq + j
     normals = np.empty((nc, 3))

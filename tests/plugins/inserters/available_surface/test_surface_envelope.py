@@ -298,3 +298,12 @@ def test_edge_pair_directions_are_those_of_the_pairwise_test(seed: int) -> None:
         assert np.all(kind[first:nc] == 2)
         got = [(*cand[c], ca[c], cb[c]) for c in range(first, nc)]
         assert got == _pairwise_directions(p, q)
+
+
+def test_the_envelope_dot_products_are_those_of_numpy() -> None:
+    from regopack.plugins.inserters.available_surface.envelope import dots3
+
+    rng = np.random.default_rng(7)
+    a, b = rng.normal(size=(13, 3)), rng.normal(size=(5, 3)) * 1e6
+    assert np.allclose(dots3(a, b), a @ b.T, rtol=1e-14, atol=0.0)
+    assert dots3(a[:0], b).shape == (0, 5)
