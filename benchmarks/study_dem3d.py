@@ -6,8 +6,10 @@ seed with the given ``--set`` overrides, runs the ``psd`` and
 drawn and placed, φ of the domain and of the interior, the fabric
 (anisotropy with its error, Z, rattler share), the worst size class by
 number and by mass with how many classes are within the tolerance, and the
-layers' number density, mean diameter and φ from the floor up. The rows of
-`docs/development/2026-12-07-dem3d-zone-and-count.md` come from it. Run
+layers' number density, mean diameter and φ from the floor up, with the
+candidates analysed and the particles refused. The rows of
+`docs/development/2026-12-07-dem3d-zone-and-count.md` and of
+`docs/development/2026-12-07-3d-kernel-loops.md` come from it. Run
 from the repository root::
 
     python benchmarks/study_dem3d.py --seeds 1 2 3
@@ -44,6 +46,8 @@ def row(scene: str, seed: int, overrides: list[str]) -> dict[str, Any]:
         "insertion_s": round(float(packing.stats["insert_time_s"]), 1),
         "drawn": int(packing.n_particles),
         "placed": int(packing.n_placed),
+        "analyses": int(packing.stats.get("candidate_analyses", 0)),
+        "refused": int(packing.stats.get("refused", 0)),
         "phi_domain": summary.get("phi_domain"),
         "phi_interior": summary.get("phi_interior"),
         "anisotropy": fabric.get("anisotropy"),
