@@ -108,6 +108,7 @@ def _start_warmup(parts: int = 1) -> None:
     with open(marker.with_name(WARMUP_LOG), "wb") as log:
         for part in range(parts):
             progress = marker.with_name(f"{marker.name}.{os.getpid()}.{part}.stage")
+            progress.unlink(missing_ok=True)  # left by a killed session of the same pid
             command = [str(script), str(os.getpid()), str(marker), str(progress)]
             _warmup.append(
                 subprocess.Popen(
@@ -187,8 +188,10 @@ def pytest_configure(config: pytest.Config) -> None:
     """
     if hasattr(config, "workerinput") or not _whole_suite(config):
         return
-    # with workers (pytest-xdist), as many warm-up processes: the stages are ready sooner
-    _start_warmup(max(1, int(getattr(config.option, "numprocesses", 0) or 0)))
+    # with workers (pytest-xdist), a warm-up process per worker, up to the parts that
+    # kernel_warmup.py shares the stages between: the stages are ready sooner
+    workers = int(getattr(config.option, "numprocesses", 0) or 0)
+    _start_warmup(min(WORKERS, max(1, workers)))
 
 
 def _whole_suite(config: pytest.Config) -> bool:
@@ -197,6 +200,26 @@ def _whole_suite(config: pytest.Config) -> bool:
     if config.getoption("keyword", ""):
         return False
     return bool(config.args) and all(Path(arg).resolve() == here for arg in config.args)
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_cmdline_main(config: pytest.Config) -> None:
+    """Let pytest-xdist, when it is loaded and no ``-n`` is given, choose the workers.
+
+    ``-n auto`` (answered by :func:`pytest_xdist_auto_num_workers`), one module
+    per worker at a time, in the order of :func:`pytest_collection_modifyitems`
+    (not xdist's largest-first: the first modules of each worker are then those
+    that need no warm-up stage). ``-n 0`` or ``-p no:xdist`` run in this process.
+    Runs before xdist's own hook (a conftest registers after the plugin).
+    """
+    if not config.pluginmanager.hasplugin("xdist"):
+        return
+    if getattr(config.option, "numprocesses", 0) is not None:
+        return  # the user's -n
+    config.option.numprocesses = "auto"
+    if config.option.dist == "no":
+        config.option.dist = "loadfile"
+        config.option.loadscopereorder = False
 
 
 @pytest.hookimpl(optionalhook=True)

@@ -88,6 +88,8 @@ def steps_of(part: int, parts: int) -> list[list[Step]]:
     """Return, per stage, the steps that process ``part`` of ``parts`` compiles."""
     if parts <= 1:
         return [list(steps) for steps in STAGE_STEPS]
+    if part > 1:  # the steps are shared between two processes: a third has none
+        return [[] for _ in STAGE_STEPS]
     return [
         [step for m, step in enumerate(steps) if ((n, m) in SECOND_PART) == (part == 1)]
         for n, steps in enumerate(STAGE_STEPS)
