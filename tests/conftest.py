@@ -214,6 +214,8 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
     """
     if not config.pluginmanager.hasplugin("xdist"):
         return
+    if hasattr(config, "workerinput") or os.environ.get("PYTEST_XDIST_WORKER"):
+        return  # a worker runs its tests itself (it would start workers of its own)
     if getattr(config.option, "numprocesses", 0) is not None:
         return  # the user's -n
     config.option.numprocesses = "auto"

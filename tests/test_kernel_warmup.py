@@ -123,6 +123,7 @@ def test_the_suite_lets_xdist_choose_its_workers_unless_told(
         option = SimpleNamespace(numprocesses=n, dist=dist, loadscopereorder=True)
         return SimpleNamespace(pluginmanager=Plugins(xdist), option=option)
 
+    monkeypatch.delenv("PYTEST_XDIST_WORKER", raising=False)  # as in the controller
     chosen = config(True, None)
     conftest.pytest_cmdline_main(chosen)
     assert vars(chosen.option) == {
@@ -130,7 +131,9 @@ def test_the_suite_lets_xdist_choose_its_workers_unless_told(
         "dist": "loadfile",
         "loadscopereorder": False,  # the staged order, not xdist's largest module first
     }
-    for told in (config(True, 0), config(True, 3, "load"), config(False, None)):
+    worker = config(True, None)
+    worker.workerinput = {"workerid": "gw0"}  # xdist sets no -n in its workers
+    for told in (config(True, 0), config(True, 3, "load"), config(False, None), worker):
         before = dict(vars(told.option))
         conftest.pytest_cmdline_main(told)
         assert vars(told.option) == before
