@@ -129,7 +129,7 @@ def test_the_suite_lets_xdist_choose_its_workers_unless_told(
     assert vars(chosen.option) == {
         "numprocesses": "auto",
         "dist": "loadfile",
-        "loadscopereorder": False,  # the staged order, not xdist's largest module first
+        "loadscopereorder": True,  # xdist's: the largest modules first
     }
     worker = config(True, None)
     worker.workerinput = {"workerid": "gw0"}  # xdist sets no -n in its workers
