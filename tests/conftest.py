@@ -202,31 +202,6 @@ def _whole_suite(config: pytest.Config) -> bool:
     return bool(config.args) and all(Path(arg).resolve() == here for arg in config.args)
 
 
-@pytest.hookimpl(tryfirst=True)
-def pytest_cmdline_main(config: pytest.Config) -> None:
-    """Let pytest-xdist, when it is loaded and no ``-n`` is given, choose the workers.
-
-    ``-n auto`` (answered by :func:`pytest_xdist_auto_num_workers`), one module
-    per worker at a time. xdist hands out the modules with the most tests
-    first, not in the order of :func:`pytest_collection_modifyitems`: a worker
-    then waits for the warm-up at a large staged module rather than compiling
-    the first stage's kernels beside three other processes (in the staged
-    order a clean clone had run half its tests after 8.5 minutes; in xdist's,
-    all of them). ``-n 0`` or ``-p no:xdist``
-    run in this process. Runs before xdist's own hook (a conftest registers
-    after the plugin).
-    """
-    if not config.pluginmanager.hasplugin("xdist"):
-        return
-    if hasattr(config, "workerinput") or os.environ.get("PYTEST_XDIST_WORKER"):
-        return  # a worker runs its tests itself (it would start workers of its own)
-    if getattr(config.option, "numprocesses", 0) is not None:
-        return  # the user's -n
-    config.option.numprocesses = "auto"
-    if config.option.dist == "no":
-        config.option.dist = "loadfile"
-
-
 @pytest.hookimpl(optionalhook=True)
 def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
     """Run the whole suite in :data:`WORKERS` processes where the CPUs allow, else in this one.

@@ -7,8 +7,7 @@ import json
 import os
 from fnmatch import fnmatchcase
 from pathlib import Path
-from types import ModuleType, SimpleNamespace
-from typing import Any
+from types import ModuleType
 
 import kernel_warmup
 import pytest
@@ -105,38 +104,6 @@ def test_two_warmup_processes_share_every_step_once() -> None:
         assert sorted(map(repr, first[n] + second[n])) == sorted(map(repr, steps))
     assert any(second) and any(first)
     assert not any(kernel_warmup.steps_of(2, 3))  # a third process repeats nothing
-
-
-def test_the_suite_lets_xdist_choose_its_workers_unless_told(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    conftest = _suite_conftest()
-
-    class Plugins:
-        def __init__(self, xdist: bool) -> None:
-            self.xdist = xdist
-
-        def hasplugin(self, name: str) -> bool:
-            return self.xdist and name == "xdist"
-
-    def config(xdist: bool, n: object, dist: str = "no") -> Any:
-        option = SimpleNamespace(numprocesses=n, dist=dist, loadscopereorder=True)
-        return SimpleNamespace(pluginmanager=Plugins(xdist), option=option)
-
-    monkeypatch.delenv("PYTEST_XDIST_WORKER", raising=False)  # as in the controller
-    chosen = config(True, None)
-    conftest.pytest_cmdline_main(chosen)
-    assert vars(chosen.option) == {
-        "numprocesses": "auto",
-        "dist": "loadfile",
-        "loadscopereorder": True,  # xdist's: the largest modules first
-    }
-    worker = config(True, None)
-    worker.workerinput = {"workerid": "gw0"}  # xdist sets no -n in its workers
-    for told in (config(True, 0), config(True, 3, "load"), config(False, None), worker):
-        before = dict(vars(told.option))
-        conftest.pytest_cmdline_main(told)
-        assert vars(told.option) == before
 
 
 def test_a_stage_waits_for_every_warmup_process_that_compiles_it(
