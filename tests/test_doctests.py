@@ -39,6 +39,7 @@ MODULES = [
     "regopack.plugins.shapes.polyhedra.generator",
     "regopack.plugins.shapes.polyhedra.rotations",
     "regopack.plugins.inserters.available_surface.polyhedron",
+    "regopack.plugins.common.kernel_random",
 ]
 
 

@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
 from regopack.base.limits import derived_count
+from regopack.plugins.common.kernel_random import KernelSource, uniform
 from regopack.plugins.inserters.available_arc.candidates import first_candidate, tree_set
 from regopack.plugins.inserters.available_surface.cap_cover import (
     COVERED,
@@ -517,7 +518,7 @@ def analyse_sphere(
     placed: Placed,
     bounds: Bounds,
     margin: float,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
 ) -> int:
     """:func:`analyse` for spheres (``circum`` holds their radii); see :mod:`.spheres`.
@@ -650,7 +651,7 @@ def analyse(
     placed: Placed,
     bounds: Bounds,
     margin: float,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
 ) -> int:
     """Analyse candidate ``k`` (insertion index) for particle ``i``; see the module docstring.
@@ -720,9 +721,9 @@ def analyse(
     if surface.area > 0.0:
         if out.shape[0] == 0:
             return FOUND
-        u1 = rng.random()  # three uniforms in the order of rng.random(3)
-        u2 = rng.random()
-        u3 = rng.random()
+        u1 = uniform(rng)  # three uniforms in the order of rng.random(3)
+        u2 = uniform(rng)
+        u3 = uniform(rng)
         x = sample_free_point(surface, u1, u2, u3)
         out[0] = x[0]
         out[1] = x[1]
@@ -820,7 +821,7 @@ def sphere_turn(
     levels: FloatArray,
     shut: FloatArray,
     counters: IntArray,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
 ) -> int:
     """Candidate ``k``'s turn for sphere ``i`` in a scan without a margin (see :func:`scan`).
@@ -875,7 +876,7 @@ def scan(
     eta: float,
     xi: FloatArray,
     spheres: bool,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
     tree: FloatArray,
 ) -> tuple[int, int]:
@@ -927,7 +928,7 @@ def scan(
         margin = 0.0
         if eta > 0.0:
             if xi[0] < 0.0:  # drawn once per analysis, kept when the cache grows
-                xi[0] = rng.random()
+                xi[0] = uniform(rng)
             margin = eta_margin(eta, xi[0], r)
         if spheres and margin == 0.0:
             shutting = levels.shape[0] > 0 and math.isfinite(t)
@@ -986,7 +987,7 @@ def scan_spheres(
     bounds: Bounds,
     eta: float,
     xi: FloatArray,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
     tree: FloatArray,
 ) -> tuple[int, int]:

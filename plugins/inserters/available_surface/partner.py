@@ -45,6 +45,7 @@ from regopack.plugins.common.atomics import (
     store_release,
 )
 from regopack.plugins.common.borrowed import borrowed
+from regopack.plugins.common.kernel_random import KernelSource
 from regopack.plugins.inserters.available_arc.candidates import tree_set
 from regopack.plugins.inserters.available_arc.partner import (
     ARCS,
@@ -142,7 +143,7 @@ def serve(
     lo: FloatArray,
     hi: FloatArray,
     p: SurfacePartner,
-    rng: np.random.Generator,
+    rng: KernelSource,
 ) -> None:
     """Claim posted slots and analyse them until asked to stop (the partner's loop).
 
@@ -223,7 +224,7 @@ def scan_shared(
     cache: HalfspaceCache,
     placed: Placed,
     bounds: Bounds,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
     tree: FloatArray,
     p: SurfacePartner,
@@ -339,7 +340,7 @@ def _steal(
     cache: HalfspaceCache,
     placed: Placed,
     bounds: Bounds,
-    rng: np.random.Generator,
+    rng: KernelSource,
     out: FloatArray,
     p: SurfacePartner,
     defer: bool,
@@ -394,7 +395,7 @@ class PartnerThread:
         self.shared = new_surface_partner()
         self._args = (
             solids, arcs, grid, cache, order, centre, circum, period, lo, hi, self.shared,
-            np.random.default_rng(0),
+            np.zeros(4, dtype=np.uint64),  # a source never drawn from
         )  # fmt: skip
         self._thread: threading.Thread | None = None
         self._failure: list[BaseException] = []

@@ -52,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 import regopack.base.jit  # noqa: F401  (sets the kernel cache folder before numba compiles)
+from regopack.plugins.common.kernel_random import KernelSource, uniform
 
 FloatArray = NDArray[np.float64]
 
@@ -487,7 +488,7 @@ def sample_free(
     arcs: FloatArray,
     big_r: float,
     tau: float,
-    rng: np.random.Generator,
+    rng: KernelSource,
 ) -> tuple[float, float, float]:
     """Draw a point of the free set, uniform by area (see the module docstring).
 
@@ -500,8 +501,8 @@ def sample_free(
     ax, ay, az, cos_max = bounding_cap(caps, ncaps, arcs, big_r, tau)
     e1x, e1y, e1z, e2x, e2y, e2z = _frame(ax, ay, az)
     for _ in range(TRIES):
-        z = 1.0 - rng.random() * (1.0 - cos_max)
-        phi = 2.0 * math.pi * rng.random()
+        z = 1.0 - uniform(rng) * (1.0 - cos_max)
+        phi = 2.0 * math.pi * uniform(rng)
         s = math.sqrt(max(1.0 - z * z, 0.0))
         c1 = s * math.cos(phi)
         c2 = s * math.sin(phi)
@@ -515,7 +516,7 @@ def sample_free(
     for a in range(na):
         h = caps[int(arcs[a, 0]), 3]
         total += (arcs[a, 2] - arcs[a, 1]) * math.sqrt(max(big_r * big_r - h * h, 0.0))
-    pick = rng.random() * total
+    pick = uniform(rng) * total
     for a in range(na):
         h = caps[int(arcs[a, 0]), 3]
         length = (arcs[a, 2] - arcs[a, 1]) * math.sqrt(max(big_r * big_r - h * h, 0.0))

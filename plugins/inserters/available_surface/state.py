@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from regopack.geometry.solids import SolidBatch
+from regopack.plugins.common.kernel_random import KernelSource, kernel_source
 from regopack.plugins.inserters.available_surface.analysis import (
     FOUND,
     FULL,
@@ -150,6 +151,11 @@ class SurfaceState:
         self.adm_hi = hi
         self._partner: PartnerThread | None = None
         self._shared: SurfacePartner | None = None
+        self._rng: np.random.Generator | None = None
+        self._source: KernelSource = np.zeros(4, dtype=np.uint64)
+        self._placed = Placed(self.order, self.centre, self.circum, self.reach_max)
+        self._bounds = Bounds(self._period, lo, hi, lo, hi)
+        self._unbounded = (np.full(3, -np.inf), np.full(3, np.inf))
 
     def start_partner(self) -> bool:
         """Have a partner thread analyse candidates ahead of the scans; False when none serves.
@@ -192,17 +198,20 @@ class SurfaceState:
         self._q_arcs = None
         self.cache.fill[0] = 0
         if self.period is not None:
-            self.adm_lo = np.full(3, -np.inf)
-            self.adm_hi = np.full(3, np.inf)
+            self.adm_lo, self.adm_hi = self._unbounded
+            self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
             return not self._meets_own_images(i)
         if self.spheres:
-            self.adm_lo = self.lo + self.rounding[i]
-            self.adm_hi = self.hi - self.rounding[i]
+            r = self.rounding[i]
+            self.adm_lo = self.lo + r
+            self.adm_hi = self.hi - r
         else:
             q = self.polys[i]
             self.adm_lo = self.lo - q.vertices.min(axis=0)
             self.adm_hi = self.hi - q.vertices.max(axis=0)
-        return not bool(np.any(self.adm_lo > self.adm_hi))
+        self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
+        lo, hi = self.adm_lo, self.adm_hi
+        return not (lo[0] > hi[0] or lo[1] > hi[1] or lo[2] > hi[2])
 
     def _meets_own_images(self, i: int) -> bool:
         """Whether particle ``i`` overlaps its own periodic images (it then fits nowhere).
@@ -265,12 +274,14 @@ class SurfaceState:
             self.levels,
             self.shut_from,
         )
-        placed = Placed(self.order, self.centre, self.circum, self.reach_max)
-        bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
+        placed, bounds = self._placed, self._bounds
+        if rng is not self._rng:  # the kernels draw from its PCG64 state (.kernel_random)
+            self._rng, self._source = rng, kernel_source(rng)
+        src = self._source
         begin = 0
         if self.spheres:
             code, at = scan_spheres(
-                cands, begin, i, screen, self.grid, placed, bounds, self.eta, self._xi, rng,
+                cands, begin, i, screen, self.grid, placed, bounds, self.eta, self._xi, src,
                 self._out, self._no_tree if tree is None else tree,
             )  # fmt: skip
             if code == FOUND:
@@ -281,7 +292,7 @@ class SurfaceState:
             if shared is not None:
                 code, at = scan_shared(
                     cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
-                    self.cache, placed, bounds, rng, self._out,
+                    self.cache, placed, bounds, src, self._out,
                     self._no_tree if tree is None else tree, shared,
                 )  # fmt: skip
                 if code != FULL:
@@ -291,7 +302,7 @@ class SurfaceState:
                 continue
             code, at = scan(
                 cands, begin, i, screen, self._q_arcs, self.solids, self.arcs, self.grid,
-                self.cache, placed, bounds, self.eta, self._xi, self.spheres, rng, self._out,
+                self.cache, placed, bounds, self.eta, self._xi, self.spheres, src, self._out,
                 self._no_tree if tree is None else tree,
             )  # fmt: skip
             if code != FULL:
@@ -346,5 +357,7 @@ class SurfaceState:
             # read them and write nothing the scans read (.partner)
             arcs_of(self.arcs, self.solids, i)
         grid_add(self.grid, i, self.centre[i])
-        self.reach_max = max(self.reach_max, float(self.circum[i]))
+        if self.circum[i] > self.reach_max:
+            self.reach_max = float(self.circum[i])
+            self._placed = Placed(self.order, self.centre, self.circum, self.reach_max)
         return k
