@@ -1,11 +1,14 @@
 """Raster images of a packing for image-based pore studies (exporter ``image``).
 
-The placed particles are sampled on a grid of square pixels: a pixel belongs
-to a particle when its centre lies in the particle (on or inside a sharp
-outline; within the rounding radius of the core of a rounded one, so disks
-are exact). The grid covers the domain's bounding box from its top-left
-corner; row 0 is the top of the domain (largest y), column 0 its left side
-(smallest x). Pixels whose centre lies outside the domain (around a circle or
+The placed particles are sampled on a grid of square pixels (2D) or cubic
+voxels (3D): a pixel or voxel belongs to a particle when its centre lies in
+the particle (on or inside a sharp outline or polyhedron; within the rounding
+radius of the core of a rounded one, so disks and spheres are exact). The
+grid covers the domain's bounding box from its top-left corner; row 0 is the
+top of the domain (largest y), column 0 its left side (smallest x). A 3D
+image is a stack of such layers, ``[layer, row, column]``, layer 0 at the
+bottom (smallest z): every layer is the 2D image of a horizontal section seen
+from above. Pixels whose centre lies outside the domain (around a circle or
 polygon, or past a side that the pixel size does not divide) have their own
 value in every image and are neither solid nor pore. In a periodic domain a
 particle that crosses a side is drawn on both sides.
@@ -17,10 +20,20 @@ particle that crosses a side is drawn on both sides.
 [[0, 0, 0, 0], [0, 1, 1, 0], [0, 1, 1, 0], [0, 0, 0, 0]]
 >>> float(image.phi)
 0.25
+
+A sphere of radius 1 at the centre of a 2-µm cube, in voxels of 0.5 µm:
+
+>>> from regopack.geometry.domain import Box
+>>> ball = Packing.of_spheres([[1, 1, 1]], [1.0], Box(0, 2, 0, 2, 0, 2))
+>>> voxels = rasterise(ball, pixel_size=0.5)
+>>> voxels.labels.shape, int(voxels.solid.sum())
+((4, 4, 4), 32)
 """
 
 from __future__ import annotations
 
+import io
+import itertools
 import json
 import math
 from collections.abc import Iterable, Iterator, Mapping
@@ -33,7 +46,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ExportError
-from regopack.geometry.domain import Domain, PeriodicRectangle, Rectangle
+from regopack.geometry.domain import Box, Domain, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing, _atomic_file, _finite_or_none
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import Analyzer, Exporter
@@ -60,13 +73,13 @@ IMAGE_FORMAT = "regopack-image"
 """Value of ``format`` in the ``<stem>_image.json`` file of an image export."""
 
 DEFAULT_MAX_PIXELS = 2**28
-"""Default largest image (pixels): about 16 000 × 16 000."""
+"""Default largest image (pixels or voxels): about 16 000 × 16 000, or 645³."""
 
 MAX_PIXELS_LIMIT = 2**29
 """Largest ``max_pixels`` allowed (the label TIFF stays below the 4 GiB of a classic TIFF)."""
 
 BYTES_PER_PIXEL = 10
-"""Memory an export needs per pixel, roughly (labels, masks and one file's buffer)."""
+"""Memory an export needs per pixel or voxel, roughly (labels, masks and one file's buffer)."""
 
 OUTSIDE_LABEL = -1
 """Particle label of a pixel outside the domain (0 is void, ``j + 1`` particle ``j``)."""
@@ -87,7 +100,7 @@ _ROWS_PER_CHUNK = 512
 """Rows of the domain mask computed at once (bounds the memory of the point tests)."""
 
 _CHUNK = 1 << 22
-"""Work (rows times corners plus bounding-box pixels) that one scanline fill handles at once."""
+"""Work (lines times corners or faces, plus their pixels) that one scanline fill handles at once."""
 
 
 class ImageConfig(BaseModel):
@@ -100,9 +113,9 @@ class ImageConfig(BaseModel):
         ge=0,
         allow_inf_nan=False,
         description=(
-            "Side of a square pixel in the length unit; 0 takes d_min/10 (d_min the smallest "
-            "placed particle's equivalent diameter), made just small enough that a whole "
-            "number of pixels spans the domain's width."
+            "Side of a square pixel (a cubic voxel in 3D) in the length unit; 0 takes d_min/10 "
+            "(d_min the smallest placed particle's equivalent diameter), made just small enough "
+            "that a whole number of pixels spans the domain's width."
         ),
     )
     max_pixels: int = Field(
@@ -110,18 +123,20 @@ class ImageConfig(BaseModel):
         gt=0,
         le=MAX_PIXELS_LIMIT,
         description=(
-            "Largest image, in pixels; a larger one is refused before anything is allocated "
-            "(an export needs about 10 bytes of memory a pixel)."
+            "Largest image, in pixels (voxels in 3D); a larger one is refused before anything "
+            "is allocated (an export needs about 10 bytes of memory a pixel)."
         ),
     )
 
 
 @dataclass(frozen=True)
 class PixelGrid:
-    """Square pixels over a domain's bounding box, row 0 at the top.
+    """Square pixels over a domain's bounding box, row 0 at the top; in 3D, layers of them.
 
     The centre of pixel ``(row, col)`` is ``(x_left + (col + 0.5) size,
-    y_top - (row + 0.5) size)``.
+    y_top - (row + 0.5) size)``. A 3D grid (``n_layers > 0``) stacks
+    ``n_layers`` such layers of cubic voxels upward from ``z_bottom``: voxel
+    ``(layer, row, col)`` has that centre and ``z = z_bottom + (layer + 0.5) size``.
     """
 
     x_left: float
@@ -129,11 +144,25 @@ class PixelGrid:
     size: float
     n_rows: int
     n_cols: int
+    z_bottom: float = 0.0
+    n_layers: int = 0
 
     @property
-    def shape(self) -> tuple[int, int]:
-        """``(n_rows, n_cols)``."""
+    def dimension(self) -> int:
+        """2 for pixels, 3 for voxels."""
+        return 3 if self.n_layers else 2
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """``(n_rows, n_cols)``, or ``(n_layers, n_rows, n_cols)`` in 3D."""
+        if self.n_layers:
+            return (self.n_layers, self.n_rows, self.n_cols)
         return (self.n_rows, self.n_cols)
+
+    @property
+    def n_lines(self) -> int:
+        """Rows of the whole image: ``n_rows``, times ``n_layers`` in 3D."""
+        return self.n_rows * max(self.n_layers, 1)
 
     def x(self, cols: NDArray[Any]) -> FloatArray:
         """Return the x of the centres of the columns ``cols``."""
@@ -145,14 +174,25 @@ class PixelGrid:
         out: FloatArray = self.y_top - (np.asarray(rows, dtype=np.float64) + 0.5) * self.size
         return out
 
+    def z(self, layers: NDArray[Any]) -> FloatArray:
+        """Return the z of the centres of the layers ``layers`` (3D)."""
+        out: FloatArray = self.z_bottom + (np.asarray(layers, dtype=np.float64) + 0.5) * self.size
+        return out
+
     def extent(self) -> tuple[float, float, float, float]:
-        """``(left, right, bottom, top)`` of the image (matplotlib's ``extent``)."""
+        """``(left, right, bottom, top)``, matplotlib's ``extent`` (of a layer in 3D)."""
         return (
             self.x_left,
             self.x_left + self.n_cols * self.size,
             self.y_top - self.n_rows * self.size,
             self.y_top,
         )
+
+    def bounds(self) -> tuple[float, ...]:
+        """``(xmin, xmax, ymin, ymax)`` of the image, and ``zmin, zmax`` in 3D."""
+        if not self.n_layers:
+            return self.extent()
+        return (*self.extent(), self.z_bottom, self.z_bottom + self.n_layers * self.size)
 
 
 @dataclass(frozen=True)
@@ -162,10 +202,11 @@ class RasterImage:
     Attributes
     ----------
     grid
-        The pixels.
+        The pixels (voxels).
     labels
-        ``(n_rows, n_cols)`` int32: 0 void, ``j + 1`` particle of draw index
-        ``j``, :data:`OUTSIDE_LABEL` outside the domain.
+        ``grid.shape`` int32, ``(n_rows, n_cols)`` or ``(n_layers, n_rows,
+        n_cols)``: 0 void, ``j + 1`` particle of draw index ``j``,
+        :data:`OUTSIDE_LABEL` outside the domain.
     mineral
         Mineral index of every particle (the packing's ``mineral``).
     """
@@ -185,6 +226,17 @@ class RasterImage:
         """Mask of the pixels covered by a particle."""
         out: BoolArray = self.labels > 0
         return out
+
+    @property
+    def middle_layer(self) -> int:
+        """Layer drawn in the PNG files of a 3D image: ``n_layers // 2`` (0 in 2D)."""
+        return self.grid.n_layers // 2
+
+    def layer(self, k: int) -> RasterImage:
+        """Return layer ``k`` of a 3D image as a 2D image: the section at z of its centres."""
+        g = self.grid
+        flat = PixelGrid(g.x_left, g.y_top, g.size, g.n_rows, g.n_cols)
+        return RasterImage(flat, self.labels[k], self.mineral)
 
     @property
     def phi(self) -> float:
@@ -238,6 +290,9 @@ def _check_minerals(n_minerals: int) -> None:
 def default_pixel_size(packing: Packing) -> float:
     """d_min/10, d_min the smallest placed particle's equivalent diameter ``2 radius``.
 
+    The equivalent diameter is that of the disk of equal area in 2D, of the
+    sphere of equal volume in 3D.
+
     Raises
     ------
     ExportError
@@ -260,17 +315,18 @@ def _count(length: float, size: float) -> int:
 def pixel_grid(
     packing: Packing, pixel_size: float = 0.0, max_pixels: int = DEFAULT_MAX_PIXELS
 ) -> PixelGrid:
-    """Return the pixels of an image of ``packing``, checked against ``max_pixels``.
+    """Return the pixels (voxels) of an image of ``packing``, checked against ``max_pixels``.
 
     Parameters
     ----------
     packing
-        The packing (its domain and, for the default size, its particles).
+        The packing (its domain and, for the default size, its particles); a
+        3D packing gives a grid of voxels.
     pixel_size
-        Side of a pixel; 0 takes :func:`default_pixel_size`, reduced so that
-        a whole number of pixels spans the domain's width.
+        Side of a pixel or voxel; 0 takes :func:`default_pixel_size`,
+        reduced so that a whole number of pixels spans the domain's width.
     max_pixels
-        Largest number of pixels allowed.
+        Largest number of pixels (voxels) allowed.
 
     Raises
     ------
@@ -280,22 +336,25 @@ def pixel_grid(
     """
     if not (math.isfinite(pixel_size) and pixel_size >= 0):
         raise ExportError(f"pixel_size = {pixel_size!r}: a pixel size is a finite number > 0")
-    xmin, xmax, ymin, ymax = (float(v) for v in packing.domain.bounds())
-    width, height = xmax - xmin, ymax - ymin
+    b = [float(v) for v in packing.domain.bounds()]
+    sides = [b[2 * a + 1] - b[2 * a] for a in range(len(b) // 2)]
     size = float(pixel_size)
     if size == 0:
-        size = width / _count(width, default_pixel_size(packing))
-    n_cols, n_rows = _count(width, size), _count(height, size)
-    total = n_cols * n_rows
+        size = sides[0] / _count(sides[0], default_pixel_size(packing))
+    counts = [_count(side, size) for side in sides]
+    total = math.prod(counts)
     if total > max_pixels:
-        smallest = math.sqrt(width * height / max_pixels)
+        what = "voxels" if len(sides) == 3 else "pixels"
+        smallest = (math.prod(sides) / max_pixels) ** (1.0 / len(sides))
         raise ExportError(
-            f"pixel_size = {size:.6g} gives an image of {n_cols} x {n_rows} = {total} pixels, "
-            f"more than max_pixels = {max_pixels} (about {BYTES_PER_PIXEL} bytes of memory a "
-            f"pixel); use pixel_size >= {smallest:.3g} or raise max_pixels "
+            f"pixel_size = {size:.6g} gives an image of {' x '.join(map(str, counts))} = "
+            f"{total} {what}, more than max_pixels = {max_pixels} (about {BYTES_PER_PIXEL} "
+            f"bytes of memory a pixel); use pixel_size >= {smallest:.3g} or raise max_pixels "
             f"(at most {MAX_PIXELS_LIMIT})"
         )
-    return PixelGrid(xmin, ymax, size, n_rows, n_cols)
+    if len(sides) == 3:
+        return PixelGrid(b[0], b[3], size, counts[1], counts[0], b[4], counts[2])
+    return PixelGrid(b[0], b[3], size, counts[1], counts[0])
 
 
 # ---------------------------------------------------------------------------
@@ -330,42 +389,37 @@ def _near_core(v: FloatArray, rho: float, xs: FloatArray, ys: FloatArray) -> Boo
 
 
 def _bounds(packing: Packing, idx: IntArray) -> tuple[FloatArray, FloatArray]:
-    """Lower-left and upper-right corners ``(n, 2)`` of the particles ``idx``, rounding included."""
+    """Lowest and highest corners ``(n, dimension)`` of the particles ``idx``, rounding included."""
     v, starts = packing.vertices, packing.offsets[:-1]
-    lo = np.column_stack(
-        [np.minimum.reduceat(v[:, 0], starts), np.minimum.reduceat(v[:, 1], starts)]
-    )
-    hi = np.column_stack(
-        [np.maximum.reduceat(v[:, 0], starts), np.maximum.reduceat(v[:, 1], starts)]
-    )
+    lo = np.minimum.reduceat(v, starts, axis=0)
+    hi = np.maximum.reduceat(v, starts, axis=0)
     grow = packing.rounding_radius[idx, None]
     return lo[idx] + packing.centre[idx] - grow, hi[idx] + packing.centre[idx] + grow
 
 
 def _copies(packing: Packing, grid: PixelGrid) -> tuple[IntArray, FloatArray, FloatArray]:
-    """Draw index, offset ``(n, 2)`` and shifted bounding box of every copy to draw.
+    """Draw index, offset ``(n, dimension)`` and shifted bounding box of every copy to draw.
 
     A walled domain has one copy per placed particle; in a periodic domain a
     particle that crosses a side has a copy shifted by a period for every
-    side (and corner) of the image it reaches. Copies are in draw order.
+    side (edge, corner) of the image it reaches. Copies are in draw order.
     """
     idx = np.flatnonzero(packing.placed).astype(np.int64)
     lo, hi = _bounds(packing, idx)
     d = packing.domain
-    if not isinstance(d, PeriodicRectangle):
-        return idx, np.zeros((idx.shape[0], 2)), np.stack([lo, hi], axis=1)
-    left, right, bottom, top = grid.extent()
+    if not d.periodic:
+        return idx, np.zeros(lo.shape), np.stack([lo, hi], axis=1)
+    edges = np.array(grid.bounds()).reshape(-1, 2)
+    periods = [float(length) for length in packing.domain.period]
     rows, shifts = [], []
-    for sx in (-d.width, 0.0, d.width):
-        for sy in (-d.height, 0.0, d.height):
-            near = (hi[:, 0] + sx >= left) & (lo[:, 0] + sx <= right)
-            near &= (hi[:, 1] + sy >= bottom) & (lo[:, 1] + sy <= top)
-            rows.append(np.flatnonzero(near))
-            shifts.append(np.tile([sx, sy], (rows[-1].shape[0], 1)))
+    for shift in itertools.product(*[(-length, 0.0, length) for length in periods]):
+        near = np.all((hi + shift >= edges[:, 0]) & (lo + shift <= edges[:, 1]), axis=1)
+        rows.append(np.flatnonzero(near))
+        shifts.append(np.tile(shift, (rows[-1].shape[0], 1)))
     at = np.concatenate(rows)
     order = np.argsort(at, kind="stable")
-    at, shift = at[order], np.concatenate(shifts)[order]
-    return idx[at], shift, np.stack([lo[at] + shift, hi[at] + shift], axis=1)
+    at, offset = at[order], np.concatenate(shifts)[order]
+    return idx[at], offset, np.stack([lo[at] + offset, hi[at] + offset], axis=1)
 
 
 def _row_span(box: FloatArray, grid: PixelGrid) -> tuple[IntArray, IntArray]:
@@ -376,6 +430,17 @@ def _row_span(box: FloatArray, grid: PixelGrid) -> tuple[IntArray, IntArray]:
     return (
         np.clip(r0, 0, grid.n_rows).astype(np.int64),
         np.clip(r1, 0, grid.n_rows).astype(np.int64),
+    )
+
+
+def _layer_span(box: FloatArray, grid: PixelGrid) -> tuple[IntArray, IntArray]:
+    """Layers ``[k0, k1)`` whose centres may lie within the boxes' z range (3D)."""
+    h = grid.size
+    k0 = np.ceil((box[:, 0, 2] - grid.z_bottom) / h - 0.5)
+    k1 = np.floor((box[:, 1, 2] - grid.z_bottom) / h - 0.5) + 1
+    return (
+        np.clip(k0, 0, grid.n_layers).astype(np.int64),
+        np.clip(k1, 0, grid.n_layers).astype(np.int64),
     )
 
 
@@ -398,7 +463,10 @@ def _fill(
     xr: FloatArray,
     value: NDArray[np.int32],
 ) -> None:
-    """Set the pixels of every row ``rows[i]`` whose centre x lies in ``[xl[i], xr[i]]``."""
+    """Set the pixels of every row ``rows[i]`` whose centre x lies in ``[xl[i], xr[i]]``.
+
+    In 3D a row is a line of voxels, ``layer * n_rows + row``.
+    """
     h, x0 = grid.size, grid.x_left
     with np.errstate(invalid="ignore"):
         a = np.clip(np.ceil((xl - x0) / h - 0.5), 0, grid.n_cols)
@@ -486,6 +554,88 @@ def _fill_rounded(
     labels[r0:r1, c0:c1][inside] = j + 1
 
 
+def _lines(box: FloatArray, grid: PixelGrid) -> tuple[IntArray, IntArray, FloatArray, FloatArray]:
+    """Copy, line (``layer * n_rows + row``), y and z of every voxel line the 3D boxes cross."""
+    r0, r1 = _row_span(box, grid)
+    k0, k1 = _layer_span(box, grid)
+    n_rows = np.maximum(r1 - r0, 0)
+    n_lines = n_rows * np.maximum(k1 - k0, 0)
+    copy = np.repeat(np.arange(box.shape[0]), n_lines)
+    t = np.arange(copy.shape[0], dtype=np.int64) - np.repeat(np.cumsum(n_lines) - n_lines, n_lines)
+    per_layer = n_rows[copy]
+    row = r0[copy] + t % np.maximum(per_layer, 1)
+    layer = k0[copy] + t // np.maximum(per_layer, 1)
+    return copy, layer * grid.n_rows + row, grid.y(row), grid.z(layer)
+
+
+def _fill_polyhedra(
+    labels: NDArray[np.int32], grid: PixelGrid, packing: Packing, j: IntArray, shift: FloatArray
+) -> None:
+    """Scanline fill of the sharp convex polyhedra ``j`` (offset by ``shift``), line by line.
+
+    A voxel centre ``p`` is in polyhedron ``j`` when ``n_f . (p - c) <= s_f``
+    for all its faces ``f`` (``c`` its centre, ``n_f`` the outward normal,
+    ``s_f`` the support); along a line of fixed y and z every face bounds x
+    on one side, and the bounds give the run of voxels inside.
+    """
+    counts = packing.face_offsets[j + 1] - packing.face_offsets[j]
+    width = int(counts.max())
+    # pad every polyhedron to ``width`` faces by repeating its last one (the same half-space)
+    face = packing.face_offsets[j, None] + np.minimum(np.arange(width), counts[:, None] - 1)
+    normal = packing.normals[face]
+    centre = packing.centre[j] + shift
+    support = packing.support[face] + np.einsum("mfk,mk->mf", normal, centre)
+    lo, hi = _bounds(packing, j)
+    copy, line, y, z = _lines(np.stack([lo + shift, hi + shift], axis=1), grid)
+    # inside face f: a x <= b with a = n_x and b = s + n . c - n_y y - n_z z
+    a = normal[copy, :, 0]
+    b = support[copy] - normal[copy, :, 1] * y[:, None] - normal[copy, :, 2] * z[:, None]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        bound = b / a
+    xl = np.where(a < 0, bound, -np.inf).max(axis=1)
+    xr = np.where(a > 0, bound, np.inf).min(axis=1)
+    xl[~np.all((a != 0) | (b >= 0), axis=1)] = np.nan  # outside a face parallel to x
+    _fill(labels, grid, line, xl, xr, (j + 1).astype(np.int32)[copy])
+
+
+def _fill_spheres(
+    labels: NDArray[np.int32], grid: PixelGrid, packing: Packing, j: IntArray, shift: FloatArray
+) -> None:
+    """Scanline fill of the spheres ``j``: one core point, grown by its rounding radius."""
+    centre = packing.vertices[packing.offsets[j]] + packing.centre[j] + shift
+    rho = packing.rounding_radius[j]
+    copy, line, y, z = _lines(
+        np.stack([centre - rho[:, None], centre + rho[:, None]], axis=1), grid
+    )
+    dy, dz = y - centre[copy, 1], z - centre[copy, 2]
+    with np.errstate(invalid="ignore"):
+        half = np.sqrt(rho[copy] ** 2 - dy * dy - dz * dz)  # NaN where the line misses it
+    cx = centre[copy, 0]
+    _fill(labels, grid, line, cx - half, cx + half, (j + 1).astype(np.int32)[copy])
+
+
+def _draw_solids(labels: NDArray[np.int32], grid: PixelGrid, packing: Packing) -> None:
+    """Give every voxel whose centre lies in placed solid ``j`` the label ``j + 1``.
+
+    A solid is a sharp polyhedron (4 faces or more) or a sphere (no faces, a
+    rounding radius), as a 3D packing's validation requires.
+    """
+    if packing.n_placed == 0:
+        return
+    j, shift, box = _copies(packing, grid)
+    faces = packing.face_offsets[j + 1] - packing.face_offsets[j]
+    rho = packing.rounding_radius[j]
+    sharp = np.flatnonzero((rho <= 0) & (faces >= 4))
+    spheres = np.flatnonzero((rho > 0) & (faces == 0))
+    r0, r1 = _row_span(box, grid)
+    k0, k1 = _layer_span(box, grid)
+    cols = np.ceil((box[:, 1, 0] - box[:, 0, 0]) / grid.size).astype(np.int64) + 1
+    work = np.maximum(r1 - r0, 0) * np.maximum(k1 - k0, 0) * (faces + cols)
+    for part, fill in ((sharp, _fill_polyhedra), (spheres, _fill_spheres)):
+        for s in _chunks(work[part]):
+            fill(labels, grid, packing, j[part[s]], shift[part[s]])
+
+
 def _draw(labels: NDArray[np.int32], grid: PixelGrid, packing: Packing) -> None:
     """Give every pixel whose centre lies in placed particle ``j`` the label ``j + 1``."""
     if packing.n_placed == 0:
@@ -506,13 +656,24 @@ def _draw(labels: NDArray[np.int32], grid: PixelGrid, packing: Packing) -> None:
 
 
 def _domain_mask(domain: Domain, grid: PixelGrid) -> BoolArray:
-    """Mask of the pixels whose centre lies inside ``domain``."""
+    """Mask of the pixels (voxels) whose centre lies inside ``domain``."""
     xs = grid.x(np.arange(grid.n_cols))
     ys = grid.y(np.arange(grid.n_rows))
+    if isinstance(domain, Box):  # periodic: half-open [min, max) along every axis
+        centres = (xs, ys, grid.z(np.arange(grid.n_layers)))
+        b = domain.bounds()
+        along = [
+            (c >= b[2 * a]) & (c < b[2 * a + 1])
+            if domain.periodic
+            else (c > b[2 * a]) & (c < b[2 * a + 1])
+            for a, c in enumerate(centres)
+        ]
+        out: BoolArray = along[2][:, None, None] & along[1][None, :, None] & along[0][None, None, :]
+        return out
     if isinstance(domain, PeriodicRectangle):  # half-open: [xmin, xmax) x [ymin, ymax)
         cols = (xs >= domain.xmin) & (xs < domain.xmax)
         rows = (ys >= domain.ymin) & (ys < domain.ymax)
-        out: BoolArray = rows[:, None] & cols[None, :]
+        out = rows[:, None] & cols[None, :]
         return out
     if isinstance(domain, Rectangle):
         cols = (xs > domain.xmin) & (xs < domain.xmax)
@@ -530,14 +691,14 @@ def _domain_mask(domain: Domain, grid: PixelGrid) -> BoolArray:
 def rasterise(
     packing: Packing, pixel_size: float = 0.0, max_pixels: int = DEFAULT_MAX_PIXELS
 ) -> RasterImage:
-    """Sample the placed particles of ``packing`` at the pixel centres.
+    """Sample the placed particles of ``packing`` at the pixel (voxel) centres.
 
     A pixel centre on the outlines of two touching particles goes to one of them.
 
     Parameters
     ----------
     packing
-        The packing.
+        The packing: a 2D one gives pixels, a 3D one voxels.
     pixel_size, max_pixels
         See :func:`pixel_grid`.
 
@@ -548,7 +709,7 @@ def rasterise(
     """
     grid = pixel_grid(packing, pixel_size, max_pixels)
     labels = np.zeros(grid.shape, dtype=np.int32)
-    _draw(labels, grid, packing)
+    (_draw_solids if grid.dimension == 3 else _draw)(labels, grid, packing)
     labels[~_domain_mask(packing.domain, grid)] = OUTSIDE_LABEL
     return RasterImage(grid, labels, packing.mineral.copy())
 
@@ -598,16 +759,39 @@ def _save_png(path: Path, image: NDArray[np.uint8]) -> None:
 
 
 def _save_tiff(path: Path, image: NDArray[np.int32]) -> None:
+    """Write a 2D image as one TIFF page, a 3D one as one page per layer (layer 0 first)."""
     from PIL import Image, features
 
-    picture = Image.fromarray(np.ascontiguousarray(image, dtype=np.int32))
-    options = {"compression": "tiff_adobe_deflate"} if features.check("libtiff") else {}
-    _write(path, lambda fh: picture.save(fh, format="TIFF", **options))
+    pages = [
+        Image.fromarray(np.ascontiguousarray(page, dtype=np.int32))
+        for page in (image if image.ndim == 3 else image[None])
+    ]
+    options: dict[str, Any] = (
+        {"compression": "tiff_adobe_deflate"} if features.check("libtiff") else {}
+    )
+    if len(pages) == 1:
+        _write(path, lambda fh: pages[0].save(fh, format="TIFF", **options))
+        return
+    # Pillow reads back what it wrote of a multi-page TIFF: compose it in memory (compressed)
+    buffer = io.BytesIO()
+    pages[0].save(buffer, format="TIFF", save_all=True, append_images=pages[1:], **options)
+    _write(path, lambda fh: fh.write(buffer.getbuffer()))
+
+
+AXES = {
+    2: ["row: y, from the top", "column: x, from the left"],
+    3: ["layer: z, from the bottom", "row: y, from the top", "column: x, from the left"],
+}
+"""The ``axes`` of ``<stem>_image.json``: what the array indices run along, by dimension."""
 
 
 def _metadata(packing: Packing, image: RasterImage, files: Mapping[str, Path]) -> dict[str, Any]:
     g = image.grid
-    area = packing.area()[packing.placed].sum()
+    solid = float(packing.measure()[packing.placed].sum())
+    layer = {}
+    if g.dimension == 3:
+        k = image.middle_layer
+        layer = {"png_layer": k, "png_z": float(g.z(np.array(k)))}
     return {
         "format": IMAGE_FORMAT,
         "format_version": 1,
@@ -615,14 +799,16 @@ def _metadata(packing: Packing, image: RasterImage, files: Mapping[str, Path]) -
         "scene": packing.scene.get("name"),
         "seed": packing.seed,
         "pixel_size": g.size,
-        "shape": [g.n_rows, g.n_cols],
-        "extent": list(g.extent()),
+        "shape": list(g.shape),
+        "axes": AXES[g.dimension],
+        "extent": list(g.bounds()),
+        **layer,
         "domain": packing.domain.to_dict(),
         "mineral_names": list(packing.mineral_names),
         "pixels_inside": int(np.count_nonzero(image.inside)),
         "pixels_solid": int(np.count_nonzero(image.solid)),
         "phi_image": image.phi,
-        "phi_exact": float(area) / packing.domain.area,
+        "phi_exact": solid / packing.domain.measure,
         "files": {key: p.name for key, p in files.items() if key != "meta"},
     }
 
@@ -636,6 +822,10 @@ class ImageExporter(Exporter[Packing]):
     (8-bit: 0 void, ``k + 1`` mineral ``k``, 255 outside), ``<stem>.npy`` the
     phases in PoreSpy's convention (uint8: 1 pore, 0 solid, 2 outside) and
     ``<stem>_image.json`` the pixel size, extent and solid fractions.
+
+    For a 3D packing the label TIFF has one page per layer (layer 0, the
+    bottom, first) and the ``.npy`` array is ``(layers, rows, columns)``; the
+    two PNG files show the middle layer (:attr:`RasterImage.middle_layer`).
     """
 
     suffix = ".png"
@@ -654,9 +844,10 @@ class ImageExporter(Exporter[Packing]):
         _check_minerals(len(packing.mineral_names))
         files = image_paths(Path(path))
         image = rasterise(packing, self.config.pixel_size, self.config.max_pixels)
-        _save_png(files["binary"], image.binary())
+        shown = image.layer(image.middle_layer) if image.grid.dimension == 3 else image
+        _save_png(files["binary"], shown.binary())
         _save_tiff(files["labels"], image.labels)
-        _save_png(files["minerals"], image.minerals())
+        _save_png(files["minerals"], shown.minerals())
         phases = image.phases()
         _write(files["phases"], lambda fh: np.save(fh, phases, allow_pickle=False))
         meta = json.dumps(_finite_or_none(_metadata(packing, image, files)), indent=2)
@@ -676,6 +867,7 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             "image",
             ImageConfig,
             ImageExporter,
-            "Binary, label and mineral images (PNG, TIFF, .npy) for pore studies.",
+            "Binary, label and mineral images (PNG, TIFF, .npy) for pore studies; voxels in 3D.",
+            dimensions=(2, 3),
         )
     ]
