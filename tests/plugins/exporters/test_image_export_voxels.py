@@ -301,6 +301,8 @@ def test_the_command_line_writes_a_3d_image(packing, tmp_path, capsys):
     save(packing, source)
     assert main(["export", str(source), "--to", "image"]) == 0
     assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'packing.png'}"
+    for file in image_paths(tmp_path / "packing.png").values():
+        assert file.stat().st_size > 0
     meta = json.loads((tmp_path / "packing_image.json").read_text())
     # the default voxel: d_min/10, a whole number of voxels across the width
     d_min = 2 * packing.radius.min()
