@@ -159,11 +159,6 @@ class PixelGrid:
             return (self.n_layers, self.n_rows, self.n_cols)
         return (self.n_rows, self.n_cols)
 
-    @property
-    def n_lines(self) -> int:
-        """Rows of the whole image: ``n_rows``, times ``n_layers`` in 3D."""
-        return self.n_rows * max(self.n_layers, 1)
-
     def x(self, cols: NDArray[Any]) -> FloatArray:
         """Return the x of the centres of the columns ``cols``."""
         out: FloatArray = self.x_left + (np.asarray(cols, dtype=np.float64) + 0.5) * self.size
@@ -410,7 +405,7 @@ def _copies(packing: Packing, grid: PixelGrid) -> tuple[IntArray, FloatArray, Fl
     if not d.periodic:
         return idx, np.zeros(lo.shape), np.stack([lo, hi], axis=1)
     edges = np.array(grid.bounds()).reshape(-1, 2)
-    periods = [float(length) for length in packing.domain.period]
+    periods = [float(length) for length in d.period]
     rows, shifts = [], []
     for shift in itertools.product(*[(-length, 0.0, length) for length in periods]):
         near = np.all((hi + shift >= edges[:, 0]) & (lo + shift <= edges[:, 1]), axis=1)
