@@ -44,6 +44,10 @@ class DeprecatedNameWarning(FutureWarning):
     """
 
 
+class DensityTargetWarning(UserWarning):
+    """A density target was not met within its tolerance; the closest packing was kept."""
+
+
 class Terminated(KeyboardInterrupt):
     """The process received SIGTERM (what batch schedulers send at a time limit).
 

@@ -22,7 +22,7 @@ import math
 import os
 from pathlib import Path
 
-from regopack.base.errors import ConfigError
+from regopack.base.field_error import FieldValueError
 
 __all__ = [
     "BIN_BYTES",
@@ -65,37 +65,14 @@ the fine curve of every pair: about six 8-byte values, rounded up.
 """
 
 
-class LimitError(ConfigError):
+class LimitError(FieldValueError):
     """A size derived from a scene is beyond what can be allocated or computed.
 
-    Parameters
-    ----------
-    field
-        The dotted scene field the size derives from (e.g. ``insertion.zone``).
-    value
-        That field's value (shown in the message), or ``None`` for a table.
-    text
-        What the value implies and what is allowed.
-
-    Attributes
-    ----------
-    field, value, text
-        As given; ``str(err)`` is ``"<field> = <value>: <text>"``.
+    ``field`` is the dotted scene field the size derives from (e.g.
+    ``insertion.zone``), ``value`` that field's value (``None`` for a table),
+    ``text`` what the value implies and what is allowed (see
+    :class:`~regopack.base.field_error.FieldValueError`).
     """
-
-    def __init__(self, field: str, value: object, text: str) -> None:
-        self.field = field
-        self.value = value
-        self.text = text
-        super().__init__(self.located(None))
-
-    def located(self, source: str | None) -> str:
-        """Return the one-line message, prefixed with ``source`` (a file or ``--set``) if given."""
-        from regopack.base.messages import format_value
-
-        shown = format_value(self.value) if self.value is not None else None
-        head = f"{self.field} = {shown}" if shown is not None else self.field
-        return f"{source}: {head}: {self.text}" if source else f"{head}: {self.text}"
 
 
 def derived_count(

@@ -118,6 +118,65 @@ class DensityController(ABC):
 
 
 @dataclass
+class DensitySearch:
+    """How a :class:`DensityTarget` chose its controller.
+
+    Attributes
+    ----------
+    chosen
+        Index into ``tries`` of the packing kept: the first within the
+        tolerance, or else the closest to the target (the first of equals).
+    tries
+        One mapping per packing made, in order: the chosen controller's
+        parameters (e.g. ``{"eta": 12.5}``) and the measured ``phi``.
+    met
+        Whether the kept packing is within the target's tolerance.
+    """
+
+    chosen: int
+    tries: list[dict[str, float]]
+    met: bool
+
+
+class DensityTarget(DensityController):
+    """A density goal (a packing fraction to reach) met by choosing another controller.
+
+    The run packs the scene once per controller :meth:`search` tries, each
+    time from the scene's seed, and keeps the packing it chooses: that
+    packing is the one the chosen controller gives on its own.
+    """
+
+    controls: str = "eta"
+    """Kind of the density controller the search chooses (what inserters are checked against)."""
+
+    measure: str = "interior"
+    """The packing fraction the goal is about: ``"interior"`` or ``"domain"``."""
+
+    phi: float = math.nan
+    """The packing fraction to reach."""
+
+    tolerance: float = 0.0
+    """How close to :attr:`phi` the packing kept must be to meet the goal."""
+
+    @abstractmethod
+    def search(self, probe: Callable[[DensityController], float]) -> DensitySearch:
+        """Choose a controller by packing: ``probe(controller)`` packs and returns its fraction.
+
+        Raises
+        ------
+        regopack.base.field_error.FieldValueError
+            When the goal is out of the scene's reach (one line naming the
+            field, its value and the reachable range).
+        """
+
+    def shrink(
+        self, arcs: FloatArray, r_new: float, r_candidate: float, rng: np.random.Generator
+    ) -> FloatArray:
+        """Refuse: a target is met by the controller its search chooses, not applied itself."""
+        raise TypeError("a density target packs through the controller its search chooses")
+
+
+@dataclass
 class InsertionResult:
     """Outcome of an insertion run.
 

@@ -48,6 +48,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "regopack.plugins.shapes.octagon",
     "regopack.plugins.inserters.available_arc",
     "regopack.plugins.density.eta",
+    "regopack.plugins.density.target",
     "regopack.plugins.analyzers",
     "regopack.plugins.sizes.distributions",
     "regopack.plugins.shapes.polygons",

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -20,7 +21,13 @@ import numpy as np
 from regopack._compat import renamed_names
 from regopack.analysis.pipeline import AnalysisFiles, write_analysis_files
 from regopack.base import toml as _toml
-from regopack.base.errors import ConfigError, GeometryError, PluginError
+from regopack.base.errors import (
+    ConfigError,
+    DensityTargetWarning,
+    GeometryError,
+    PluginError,
+)
+from regopack.base.field_error import FieldValueError
 from regopack.base.limits import (
     MAX_EXTENT_RATIO,
     LimitError,
@@ -49,6 +56,8 @@ from regopack.packing.solid_fraction import phi_in_window as phi_in_window
 from regopack.registry.interfaces import (
     Analyzer,
     DensityController,
+    DensitySearch,
+    DensityTarget,
     InsertionResult,
     InsertionStrategy,
     ProgressCallback,
@@ -205,7 +214,7 @@ def _located(scene: ResolvedScene, loc: str, text: str, value: Any = None) -> st
     return f"{where}: {shown}: {text}" if where else f"{shown}: {text}"
 
 
-def located_limit(scene: ResolvedScene, err: LimitError) -> ConfigError:
+def located_limit(scene: ResolvedScene, err: FieldValueError) -> ConfigError:
     """``err`` prefixed with the source of its field (the scene file or ``--set``)."""
     return ConfigError(err.located(scene.scene.origin(err.field)))
 
@@ -338,9 +347,11 @@ def check_inserter(scene: ResolvedScene) -> None:
         (see :meth:`~regopack.registry.interfaces.InsertionStrategy.scene_conflict`).
     """
     inserter: InsertionStrategy = _build(scene.insertion, InsertionStrategy, "insertion")
-    conflict = inserter.scene_conflict(
-        tuple(phase.shape.kind for phase in scene.phases), scene.density.kind
-    )
+    density = scene.density.kind
+    controller: DensityController = _build(scene.density, DensityController, "density")
+    if isinstance(controller, DensityTarget):  # the inserter packs with the one it chooses
+        density = controller.controls
+    conflict = inserter.scene_conflict(tuple(phase.shape.kind for phase in scene.phases), density)
     if conflict is not None:
         field, reason = conflict
         raise ConfigError(_located(scene, field, reason))
@@ -587,29 +598,33 @@ def _run(
     compiling: CompileTime,
 ) -> RunOutcome:
     start = time.perf_counter()
-    rng = np.random.default_rng(resolved.seed)
-    population = draw_population(resolved, rng)
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
     controller: DensityController = _build(resolved.density, DensityController, "density")
-    domain = resolved.domain
-    try:
-        result: InsertionResult = inserter.pack(population, domain, controller, rng, progress)
-    except LimitError as err:  # a size the inserter derived from the scene, refused
-        raise located_limit(resolved, err) from None
-    times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
     size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
-
-    scene_dict = resolved.to_dict()
-    packing: Packing = Packing.from_parts(
-        population,
-        result,
-        domain,
-        scene_dict,
-        resolved.seed,
-        result.stats,
-    )
-    n_placed = packing.n_placed
     margin = 2.0 * float(size_dist.r_max)
+    domain = resolved.domain
+    scene_dict = resolved.to_dict()
+
+    def pack_with(ctl: DensityController) -> tuple[InsertionResult, Packing]:
+        rng = np.random.default_rng(resolved.seed)
+        population = draw_population(resolved, rng)
+        try:
+            result = inserter.pack(population, domain, ctl, rng, progress)
+        except LimitError as err:  # a size the inserter derived from the scene, refused
+            raise located_limit(resolved, err) from None
+        packing = Packing.from_parts(
+            population, result, domain, scene_dict, resolved.seed, result.stats
+        )
+        return result, packing
+
+    search: DensitySearch | None = None
+    if isinstance(controller, DensityTarget):
+        result, packing, search = _search_density(resolved, controller, pack_with, margin)
+    else:
+        result, packing = pack_with(controller)
+    times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
+
+    n_placed = packing.n_placed
     phi_interior, note = _phi_interior(packing, margin)
     summary: dict[str, Any] = {
         "scene": resolved.name,
@@ -634,6 +649,10 @@ def _run(
     eta = getattr(resolved.density.config, "eta", None)
     if eta is not None:
         summary["eta"] = eta
+    if search is not None:
+        assert isinstance(controller, DensityTarget)
+        summary["eta"] = search.tries[search.chosen]["eta"]
+        summary["density_target"] = _target_summary(controller, search)
     for key, value in result.stats.items():
         summary.setdefault(key, value)
     if verify if verify is not None else inserter.may_overlap():
@@ -656,6 +675,64 @@ def _run(
     return _write_run(
         resolved, Path(out_dir), packing, summary, analyzers, figures, extra_files or {}
     )
+
+
+def _search_density(
+    resolved: ResolvedScene,
+    target: DensityTarget,
+    pack_with: Callable[[DensityController], tuple[InsertionResult, Packing]],
+    margin: float,
+) -> tuple[InsertionResult, Packing, DensitySearch]:
+    """Pack ``resolved`` as often as ``target``'s search asks; return the packing it keeps.
+
+    The search keeps the packing closest to ``target.phi`` (the first one
+    within the tolerance ends it); only the closest so far is held.
+    """
+    best: list[Any] = []  # [distance, index, result, packing]
+    count = 0
+
+    def probe(ctl: DensityController) -> float:
+        nonlocal count
+        result, packing = pack_with(ctl)
+        phi = packing.phi if target.measure == "domain" else _phi_interior(packing, margin)[0]
+        if not math.isnan(phi) and (not best or abs(phi - target.phi) < best[0]):
+            best[:] = [abs(phi - target.phi), count, result, packing]
+        count += 1
+        return phi
+
+    try:
+        search = target.search(probe)
+    except FieldValueError as err:  # out of the scene's reach, or not measurable
+        raise located_limit(resolved, err) from None
+    if not best or best[1] != search.chosen or len(search.tries) != count:
+        raise PluginError(
+            f"density {resolved.density.kind!r}: its search chose packing {search.chosen} of "
+            f"{len(search.tries)}, not the closest to its target of the {count} it made"
+        )
+    if not search.met:
+        warnings.warn(
+            DensityTargetWarning(
+                f"density {resolved.density.kind!r}: phi {target.measure} {target.phi:.4g} not "
+                f"reached within the tolerance in {count} packings; the closest, kept, has "
+                f"{search.tries[search.chosen]['phi']:.4f} (raise density.packings or "
+                "density.tolerance)"
+            ),
+            stacklevel=2,
+        )
+    return best[2], best[3], search
+
+
+def _target_summary(target: DensityTarget, search: DensitySearch) -> dict[str, Any]:
+    """Return the summary's ``density_target`` block: the goal, what was reached, the tries."""
+    return {
+        "phi": target.phi,
+        "of": target.measure,
+        "tolerance": target.tolerance,
+        "reached": search.tries[search.chosen]["phi"],
+        "met": search.met,
+        "packings": len(search.tries),
+        "tries": search.tries,
+    }
 
 
 def _phi_interior(packing: Packing, margin: float) -> tuple[float, str]:

@@ -225,7 +225,7 @@ def scene_schema(registry: Registry) -> JsonObject:
     >>> schema["$schema"]
     'https://json-schema.org/draft/2020-12/schema'
     >>> [b["$ref"] for b in schema["properties"]["density"]["oneOf"]]
-    ['#/$defs/density.eta']
+    ['#/$defs/density.eta', '#/$defs/density.target']
     """
     schema = copy.deepcopy(Scene.model_json_schema(mode="validation"))
     defs: JsonObject = schema.setdefault("$defs", {})
@@ -346,7 +346,7 @@ def describe_plugins(registry: Registry, kind: str | None = None) -> list[JsonOb
     Examples
     --------
     >>> from regopack.registry.manager import default_registry
-    >>> [entry] = describe_plugins(default_registry(autoload=False), "density")
+    >>> entry = describe_plugins(default_registry(autoload=False), "density")[0]
     >>> entry["name"], entry["distribution"], [f["name"] for f in entry["fields"]]
     ('eta', 'regopack', ['eta'])
     >>> entry["fields"][0]["type"], entry["fields"][0]["default"]

@@ -39,7 +39,7 @@ def test_default_registry_has_the_builtins():
         "template-3d",
     ]
     assert reg.names("insertion") == ["available-arc", "available-surface", "rsa"]
-    assert reg.names("density") == ["eta"]
+    assert reg.names("density") == ["eta", "target"]
     assert reg.names("export") == [
         "csv",
         "gsd",

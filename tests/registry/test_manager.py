@@ -33,6 +33,7 @@ def test_builtin_plugins_are_the_plugin_modules():
         "regopack.plugins.shapes.octagon",
         "regopack.plugins.inserters.available_arc",
         "regopack.plugins.density.eta",
+        "regopack.plugins.density.target",
         "regopack.plugins.analyzers",
         "regopack.plugins.sizes.distributions",
         "regopack.plugins.shapes.polygons",
