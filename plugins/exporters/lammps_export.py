@@ -59,7 +59,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -67,10 +67,19 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack._compat import renamed_names
 from regopack.base.errors import ConfigError, ExportError
-from regopack.base.units import conversion, length_scale, length_unit
+from regopack.base.units import length_scale, length_unit
 from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.export_common import Analyses, AnyPacking, _num, _write_text
+from regopack.plugins.exporters.granular_common import RAYLEIGH_FRACTION as RAYLEIGH_FRACTION
+from regopack.plugins.exporters.granular_common import UNIT_STYLE_LENGTH as UNIT_STYLE_LENGTH
+from regopack.plugins.exporters.granular_common import GranularSpheres as GranularSpheres
+from regopack.plugins.exporters.granular_common import check_finite as _check_finite
+from regopack.plugins.exporters.granular_common import default_length_scale as default_length_scale
+from regopack.plugins.exporters.granular_common import density_note as _density_note
+from regopack.plugins.exporters.granular_common import granular_spheres as granular_spheres
+from regopack.plugins.exporters.granular_common import mineral_densities as mineral_densities
+from regopack.plugins.exporters.granular_common import rayleigh_step_lines, sphere_data
 from regopack.plugins.exporters.rounded_bodies import (
     CLEAN_TOLERANCE,
     clean_outline,
@@ -115,58 +124,8 @@ as many lines as it likes, but a long line is cut (and its numbers with it) and
 a body may span at most :data:`MAX_BODY_LINES` lines, so the values are packed
 into lines of this length."""
 
-RAYLEIGH_FRACTION = 0.2
-"""Time step of granular spheres as a fraction of the Rayleigh time of the smallest sphere."""
-
 ROUNDING_TRIES = 8
 """Times the rounding radius of one body is halved when its eroded core vanishes."""
-
-
-UNIT_STYLE_LENGTH: dict[str, str | None] = {
-    "micro": "µm",
-    "si": "m",
-    "cgs": "cm",
-    "nano": "nm",
-    "lj": None,
-}
-"""Length unit of each LAMMPS unit style (``lj``: none, lengths written as they are)."""
-
-
-def default_length_scale(packing: Any, units: str) -> float:
-    """Return the factor from the packing's ``length_unit`` to the length unit of ``units``.
-
-    1 for ``lj`` (reduced units: lengths as they are) and for a scene in
-    micrometres written with ``units = "micro"``.
-
-    Examples
-    --------
-    >>> default_length_scale({"length_unit": "mm"}, "micro"), default_length_scale({}, "si")
-    (1000.0, 1e-06)
-    """
-    target = UNIT_STYLE_LENGTH[units]
-    return 1.0 if target is None else conversion(length_unit(packing), target)
-
-
-def mineral_densities(packing: Any, config: LammpsConfig) -> FloatArray:
-    """Density of the grains of each mineral: ``density`` or its entry of ``mineral_density``.
-
-    Raises
-    ------
-    ConfigError
-        One line, when ``mineral_density`` names a mineral the packing does not have.
-    """
-    names = [str(n) for n in packing.mineral_names]
-    unknown = sorted(set(config.mineral_density) - set(names))
-    if unknown:
-        raise ConfigError(
-            f"exporter 'lammps': mineral_density names {unknown[0]!r}, not a mineral of this "
-            f"packing (its minerals: {', '.join(names)})"
-        )
-    n = max(1, len(names), int(packing.mineral.max(initial=-1)) + 1)
-    out = np.full(n, config.density)
-    for k, name in enumerate(names):
-        out[k] = config.mineral_density.get(name, config.density)
-    return out
 
 
 class LammpsConfig(BaseModel):
@@ -583,24 +542,6 @@ class _Layout:
         return out
 
 
-def _check_finite(given: str, checks: list[tuple[str, FloatArray]]) -> None:
-    """Refuse masses and moments that are not positive finite numbers (subnormal ones too)."""
-    tiny = np.finfo(np.float64).tiny  # subnormal numbers lose their precision
-    for what, values in checks:
-        if values.size and not (np.isfinite(values).all() and (values >= tiny).all()):
-            raise ExportError(
-                f"{given}: a body's {what} is not a positive finite number; give values nearer 1"
-            )
-
-
-def _density_note(cfg: LammpsConfig) -> str:
-    """Name the density in a comment of the data file: one number, or one per mineral."""
-    if not cfg.mineral_density:
-        return _num(cfg.density)
-    listed = ", ".join(f"{k} {_num(v)}" for k, v in sorted(cfg.mineral_density.items()))
-    return f"density ({listed}; others {_num(cfg.density)})"
-
-
 def _walls_2d(packing: Packing, s: float) -> tuple[str, list[str], str]:
     """Boundary, wall lines and note of a 2D domain (in LAMMPS lengths)."""
     d = packing.domain
@@ -744,66 +685,6 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
     )
 
 
-@dataclass(frozen=True)
-class GranularSpheres:
-    """The spheres of a packing of spheres as LAMMPS' ``atom_style sphere`` reads them.
-
-    ``index`` is the draw index of each sphere's particle; ``radius``,
-    ``position`` (its centre, wrapped into a periodic box), ``lo``, ``hi`` and
-    ``d_min`` are in LAMMPS lengths (``scale`` × the packing's), ``density``
-    is each sphere's mineral's and ``r_rho`` the least ``radius × √density``,
-    which sets the Rayleigh time step.
-    """
-
-    index: NDArray[np.int64]
-    radius: FloatArray
-    position: FloatArray
-    density: FloatArray
-    scale: float
-    lo: FloatArray
-    hi: FloatArray
-    periodic: bool
-
-    @property
-    def d_min(self) -> float:
-        """Smallest diameter."""
-        return float(2.0 * self.radius.min()) if self.radius.size else 1.0
-
-    @property
-    def r_rho(self) -> float:
-        """Least ``radius × √density``: the sphere of shortest Rayleigh time."""
-        return float(np.min(self.radius * np.sqrt(self.density))) if self.radius.size else 1.0
-
-
-def granular_spheres(
-    packing: Packing[Box], config: LammpsConfig | None = None, scale: float = 1.0
-) -> GranularSpheres | None:
-    """Return the placed spheres of a 3D packing of spheres alone; ``None`` if any is no sphere.
-
-    Raises
-    ------
-    ExportError
-        One line, when ``scale`` and the densities give a mass that is no
-        positive finite number.
-    """
-    cfg = config or LammpsConfig()
-    solids = placed_solids(packing, "lammps", spheres=True)
-    if not solids or any(p.rounding <= 0 or len(p.loops) for p in solids):
-        return None
-    index = np.array([p.index for p in solids], dtype=np.int64)
-    box = packing.domain
-    lo, hi = box.bounds().reshape(3, 2).T * scale
-    position = np.array([p.centre for p in solids], dtype=np.float64) * scale
-    if box.periodic:
-        position = lo + np.mod(position - lo, hi - lo)
-    radius = np.array([p.rounding for p in solids], dtype=np.float64) * scale
-    density = mineral_densities(packing, cfg)[packing.mineral[index]]
-    with np.errstate(over="ignore", under="ignore"):  # checked below
-        mass = 4.0 / 3.0 * np.pi * radius**3 * density
-    _check_finite(f"length_scale = {scale}, density = {_density_note(cfg)}", [("mass", mass)])
-    return GranularSpheres(index, radius, position, density, scale, lo, hi, box.periodic)
-
-
 class LammpsExporter(Exporter[AnyPacking]):
     """LAMMPS data file (``atom_style body rounded/polygon`` or ``rounded/polyhedron``) and script.
 
@@ -848,7 +729,7 @@ class LammpsExporter(Exporter[AnyPacking]):
         if packing.dimension == 3 and cfg.spheres == "granular":
             spheres = granular_spheres(packing, cfg, s)
             if spheres is not None:
-                _write_text(path, self._sphere_data(packing, spheres))
+                _write_text(path, sphere_data(packing, spheres, cfg, "LAMMPS", "sphere"))
                 _write_text(script_path(path), self._sphere_script(packing, path, spheres))
                 return path
         if packing.dimension == 3:
@@ -905,33 +786,6 @@ class LammpsExporter(Exporter[AnyPacking]):
         ]
         return "\n".join(lines) + "\n"
 
-    def _sphere_data(self, packing: AnyPacking, g: GranularSpheres) -> str:
-        n = g.index.size
-        n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
-        atoms = [
-            f"{k + 1} {int(packing.mineral[j]) + 1} {_num(2.0 * g.radius[k])} "
-            f"{_num(g.density[k])} " + " ".join(_num(x) for x in g.position[k])
-            for k, j in enumerate(g.index.tolist())
-        ]
-        lines = [
-            f"LAMMPS data file from regopack {packing.version}: scene "
-            f"{packing.scene.get('name', '?')}, seed {packing.seed}, atom_style sphere",
-            "",
-            "# granular spheres: id, atom type (mineral index + 1), diameter, density, centre",
-            f"# lengths = packing lengths ({length_unit(packing)}) x {_num(g.scale)}; "
-            f"mass = sphere volume x {_density_note(self.config)}",
-            "",
-            f"{n} atoms",
-            f"{n_types} atom types",
-            "",
-            *(f"{_num(g.lo[i])} {_num(g.hi[i])} {a}lo {a}hi" for i, a in enumerate("xyz")),
-            "",
-            "Atoms # sphere",
-            "",
-            *atoms,
-        ]
-        return "\n".join(lines) + "\n"
-
     def _sphere_script(self, packing: AnyPacking, path: Path, g: GranularSpheres) -> str:
         cfg = self.config
         model = (
@@ -958,11 +812,7 @@ class LammpsExporter(Exporter[AnyPacking]):
                 f"variable e_n   index {_num(cfg.restitution)}   # coefficient of restitution",
                 f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
                 f"variable g     index {_num(cfg.gravity)}   # gravity along -z (acceleration)",
-                f"variable r_rho equal {_num(g.r_rho)}   "
-                "# radius x sqrt(density) of the sphere of shortest Rayleigh time",
-                "variable G     equal v_E/(2*(1+v_nu))   # shear modulus",
-                f"variable dt    equal {RAYLEIGH_FRACTION}*PI*v_r_rho/sqrt(v_G)"
-                "/(0.1631*v_nu+0.8766)   # of its Rayleigh time",
+                *rayleigh_step_lines(g.r_rho),
                 f"variable skin  equal {_num(0.1 * g.d_min)}",
                 "",
                 f"units        {cfg.units}",
