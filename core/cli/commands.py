@@ -197,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FORMAT",
         help=(
             "exporter name: vtk, lammps, gsd (2D and 3D packings); csv, json, svg, image "
-            "(2D packings); stl, slice (3D packings); or one from a plugin"
+            "(2D packings); stl, slice, liggghts (3D packings); or one from a plugin"
         ),
     )
     export.add_argument(

@@ -1,7 +1,7 @@
-"""Built-in exporters: VTK and LAMMPS (2D and 3D), CSV, JSON and SVG (2D), STL and slice (3D).
+"""Built-in exporters: VTK and LAMMPS (2D and 3D), CSV, JSON, SVG (2D), STL, slice, LIGGGHTS (3D).
 
 Each format lives in its own module: :mod:`.vtk_export`, :mod:`.lammps_export`,
-:mod:`.csv_export`, :mod:`.json_export`, :mod:`.svg_export`,
+:mod:`.liggghts_export`, :mod:`.csv_export`, :mod:`.json_export`, :mod:`.svg_export`,
 :mod:`.stl_export` and :mod:`.slice_export` (what they share is in
 :mod:`.export_common`, and for 3D packings in :mod:`.solid_export_common`);
 ``gsd`` and ``image`` register themselves. This module registers them and
@@ -33,6 +33,7 @@ from regopack.plugins.exporters.export_common import EXPORT_FORMAT_VERSION as EX
 from regopack.plugins.exporters.export_common import both_dimensions
 from regopack.plugins.exporters.json_export import JSON_FORMAT, JsonConfig, JsonExporter, read_json
 from regopack.plugins.exporters.lammps_export import LammpsConfig, LammpsExporter
+from regopack.plugins.exporters.liggghts_export import LiggghtsConfig, LiggghtsExporter
 from regopack.plugins.exporters.rounded_bodies import polygon_moments as polygon_moments
 from regopack.plugins.exporters.slice_export import SliceConfig, SliceExporter
 from regopack.plugins.exporters.stl_export import StlConfig, StlExporter
@@ -50,6 +51,8 @@ __all__ = [
     "JsonExporter",
     "LammpsConfig",
     "LammpsExporter",
+    "LiggghtsConfig",
+    "LiggghtsExporter",
     "SliceConfig",
     "SliceExporter",
     "StlConfig",
@@ -86,6 +89,14 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             LammpsExporter,
             "LAMMPS data file (body rounded/polygon or rounded/polyhedron) and an input script "
             "that runs it.",
+        ),
+        ExporterSpec(
+            "liggghts",
+            LiggghtsConfig,
+            LiggghtsExporter,
+            "3D packings of spheres: LIGGGHTS data file (atom_style granular) and an input "
+            "script that runs it.",
+            dimensions=(3,),
         ),
         ExporterSpec(
             "stl",

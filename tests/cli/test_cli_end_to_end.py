@@ -46,6 +46,7 @@ def test_default_registry_has_the_builtins():
         "image",
         "json",
         "lammps",
+        "liggghts",
         "slice",
         "stl",
         "svg",

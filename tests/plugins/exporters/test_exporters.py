@@ -273,6 +273,7 @@ def test_the_plugin_registers_each_format_module_under_its_name():
         csv_export,
         json_export,
         lammps_export,
+        liggghts_export,
         slice_export,
         stl_export,
         svg_export,
@@ -286,6 +287,13 @@ def test_the_plugin_registers_each_format_module_under_its_name():
         ("svg", svg_export.SvgConfig, svg_export.SvgExporter, (2,), ()),
         ("vtk", vtk_export.VtkConfig, vtk_export.VtkExporter, (2, 3), ("vtk3d",)),
         ("lammps", lammps_export.LammpsConfig, lammps_export.LammpsExporter, (2, 3), ("lammps3d",)),
+        (
+            "liggghts",
+            liggghts_export.LiggghtsConfig,
+            liggghts_export.LiggghtsExporter,
+            (3,),
+            (),
+        ),
         ("stl", stl_export.StlConfig, stl_export.StlExporter, (3,), ()),
         ("slice", slice_export.SliceConfig, slice_export.SliceExporter, (3,), ()),
     ]
