@@ -196,7 +196,7 @@ def build_parser() -> argparse.ArgumentParser:
         required=True,
         metavar="FORMAT",
         help=(
-            "exporter name: vtk, lammps, gsd (2D and 3D packings); csv, json, svg, image "
+            "exporter name: vtk, lammps, gsd, image (2D and 3D packings); csv, json, svg "
             "(2D packings); stl, slice, liggghts (3D packings); or one from a plugin"
         ),
     )
