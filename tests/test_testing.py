@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from pydantic import ValidationError
 
 from regopack.geometry.population import ShapeBatch
 from regopack.plugins.density.eta import EtaConfig, EtaController
@@ -65,10 +66,14 @@ def test_every_registered_plugin_with_defaults_keeps_its_contract():
             spec = registry.get(kind, name)
             if any(f.is_required() for f in spec.config_model.model_fields.values()):
                 continue  # needs parameters we cannot guess (e.g. a file)
+            try:
+                built = spec.build({})
+            except ValidationError:
+                continue  # no defaults alone (a density target needs its value)
             if getattr(spec, "dimension", 2) == 3:
-                check_solid_generator(spec.build({}))
+                check_solid_generator(built)
             else:
-                check(spec.build({}))
+                check(built)
             checked.append(name)
     assert {"octagon", "change5", "eta", "sphere"} <= set(checked)
 

@@ -147,6 +147,8 @@ def analysis_summary(
     if eta is None:
         density = packing.scene.get("density")
         eta = density.get("eta") if isinstance(density, dict) else None
+    if eta is None:
+        eta = packing.stats.get("eta")  # the eta a density target chose
     summary: dict[str, Any] = {
         "regopack_version": __version__,
         "packing": None if packing_path is None else str(packing_path),

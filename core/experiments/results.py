@@ -43,8 +43,8 @@ DEFAULT_METRICS: tuple[str, ...] = (
 """Summary keys collected when an experiment lists no ``metrics``.
 
 The scalar results of the analyses a scene lists are added as
-``analyses.<name>.<key>``, and those of the summary's ``verify``, ``voids``
-and ``fabric`` blocks as ``<block>.<key>``.
+``analyses.<name>.<key>``, and those of the summary's ``verify``, ``voids``,
+``fabric`` and ``density_target`` blocks as ``<block>.<key>``.
 """
 
 RESULTS_CSV = "results.csv"
@@ -149,7 +149,7 @@ def _collect(summary: Mapping[str, Any], metrics: Sequence[str] | None) -> dict[
     if metrics is not None:
         return {m: _lookup(summary, m) for m in metrics}
     out = {m: summary.get(m) for m in DEFAULT_METRICS}
-    for group in ("verify", "voids", "fabric"):
+    for group in ("verify", "voids", "fabric", "density_target"):
         values = summary.get(group)
         if isinstance(values, Mapping):
             for key, value in values.items():

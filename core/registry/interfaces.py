@@ -204,6 +204,10 @@ class InsertionResult:
 class InsertionStrategy(ABC):
     """Algorithm that places a population inside a domain without overlaps."""
 
+    steered_by_density: ClassVar[bool] = True
+    """Whether the density controller changes what :meth:`pack` places (a
+    density target needs it; a strategy that ignores the controller says False)."""
+
     @abstractmethod
     def pack(
         self,

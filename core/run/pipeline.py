@@ -350,6 +350,16 @@ def check_inserter(scene: ResolvedScene) -> None:
     density = scene.density.kind
     controller: DensityController = _build(scene.density, DensityController, "density")
     if isinstance(controller, DensityTarget):  # the inserter packs with the one it chooses
+        if not inserter.steered_by_density:
+            raise ConfigError(
+                _located(
+                    scene,
+                    "density.kind",
+                    f"a density target chooses a controller by packing, and insertion "
+                    f"{scene.insertion.kind!r} places particles without one",
+                    scene.density.kind,
+                )
+            )
         density = controller.controls
     conflict = inserter.scene_conflict(tuple(phase.shape.kind for phase in scene.phases), density)
     if conflict is not None:
@@ -717,14 +727,19 @@ def _search_density(
                 f"{search.tries[search.chosen]['phi']:.4f} (raise density.packings or "
                 "density.tolerance)"
             ),
-            stacklevel=2,
+            stacklevel=1,
         )
-    return best[2], best[3], search
+    packing: Packing = best[3]
+    # the chosen controller's parameters (eta) travel with the packing, for its analyses
+    chosen = {k: v for k, v in search.tries[search.chosen].items() if k != "phi"}
+    packing.stats.update(chosen)
+    return best[2], packing, search
 
 
 def _target_summary(target: DensityTarget, search: DensitySearch) -> dict[str, Any]:
     """Return the summary's ``density_target`` block: the goal, what was reached, the tries."""
     return {
+        **{k: v for k, v in search.tries[search.chosen].items() if k != "phi"},
         "phi": target.phi,
         "of": target.measure,
         "tolerance": target.tolerance,

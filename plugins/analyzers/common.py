@@ -82,9 +82,15 @@ def interior_mask(packing: Packing, margin: float) -> NDArray[np.bool_]:
 
 
 def eta_of(packing: Packing) -> float | None:
-    """Return the packing control coefficient of the run, when the scene used one."""
+    """Return the packing control coefficient of the run, when the scene used one.
+
+    The scene's ``density.eta``, or the η a density target chose (the
+    packing's stat ``eta``).
+    """
     density = packing.scene.get("density", {}) if isinstance(packing.scene, dict) else {}
     value = density.get("eta") if isinstance(density, dict) else None
+    if value is None:
+        value = packing.stats.get("eta")
     return float(value) if value is not None else None
 
 

@@ -15,9 +15,8 @@ whoever draws. For any other bit generator, or a state laid out otherwise
 than checked, it returns the Generator itself. :func:`uniform` draws from
 either inside a kernel (numba compiles it for the type it is given).
 
-The view does not hold the Generator: whoever draws through it keeps the
-Generator alive (its memory goes with it). Like the Generator's own compiled
-use, it takes no lock: one thread draws.
+The view holds the Generator (its memory lives as long as the view). Like
+the Generator's own compiled use, it takes no lock: one thread draws.
 """
 
 from __future__ import annotations
@@ -56,7 +55,9 @@ def _pcg64_words(rng: np.random.Generator) -> UInt64Array | None:
     address = ctypes.c_void_p.from_address(bit.ctypes.state_address).value
     if not address:
         return None
-    view: UInt64Array = np.ctypeslib.as_array((ctypes.c_uint64 * 4).from_address(address))
+    words = (ctypes.c_uint64 * 4).from_address(address)
+    words.generator = rng  # type: ignore[attr-defined]  # the view's base holds it
+    view: UInt64Array = np.ctypeslib.as_array(words)
     state = bit.state["state"]
     expected = [
         state["state"] % _WORD,

@@ -149,19 +149,22 @@ class TargetController(DensityTarget):
                 )
             return phi
 
+        def near(f: float) -> bool:  # within the tolerance, a rounding of it included
+            return abs(f) <= tol + 1e-12
+
         def done(k: int) -> DensitySearch:
-            return DensitySearch(k, tries, abs(tries[k]["phi"] - target) <= tol)
+            return DensitySearch(k, tries, near(tries[k]["phi"] - target))
 
         what = f"phi {self.measure} {target:.4g}"
         a, fa = 0.0, pack(0.0) - target
-        if abs(fa) <= tol:
+        if near(fa):
             return done(0)
         if fa < 0.0:
             raise self._refuse(
                 f"{what} is above the densest this scene packs, {tries[0]['phi']:.4f} at eta = 0"
             )
         b, fb = cfg.eta_max, pack(cfg.eta_max) - target
-        if abs(fb) <= tol:
+        if near(fb):
             return done(1)
         if fb > 0.0:
             raise self._refuse(
@@ -175,7 +178,7 @@ class TargetController(DensityTarget):
             if not (a < eta < b):  # rounding at a bracket narrower than eta can resolve
                 eta = 0.5 * (a + b)
             f = pack(eta) - target
-            if abs(f) <= tol:
+            if near(f):
                 return done(len(tries) - 1)
             if f > 0.0:  # still too dense: the root lies above eta
                 a, fa = eta, f

@@ -481,6 +481,9 @@ def _prepare(population: Population, domain: PlaneDomain) -> tuple[Outlines, Gri
 class RandomSequentialAddition(InsertionStrategy):
     """Random sequential addition with rejection; see the module docstring.
 
+    It places particles without the density controller
+    (:attr:`steered_by_density` is False).
+
     Examples
     --------
     >>> import numpy as np
@@ -496,6 +499,8 @@ class RandomSequentialAddition(InsertionStrategy):
     >>> int(out.placed.sum())
     3
     """
+
+    steered_by_density = False
 
     def __init__(self, config: RsaConfig) -> None:
         self.config = config

@@ -65,3 +65,14 @@ def test_pcg64_double_is_the_53_high_bits_of_the_xsl_rr_output() -> None:
         out = ((x >> rot) | (x << ((64 - rot) & 63))) & word
         assert pcg64_double(words) == (out >> 11) * 2.0**-53
     assert int(words[0]) == s & word and int(words[1]) == s >> 64
+
+
+def test_the_view_holds_its_generator() -> None:
+    import gc
+
+    source = kernel_source(np.random.default_rng(7))  # the Generator itself is dropped here
+    gc.collect()
+    others = [np.random.PCG64(k) for k in range(200)]  # would take its memory if it were freed
+    states = [bit.state for bit in others]
+    assert np.array_equal(_draws(source, 10), np.random.default_rng(7).random(10))
+    assert [bit.state for bit in others] == states

@@ -177,6 +177,39 @@ def test_three_targets_are_met_in_2d(target: str) -> None:
     assert again["placed"] == summary["placed"]
 
 
+def test_the_chosen_eta_goes_with_the_packing_to_its_analyses() -> None:
+    target = "density={kind = 'target', phi = 0.80}"
+    summary = _run(
+        "small", ["domain.width=120", "domain.height=120", target, "outputs.analyses=['density']"]
+    )
+    assert (
+        summary["analyses"]["density"]["eta"] == summary["eta"] == summary["density_target"]["eta"]
+    )
+
+
+def test_results_of_a_sweep_hold_the_target_block() -> None:
+    from regopack.experiments.results import _collect
+
+    summary = _run(
+        "small", ["domain.width=120", "domain.height=120", "density={kind = 'target', phi = 0.80}"]
+    )
+    row = _collect(summary, None)
+    assert row["density_target.met"] is True and row["density_target.eta"] == summary["eta"]
+
+
+def test_an_inserter_without_a_density_controller_refuses_a_target(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    argv = ["run", "small", "--set", "insertion={kind = 'rsa'}", "--quiet"]
+    argv += ["--set", "density={kind = 'target', phi = 0.5}"]
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        assert main(argv) == 2
+    [line] = err.getvalue().splitlines()
+    assert "density.kind" in line and "insertion 'rsa' places particles without one" in line
+
+
 def test_a_target_is_met_in_3d() -> None:
     dims = ["domain.width=30", "domain.height=30", "domain.depth=30", "size.d_max=12"]
     summary = _run("dem3d", [*dims, "density={kind = 'target', phi = 0.40, tolerance = 0.005}"])
