@@ -33,6 +33,7 @@ __all__ = [
     "default_length_scale",
     "density_note",
     "granular_spheres",
+    "material_variable_lines",
     "mineral_densities",
     "rayleigh_step_lines",
     "sphere_data",
@@ -216,6 +217,29 @@ def sphere_data(
         *atoms,
     ]
     return "\n".join(lines) + "\n"
+
+
+class Materials(Protocol):
+    """The contact and run fields of a granular exporter's configuration."""
+
+    steps: int
+    youngs_modulus: float
+    poisson_ratio: float
+    restitution: float
+    friction: float
+    gravity: float
+
+
+def material_variable_lines(cfg: Materials) -> list[str]:
+    """Script lines that set the run's length and the contact variables, each changeable by -var."""
+    return [
+        f"variable steps index {cfg.steps}",
+        f"variable E     index {_num(cfg.youngs_modulus)}   # Young's modulus (pressure)",
+        f"variable nu    index {_num(cfg.poisson_ratio)}   # Poisson's ratio",
+        f"variable e_n   index {_num(cfg.restitution)}   # coefficient of restitution",
+        f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
+        f"variable g     index {_num(cfg.gravity)}   # gravity along -z (acceleration)",
+    ]
 
 
 def rayleigh_step_lines(r_rho: float, fraction: float = RAYLEIGH_FRACTION) -> list[str]:

@@ -78,8 +78,12 @@ from regopack.plugins.exporters.granular_common import check_finite as _check_fi
 from regopack.plugins.exporters.granular_common import default_length_scale as default_length_scale
 from regopack.plugins.exporters.granular_common import density_note as _density_note
 from regopack.plugins.exporters.granular_common import granular_spheres as granular_spheres
+from regopack.plugins.exporters.granular_common import (
+    material_variable_lines,
+    rayleigh_step_lines,
+    sphere_data,
+)
 from regopack.plugins.exporters.granular_common import mineral_densities as mineral_densities
-from regopack.plugins.exporters.granular_common import rayleigh_step_lines, sphere_data
 from regopack.plugins.exporters.rounded_bodies import (
     CLEAN_TOLERANCE,
     clean_outline,
@@ -806,12 +810,7 @@ class LammpsExporter(Exporter[AnyPacking]):
                 "# Domain: "
                 + ("periodic in x, y and z." if g.periodic else "walls on all six sides."),
                 "",
-                f"variable steps index {cfg.steps}",
-                f"variable E     index {_num(cfg.youngs_modulus)}   # Young's modulus (pressure)",
-                f"variable nu    index {_num(cfg.poisson_ratio)}   # Poisson's ratio",
-                f"variable e_n   index {_num(cfg.restitution)}   # coefficient of restitution",
-                f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
-                f"variable g     index {_num(cfg.gravity)}   # gravity along -z (acceleration)",
+                *material_variable_lines(cfg),
                 *rayleigh_step_lines(g.r_rho),
                 f"variable skin  equal {_num(0.1 * g.d_min)}",
                 "",

@@ -51,6 +51,7 @@ from regopack.plugins.exporters.granular_common import (
     GranularSpheres,
     default_length_scale,
     granular_spheres,
+    material_variable_lines,
     rayleigh_step_lines,
     sphere_data,
 )
@@ -250,12 +251,7 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
                 f"# At the end: {dump_path(path).name}, id type x y z radius mass and the "
                 "displacement from the packing (dx dy dz |d|).",
                 "",
-                f"variable steps index {cfg.steps}",
-                f"variable E     index {_num(cfg.youngs_modulus)}   # Young's modulus (pressure)",
-                f"variable nu    index {_num(cfg.poisson_ratio)}   # Poisson's ratio",
-                f"variable e_n   index {_num(cfg.restitution)}   # coefficient of restitution",
-                f"variable mu    index {_num(cfg.friction)}   # friction coefficient",
-                f"variable g     index {_num(cfg.gravity)}   # gravity along -z (acceleration)",
+                *material_variable_lines(cfg),
                 *rayleigh_step_lines(g.r_rho, cfg.rayleigh_fraction),
                 f"variable skin  equal {_num(0.1 * g.d_min)}",
                 "",

@@ -83,9 +83,11 @@ def placed_solids(packing: Packing[Box], exporter: str, spheres: bool = False) -
     for j in np.flatnonzero(packing.placed).tolist():
         local, loops = solids.solid(j)
         if rho[j] > 0 and not (spheres and not loops):
+            what = "a rounded polyhedron" if loops else "a sphere"
+            allowed = "sharp polyhedra and spheres" if spheres else "sharp polyhedra"
             raise ExportError(
-                f"particle {j}: a sphere; the {exporter} export writes sharp polyhedra only"
-                + ("" if spheres else " (gsd and lammps write spheres)")
+                f"particle {j}: {what}; the {exporter} export writes {allowed} only"
+                + ("" if spheres or loops else " (gsd, lammps and liggghts write spheres)")
             )
         out.append(PlacedSolid(int(j), local, loops, packing.centre[j], float(rho[j])))
     return out

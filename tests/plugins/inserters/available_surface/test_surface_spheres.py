@@ -10,6 +10,7 @@ import pytest
 
 import regopack
 from regopack.base.errors import ConfigError
+from regopack.plugins.common.kernel_random import kernel_source
 from regopack.plugins.inserters.available_surface.spheres import free_arcs, is_free, sample_free
 
 
@@ -23,7 +24,7 @@ def test_a_hemisphere_cap_leaves_free_arcs_and_uniform_points_on_the_rest() -> N
     caps = _caps([(0, 0, 1, 0.0)])  # covers z > 0 on the unit sphere
     arcs = free_arcs(caps, 1, 1.0, 1e-12)
     assert arcs.shape == (1, 3) and arcs[0, 2] - arcs[0, 1] == pytest.approx(2 * math.pi)
-    rng = np.random.default_rng(5)
+    rng = kernel_source(np.random.default_rng(5))  # the kernels' own source
     z = np.array([sample_free(caps, 1, arcs, 1.0, 1e-12, rng)[2] for _ in range(4000)])
     assert np.all(z <= 1e-12)
     # uniform by area on a sphere: the height is uniform (Archimedes), here on [-1, 0]
@@ -43,7 +44,7 @@ def test_caps_that_cover_the_sphere_leave_no_arc_and_a_gap_is_found() -> None:
     caps = _caps(walls)
     arcs = free_arcs(caps, 6, 1.0, 1e-12)
     assert arcs.shape[0] > 0
-    rng = np.random.default_rng(1)
+    rng = kernel_source(np.random.default_rng(1))  # the kernels' own source
     for _ in range(20):
         u = sample_free(caps, 6, arcs, 1.0, 1e-12, rng)
         assert is_free(caps, 6, *u, 1e-12)
@@ -80,7 +81,7 @@ def test_a_free_set_pinched_at_the_middle_of_every_free_arc_is_found() -> None:
     arcs = free_arcs(caps, 6, 1.0, 1e-12)
     assert arcs.shape[0] > 0
     for _ in range(20):
-        assert is_free(caps, 6, *sample_free(caps, 6, arcs, 1.0, 1e-12, rng), 1e-12)
+        assert is_free(caps, 6, *sample_free(caps, 6, arcs, 1.0, 1e-12, kernel_source(rng)), 1e-12)
 
 
 def scene(**changes: Any) -> dict[str, Any]:
@@ -208,7 +209,7 @@ def test_a_small_free_corner_is_sampled_uniformly_by_area_from_its_cap() -> None
     arcs = free_arcs(caps, 3, 1.0, 1e-12)
     *_, cos_max = bounding_cap(caps, 3, arcs, 1.0, 1e-12)
     assert cos_max > 0.98  # a cap much smaller than the sphere
-    rng = np.random.default_rng(9)
+    rng = kernel_source(np.random.default_rng(9))  # the kernels' own source
     got = np.array([sample_free(caps, 3, arcs, 1.0, 1e-12, rng) for _ in range(3000)])
     assert np.all(got @ caps[:, :3].T <= caps[:, 3] + 1e-12)
     for axis in range(3):  # the same distribution as uniform points filtered by the caps
@@ -224,7 +225,7 @@ def test_free_pieces_on_opposite_sides_make_the_whole_sphere_the_cap() -> None:
     arcs = free_arcs(caps, 8, 1.0, 1e-12)
     *_, cos_max = bounding_cap(caps, 8, arcs, 1.0, 1e-12)
     assert cos_max == -1.0
-    rng = np.random.default_rng(4)
+    rng = kernel_source(np.random.default_rng(4))  # the kernels' own source
     z = np.array([sample_free(caps, 8, arcs, 1.0, 1e-12, rng)[2] for _ in range(400)])
     assert 120 < np.count_nonzero(z > 0) < 280  # both pieces, about equally
 
@@ -234,7 +235,7 @@ def test_the_rest_of_a_sphere_beyond_a_small_cap_is_sampled_whole() -> None:
     # the point opposite the arcs' axis tells so
     caps = _caps([(0, 0, 1, 0.9)])
     arcs = free_arcs(caps, 1, 1.0, 1e-12)
-    rng = np.random.default_rng(2)
+    rng = kernel_source(np.random.default_rng(2))  # the kernels' own source
     z = np.array([sample_free(caps, 1, arcs, 1.0, 1e-12, rng)[2] for _ in range(2000)])
     assert np.all(z <= 0.9 + 1e-12)
     counts, _ = np.histogram(z, bins=10, range=(-1.0, 0.9))
@@ -280,8 +281,8 @@ def test_dropping_contained_caps_changes_no_arc_and_no_drawn_centre(seed: int) -
     for x in u:
         assert is_free(caps, n, *x, tau) == is_free(kept, m, *x, tau)
     if before.shape[0]:
-        a = sample_free(caps, n, before, big_r, tau, np.random.default_rng(seed))
-        b = sample_free(kept, m, after, big_r, tau, np.random.default_rng(seed))
+        a = sample_free(caps, n, before, big_r, tau, kernel_source(np.random.default_rng(seed)))
+        b = sample_free(kept, m, after, big_r, tau, kernel_source(np.random.default_rng(seed)))
         assert a == b
 
 
