@@ -272,6 +272,7 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "cli/test_cli_end_to_end.py",
         "run/test_compilation.py",
         "test_howto_export.py",
+        "plugins/density/test_target.py",
         "test_benchmarks_suite.py",
     ),
 )
