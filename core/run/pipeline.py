@@ -628,14 +628,15 @@ def _run(
         return result, packing
 
     search: DensitySearch | None = None
+    interior: tuple[float, str] | None = None
     if isinstance(controller, DensityTarget):
-        result, packing, search = _search_density(resolved, controller, pack_with, margin)
+        result, packing, search, interior = _search_density(resolved, controller, pack_with, margin)
     else:
         result, packing = pack_with(controller)
     times = compiling.run_times(time.perf_counter() - start)  # now, before any later compiling
 
     n_placed = packing.n_placed
-    phi_interior, note = _phi_interior(packing, margin)
+    phi_interior, note = interior if interior is not None else _phi_interior(packing, margin)
     summary: dict[str, Any] = {
         "scene": resolved.name,
         "seed": resolved.seed,
@@ -692,21 +693,25 @@ def _search_density(
     target: DensityTarget,
     pack_with: Callable[[DensityController], tuple[InsertionResult, Packing]],
     margin: float,
-) -> tuple[InsertionResult, Packing, DensitySearch]:
+) -> tuple[InsertionResult, Packing, DensitySearch, tuple[float, str] | None]:
     """Pack ``resolved`` as often as ``target``'s search asks; return the packing it keeps.
+
+    The last item is the kept packing's interior fraction and note when the
+    search measured them (``None`` when it measured the domain's).
 
     The search keeps the packing closest to ``target.phi`` (the first one
     within the tolerance ends it); only the closest so far is held.
     """
-    best: list[Any] = []  # [distance, index, result, packing]
+    best: list[Any] = []  # [distance, index, result, packing, interior fraction and note]
     count = 0
 
     def probe(ctl: DensityController) -> float:
         nonlocal count
         result, packing = pack_with(ctl)
-        phi = packing.phi if target.measure == "domain" else _phi_interior(packing, margin)[0]
+        interior = None if target.measure == "domain" else _phi_interior(packing, margin)
+        phi = packing.phi if interior is None else interior[0]
         if not math.isnan(phi) and (not best or abs(phi - target.phi) < best[0]):
-            best[:] = [abs(phi - target.phi), count, result, packing]
+            best[:] = [abs(phi - target.phi), count, result, packing, interior]
         count += 1
         return phi
 
@@ -733,7 +738,7 @@ def _search_density(
     # the chosen controller's parameters (eta) travel with the packing, for its analyses
     chosen = {k: v for k, v in search.tries[search.chosen].items() if k != "phi"}
     packing.stats.update(chosen)
-    return best[2], packing, search
+    return best[2], packing, search, best[4]
 
 
 def _target_summary(target: DensityTarget, search: DensitySearch) -> dict[str, Any]:
