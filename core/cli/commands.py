@@ -184,7 +184,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     export = sub.add_parser(
         "export",
-        help="write a packing for LAMMPS, HOOMD-blue (GSD), VTK, image tools, CSV, JSON or SVG",
+        help="write a packing for LAMMPS, LIGGGHTS, YADE, GSD, VTK, image tools, CSV, JSON or SVG",
         description=(
             "Write a saved packing in another program's file format with an exporter "
             "plugin (see 'regopack plugins --kind export')."
@@ -197,7 +197,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="FORMAT",
         help=(
             "exporter name: vtk, lammps, gsd, image (2D and 3D packings); csv, json, svg "
-            "(2D packings); stl, slice, liggghts (3D packings); or one from a plugin"
+            "(2D packings); stl, slice, liggghts, yade (3D packings); or one from a plugin"
         ),
     )
     export.add_argument(

@@ -1,8 +1,8 @@
-"""Built-in exporters: VTK and LAMMPS (2D and 3D), CSV, JSON, SVG (2D), STL, slice, LIGGGHTS (3D).
+"""Built-in exporters: VTK, LAMMPS (2D, 3D), CSV, JSON, SVG (2D), STL, slice, LIGGGHTS, YADE (3D).
 
 Each format lives in its own module: :mod:`.vtk_export`, :mod:`.lammps_export`,
-:mod:`.liggghts_export`, :mod:`.csv_export`, :mod:`.json_export`, :mod:`.svg_export`,
-:mod:`.stl_export` and :mod:`.slice_export` (what they share is in
+:mod:`.liggghts_export`, :mod:`.yade_export`, :mod:`.csv_export`, :mod:`.json_export`,
+:mod:`.svg_export`, :mod:`.stl_export` and :mod:`.slice_export` (what they share is in
 :mod:`.export_common`, and for 3D packings in :mod:`.solid_export_common`);
 ``gsd`` and ``image`` register themselves. This module registers them and
 gathers their public names, so ``from regopack.plugins.exporters import
@@ -39,6 +39,7 @@ from regopack.plugins.exporters.slice_export import SliceConfig, SliceExporter
 from regopack.plugins.exporters.stl_export import StlConfig, StlExporter
 from regopack.plugins.exporters.svg_export import SvgConfig, SvgExporter
 from regopack.plugins.exporters.vtk_export import VtkConfig, VtkExporter
+from regopack.plugins.exporters.yade_export import YadeConfig, YadeExporter
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.plugin_types import ExporterSpec
 
@@ -61,6 +62,8 @@ __all__ = [
     "SvgExporter",
     "VtkConfig",
     "VtkExporter",
+    "YadeConfig",
+    "YadeExporter",
     "companion_paths",
     "read_csv",
     "read_json",
@@ -96,6 +99,14 @@ def regopack_exporters() -> Iterable[ExporterSpec]:
             LiggghtsExporter,
             "3D packings of spheres: LIGGGHTS data file (atom_style granular) and an input "
             "script that runs it.",
+            dimensions=(3,),
+        ),
+        ExporterSpec(
+            "yade",
+            YadeConfig,
+            YadeExporter,
+            "3D: a YADE script that builds every polyhedron and sphere as a body (with walls or "
+            "a periodic cell), and its bodies file.",
             dimensions=(3,),
         ),
         ExporterSpec(

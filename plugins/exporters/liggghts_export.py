@@ -65,7 +65,7 @@ __all__ = [
     "script_path",
 ]
 
-POLYHEDRA_EXPORTERS = "gsd, image, lammps, slice, stl, vtk"
+POLYHEDRA_EXPORTERS = "gsd, image, lammps, slice, stl, vtk, yade"
 """The built-in exporters that write 3D packings of polyhedra, named when one is refused."""
 
 

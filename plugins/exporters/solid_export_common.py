@@ -32,6 +32,9 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
+SPHERE_EXPORTERS = " (gsd, image, lammps, liggghts and yade write spheres)"
+"""What a refusal of spheres adds: the built-in exporters that write them."""
+
 _CANONICAL = (np.ones((3, 3)) + np.eye(3)) / 120.0
 """``∫ x xᵀ dV`` over the tetrahedron with vertices 0, e1, e2, e3 (its volume is 1/6)."""
 
@@ -87,7 +90,7 @@ def placed_solids(packing: Packing[Box], exporter: str, spheres: bool = False) -
             allowed = "sharp polyhedra and spheres" if spheres else "sharp polyhedra"
             raise ExportError(
                 f"particle {j}: {what}; the {exporter} export writes {allowed} only"
-                + ("" if spheres or loops else " (gsd, lammps and liggghts write spheres)")
+                + ("" if spheres or loops else SPHERE_EXPORTERS)
             )
         out.append(PlacedSolid(int(j), local, loops, packing.centre[j], float(rho[j])))
     return out

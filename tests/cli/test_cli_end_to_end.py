@@ -51,6 +51,7 @@ def test_default_registry_has_the_builtins():
         "stl",
         "svg",
         "vtk",
+        "yade",
     ]
     assert reg.aliases("export") == {"gsd3d": "gsd", "lammps3d": "lammps", "vtk3d": "vtk"}
     assert reg.origin("shape", "octagon") == "regopack.plugins.shapes.octagon"

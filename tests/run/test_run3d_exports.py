@@ -64,7 +64,7 @@ def test_a_2d_exporter_in_a_3d_scene_file_is_one_line(tmp_path, capsys) -> None:
     assert one_error_line(capsys) == (
         f"regopack: error: {path}: outputs.exports.1.kind = 'svg' is a 2D exporter, but "
         "domain.kind = 'box' makes the scene 3D; 3D exporters: gsd, image, lammps, liggghts, "
-        "slice, stl, vtk"
+        "slice, stl, vtk, yade"
     )
     assert not (tmp_path / "run").exists()
 

@@ -278,6 +278,7 @@ def test_the_plugin_registers_each_format_module_under_its_name():
         stl_export,
         svg_export,
         vtk_export,
+        yade_export,
     )
 
     specs = list(exporters.regopack_exporters())
@@ -294,6 +295,7 @@ def test_the_plugin_registers_each_format_module_under_its_name():
             (3,),
             (),
         ),
+        ("yade", yade_export.YadeConfig, yade_export.YadeExporter, (3,), ()),
         ("stl", stl_export.StlConfig, stl_export.StlExporter, (3,), ()),
         ("slice", slice_export.SliceConfig, slice_export.SliceExporter, (3,), ()),
     ]

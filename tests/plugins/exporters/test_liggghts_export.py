@@ -139,7 +139,7 @@ def test_wrong_parameters_are_refused(spheres, tmp_path) -> None:
 
 POLYHEDRA_REFUSED = (
     "exporter 'liggghts' writes packings of spheres alone (LIGGGHTS' granular atoms are "
-    "spheres), and this packing has polyhedra; polyhedra: gsd, image, lammps, slice, stl, vtk"
+    "spheres), and this packing has polyhedra; polyhedra: gsd, image, lammps, slice, stl, vtk, yade"
 )
 
 

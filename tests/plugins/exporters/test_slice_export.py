@@ -141,7 +141,7 @@ def test_a_2d_exporter_is_refused_in_one_line(packing_file, capsys) -> None:  # 
     line = one_error_line(capsys)
     assert line == (
         f"regopack: error: {packing_file}: exporter 'svg' writes 2D packings, and this is a "
-        "3D packing; 3D exporters: gsd, image, lammps, liggghts, slice, stl, vtk"
+        "3D packing; 3D exporters: gsd, image, lammps, liggghts, slice, stl, vtk, yade"
     )
 
 

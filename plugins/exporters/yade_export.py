@@ -1,0 +1,589 @@
+"""YADE export: a script that builds every placed particle as a YADE body, and its bodies.
+
+YADE (``yade -n -x packing.py``) runs Python scripts that build a scene and
+run it. A 3D packing is written as two files:
+
+- ``<stem>.bodies``: one line a body, ``index mineral n radius x1 y1 z1 …
+  xn yn zn`` — the particle's draw index, its mineral index, and either a
+  sphere (``n = 1``, its centre, ``radius > 0``) or a polyhedron (its ``n``
+  vertices in the packing's frame, ``radius = 0``);
+- ``<stem>.py``: the script. Its first lines set the parameters (one
+  material per mineral: density and friction; Young's modulus, Poisson's
+  ratio, damping, gravity, the time step's safety factor), each also
+  changeable on the command line (``--gravity 9.81``). It creates every
+  sphere as a ``Sphere`` and every polyhedron as a ``Polyhedra`` from its
+  exact vertices, the six walls of a walled box (axis-aligned ``Wall``
+  bodies) or YADE's periodic cell, and the engines the bodies need (and no
+  other): spheres meet through ``ScGeom``/``FrictPhys`` (linear springs with
+  Coulomb friction), polyhedra through YADE's volumetric law (a normal force
+  proportional to the volume of overlap). It runs nothing unless asked:
+  ``--run STEPS`` runs that many steps and then writes the bodies' final
+  state, ``<stem>.final.txt``; ``RUN_STEPS`` at the top does the same for a
+  user who runs it with ``exec`` from a script of their own, where
+  :func:`save_state` also writes the state at any time.
+
+Lengths are the packing's times ``length_scale``, by default converted to
+metres (YADE works in whatever consistent units it is given; the defaults
+here are SI: kg/m³, Pa, m/s²). The volumetric law's stiffness is a force per
+volume of overlap: the script gives the polyhedra ``young /
+volumetric_length``, ``volumetric_length`` being the packing's smallest
+equivalent diameter by default, so that a contact between the smallest
+grains is about as stiff as one between spheres of that size. The time step
+is ``dt_fraction`` of the shortest oscillation period a body can have on its
+stiffest contact: YADE's P-wave time step of the spheres, and
+``√(m / (k D²))`` of each polyhedron (mass ``m``, circumscribed diameter
+``D``, ``k`` the volumetric stiffness).
+
+The final state gives, for every body in draw order, its centroid, the
+displacement of its centroid and the rotation (a 3 × 3 matrix, row by row)
+from the packing to the end of the run, in the script's lengths;
+:func:`regopack.plugins.exporters.dem_states.read_yade_state` turns it back
+into a packing. 2D packings are refused in one line.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Annotated
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+
+from regopack.base.errors import ExportError
+from regopack.base.units import conversion, length_unit
+from regopack.geometry.domain import Box
+from regopack.packing.core import Packing
+from regopack.plugins.exporters.export_common import Analyses, _num, _write_text
+from regopack.plugins.exporters.granular_common import mineral_densities
+from regopack.plugins.exporters.solid_export_common import (
+    PlacedSolid,
+    mass_properties,
+    placed_solids,
+)
+from regopack.registry.interfaces import Exporter
+
+__all__ = ["STATE_FORMAT", "YadeConfig", "YadeExporter", "bodies_path", "state_path"]
+
+VERLET_FRACTION = 0.05
+"""Margin of YADE's collider (``verletDist``) as a fraction of the smallest equivalent diameter."""
+
+STATE_FORMAT = "regopack-yade-state 1"
+"""First line of the final state that the script writes."""
+
+
+def bodies_path(path: Path) -> Path:
+    """Return the bodies file written beside the script ``path``: ``<stem>.bodies``.
+
+    Examples
+    --------
+    >>> bodies_path(Path("runs/dem3d/packing.py")).as_posix()
+    'runs/dem3d/packing.bodies'
+    """
+    return Path(path).with_suffix(".bodies")
+
+
+def state_path(path: Path) -> Path:
+    """Return the final state the script writes after ``--run``: ``<stem>.final.txt``.
+
+    Examples
+    --------
+    >>> state_path(Path("runs/dem3d/packing.py")).as_posix()
+    'runs/dem3d/packing.final.txt'
+    """
+    return Path(path).with_suffix(".final.txt")
+
+
+class YadeConfig(BaseModel):
+    """Parameters of the YADE exporter (3D packings of polyhedra and spheres).
+
+    Every value is written at the top of the script, where it can be edited;
+    the command line of the script changes the run's (``--run``,
+    ``--gravity``, ``--young``, ``--damping``, ``--dt-fraction``). Lengths of
+    the packing are multiplied by ``length_scale``; by default it converts
+    the scene's ``length_unit`` to metres, and the other defaults are SI.
+    """
+
+    model_config = ConfigDict(extra="forbid", strict=True)
+
+    length_scale: float | None = Field(
+        None,
+        gt=0,
+        allow_inf_nan=False,
+        description=(
+            "Factor from the packing's length unit to the script's length unit; default: "
+            "the scene's length_unit in metres (1e-6 for 'µm')."
+        ),
+    )
+    density: float = Field(
+        3100.0,
+        gt=0,
+        allow_inf_nan=False,
+        description="Mass per unit volume of the grains (kg/m³ with the SI defaults).",
+    )
+    mineral_density: dict[str, Annotated[float, Field(gt=0, allow_inf_nan=False)]] = Field(
+        default_factory=dict,
+        description="Density of the grains of a mineral, by name; others get `density`.",
+    )
+    friction: float = Field(
+        0.5,
+        ge=0,
+        allow_inf_nan=False,
+        description="Coulomb friction coefficient of the grains and walls (no unit).",
+    )
+    mineral_friction: dict[str, Annotated[float, Field(ge=0, allow_inf_nan=False)]] = Field(
+        default_factory=dict,
+        description="Friction coefficient of the grains of a mineral, by name; others get "
+        "`friction`.",
+    )
+    youngs_modulus: float = Field(
+        1.0e8,
+        gt=0,
+        allow_inf_nan=False,
+        description=(
+            "Young's modulus E of the grains and walls (Pa with the SI defaults: 1e8 is a "
+            "softened grain, basalt has 7e10)."
+        ),
+    )
+    poisson_ratio: float = Field(
+        0.25, gt=0, lt=0.5, description="Poisson's ratio of the grains and walls (no unit)."
+    )
+    volumetric_length: float | None = Field(
+        None,
+        gt=0,
+        allow_inf_nan=False,
+        description=(
+            "Polyhedra: their contact stiffness per volume of overlap is E / volumetric_length "
+            "(in the script's lengths); default: the smallest equivalent diameter."
+        ),
+    )
+    damping: float = Field(
+        0.2,
+        ge=0,
+        lt=1,
+        description="Local (non-viscous) damping of YADE's NewtonIntegrator (no unit).",
+    )
+    gravity: float = Field(
+        0.0,
+        ge=0,
+        allow_inf_nan=False,
+        description="Acceleration of gravity along -z (m/s² with the SI defaults); 0: none.",
+    )
+    steps: int = Field(
+        0,
+        ge=0,
+        description="Steps the script runs after building the scene (0: it only builds it).",
+    )
+    dt_fraction: float = Field(
+        0.3,
+        gt=0,
+        le=1,
+        description=(
+            "Time step as a fraction of the shortest oscillation period of a body on its "
+            "stiffest contact (safety factor; no unit)."
+        ),
+    )
+
+
+class YadeExporter(Exporter[Packing[Box]]):
+    """YADE script (``<stem>.py``) and bodies file (``<stem>.bodies``) of a 3D packing.
+
+    See the module documentation for the files and the model.
+    """
+
+    suffix = ".py"
+
+    def __init__(self, config: YadeConfig | None = None) -> None:
+        self.config = config or YadeConfig()
+
+    def companions(self, path: Path) -> tuple[Path, ...]:
+        """Return the bodies file written beside the script."""
+        return (bodies_path(path),)
+
+    def export(self, packing: Packing[Box], path: Path, *, analyses: Analyses = None) -> Path:
+        """Write the script and the bodies file; return the script's path.
+
+        Raises
+        ------
+        ExportError
+            One line, when the packing is 2D, or has rounded polyhedra, or a
+            parameter gives a body no positive finite mass.
+        ConfigError
+            One line, when ``mineral_density`` or ``mineral_friction`` names a
+            mineral the packing does not have.
+        """
+        cfg = self.config
+        path = Path(path)
+        if packing.dimension != 3:
+            raise ExportError(
+                "exporter 'yade' writes 3D packings (polyhedra and spheres); 2D packings: csv, "
+                "gsd, image, json, lammps, svg, vtk"
+            )
+        scale = (
+            conversion(length_unit(packing), "m") if cfg.length_scale is None else cfg.length_scale
+        )
+        solids = placed_solids(packing, "yade", spheres=True)
+        names = [str(n) for n in packing.mineral_names]
+        density = mineral_densities(packing, cfg, "yade")
+        friction = _mineral_friction(packing, cfg)
+        diameters = [_equivalent_diameter(p) for p in solids]
+        d_min = min(diameters) if diameters else 1.0
+        kappa_length = cfg.volumetric_length or d_min * scale
+        masses = [
+            math.pi / 6.0 * d**3 * scale**3 * density[packing.mineral[p.index]]
+            for p, d in zip(solids, diameters, strict=True)
+        ]
+        if not all(math.isfinite(m) and m >= np.finfo(np.float64).tiny for m in masses):
+            raise ExportError(
+                f"exporter 'yade': length_scale = {scale} and the densities give a body no "
+                "positive finite mass; give values nearer 1"
+            )
+        if packing.domain.periodic:
+            _check_cell(packing, solids)
+        _write_text(bodies_path(path), _bodies_text(packing, solids, scale))
+        text = _script(
+            packing,
+            path,
+            cfg,
+            scale=scale,
+            names=names or ["grain"],
+            density=density,
+            friction=friction,
+            kappa_length=kappa_length,
+            verlet=VERLET_FRACTION * d_min * scale,
+            spheres=any(not p.loops for p in solids),
+            polyhedra=any(p.loops for p in solids),
+        )
+        _write_text(path, text)
+        return path
+
+
+def _check_cell(packing: Packing[Box], solids: list[PlacedSolid]) -> None:
+    """Refuse a periodic box in which a body is half a side across (YADE's cell refuses it)."""
+    side = np.diff(packing.domain.bounds().reshape(3, 2), axis=1)[:, 0]
+    d_min = min((_equivalent_diameter(p) for p in solids), default=0.0)
+    for p in solids:
+        points = p.world if p.loops else p.centre[None, :]
+        extent = points.max(axis=0) - points.min(axis=0) + 2.0 * p.rounding
+        extent += 2.0 * VERLET_FRACTION * d_min
+        if np.any(extent >= 0.5 * side):
+            axis = int(np.argmax(extent / side))
+            raise ExportError(
+                f"exporter 'yade': particle {p.index} is {extent[axis]:.6g} across along "
+                f"{'xyz'[axis]} with the collider's margin, not under half the periodic box's "
+                f"side ({side[axis]:.6g}), as YADE's periodic cell needs; use a larger box"
+            )
+
+
+def _mineral_friction(packing: Packing[Box], cfg: YadeConfig) -> list[float]:
+    """Friction coefficient of each mineral (the mineral index's entry)."""
+    from regopack.base.errors import ConfigError
+
+    names = [str(n) for n in packing.mineral_names]
+    unknown = sorted(set(cfg.mineral_friction) - set(names))
+    if unknown:
+        raise ConfigError(
+            f"exporter 'yade': mineral_friction names {unknown[0]!r}, not a mineral of this "
+            f"packing (its minerals: {', '.join(names)})"
+        )
+    n = max(1, len(names), int(packing.mineral.max(initial=-1)) + 1)
+    out = [cfg.friction] * n
+    for k, name in enumerate(names):
+        out[k] = cfg.mineral_friction.get(name, cfg.friction)
+    return out
+
+
+def _equivalent_diameter(p: PlacedSolid) -> float:
+    """Diameter of the sphere of the solid's volume."""
+    if not p.loops:
+        return 2.0 * p.rounding
+    volume = mass_properties(p.local, p.loops)[0]
+    return float((6.0 * volume / math.pi) ** (1.0 / 3.0))
+
+
+def _bodies_text(packing: Packing[Box], solids: list[PlacedSolid], scale: float) -> str:
+    """Text of the bodies file: ``index mineral n radius`` and the coordinates, a line a body.
+
+    The coordinates are the packing's times ``scale``, less the box's lower
+    corner in a periodic box (YADE's cell starts at the origin).
+    """
+    box = packing.domain
+    origin = box.bounds().reshape(3, 2)[:, 0] if box.periodic else np.zeros(3)
+    lines = [
+        f"# bodies of {packing.scene.get('name', '?')} (seed {packing.seed}), regopack "
+        f"{packing.version}: draw index, mineral index, vertices, radius, coordinates",
+        f"# coordinates = (packing lengths ({length_unit(packing)}) - origin) x {_num(scale)}, "
+        f"origin {' '.join(_num(x) for x in origin)}",
+    ]
+    for p in solids:
+        points = (p.centre[None, :] if not p.loops else p.world) - origin
+        coords = " ".join(_num(x) for x in (points * scale).ravel())
+        radius = p.rounding * scale if not p.loops else 0.0
+        lines.append(
+            f"{p.index} {int(packing.mineral[p.index])} {len(points)} {_num(radius)} {coords}"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def _dict_text(names: list[str], values: list[float] | np.ndarray) -> str:
+    """Return a Python dict literal of values by mineral name."""
+    return "{" + ", ".join(f"{n!r}: {_num(v)}" for n, v in zip(names, values, strict=False)) + "}"
+
+
+def _script(
+    packing: Packing[Box],
+    path: Path,
+    cfg: YadeConfig,
+    *,
+    scale: float,
+    names: list[str],
+    density: np.ndarray,
+    friction: list[float],
+    kappa_length: float,
+    verlet: float,
+    spheres: bool,
+    polyhedra: bool,
+) -> str:
+    """Text of the YADE script (see the module documentation)."""
+    box = packing.domain
+    lo, hi = box.bounds().reshape(3, 2).T
+    size = (hi - lo) * scale
+    lower = np.zeros(3) if box.periodic else lo * scale
+    upper = size if box.periodic else hi * scale
+    bounds = ", ".join(_num(x) for x in lower), ", ".join(_num(x) for x in upper)
+    unit = length_unit(packing)
+    engines = _engines(spheres, polyhedra)
+    head = [
+        f"# YADE scene of {bodies_path(path).name}, written by regopack {packing.version} "
+        f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+        f"# Build the scene and exit:    yade -n -x {path.name}",
+        f"# Build it and run 5000 steps: yade -n -x {path.name} --run 5000 [--gravity 9.81]",
+        f"#   (then {state_path(path).name}: every body's centroid, displacement and rotation)",
+        f"# From a YADE script of yours: exec(open({path.name!r}).read()), then O.run(...) and",
+        "#   save_state('state.txt'); it builds the scene and runs RUN_STEPS steps (0: none).",
+        f"# Lengths: packing lengths ({unit}) x {_num(scale)}"
+        + (
+            f", less the lower corner ({', '.join(_num(x) for x in lo)}) in the periodic box."
+            if box.periodic
+            else "."
+        ),
+        "",
+        "import argparse",
+        "import math",
+        "import os",
+        "import sys",
+        "",
+        "from yade import *  # noqa: F403 (O, the bodies, engines and materials)",
+        "from yade import polyhedra_utils, utils",
+        "",
+        f"RUN_STEPS = {cfg.steps}  # steps run after building (--run)",
+        f"GRAVITY = {_num(cfg.gravity)}  # acceleration along -z (--gravity)",
+        f"YOUNG = {_num(cfg.youngs_modulus)}  # Young's modulus of grains and walls (--young)",
+        f"POISSON = {_num(cfg.poisson_ratio)}  # Poisson's ratio",
+        f"DAMPING = {_num(cfg.damping)}  # NewtonIntegrator's local damping (--damping)",
+        f"DT_FRACTION = {_num(cfg.dt_fraction)}  # of the shortest period (--dt-fraction)",
+        f"VOLUMETRIC_LENGTH = {_num(kappa_length)}  # polyhedra: stiffness per overlap volume "
+        "YOUNG / VOLUMETRIC_LENGTH",
+        f"DENSITY = {_dict_text(names, density)}  # by mineral",
+        f"FRICTION = {_dict_text(names, friction)}  # Coulomb coefficient, by mineral",
+        f"WALL_FRICTION = {_num(cfg.friction)}",
+        f"VERLET = {_num(verlet)}  # the collider's margin: 5 % of the smallest diameter",
+        f"PERIODIC = {box.periodic}",
+        f"SPHERES = {spheres}  # bodies of each kind present",
+        f"POLYHEDRA = {polyhedra}",
+        f"LOWER = ({bounds[0]})  # box corners",
+        f"UPPER = ({bounds[1]})",
+        f"BODIES = {bodies_path(path).name!r}",
+        f"STATE = {state_path(path).name!r}",
+        f"STATE_FORMAT = {STATE_FORMAT!r}",
+        f"LENGTH_SCALE = {_num(scale)}",
+        "",
+    ]
+    return "\n".join(head) + _SCRIPT_BODY.replace("@ENGINES@", engines)
+
+
+def _engines(spheres: bool, polyhedra: bool) -> str:
+    """Return the script's engines: the functors the bodies present need, and no other."""
+    bounds = []
+    geoms = []
+    physics = []
+    laws = []
+    if spheres:
+        bounds.append("Bo1_Sphere_Aabb()")
+        geoms += ["Ig2_Sphere_Sphere_ScGeom()", "Ig2_Wall_Sphere_ScGeom()"]
+        physics.append("Ip2_FrictMat_FrictMat_FrictPhys()")
+        laws.append("Law2_ScGeom_FrictPhys_CundallStrack()")
+    if polyhedra:
+        bounds.append("Bo1_Polyhedra_Aabb()")
+        geoms += [
+            "Ig2_Polyhedra_Polyhedra_PolyhedraGeom()",
+            "Ig2_Wall_Polyhedra_PolyhedraGeom()",
+        ]
+        physics.append("Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()")
+        laws.append("Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()")
+    if spheres and polyhedra:
+        geoms.append("Ig2_Sphere_Polyhedra_ScGeom()")
+        physics.append("Ip2_FrictMat_PolyhedraMat_FrictPhys()")
+    bounds.append("Bo1_Wall_Aabb()")
+
+    def listed(items: list[str]) -> str:
+        return "[" + ", ".join(items) + "]"
+
+    return "\n".join(
+        [
+            "        ForceResetter(),",
+            f"        InsertionSortCollider({listed(bounds)}, verletDist=verlet),",
+            "        InteractionLoop(",
+            f"            {listed(geoms)},",
+            f"            {listed(physics)},",
+            f"            {listed(laws)},",
+            "        ),",
+            "        NewtonIntegrator(damping=DAMPING, gravity=(0, 0, -GRAVITY)),",
+        ]
+    )
+
+
+_SCRIPT_BODY = '''
+DRAW_INDEX = {}
+"""The packing's draw index of each body, by YADE body id."""
+
+
+def _options(argv):
+    """Read --run, --gravity, --young, --damping and --dt-fraction (other arguments are left)."""
+    parser = argparse.ArgumentParser(add_help=False)
+    parser.add_argument("--run", type=int, default=None)
+    parser.add_argument("--gravity", type=float, default=None)
+    parser.add_argument("--young", type=float, default=None)
+    parser.add_argument("--damping", type=float, default=None)
+    parser.add_argument("--dt-fraction", type=float, default=None)
+    return parser.parse_known_args(argv)[0]
+
+
+def _beside(name):
+    """A file beside this script when yade runs it, else in the working folder."""
+    folder = os.path.dirname(os.path.abspath(sys.argv[0])) if sys.argv and sys.argv[0] else ""
+    there = os.path.join(folder, name)
+    return there if folder and os.path.exists(there) else name
+
+
+def _material(polyhedra, friction, density, label):
+    """A material of spheres (FrictMat) or of polyhedra (PolyhedraMat), appended to O.materials."""
+    angle = math.atan(friction)
+    if polyhedra:
+        material = PolyhedraMat(young=YOUNG / VOLUMETRIC_LENGTH, poisson=POISSON,
+                                frictionAngle=angle, density=density, label=label)
+    else:
+        material = FrictMat(young=YOUNG, poisson=POISSON, frictionAngle=angle, density=density,
+                            label=label)
+    O.materials.append(material)
+    return material
+
+
+def _materials():
+    """Per mineral, a material for its spheres and one for its polyhedra (those present),
+    and one for the walls (of polyhedra where there are polyhedra)."""
+    kinds = {}
+    for name in DENSITY:
+        kinds[name] = tuple(
+            _material(polyhedra, FRICTION[name], DENSITY[name], kind + " " + name)
+            if present else None
+            for polyhedra, kind, present in ((False, "spheres", SPHERES),
+                                             (True, "polyhedra", POLYHEDRA))
+        )
+    wall = _material(POLYHEDRA, WALL_FRICTION, 1000.0, "walls")
+    return kinds, wall
+
+
+def _bodies(kinds):
+    """Read the bodies file: every placed particle as a YADE body, in draw order."""
+    names = list(DENSITY)
+    bodies = []
+    with open(_beside(BODIES)) as lines:
+        for line in lines:
+            if line.startswith("#") or not line.strip():
+                continue
+            words = line.split()
+            index, mineral, n, radius = int(words[0]), int(words[1]), int(words[2]), float(words[3])
+            xyz = [float(w) for w in words[4:4 + 3 * n]]
+            sphere_mat, polyhedra_mat = kinds[names[mineral]]
+            if radius > 0:
+                body = utils.sphere(xyz[:3], radius, material=sphere_mat)
+            else:
+                points = [Vector3(*xyz[3 * k:3 * k + 3]) for k in range(n)]
+                body = polyhedra_utils.polyhedra(polyhedra_mat, v=points)
+            bodies.append((index, body))
+    ids = O.bodies.append([body for _, body in bodies])
+    for body_id, (index, body) in zip(ids, bodies):
+        body.state.refPos = body.state.pos
+        body.state.refOri = body.state.ori
+        DRAW_INDEX[body_id] = index
+
+
+def _walls(wall):
+    """The six walls of a walled box (sense: towards the inside), or YADE's periodic cell."""
+    if PERIODIC:
+        O.periodic = True
+        O.cell.setBox(UPPER)
+        return
+    for axis in range(3):
+        O.bodies.append(utils.wall(LOWER[axis], axis=axis, sense=1, material=wall))
+        O.bodies.append(utils.wall(UPPER[axis], axis=axis, sense=-1, material=wall))
+
+
+def time_step():
+    """DT_FRACTION of the shortest period of a body on its stiffest contact."""
+    periods = []
+    kappa = YOUNG / VOLUMETRIC_LENGTH
+    for body in O.bodies:
+        if isinstance(body.shape, Polyhedra):
+            size = 2.0 * max(v.norm() for v in body.shape.v)
+            periods.append(math.sqrt(body.state.mass / (kappa * size * size)))
+    if any(isinstance(body.shape, Sphere) for body in O.bodies):
+        periods.append(utils.PWaveTimeStep())
+    return DT_FRACTION * min(periods) if periods else O.dt
+
+
+def build():
+    """Create the materials, the walls or the cell, the bodies, the engines and the step."""
+    kinds, wall = _materials()
+    _walls(wall)
+    _bodies(kinds)
+    verlet = VERLET
+    O.engines = [
+@ENGINES@
+    ]
+    O.dt = time_step()
+
+
+def save_state(path=None):
+    """Write every body's centroid, displacement and rotation since the packing, in draw order."""
+    rows = []
+    for body_id, index in sorted(DRAW_INDEX.items(), key=lambda item: item[1]):
+        state = O.bodies[body_id].state
+        turn = state.ori.toRotationMatrix() * state.refOri.toRotationMatrix().transpose()
+        moved = state.pos - state.refPos
+        values = list(state.pos) + list(moved) + [turn[i, j] for i in range(3) for j in range(3)]
+        rows.append(str(index) + " " + " ".join(repr(float(x)) for x in values))
+    target = path or _beside(STATE)
+    with open(target + ".part", "w") as out:
+        out.write(STATE_FORMAT + "\\n")
+        out.write("# steps %d, time %r, dt %r, length scale %r, bodies %d\\n"
+                  % (O.iter, O.time, O.dt, LENGTH_SCALE, len(rows)))
+        out.write("# index x y z dx dy dz r11 r12 r13 r21 r22 r23 r31 r32 r33\\n")
+        out.write("\\n".join(rows) + "\\n")
+    os.replace(target + ".part", target)
+    return target
+
+
+_given = _options(sys.argv[1:])
+RUN_STEPS = _given.run if _given.run is not None else RUN_STEPS
+GRAVITY = _given.gravity if _given.gravity is not None else GRAVITY
+YOUNG = _given.young if _given.young is not None else YOUNG
+DAMPING = _given.damping if _given.damping is not None else DAMPING
+DT_FRACTION = _given.dt_fraction if _given.dt_fraction is not None else DT_FRACTION
+build()
+print("regopack: %d bodies, dt %r" % (len(DRAW_INDEX), O.dt))
+if RUN_STEPS > 0:
+    O.run(RUN_STEPS, True)
+    print("regopack: %d steps run, state in %s" % (O.iter, save_state()))
+'''

@@ -1,0 +1,300 @@
+"""The YADE export of 3D packings, built and run by the real ``yade``."""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cli_helpers import one_error_line
+from packings3d import cube_and_sphere, packing3d, spheres3d
+from pydantic import ValidationError
+
+import regopack
+from regopack.base.errors import ConfigError, ExportError
+from regopack.cli import main
+from regopack.geometry.domain import PeriodicBox
+from regopack.packing.core import Packing, save
+from regopack.plugins.exporters.solid_export_common import mass_properties, placed_solids
+from regopack.plugins.exporters.yade_export import (
+    STATE_FORMAT,
+    YadeConfig,
+    YadeExporter,
+    bodies_path,
+    state_path,
+)
+from regopack.testing import packing_from_polygons
+
+YADE = shutil.which("yade")
+
+
+@functools.cache
+def dem3d_like() -> Packing:
+    """The ``dem3d`` scene in a 40 µm cube with sizes up to 12 µm: 505 polyhedra."""
+    scene = regopack.scene(
+        "dem3d",
+        domain__width=40,
+        domain__height=40,
+        domain__depth=40,
+        size__d_max=12,
+        insertion__strip=20,
+    )
+    return regopack.pack(scene, verify=False)
+
+
+def body_lines(path: Path) -> list[list[str]]:
+    """The words of every body line of a bodies file."""
+    lines = bodies_path(path).read_text().splitlines()
+    return [line.split() for line in lines if line and not line.startswith("#")]
+
+
+def test_the_bodies_file_holds_every_vertex_exactly() -> None:
+    packing = packing3d()
+    path = Path("/nonexistent/p.py")
+    exporter = YadeExporter(YadeConfig(length_scale=1.0))
+    text = exporter_text(exporter, packing, path)
+    rows = [line.split() for line in text.splitlines() if not line.startswith("#")]
+    solids = placed_solids(packing, "yade")
+    assert [int(r[0]) for r in rows] == [p.index for p in solids]  # draw order
+    for row, p in zip(rows, solids, strict=True):
+        assert int(row[1]) == packing.mineral[p.index]
+        assert int(row[2]) == len(p.local) and float(row[3]) == 0.0
+        points = np.array(row[4:], dtype=float).reshape(-1, 3)
+        np.testing.assert_array_equal(points, p.world)  # the shortest round-trip text
+
+
+def exporter_text(exporter: YadeExporter, packing: Packing, path: Path) -> str:
+    """The bodies file's text, written by the exporter without touching ``path``."""
+    from regopack.plugins.exporters import yade_export
+
+    solids = placed_solids(packing, "yade", spheres=True)
+    scale = exporter.config.length_scale or 1e-6
+    return yade_export._bodies_text(packing, solids, scale)
+
+
+def test_the_script_sets_materials_per_mineral_and_only_the_engines_it_needs(tmp_path) -> None:
+    cfg = YadeConfig(mineral_density={"pyroxene": 3400.0}, mineral_friction={"glass": 0.3})
+    path = YadeExporter(cfg).export(packing3d(), tmp_path / "p.py")
+    script = path.read_text()
+    assert (
+        "DENSITY = {'plagioclase': 3100.0, 'pyroxene': 3400.0, 'glass': 3100.0}" in script
+        and "FRICTION = {'plagioclase': 0.5, 'pyroxene': 0.5, 'glass': 0.3}" in script
+    )
+    assert "Polyhedra" in script and "Sphere_Sphere" not in script and "PERIODIC = False" in script
+    assert "SPHERES = False" in script and "POLYHEDRA = True" in script
+    lower = re.search(r"^LOWER = \(([^)]*)\)", script, re.M)[1]  # metres, from µm
+    np.testing.assert_allclose(eval(lower), packing3d().domain.bounds()[::2] * 1e-6, rtol=1e-15)
+    spheres = YadeExporter().export(spheres3d(30.0), tmp_path / "s.py").read_text()
+    assert "Ig2_Sphere_Sphere_ScGeom" in spheres and "Polyhedra_Polyhedra" not in spheres
+    mixed = YadeExporter().export(cube_and_sphere(), tmp_path / "m.py").read_text()
+    assert "Ig2_Sphere_Polyhedra_ScGeom" in mixed and "Ip2_FrictMat_PolyhedraMat" in mixed
+    compile(script, "p.py", "exec")  # plain Python, whatever YADE adds to it
+
+
+def test_wrong_parameters_and_packings_are_refused_in_one_line(tmp_path, capsys) -> None:
+    with pytest.raises(ValidationError):
+        YadeConfig(youngs_modulus=-1.0)
+    with pytest.raises(ValidationError):
+        YadeConfig(dt_fraction=2.0)
+    with pytest.raises(ConfigError, match="mineral_friction names 'basalt'"):
+        YadeExporter(YadeConfig(mineral_friction={"basalt": 0.1})).export(
+            packing3d(), tmp_path / "p.py"
+        )
+    with pytest.raises(ExportError, match="no positive finite mass"):
+        YadeExporter(YadeConfig(length_scale=1e-200)).export(packing3d(), tmp_path / "p.py")
+    small = packing3d()  # 12 µm grains in a 20 µm periodic box: more than half a side
+    periodic = dataclasses.replace(small, domain=PeriodicBox(*small.domain.bounds()))
+    with pytest.raises(ExportError, match="half the periodic box's side"):
+        YadeExporter().export(periodic, tmp_path / "p.py")
+    assert not list(tmp_path.iterdir())  # nothing written by a refusal
+    plane = packing_from_polygons([np.array([[0.0, 0], [1, 0], [0, 1]])])
+    file = tmp_path / "plane.npz"
+    save(plane, file)
+    assert main(["export", str(file), "--to", "yade"]) == 2
+    line = one_error_line(capsys)
+    assert "'yade'" in line and "3D" in line
+
+
+def test_the_command_writes_the_script_and_its_bodies(tmp_path, capsys) -> None:
+    file = tmp_path / "packing.npz"
+    save(packing3d(), file)
+    assert main(["export", str(file), "--to", "yade", "--set", "yade.gravity=9.81"]) == 0
+    assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'packing.py'}"
+    assert "\nGRAVITY = 9.81  #" in (tmp_path / "packing.py").read_text()
+    assert len(body_lines(tmp_path / "packing.py")) == packing3d().n_placed
+
+
+# ---------------------------------------------------------------------------
+# The real program
+
+CHECK = """
+exec(open({script!r}).read())
+with open("bodies.check", "w") as out:
+    for body_id, index in sorted(DRAW_INDEX.items(), key=lambda item: item[1]):
+        b = O.bodies[body_id]
+        if isinstance(b.shape, Polyhedra):
+            points = [b.state.pos + b.state.ori * v for v in b.shape.v]
+            volume = b.shape.GetVolume()
+        else:
+            points = [b.state.pos]
+            volume = 4.0 / 3.0 * math.pi * b.shape.radius ** 3
+        out.write(" ".join(repr(float(x)) for x in
+                  [index, b.state.mass, volume, len(points)] + [c for p in points for c in p]))
+        out.write("\\n")
+"""
+
+
+def run_yade(path: Path, *args: str, timeout: float = 300) -> str:
+    """Run ``yade -n -x`` on the script ``path`` with ``args``; return its output."""
+    if YADE is None:
+        pytest.skip("the yade executable is not on PATH (Debian: apt-get install yade)")
+    done = subprocess.run(
+        [YADE, "-f1", "-n", "-x", path.name, *args],
+        cwd=path.parent,
+        capture_output=True,
+        text=True,
+        errors="replace",
+        timeout=timeout,
+        check=False,
+    )
+    out = done.stdout + done.stderr
+    assert done.returncode == 0 and "Traceback" not in out, out[-3000:]
+    return out
+
+
+def read_state(path: Path) -> tuple[dict[str, float], np.ndarray]:
+    """The header numbers and the rows of the final state the script wrote."""
+    lines = state_path(path).read_text().splitlines()
+    assert lines[0] == STATE_FORMAT
+    head = dict(re.findall(r"(steps|time|dt|bodies) ([^,]+)", lines[1]))
+    table = np.array([line.split() for line in lines[3:]], dtype=float)
+    return {k: float(v) for k, v in head.items()}, table
+
+
+def check_bodies(path: Path, packing: Packing, density: float = 3100.0) -> None:
+    """YADE built every placed particle with its exact vertices, volume and mass."""
+    check = path.with_name("check.py")
+    check.write_text(CHECK.format(script=path.name))
+    run_yade(check)
+    rows = [line.split() for line in path.with_name("bodies.check").read_text().splitlines()]
+    solids = placed_solids(packing, "yade", spheres=True)
+    assert [int(float(r[0])) for r in rows] == [p.index for p in solids]
+    scale = 1e-6
+    for row, p in zip(rows, solids, strict=True):
+        mass, volume, n = float(row[1]), float(row[2]), int(float(row[3]))
+        points = np.array(row[4:], dtype=float).reshape(n, 3)
+        if p.loops:
+            want = p.world * scale
+            exact = mass_properties(p.local, p.loops)[0] * scale**3
+        else:
+            want = p.centre[None, :] * scale
+            exact = 4 / 3 * math.pi * (p.rounding * scale) ** 3
+        # YADE keeps the vertices of the convex hull in its principal frame: the same
+        # points, in another order, within rounding
+        order = np.lexsort(points.T[::-1]), np.lexsort(want.T[::-1])
+        np.testing.assert_allclose(points[order[0]], want[order[1]], rtol=0, atol=1e-12 * scale)
+        assert volume == pytest.approx(exact, rel=1e-12)
+        assert mass == pytest.approx(density * exact, rel=1e-12)
+
+
+def test_yade_builds_every_polyhedron_exactly_and_holds_the_packing_still(tmp_path) -> None:
+    """505 polyhedra of the dem3d scene: exact bodies, then steps without gravity."""
+    packing = dem3d_like()
+    assert packing.n_placed >= 500
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    check_bodies(path, packing)
+    out = run_yade(path, "--run", "20")
+    assert f"regopack: {packing.n_placed} bodies" in out
+    head, state = read_state(path)
+    assert head["steps"] == 20 and state.shape == (packing.n_placed, 16)
+    assert np.isfinite(state).all()
+    d_min = float(re.search(r"^VOLUMETRIC_LENGTH = (\S+)", path.read_text(), re.M)[1])
+    assert np.linalg.norm(state[:, 4:7], axis=1).max() < 0.01 * d_min
+
+
+@pytest.mark.slow  # about 7 minutes: YADE spends 0.4 s a step on 505 touching polyhedra
+def test_yade_holds_505_polyhedra_still_for_1000_steps(tmp_path) -> None:
+    packing = dem3d_like()
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    run_yade(path, "--run", "1000", timeout=3600)
+    head, state = read_state(path)
+    assert head["steps"] == 1000 and state.shape[0] == packing.n_placed >= 500
+    assert np.isfinite(state).all()
+    d_min = float(re.search(r"^VOLUMETRIC_LENGTH = (\S+)", path.read_text(), re.M)[1])
+    assert np.linalg.norm(state[:, 4:7], axis=1).max() < 0.01 * d_min
+
+
+def check_settled(packing: Packing, path: Path, state: np.ndarray, g: float, time: float) -> None:
+    """Under gravity the bodies fell, no faster than free fall, and none left the box."""
+    scale = 1e-6
+    drop = -state[:, 6]
+    assert np.median(drop) > 0.2 * 0.5 * g * time**2  # gravity acts ...
+    assert drop.max() <= 0.5 * g * time**2 * (1 + 1e-9)  # ... no faster than free fall
+    lo, hi = packing.domain.bounds().reshape(3, 2).T * scale
+    assert np.all(state[:, 1:4] > lo) and np.all(state[:, 1:4] < hi)  # every centroid inside
+
+
+def test_yade_settles_polyhedra_inside_their_walls(tmp_path) -> None:
+    packing = packing3d()  # 57 polyhedra in a 20 µm box
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    g, steps = 1e7, 300
+    run_yade(path, "--run", str(steps), "--gravity", repr(g))
+    head, state = read_state(path)
+    assert np.isfinite(state).all()
+    check_settled(packing, path, state, g, head["time"])
+    # the floor holds the bottom bodies: the volumetric law lets a corner into it, by less
+    # than half the smallest grain under this gravity, and none passes through
+    lowest = []
+    for p, row in zip(placed_solids(packing, "yade"), state, strict=True):
+        centroid = row[1:4] - row[4:7]  # where it was
+        turn = row[7:].reshape(3, 3)
+        lowest.append(((p.world * 1e-6 - centroid) @ turn.T + row[1:4])[:, 2].min())
+    d_min = float(re.search(r"^VOLUMETRIC_LENGTH = (\S+)", path.read_text(), re.M)[1])
+    floor = packing.domain.bounds()[4] * 1e-6
+    assert floor - 0.5 * d_min < min(lowest) < floor
+
+
+def test_yade_holds_spheres_still_and_settles_them(tmp_path) -> None:
+    packing = spheres3d(30.0)
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    check_bodies(path, packing)
+    run_yade(path, "--run", "1000")
+    head, state = read_state(path)
+    assert head["steps"] == 1000 and state.shape[0] == packing.n_placed > 200
+    assert np.isfinite(state).all()
+    d_min = 2 * packing.solids.rounding_radius[packing.placed].min() * 1e-6
+    assert np.linalg.norm(state[:, 4:7], axis=1).max() < 0.01 * d_min
+    g, steps = 1e5, 3000
+    run_yade(path, "--run", str(steps), "--gravity", repr(g))
+    head, state = read_state(path)
+    check_settled(packing, path, state, g, head["time"])
+    radius = packing.solids.rounding_radius[packing.placed] * 1e-6
+    lo = packing.domain.bounds()[4] * 1e-6
+    assert (state[:, 3] - radius).min() > lo - 0.05 * radius.min()  # on the floor, not through
+
+
+def test_yade_runs_spheres_in_a_periodic_cell(tmp_path) -> None:
+    packing = spheres3d(30.0)
+    periodic = dataclasses.replace(packing, domain=PeriodicBox(*packing.domain.bounds()))
+    path = YadeExporter().export(periodic, tmp_path / "p.py")
+    assert "PERIODIC = True" in path.read_text()
+    run_yade(path, "--run", "1000")
+    _, state = read_state(path)
+    assert np.isfinite(state).all() and state.shape[0] == periodic.n_placed
+    d_min = 2 * packing.solids.rounding_radius[packing.placed].min() * 1e-6
+    assert np.linalg.norm(state[:, 4:7], axis=1).max() < 0.01 * d_min
+
+
+def test_yade_runs_a_packing_of_polyhedra_and_spheres(tmp_path) -> None:
+    packing = cube_and_sphere()
+    path = YadeExporter(YadeConfig(length_scale=1e-6)).export(packing, tmp_path / "p.py")
+    check_bodies(path, packing)
+    run_yade(path, "--run", "200", "--gravity", "1e7")
+    _, state = read_state(path)
+    assert np.isfinite(state).all() and (state[:, 6] < 0).all()
