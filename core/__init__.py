@@ -29,6 +29,7 @@ if TYPE_CHECKING:
         pack,
         pack_and_summarise,
         scene,
+        settled,
         sweep,
         verify,
     )
@@ -43,13 +44,16 @@ __all__ = [
     "pack_and_summarise",
     "save",
     "scene",
+    "settled",
     "sweep",
     "verify",
 ]
 
 _compat.install()  # old module names (regopack.domain3d, ...) as deprecated aliases
 
-_API = frozenset({"analyze", "export", "pack", "pack_and_summarise", "scene", "sweep", "verify"})
+_API = frozenset(
+    {"analyze", "export", "pack", "pack_and_summarise", "scene", "settled", "sweep", "verify"}
+)
 
 
 def __getattr__(name: str) -> Any:

@@ -89,6 +89,8 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
     env = {**os.environ, "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}"}
     for kind, text in blocks():
         if kind == "python":
+            if "regopack.settled(" in text and shutil.which("yade") is None:
+                continue  # the state it reads comes from YADE
             code = compile(text, f"{HOWTO.name} (python block)", "exec")
             cwd = os.getcwd()
             os.chdir(tmp_path)
@@ -105,6 +107,8 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
                 continue
             words, cwd = command
             if words[0] == "regopack":
+                if words[1] == "settled" and shutil.which("yade") is None and "yade" in words:
+                    continue  # no run, no state to read back
                 _run_regopack(words[1:], cwd, line, capsys)
                 continue
             done = subprocess.run(
@@ -120,3 +124,4 @@ def test_every_command_of_the_export_howto_runs(tmp_path, capsys):
         for name in ("box3d", "spheres3d"):
             state = (tmp_path / "runs" / name / "packing.final.txt").read_text()
             assert state.startswith("regopack-yade-state 1\n# steps 20,")
+        assert (tmp_path / "runs" / "spheres3d" / "settled" / "analysis.json").exists()

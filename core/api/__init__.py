@@ -16,9 +16,19 @@ if TYPE_CHECKING:
     from regopack.api.functions import pack as pack
     from regopack.api.functions import pack_and_summarise as pack_and_summarise
     from regopack.api.functions import scene as scene
+    from regopack.api.functions import settled as settled
     from regopack.api.functions import sweep as sweep
     from regopack.api.functions import verify as verify
 
-__all__ = ["analyze", "export", "pack", "pack_and_summarise", "scene", "sweep", "verify"]
+__all__ = [
+    "analyze",
+    "export",
+    "pack",
+    "pack_and_summarise",
+    "scene",
+    "settled",
+    "sweep",
+    "verify",
+]
 
 __getattr__, __dir__ = lazy_exports(globals(), "regopack.api.functions")

@@ -574,6 +574,75 @@ def export(
         raise
 
 
+def settled(
+    packing: Packing | str | os.PathLike[str],
+    state: str | os.PathLike[str],
+    exporter: str,
+    *,
+    registry: Registry | None = None,
+    params: Mapping[str, Any] | None = None,
+    params_source: str | None = None,
+) -> Packing:
+    """Read the final state of a DEM run back into a packing, as ``regopack settled`` does.
+
+    Parameters
+    ----------
+    packing
+        The packing that was exported (or its file).
+    state
+        The final state the exported files made the program write:
+        ``<stem>.final.txt`` of a ``yade`` script, ``<stem>.final.dump`` of a
+        ``liggghts`` script.
+    exporter
+        The exporter that wrote the files (``yade``, ``liggghts``).
+    params
+        The exporter's parameters of the export (only those that set lengths
+        matter: ``length_scale``, ``units``).
+    params_source
+        What error messages call the parameters (the command line: ``"--set"``).
+
+    Returns
+    -------
+    Packing
+        The same particles, moved and turned as the run left them; every
+        analysis takes it (``analyze(settled(...), [...])``) to compare the
+        sample before and after.
+
+    Raises
+    ------
+    ConfigError
+        One line, when the exporter reads no state back or a parameter is wrong.
+    PackingFileError
+        One line naming ``state``, when it is not a state of this packing.
+    """
+    from regopack.exports.pipeline import build_exporter
+
+    reg = registry_or_default(registry)
+    if not isinstance(exporter, str):
+        raise ConfigError(f"exporter: expected an exporter's name, not {type(exporter).__name__}")
+    loaded = _packing(packing)
+    built = build_exporter(reg, exporter, dict(params or {}), source=params_source)
+    if loaded.dimension != 3:
+        raise ConfigError(f"exporter {exporter!r}: reads the states of 3D packings only")
+    try:
+        moved: Packing = built.read_state(loaded, Path(state))
+    except NotImplementedError:
+        readers = [name for name in reg.names("export") if _reads_state(reg, name)]
+        raise ConfigError(
+            f"exporter {exporter!r} reads no state back; these do: {', '.join(readers)}"
+        ) from None
+    return moved
+
+
+def _reads_state(reg: Registry, name: str) -> bool:
+    """Say whether the exporter ``name`` overrides :meth:`Exporter.read_state`."""
+    from regopack.registry.interfaces import Exporter
+
+    factory = reg.get("export", name).factory
+    method = getattr(factory, "read_state", None)
+    return method is not None and method is not Exporter.read_state
+
+
 def sweep(
     experiment: str | os.PathLike[str],
     *,

@@ -226,6 +226,41 @@ def build_parser() -> argparse.ArgumentParser:
     )
     export.set_defaults(handler=_cmd_export)
 
+    settled = sub.add_parser(
+        "settled",
+        help="read the final state of a DEM run (YADE, LIGGGHTS) back into a packing file",
+        description=(
+            "Write the packing as the run of its exported files left it: the same particles, "
+            "moved and turned, for every analysis to compare before and after."
+        ),
+    )
+    settled.add_argument("packing", type=Path, metavar="PACKING", help="the exported packing")
+    settled.add_argument(
+        "state",
+        type=Path,
+        metavar="STATE",
+        help="the run's final state (yade: <stem>.final.txt, liggghts: <stem>.final.dump)",
+    )
+    settled.add_argument(
+        "--from",
+        dest="exporter",
+        required=True,
+        metavar="FORMAT",
+        help="the exporter that wrote the run's files: yade or liggghts",
+    )
+    settled.add_argument(
+        "--out",
+        type=output_path,
+        metavar="PATH",
+        help="packing file to write (default: the state's name with .npz, beside it)",
+    )
+    _add_set(
+        settled,
+        "FIELD=VALUE",
+        "an exporter parameter of the export that sets lengths, e.g. --set length_scale=1e-6",
+    )
+    settled.set_defaults(handler=_cmd_settled)
+
     plugins = sub.add_parser(
         "plugins",
         help="list the plugins with their origin and parameters",
@@ -480,6 +515,28 @@ def _cmd_export(args: argparse.Namespace, out: Console, err: Console) -> int:
         force=args.force,
     )
     out.print(f"wrote {written}", soft_wrap=True, markup=False, highlight=False)
+    return EXIT_OK
+
+
+def _cmd_settled(args: argparse.Namespace, out: Console, err: Console) -> int:
+    from regopack.api.functions import settled
+    from regopack.packing.core import save
+
+    target = args.out or args.state.with_suffix(".npz")
+    if target.is_dir():
+        target = target / args.state.with_suffix(".npz").name
+    for given in (args.packing, args.state):
+        if target.exists() and given.exists() and target.samefile(given):
+            raise ConfigError(f"--out {target}: is {given} itself; give another file")
+    packing = settled(
+        args.packing,
+        args.state,
+        args.exporter,
+        params=_exporter_params(args.overrides),
+        params_source="--set",
+    )
+    save(packing, target)
+    out.print(f"wrote {target}", soft_wrap=True, markup=False, highlight=False)
     return EXIT_OK
 
 

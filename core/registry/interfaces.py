@@ -328,6 +328,23 @@ class Exporter(ABC, Generic[P]):
         """
         return ()
 
+    def read_state(self, packing: P, path: Path) -> P:
+        """Return ``packing`` as a run of the exported files left it, read from ``path``.
+
+        An exporter whose files make a program write its particles' final
+        state (a DEM code's dump) reads that state back: the same particles,
+        moved and turned (:func:`regopack.packing.motion.moved`). The default
+        reads none.
+
+        Raises
+        ------
+        NotImplementedError
+            When the exporter reads no state.
+        PackingFileError
+            One line naming ``path``, when the file is not a state of ``packing``.
+        """
+        raise NotImplementedError(f"{type(self).__name__} reads no state back")
+
 
 class _SolidExporter(Exporter[Any]):
     """An :class:`Exporter` of 3D packings, under its deprecated name ``SolidExporter``.

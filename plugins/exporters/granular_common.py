@@ -12,6 +12,7 @@ sphere whose Rayleigh time is shortest (:func:`rayleigh_step_lines`).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -36,6 +37,7 @@ __all__ = [
     "material_variable_lines",
     "mineral_densities",
     "rayleigh_step_lines",
+    "read_sphere_dump",
     "sphere_data",
 ]
 
@@ -263,3 +265,65 @@ def rayleigh_step_lines(r_rho: float, fraction: float = RAYLEIGH_FRACTION) -> li
         f"variable dt    equal {_num(fraction)}*PI*v_r_rho/sqrt(v_G)"
         "/(0.1631*v_nu+0.8766)   # of its Rayleigh time",
     ]
+
+
+def read_sphere_dump(
+    packing: Packing[Box], path: Path, config: Densities, scale: float, program: str
+) -> Packing[Box]:
+    """Return ``packing`` as the run whose final dump of granular spheres is ``path`` left it.
+
+    The dump (``write_dump ... custom ... id type x y z radius ...`` of the
+    scripts of :func:`sphere_data`'s atoms, sorted by id) gives every sphere's
+    centre; atom ``k`` is the ``k``-th placed sphere in draw order. Lengths
+    are divided by ``scale``; the dump's time step goes into the packing's
+    ``stats`` as ``settled_steps``.
+
+    Raises
+    ------
+    PackingFileError
+        One line naming ``path``, when it is no dump of this packing's spheres.
+    """
+    from regopack.base.errors import PackingError, PackingFileError
+    from regopack.packing.motion import moved
+
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PackingFileError(f"{path}: cannot read a {program} dump: {err}") from err
+    heads = [k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")]
+    if len(heads) != 1 or len(lines) < 2 or not lines[0].startswith("ITEM: TIMESTEP"):
+        raise PackingFileError(f"{path}: not a {program} dump of one time step")
+    columns = lines[heads[0]].split()[2:]
+    if columns[:6] != ["id", "type", "x", "y", "z", "radius"]:
+        raise PackingFileError(
+            f"{path}: its atoms' columns start with {' '.join(columns[:6])!r}, not "
+            f"'id type x y z radius' as the script's final dump"
+        )
+    spheres = granular_spheres(packing, config, scale, exporter=program.lower())
+    if spheres is None:
+        raise PackingFileError(f"{path}: the packing is not one of spheres alone")
+    try:
+        table = np.array([line.split() for line in lines[heads[0] + 1 :]], dtype=np.float64)
+        step = float(lines[1])
+    except ValueError as err:
+        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
+    n = spheres.index.size
+    if table.ndim != 2 or table.shape[0] != n or table.shape[1] != len(columns):
+        raise PackingFileError(
+            f"{path}: {table.shape[0] if table.ndim == 2 else 0} atoms, but the packing has "
+            f"{n} placed spheres; is it the dump of another packing?"
+        )
+    if not np.isfinite(table[:, :6]).all():
+        raise PackingFileError(f"{path}: an atom's position is not finite (the run blew up)")
+    if not np.array_equal(table[:, 0], np.arange(1, n + 1)):
+        raise PackingFileError(f"{path}: its atom ids are not 1 to {n} in order")
+    if not np.allclose(table[:, 5], spheres.radius, rtol=1e-9, atol=0.0):
+        raise PackingFileError(
+            f"{path}: its radii are not those of the packing's spheres times {scale!r}; "
+            "give the export's units and length_scale"
+        )
+    shift = table[:, 2:5] / scale - packing.centre[spheres.index]
+    try:
+        return moved(packing, spheres.index, shift, stats={"settled_steps": step})
+    except PackingError as err:
+        raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err

@@ -53,6 +53,7 @@ from regopack.plugins.exporters.granular_common import (
     granular_spheres,
     material_variable_lines,
     rayleigh_step_lines,
+    read_sphere_dump,
     sphere_data,
 )
 from regopack.registry.interfaces import Exporter
@@ -193,6 +194,21 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
     def companions(self, path: Path) -> tuple[Path, ...]:
         """Return the input script written beside the data file."""
         return (script_path(path),)
+
+    def read_state(self, packing: Packing[Box], path: Path) -> Packing[Box]:
+        """Return ``packing`` as the run whose final dump (``<stem>.final.dump``) is ``path``.
+
+        Every sphere's centre is the dump's, divided by this exporter's length
+        scale (so give the parameters of the export); see
+        :func:`~regopack.plugins.exporters.granular_common.read_sphere_dump`.
+        """
+        cfg = self.config
+        scale = (
+            default_length_scale(packing, cfg.units)
+            if cfg.length_scale is None
+            else cfg.length_scale
+        )
+        return read_sphere_dump(packing, path, cfg, scale, "LIGGGHTS")
 
     def export(self, packing: Packing[Box], path: Path, *, analyses: Analyses = None) -> Path:
         """Write the data file and the input script; return the data file's path.

@@ -37,13 +37,14 @@ stiffest contact: YADE's P-wave time step of the spheres, and
 The final state gives, for every body in draw order, its centroid, the
 displacement of its centroid and the rotation (a 3 × 3 matrix, row by row)
 from the packing to the end of the run, in the script's lengths;
-:func:`regopack.plugins.exporters.dem_states.read_yade_state` turns it back
-into a packing. 2D packings are refused in one line.
+:meth:`YadeExporter.read_state` (``regopack settled``) turns it back into a
+packing. 2D packings are refused in one line.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Annotated
 
@@ -63,7 +64,14 @@ from regopack.plugins.exporters.solid_export_common import (
 )
 from regopack.registry.interfaces import Exporter
 
-__all__ = ["STATE_FORMAT", "YadeConfig", "YadeExporter", "bodies_path", "state_path"]
+__all__ = [
+    "STATE_FORMAT",
+    "YadeConfig",
+    "YadeExporter",
+    "bodies_path",
+    "read_yade_state",
+    "state_path",
+]
 
 VERLET_FRACTION = 0.05
 """Margin of YADE's collider (``verletDist``) as a fraction of the smallest equivalent diameter."""
@@ -200,6 +208,20 @@ class YadeExporter(Exporter[Packing[Box]]):
         """Return the bodies file written beside the script."""
         return (bodies_path(path),)
 
+    def read_state(self, packing: Packing[Box], path: Path) -> Packing[Box]:
+        """Return ``packing`` as the run whose final state (``<stem>.final.txt``) is ``path``.
+
+        See :func:`read_yade_state`; the lengths are divided by this
+        exporter's ``length_scale`` (so give the parameters of the export).
+        """
+        return read_yade_state(packing, path, self._scale(packing))
+
+    def _scale(self, packing: Packing[Box]) -> float:
+        """Return the factor from the packing's lengths to the script's."""
+        if self.config.length_scale is not None:
+            return self.config.length_scale
+        return conversion(length_unit(packing), "m")
+
     def export(self, packing: Packing[Box], path: Path, *, analyses: Analyses = None) -> Path:
         """Write the script and the bodies file; return the script's path.
 
@@ -219,9 +241,7 @@ class YadeExporter(Exporter[Packing[Box]]):
                 "exporter 'yade' writes 3D packings (polyhedra and spheres); 2D packings: csv, "
                 "gsd, image, json, lammps, svg, vtk"
             )
-        scale = (
-            conversion(length_unit(packing), "m") if cfg.length_scale is None else cfg.length_scale
-        )
+        scale = self._scale(packing)
         solids = placed_solids(packing, "yade", spheres=True)
         names = [str(n) for n in packing.mineral_names]
         density = mineral_densities(packing, cfg, "yade")
@@ -256,6 +276,67 @@ class YadeExporter(Exporter[Packing[Box]]):
         )
         _write_text(path, text)
         return path
+
+
+def read_yade_state(packing: Packing[Box], path: Path, scale: float) -> Packing[Box]:
+    """Return ``packing`` as the YADE run whose final state is ``path`` left it.
+
+    ``scale`` is the export's ``length_scale``: the state's lengths are
+    divided by it. Each body's centroid moves by its displacement and the body
+    turns about it by its rotation; the steps and the time of the run go into
+    the packing's ``stats`` (``settled_steps``, ``settled_time``).
+
+    Raises
+    ------
+    PackingFileError
+        One line naming ``path``, when it is no state of this packing's bodies.
+    """
+    from regopack.base.errors import PackingError, PackingFileError
+    from regopack.packing.motion import moved
+
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PackingFileError(f"{path}: cannot read a YADE state: {err}") from err
+    if not lines or lines[0].strip() != STATE_FORMAT:
+        raise PackingFileError(
+            f"{path}: not a YADE state written by regopack's script (its first line is not "
+            f"{STATE_FORMAT!r})"
+        )
+    rows = [line.split() for line in lines[1:] if line.strip() and not line.startswith("#")]
+    solids = placed_solids(packing, "yade", spheres=True)
+    if len(rows) != len(solids) or any(len(r) != 16 for r in rows):
+        raise PackingFileError(
+            f"{path}: {len(rows)} bodies of 16 columns expected for the packing's "
+            f"{len(solids)} placed particles; is it the state of another packing?"
+        )
+    try:
+        table = np.array(rows, dtype=np.float64)
+    except ValueError as err:
+        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
+    if not np.isfinite(table).all():
+        raise PackingFileError(f"{path}: a body's state is not finite (the run blew up)")
+    index = np.array([p.index for p in solids], dtype=np.int64)
+    if not np.array_equal(table[:, 0], index):
+        raise PackingFileError(
+            f"{path}: its draw indices are not the packing's placed particles in draw order"
+        )
+    pivot = np.array(
+        [mass_properties(p.local, p.loops)[1] if p.loops else np.zeros(3) for p in solids]
+    ).reshape(-1, 3)
+    head = dict(re.findall(r"(steps|time) ([^,\s]+)", lines[1] if len(lines) > 1 else ""))
+    stats = {f"settled_{k}": float(v) for k, v in head.items()}
+    try:
+        return moved(
+            packing,
+            index,
+            table[:, 4:7] / scale,
+            table[:, 7:16].reshape(-1, 3, 3),
+            pivot,
+            stats,
+        )
+    except PackingError as err:
+        raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err
 
 
 def _check_cell(packing: Packing[Box], solids: list[PlacedSolid]) -> None:

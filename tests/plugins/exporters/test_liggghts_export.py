@@ -14,7 +14,8 @@ from cli_helpers import one_error_line
 from packings3d import cube_and_sphere, spheres3d
 from pydantic import ValidationError
 
-from regopack.base.errors import ConfigError, ExportError
+import regopack
+from regopack.base.errors import ConfigError, ExportError, PackingFileError
 from regopack.cli import main
 from regopack.geometry.domain import PeriodicBox
 from regopack.packing.core import Packing, save
@@ -263,6 +264,16 @@ def test_liggghts_settles_the_packing_inside_its_walls_under_gravity(spheres, tm
     slack = 0.05 * r.min()  # the Hertz contacts let a sphere into a wall by a little
     assert np.all(final[:, 2:5] - r > lo - slack) and np.all(final[:, 2:5] + r < hi + slack)
     assert (final[:, 4] - r[:, 0]).min() < lo[2] + 0.01  # the bottom spheres rest on the floor
+    # read back: every sphere where LIGGGHTS left it, the packing's own otherwise
+    file = tmp_path / "packing.npz"
+    save(spheres, file)
+    assert main(["settled", str(file), str(dump_path(path)), "--from", "liggghts"]) == 0
+    settled = regopack.load(dump_path(path).with_suffix(".npz"))
+    np.testing.assert_allclose(settled.centre[spheres.placed], final[:, 2:5], rtol=1e-15)
+    assert settled.stats["settled_steps"] == steps
+    np.testing.assert_array_equal(settled.radius, spheres.radius)
+    with pytest.raises(PackingFileError, match="radii are not those"):
+        regopack.settled(spheres, dump_path(path), "liggghts", params={"units": "si"})
 
 
 def test_liggghts_runs_a_periodic_box(periodic, tmp_path) -> None:

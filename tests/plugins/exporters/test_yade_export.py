@@ -240,12 +240,36 @@ def check_settled(packing: Packing, path: Path, state: np.ndarray, g: float, tim
     assert np.all(state[:, 1:4] > lo) and np.all(state[:, 1:4] < hi)  # every centroid inside
 
 
-def test_yade_settles_polyhedra_inside_their_walls(tmp_path) -> None:
+SETTLE = """
+exec(open({script!r}).read())
+O.engines[-1].gravity = (0, 0, -{g!r})
+O.run({steps}, True)
+save_state()
+with open("bodies.after", "w") as out:
+    for body_id, index in sorted(DRAW_INDEX.items(), key=lambda item: item[1]):
+        b = O.bodies[body_id]
+        points = [b.state.pos + b.state.ori * v for v in b.shape.v]
+        out.write(" ".join(repr(float(c)) for p in points for c in p) + "\\n")
+"""
+
+
+def test_yade_settles_polyhedra_inside_their_walls_and_they_read_back(tmp_path) -> None:
     packing = packing3d()  # 57 polyhedra in a 20 µm box
     path = YadeExporter().export(packing, tmp_path / "p.py")
     g, steps = 1e7, 300
-    run_yade(path, "--run", str(steps), "--gravity", repr(g))
+    check = tmp_path / "settle.py"  # a user's script that loads the export and goes on
+    check.write_text(SETTLE.format(script=path.name, g=g, steps=steps))
+    run_yade(check)
     head, state = read_state(path)
+    # the settled packing holds every polyhedron where YADE left it
+    settled = regopack.settled(packing, state_path(path), "yade")
+    after = path.with_name("bodies.after").read_text().splitlines()
+    for j, line in zip(np.flatnonzero(packing.placed), after, strict=True):
+        yade_points = np.array(line.split(), dtype=float).reshape(-1, 3) / 1e-6
+        ours = settled.world_vertices(j)
+        order = np.lexsort(yade_points.T[::-1]), np.lexsort(ours.T[::-1])
+        np.testing.assert_allclose(yade_points[order[0]], ours[order[1]], rtol=0, atol=1e-9)
+    assert settled.stats["settled_steps"] == steps
     assert np.isfinite(state).all()
     check_settled(packing, path, state, g, head["time"])
     # the floor holds the bottom bodies: the volumetric law lets a corner into it, by less
@@ -274,6 +298,8 @@ def test_yade_holds_spheres_still_and_settles_them(tmp_path) -> None:
     run_yade(path, "--run", str(steps), "--gravity", repr(g))
     head, state = read_state(path)
     check_settled(packing, path, state, g, head["time"])
+    settled = regopack.settled(packing, state_path(path), "yade")
+    np.testing.assert_allclose(settled.centre[packing.placed], state[:, 1:4] / 1e-6, atol=1e-9)
     radius = packing.solids.rounding_radius[packing.placed] * 1e-6
     lo = packing.domain.bounds()[4] * 1e-6
     assert (state[:, 3] - radius).min() > lo - 0.05 * radius.min()  # on the floor, not through
@@ -298,3 +324,69 @@ def test_yade_runs_a_packing_of_polyhedra_and_spheres(tmp_path) -> None:
     run_yade(path, "--run", "200", "--gravity", "1e7")
     _, state = read_state(path)
     assert np.isfinite(state).all() and (state[:, 6] < 0).all()
+
+
+def write_state(path: Path, packing: Packing, rows: list[str] | None = None) -> Path:
+    """A state file of ``packing``'s bodies at rest, or with the given rows."""
+    index = np.flatnonzero(packing.placed)
+    rest = " ".join(["0.0"] * 6 + ["1.0", "0", "0", "0", "1.0", "0", "0", "0", "1.0"])
+    lines = [STATE_FORMAT, "# steps 0, time 0.0", "# columns"]
+    lines += rows if rows is not None else [f"{j} {rest}" for j in index]
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+def test_a_state_at_rest_gives_the_packing_back(tmp_path, capsys) -> None:
+    packing = packing3d()
+    file = tmp_path / "packing.npz"
+    save(packing, file)
+    state = write_state(tmp_path / "packing.final.txt", packing)
+    assert main(["settled", str(file), str(state), "--from", "yade"]) == 0
+    assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'packing.final.npz'}"
+    back = regopack.load(tmp_path / "packing.final.npz")
+    np.testing.assert_allclose(back.vertices, packing.vertices, atol=1e-12)
+    np.testing.assert_allclose(back.centre[back.placed], packing.centre[packing.placed])
+    assert back.stats["settled_steps"] == 0
+
+
+@pytest.mark.parametrize(
+    ("rows", "first", "message"),
+    [
+        (None, "something else", "not a YADE state written by regopack's script"),
+        (["0 1 2"], None, "bodies of 16 columns expected"),
+        ("nan", None, "not finite (the run blew up)"),
+        ("shuffled", None, "draw indices are not the packing's placed particles"),
+        ("stretched", None, "not a rotation matrix"),
+    ],
+)
+def test_a_wrong_state_is_refused_in_one_line(tmp_path, capsys, rows, first, message) -> None:
+    packing = packing3d()
+    file = tmp_path / "packing.npz"
+    save(packing, file)
+    index = np.flatnonzero(packing.placed)
+    rest = ["0.0"] * 6 + ["1.0", "0", "0", "0", "1.0", "0", "0", "0", "1.0"]
+    if rows == "nan":
+        rows = [" ".join([str(j), "nan", *rest[1:]]) for j in index]
+    elif rows == "shuffled":
+        rows = [" ".join([str(j), *rest]) for j in index[::-1]]
+    elif rows == "stretched":
+        rows = [" ".join([str(j), *rest[:6], "2.0", *rest[7:]]) for j in index]
+    state = write_state(tmp_path / "s.txt", packing, rows)
+    if first is not None:
+        state.write_text(first + "\n" + state.read_text().split("\n", 1)[1])
+    assert main(["settled", str(file), str(state), "--from", "yade"]) == 2
+    line = one_error_line(capsys)
+    assert str(state) in line and message in line
+    assert not (tmp_path / "s.npz").exists()
+
+
+def test_exporters_without_a_state_and_2d_packings_are_refused(tmp_path, capsys) -> None:
+    file = tmp_path / "packing.npz"
+    save(packing3d(), file)
+    state = write_state(tmp_path / "s.txt", packing3d())
+    assert main(["settled", str(file), str(state), "--from", "vtk"]) == 2
+    assert "exporter 'vtk' reads no state back; these do: liggghts, yade" in one_error_line(capsys)
+    plane = tmp_path / "plane.npz"
+    save(packing_from_polygons([np.array([[0.0, 0], [1, 0], [0, 1]])]), plane)
+    assert main(["settled", str(plane), str(state), "--from", "yade"]) == 2
+    assert "3D packings only" in one_error_line(capsys)

@@ -1,0 +1,171 @@
+"""Rigid motions of a packing's particles: the packing as a simulation left it.
+
+A DEM code moves and turns the particles it was given; :func:`moved` applies
+such motions to a 3D :class:`~regopack.packing.core.Packing` and returns the
+moved packing, which every analysis reads as it reads the packing itself
+(contacts, φ, Z, the fabric, g(r)), so that a sample can be compared before
+and after settling.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.base.errors import PackingError
+from regopack.packing.core import Packing
+
+__all__ = ["moved", "quaternion_of"]
+
+FloatArray = NDArray[np.float64]
+
+
+def quaternion_of(turn: FloatArray) -> FloatArray:
+    """Return the unit quaternions ``(w, x, y, z)`` of rotation matrices ``turn`` (``(k, 3, 3)``).
+
+    Examples
+    --------
+    >>> quarter = np.array([[[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]])  # 90° about z
+    >>> quaternion_of(quarter).round(6).tolist()
+    [[0.707107, 0.0, 0.0, 0.707107]]
+    """
+    from scipy.spatial.transform import Rotation
+
+    xyzw = Rotation.from_matrix(turn).as_quat()
+    out: FloatArray = np.ascontiguousarray(xyzw[:, [3, 0, 1, 2]])
+    return out
+
+
+def moved(
+    packing: Packing[Any],
+    index: NDArray[np.int64],
+    shift: FloatArray,
+    turn: FloatArray | None = None,
+    pivot: FloatArray | None = None,
+    stats: dict[str, float] | None = None,
+) -> Packing[Any]:
+    """Return ``packing`` with particles ``index`` moved by ``shift`` and turned by ``turn``.
+
+    Parameters
+    ----------
+    packing
+        A 3D packing.
+    index
+        Draw indices of the particles that move (placed particles, each once).
+    shift
+        ``(k, 3)`` displacement of each one's pivot, in the packing's lengths.
+    turn
+        ``(k, 3, 3)`` rotation matrices, each about its particle's pivot; none:
+        the particles keep their orientation.
+    pivot
+        ``(k, 3)`` point of each particle, relative to its reference point
+        (``centre``), that moves by ``shift`` and about which it turns (its
+        centroid, as DEM codes turn bodies); none: the reference point.
+    stats
+        Entries added to the packing's ``stats`` (e.g. the run's steps).
+
+    Returns
+    -------
+    Packing
+        The same particles, draw order, minerals and domain; the centres of
+        the moved particles in a periodic box are wrapped into it. The
+        vertices, face normals and supports of each turned polyhedron are
+        turned, and its ``rotation`` composed with the turn.
+
+    Raises
+    ------
+    PackingError
+        One line, when an index is no placed particle or is given twice, or
+        an array has the wrong shape or a number that is not finite, or a
+        turn is not a rotation.
+
+    Examples
+    --------
+    >>> from regopack.geometry.domain import Box
+    >>> p = Packing.of_spheres([[1.0, 1, 1], [3, 1, 1]], [1.0, 1.0], Box(0, 4, 0, 2, 0, 2))
+    >>> moved(p, np.array([1]), np.array([[0.0, 0, -0.5]])).centre.tolist()
+    [[1.0, 1.0, 1.0], [3.0, 1.0, 0.5]]
+    """
+    if packing.dimension != 3:
+        raise PackingError("moved: a 3D packing is needed")
+    index = np.asarray(index, dtype=np.int64)
+    k = index.size
+    shift = np.asarray(shift, dtype=np.float64)
+    checks: list[tuple[str, FloatArray, tuple[int, ...]]] = [("shift", shift, (k, 3))]
+    if turn is not None:
+        turn = np.asarray(turn, dtype=np.float64)
+        checks.append(("turn", turn, (k, 3, 3)))
+    if pivot is not None:
+        pivot = np.asarray(pivot, dtype=np.float64)
+        checks.append(("pivot", pivot, (k, 3)))
+    for name, array, shape in checks:
+        if array.shape != shape:
+            raise PackingError(f"moved: {name} has shape {array.shape}, expected {shape}")
+        if not np.isfinite(array).all():
+            raise PackingError(f"moved: {name} has a number that is not finite")
+    placed = packing.placed
+    if k and (index.min() < 0 or index.max() >= placed.size or not placed[index].all()):
+        raise PackingError("moved: an index is not a placed particle")
+    if np.unique(index).size != k:
+        raise PackingError("moved: a particle is given twice")
+    if turn is not None:
+        error = np.abs(np.einsum("kij,kil->kjl", turn, turn) - np.eye(3)).max(initial=0.0)
+        if error > 1e-6 or (k and np.linalg.det(turn).min() <= 0):
+            raise PackingError("moved: a turn is not a rotation matrix")
+    g = np.zeros((k, 3)) if pivot is None else pivot
+    centre = packing.centre.copy()
+    centre[index] += shift
+    box = packing.domain
+    if box.periodic:
+        lo, hi = box.bounds().reshape(3, 2).T
+        centre[index] = lo + np.mod(centre[index] - lo, hi - lo)
+    changes: dict[str, Any] = {
+        "centre": centre,
+        "stats": {**packing.stats, **(stats or {})},
+    }
+    if turn is not None:
+        changes.update(_turned(packing, index, turn, g))
+    return dataclasses.replace(packing, **changes)
+
+
+def _turned(
+    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray, pivot: FloatArray
+) -> dict[str, FloatArray]:
+    """Vertices, normals, supports and rotations of the packing with ``index`` turned."""
+    vertices = packing.vertices.copy()
+    normals = packing.normals.copy()
+    support = packing.support.copy()
+    rotation = packing.rotation.copy()
+    offsets = packing.offsets
+    faces = packing.face_offsets
+    for r, j, g in zip(turn, index.tolist(), pivot, strict=True):
+        rows = slice(offsets[j], offsets[j + 1])
+        vertices[rows] = (vertices[rows] - g) @ r.T + g
+        if faces.size:
+            f = slice(faces[j], faces[j + 1])
+            old = normals[f].copy()
+            normals[f] = old @ r.T
+            # the plane n·x = s through the turned points: s' = s - n·g + n'·g
+            support[f] = support[f] - old @ g + normals[f] @ g
+    if rotation.shape[0]:
+        q = quaternion_of(turn)
+        rotation[index] = _compose(q, rotation[index])
+    return {"vertices": vertices, "normals": normals, "support": support, "rotation": rotation}
+
+
+def _compose(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Hamilton products ``a b`` of unit quaternions ``(w, x, y, z)``, row by row."""
+    w1, x1, y1, z1 = a.T
+    w2, x2, y2, z2 = b.T
+    out: FloatArray = np.column_stack(
+        [
+            w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+            w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+            w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+            w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+        ]
+    )
+    return out
