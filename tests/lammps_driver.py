@@ -5,7 +5,8 @@ script's setup, then ``CHUNKS`` (comma-separated step counts) runs, and writes
 the atom count, whether positions, velocities and forces stayed finite, the
 positions before and after, the kinetic energy after each chunk, the time step
 and the core vertices at the end (none for granular spheres), and each
-atom's radius (0 for a body). A LAMMPS crash fails only the test that ran it.
+atom's radius (0 for a body); the script's ``write_dump`` commands run again at
+the end. A LAMMPS crash fails only the test that ran it.
 """
 
 from __future__ import annotations
@@ -51,6 +52,9 @@ def main(script: str, out: str, chunks: str, *assignments: str) -> None:
         ke.append(lmp.get_thermo("ke"))
         finite = finite and all(np.isfinite(per_atom(n)).all() for n in ("x", "v", "f"))
     lmp.command("run 0 post no")
+    for line in Path(script).read_text().splitlines():  # the final dump, of the end state
+        if line.startswith("write_dump"):
+            lmp.command(line)
     verts = (
         np.array(lmp.numpy.extract_compute("verts", LMP_STYLE_LOCAL, LMP_TYPE_ARRAY))
         if bodies

@@ -228,7 +228,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     settled = sub.add_parser(
         "settled",
-        help="read the final state of a DEM run (YADE, LIGGGHTS) back into a packing file",
+        help="read the final state of a DEM run (YADE, LIGGGHTS, LAMMPS) into a packing file",
         description=(
             "Write the packing as the run of its exported files left it: the same particles, "
             "moved and turned, for every analysis to compare before and after."
@@ -239,14 +239,14 @@ def build_parser() -> argparse.ArgumentParser:
         "state",
         type=Path,
         metavar="STATE",
-        help="the run's final state (yade: <stem>.final.txt, liggghts: <stem>.final.dump)",
+        help="the run's final state (yade: <stem>.final.txt; liggghts, lammps: <stem>.final.dump)",
     )
     settled.add_argument(
         "--from",
         dest="exporter",
         required=True,
         metavar="FORMAT",
-        help="the exporter that wrote the run's files: yade or liggghts",
+        help="the exporter that wrote the run's files: yade, liggghts or lammps",
     )
     settled.add_argument(
         "--out",

@@ -52,6 +52,11 @@ and polyhedra is always written as bodies.
 **Densities.** Every grain has ``density``, or the density of its mineral in
 ``mineral_density`` (by mineral name); in the bodies it sets the mass and
 the inertia, for granular spheres the atoms' density column.
+
+**The final state.** After its run, the script of a 3D packing writes
+``<stem>.final.dump`` (:func:`dump_path`): each body's displacement and its
+orientation at the start and at the end, or each granular sphere's centre;
+:meth:`LammpsExporter.read_state` (``regopack settled``) reads it back.
 """
 
 from __future__ import annotations
@@ -70,6 +75,7 @@ from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import length_scale, length_unit
 from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing
+from regopack.plugins.exporters.body_dump import read_body_dump
 from regopack.plugins.exporters.export_common import Analyses, AnyPacking, _num, _write_text
 from regopack.plugins.exporters.granular_common import RAYLEIGH_FRACTION as RAYLEIGH_FRACTION
 from regopack.plugins.exporters.granular_common import UNIT_STYLE_LENGTH as UNIT_STYLE_LENGTH
@@ -81,6 +87,7 @@ from regopack.plugins.exporters.granular_common import granular_spheres as granu
 from regopack.plugins.exporters.granular_common import (
     material_variable_lines,
     rayleigh_step_lines,
+    read_sphere_dump,
     sphere_data,
 )
 from regopack.plugins.exporters.granular_common import mineral_densities as mineral_densities
@@ -103,6 +110,7 @@ __all__ = [
     "LammpsExporter",
     "PolyhedronBodies",
     "body_faces",
+    "dump_path",
     "granular_spheres",
     "lammps_bodies",
     "mineral_densities",
@@ -484,6 +492,17 @@ def _lines(values: list[str]) -> list[str]:
     return lines
 
 
+def dump_path(path: Path) -> Path:
+    """Return the dump of a 3D packing's final state that the script writes: ``<stem>.final.dump``.
+
+    Examples
+    --------
+    >>> dump_path(Path("runs/box3d/packing.data")).as_posix()
+    'runs/box3d/packing.final.dump'
+    """
+    return Path(path).with_suffix(".final.dump")
+
+
 def script_path(path: Path) -> Path:
     """Return the input script written beside the data file ``path``: ``<stem>.in``.
 
@@ -715,6 +734,29 @@ class LammpsExporter(Exporter[AnyPacking]):
         """Return the input script written beside the data file."""
         return (script_path(path),)
 
+    def read_state(self, packing: AnyPacking, path: Path) -> AnyPacking:
+        """Return a 3D ``packing`` as the run whose final dump (``<stem>.final.dump``) is ``path``.
+
+        Granular spheres take the dump's centres; bodies move by their
+        displacement and turn about their centre of mass by the turn from
+        their first orientation to their last. The lengths are divided by this
+        exporter's length scale (so give the parameters of the export).
+        """
+        cfg = self.config
+        s = (
+            default_length_scale(packing, cfg.units)
+            if cfg.length_scale is None
+            else cfg.length_scale
+        )
+        if packing.dimension != 3:
+            raise ConfigError("exporter 'lammps': reads the final states of 3D packings only")
+        if cfg.spheres == "granular" and granular_spheres(packing, cfg, s) is not None:
+            return read_sphere_dump(packing, path, cfg, s, "LAMMPS")
+        bodies = polyhedron_bodies(packing, cfg)
+        pivot = bodies.position - packing.centre[bodies.index]
+        settled: AnyPacking = read_body_dump(packing, path, bodies.index, pivot, s)
+        return settled
+
     def export(self, packing: AnyPacking, path: Path, *, analyses: Analyses = None) -> Path:
         """Write the data file and the input script; return the data file's path.
 
@@ -831,10 +873,15 @@ class LammpsExporter(Exporter[AnyPacking]):
                 "fix          integrate all nve/sphere",
                 *([] if g.periodic else walls),
                 "fix          weight all gravity ${g} vector 0 0 -1",
+                "compute      disp all displace/atom",
                 "",
                 "thermo_style custom step atoms ke pe",
                 "thermo       1000",
                 "run          ${steps}",
+                f"write_dump   all custom {dump_path(path).name} id type x y z radius mass "
+                'c_disp[1] c_disp[2] c_disp[3] c_disp[4] modify sort id format line "%d %d'
+                + " %.17g" * 9
+                + '"',
                 "",
             ]
         )
@@ -889,13 +936,33 @@ class LammpsExporter(Exporter[AnyPacking]):
                 *layout.walls,
                 f"fix          weight all gravity ${{g}} vector {style.gravity}",
                 *(["fix          plane all enforce2d"] if style.dimension == 2 else []),
+                *(self._final_state(path) if style.dimension == 3 else []),
                 "",
                 "thermo_style custom step atoms ke pe",
                 "thermo       1000",
                 "run          ${steps}",
+                *(self._final_dump(path) if style.dimension == 3 else []),
                 "",
             ]
         )
+
+    @staticmethod
+    def _final_state(path: Path) -> list[str]:
+        """Script lines that keep each body's start: its displacement and first orientation."""
+        return [
+            "compute      disp all displace/atom",
+            "compute      q all property/atom quatw quati quatj quatk",
+            "fix          q0 all store/state 0 c_q[1] c_q[2] c_q[3] c_q[4]",
+        ]
+
+    @staticmethod
+    def _final_dump(path: Path) -> list[str]:
+        """Script lines that write each body's final position, displacement and orientations."""
+        return [
+            f"write_dump   all custom {dump_path(path).name} id type x y z c_disp[1] c_disp[2] "
+            "c_disp[3] c_q[1] c_q[2] c_q[3] c_q[4] f_q0[1] f_q0[2] f_q0[3] f_q0[4] "
+            'modify sort id format line "%d %d' + " %.17g" * 14 + '"',
+        ]
 
 
 __getattr__ = renamed_names(

@@ -16,6 +16,7 @@ import pytest
 import shapely
 from packings3d import cube_and_sphere, packing3d, spheres3d
 
+import regopack
 from regopack.base.errors import ExportError
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.lammps_export import (
@@ -23,6 +24,7 @@ from regopack.plugins.exporters.lammps_export import (
     LammpsExporter,
     PolyhedronBodies,
     body_faces,
+    dump_path,
     lammps_bodies,
     polyhedron_bodies,
     reference_body,
@@ -502,7 +504,9 @@ def test_lammps_reads_back_polyhedra(polyhedra, tmp_path) -> None:
     try:
         os.chdir(tmp_path)
         script = script_path(path).read_text().splitlines()
-        lmp.commands_string("\n".join(line for line in script if not line.startswith("run")))
+        lmp.commands_string(
+            "\n".join(line for line in script if not line.startswith(("run", "write_dump")))
+        )
         lmp.command(f"write_data {tmp_path / 'back.data'}")
     finally:
         os.chdir(cwd)
@@ -543,6 +547,15 @@ def test_lammps_settles_polyhedra_under_gravity_inside_their_walls(hexahedra, tm
     lo, hi = hexahedra.domain.bounds().reshape(3, 2).T
     slack = 0.5 * r  # the contact springs let a body into a wall by a little
     assert np.all(verts[:, 1:4] - r > lo - slack) and np.all(verts[:, 1:4] + r < hi + slack)
+    # read back: the settled packing, exported again, puts every core where LAMMPS left it
+    settled = regopack.settled(hexahedra, dump_path(path), "lammps")
+    assert settled.stats["settled_steps"] == 400
+    again = polyhedron_bodies(settled)
+    for k, core in enumerate(again.cores):
+        ours = core.vertices + again.position[k]
+        theirs = verts[verts[:, 0] == k + 1, 1:4]
+        order = np.lexsort(ours.T[::-1]), np.lexsort(theirs.T[::-1])
+        np.testing.assert_allclose(ours[order[0]], theirs[order[1]], atol=1e-9)
 
 
 def test_lammps_runs_many_faced_bodies(polyhedra, tmp_path) -> None:
@@ -619,7 +632,9 @@ def test_a_packing_of_spheres_is_written_as_granular_spheres(sphere_packing, tmp
     cwd = os.getcwd()
     try:
         os.chdir(tmp_path)
-        lmp.commands_string("\n".join(s for s in script.splitlines() if not s.startswith("run")))
+        lmp.commands_string(
+            "\n".join(s for s in script.splitlines() if not s.startswith(("run", "write_dump")))
+        )
         dt = lmp.get_thermo("dt")
     finally:
         os.chdir(cwd)
@@ -692,3 +707,5 @@ def test_granular_spheres_fall_and_stay_inside_their_walls(sphere_packing, tmp_p
     slack = 0.05 * r.min()  # the Hertz contacts let a sphere into a wall by a little
     assert np.all(report["x"] - r > lo - slack) and np.all(report["x"] + r < hi + slack)
     assert (report["x"][:, 2] - r[:, 0]).min() < lo[2] + 0.001  # it reached the floor
+    settled = regopack.settled(sphere_packing, dump_path(path), "lammps")
+    np.testing.assert_allclose(settled.centre[sphere_packing.placed], report["x"], atol=1e-12)

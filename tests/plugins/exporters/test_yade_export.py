@@ -385,7 +385,8 @@ def test_exporters_without_a_state_and_2d_packings_are_refused(tmp_path, capsys)
     save(packing3d(), file)
     state = write_state(tmp_path / "s.txt", packing3d())
     assert main(["settled", str(file), str(state), "--from", "vtk"]) == 2
-    assert "exporter 'vtk' reads no state back; these do: liggghts, yade" in one_error_line(capsys)
+    line = one_error_line(capsys)
+    assert "exporter 'vtk' reads no state back; these do: lammps, liggghts, yade" in line
     plane = tmp_path / "plane.npz"
     save(packing_from_polygons([np.array([[0.0, 0], [1, 0], [0, 1]])]), plane)
     assert main(["settled", str(plane), str(state), "--from", "yade"]) == 2

@@ -1,0 +1,119 @@
+"""Read the final dump of LAMMPS bodies back into a packing.
+
+The ``lammps`` script of a 3D packing of bodies stores each body's first
+orientation (``fix store/state 0`` of its quaternion) and, after its run,
+writes ``<stem>.final.dump``: ``id type x y z``, the displacement of the centre
+of mass (``compute displace/atom``, unwrapped in a periodic box) and the
+quaternions now and at the start. :func:`read_body_dump` turns every body by
+the rotation from the one to the other about its centre of mass and moves it
+by its displacement.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from regopack.base.errors import PackingError, PackingFileError
+from regopack.packing.core import Packing
+from regopack.packing.motion import moved
+
+__all__ = ["BODY_DUMP_COLUMNS", "read_body_dump", "rotation_matrices"]
+
+FloatArray = NDArray[np.float64]
+
+BODY_DUMP_COLUMNS = (
+    "id type x y z c_disp[1] c_disp[2] c_disp[3] c_q[1] c_q[2] c_q[3] c_q[4] "
+    "f_q0[1] f_q0[2] f_q0[3] f_q0[4]"
+).split()
+"""The columns of the final dump of bodies, as the ``lammps`` script writes them."""
+
+
+def rotation_matrices(q: FloatArray) -> FloatArray:
+    """Rotation matrices ``(k, 3, 3)`` of quaternions ``(w, x, y, z)`` (normalised first).
+
+    Examples
+    --------
+    >>> rotation_matrices(np.array([[np.cos(0.5), 0, 0, np.sin(0.5)]])).round(6)[0, 0].tolist()
+    [0.540302, -0.841471, 0.0]
+    """
+    q = q / np.linalg.norm(q, axis=1, keepdims=True)
+    w, x, y, z = q.T
+    out: FloatArray = np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=1,
+    )
+    return out
+
+
+def read_body_dump(
+    packing: Packing[Any],
+    path: Path,
+    index: NDArray[np.int64],
+    pivot: FloatArray,
+    scale: float,
+) -> Packing[Any]:
+    """Return ``packing`` as the LAMMPS run whose final dump of bodies is ``path`` left it.
+
+    Parameters
+    ----------
+    packing
+        The exported 3D packing.
+    path
+        The dump (:data:`BODY_DUMP_COLUMNS`, sorted by id): body ``k`` is
+        particle ``index[k - 1]``.
+    index, pivot
+        Draw index of each body and its centre of mass relative to the
+        particle's reference point, in the packing's lengths.
+    scale
+        The export's length scale: the dump's lengths are divided by it.
+
+    Raises
+    ------
+    PackingFileError
+        One line naming ``path``, when it is no final dump of these bodies.
+    """
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PackingFileError(f"{path}: cannot read a LAMMPS dump: {err}") from err
+    heads = [k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")]
+    if len(heads) != 1 or len(lines) < 2 or not lines[0].startswith("ITEM: TIMESTEP"):
+        raise PackingFileError(f"{path}: not a LAMMPS dump of one time step")
+    if lines[heads[0]].split()[2:] != BODY_DUMP_COLUMNS:
+        raise PackingFileError(
+            f"{path}: its columns are not those of the lammps script's final dump of bodies "
+            f"({' '.join(BODY_DUMP_COLUMNS)})"
+        )
+    try:
+        table = np.array([line.split() for line in lines[heads[0] + 1 :]], dtype=np.float64)
+        step = float(lines[1])
+    except ValueError as err:
+        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
+    n = index.size
+    if table.ndim != 2 or table.shape != (n, len(BODY_DUMP_COLUMNS)):
+        raise PackingFileError(
+            f"{path}: {table.shape[0] if table.ndim == 2 else 0} bodies, but the packing has "
+            f"{n}; is it the dump of another packing?"
+        )
+    if not np.isfinite(table).all():
+        raise PackingFileError(f"{path}: a body's state is not finite (the run blew up)")
+    if not np.array_equal(table[:, 0], np.arange(1, n + 1)):
+        raise PackingFileError(f"{path}: its body ids are not 1 to {n} in order")
+    now, start = table[:, 8:12], table[:, 12:16]
+    if (np.linalg.norm(now, axis=1) < 0.5).any() or (np.linalg.norm(start, axis=1) < 0.5).any():
+        raise PackingFileError(f"{path}: a body's quaternion is not a unit quaternion")
+    turn = rotation_matrices(now) @ rotation_matrices(start).transpose(0, 2, 1)
+    try:
+        return moved(
+            packing, index, table[:, 5:8] / scale, turn, pivot, stats={"settled_steps": step}
+        )
+    except PackingError as err:
+        raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err
