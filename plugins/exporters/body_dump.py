@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from regopack.base.errors import PackingError, PackingFileError
 from regopack.packing.core import Packing
 from regopack.packing.motion import moved
+from regopack.plugins.exporters.granular_common import check_atoms, read_dump
 
 __all__ = ["BODY_DUMP_COLUMNS", "read_body_dump", "rotation_matrices"]
 
@@ -80,33 +81,13 @@ def read_body_dump(
     PackingFileError
         One line naming ``path``, when it is no final dump of these bodies.
     """
-    try:
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise PackingFileError(f"{path}: cannot read a LAMMPS dump: {err}") from err
-    heads = [k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")]
-    if len(heads) != 1 or len(lines) < 2 or not lines[0].startswith("ITEM: TIMESTEP"):
-        raise PackingFileError(f"{path}: not a LAMMPS dump of one time step")
-    if lines[heads[0]].split()[2:] != BODY_DUMP_COLUMNS:
+    step, columns, table = read_dump(path, "LAMMPS")
+    if columns != BODY_DUMP_COLUMNS:
         raise PackingFileError(
             f"{path}: its columns are not those of the lammps script's final dump of bodies "
             f"({' '.join(BODY_DUMP_COLUMNS)})"
         )
-    try:
-        table = np.array([line.split() for line in lines[heads[0] + 1 :]], dtype=np.float64)
-        step = float(lines[1])
-    except ValueError as err:
-        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
-    n = index.size
-    if table.ndim != 2 or table.shape != (n, len(BODY_DUMP_COLUMNS)):
-        raise PackingFileError(
-            f"{path}: {table.shape[0] if table.ndim == 2 else 0} bodies, but the packing has "
-            f"{n}; is it the dump of another packing?"
-        )
-    if not np.isfinite(table).all():
-        raise PackingFileError(f"{path}: a body's state is not finite (the run blew up)")
-    if not np.array_equal(table[:, 0], np.arange(1, n + 1)):
-        raise PackingFileError(f"{path}: its body ids are not 1 to {n} in order")
+    check_atoms(path, table, index.size, "bodies", table)
     now, start = table[:, 8:12], table[:, 12:16]
     if (np.linalg.norm(now, axis=1) < 0.5).any() or (np.linalg.norm(start, axis=1) < 0.5).any():
         raise PackingFileError(f"{path}: a body's quaternion is not a unit quaternion")

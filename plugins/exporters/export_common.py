@@ -56,6 +56,21 @@ def both_dimensions(
     )
 
 
+def scene_label(packing: Any) -> str:
+    r"""Return the packing's scene name as one line of printable text, for file comments.
+
+    A packing file from elsewhere may carry any name; a line break in it would
+    end a comment of a script and start a command.
+
+    Examples
+    --------
+    >>> scene_label(type("P", (), {"scene": {"name": "a\\nprint(1)"}})())
+    'a?print(1)'
+    """
+    name = str(packing.scene.get("name", "?"))
+    return "".join(c if c.isprintable() else "?" for c in name)
+
+
 def _num(value: float) -> str:
     """Shortest text that reads back to the same double (``nan`` for NaN)."""
     return repr(float(value))

@@ -22,7 +22,7 @@ from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import conversion, length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
-from regopack.plugins.exporters.export_common import _num
+from regopack.plugins.exporters.export_common import _num, scene_label
 from regopack.plugins.exporters.solid_export_common import placed_solids
 
 __all__ = [
@@ -30,13 +30,16 @@ __all__ = [
     "UNIT_STYLE_LENGTH",
     "Densities",
     "GranularSpheres",
+    "check_atoms",
     "check_finite",
     "default_length_scale",
     "density_note",
     "granular_spheres",
     "material_variable_lines",
     "mineral_densities",
+    "mineral_values",
     "rayleigh_step_lines",
+    "read_dump",
     "read_sphere_dump",
     "sphere_data",
 ]
@@ -93,17 +96,32 @@ def mineral_densities(packing: Any, config: Densities, exporter: str = "lammps")
     ConfigError
         One line, when ``mineral_density`` names a mineral the packing does not have.
     """
+    return mineral_values(
+        packing, config.density, config.mineral_density, "mineral_density", exporter
+    )
+
+
+def mineral_values(
+    packing: Any, default: float, by_name: dict[str, float], field: str, exporter: str
+) -> FloatArray:
+    """Return a value per mineral index: its ``by_name`` entry (field ``field``), else ``default``.
+
+    Raises
+    ------
+    ConfigError
+        One line, when ``by_name`` names a mineral the packing does not have.
+    """
     names = [str(n) for n in packing.mineral_names]
-    unknown = sorted(set(config.mineral_density) - set(names))
+    unknown = sorted(set(by_name) - set(names))
     if unknown:
         raise ConfigError(
-            f"exporter {exporter!r}: mineral_density names {unknown[0]!r}, not a mineral of this "
+            f"exporter {exporter!r}: {field} names {unknown[0]!r}, not a mineral of this "
             f"packing (its minerals: {', '.join(names)})"
         )
     n = max(1, len(names), int(packing.mineral.max(initial=-1)) + 1)
-    out = np.full(n, config.density)
+    out = np.full(n, default, dtype=np.float64)
     for k, name in enumerate(names):
-        out[k] = config.mineral_density.get(name, config.density)
+        out[k] = by_name.get(name, default)
     return out
 
 
@@ -203,7 +221,7 @@ def sphere_data(
     ]
     lines = [
         f"{program} data file from regopack {packing.version}: scene "
-        f"{packing.scene.get('name', '?')}, seed {packing.seed}, atom_style {style}",
+        f"{scene_label(packing)}, seed {packing.seed}, atom_style {style}",
         "",
         "# granular spheres: id, atom type (mineral index + 1), diameter, density, centre",
         f"# lengths = packing lengths ({length_unit(packing)}) x {_num(g.scale)}; "
@@ -286,14 +304,7 @@ def read_sphere_dump(
     from regopack.base.errors import PackingError, PackingFileError
     from regopack.packing.motion import moved
 
-    try:
-        lines = Path(path).read_text(encoding="utf-8").splitlines()
-    except (OSError, UnicodeDecodeError) as err:
-        raise PackingFileError(f"{path}: cannot read a {program} dump: {err}") from err
-    heads = [k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")]
-    if len(heads) != 1 or len(lines) < 2 or not lines[0].startswith("ITEM: TIMESTEP"):
-        raise PackingFileError(f"{path}: not a {program} dump of one time step")
-    columns = lines[heads[0]].split()[2:]
+    step, columns, table = read_dump(path, program)
     if columns[:6] != ["id", "type", "x", "y", "z", "radius"]:
         raise PackingFileError(
             f"{path}: its atoms' columns start with {' '.join(columns[:6])!r}, not "
@@ -302,21 +313,7 @@ def read_sphere_dump(
     spheres = granular_spheres(packing, config, scale, exporter=program.lower())
     if spheres is None:
         raise PackingFileError(f"{path}: the packing is not one of spheres alone")
-    try:
-        table = np.array([line.split() for line in lines[heads[0] + 1 :]], dtype=np.float64)
-        step = float(lines[1])
-    except ValueError as err:
-        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
-    n = spheres.index.size
-    if table.ndim != 2 or table.shape[0] != n or table.shape[1] != len(columns):
-        raise PackingFileError(
-            f"{path}: {table.shape[0] if table.ndim == 2 else 0} atoms, but the packing has "
-            f"{n} placed spheres; is it the dump of another packing?"
-        )
-    if not np.isfinite(table[:, :6]).all():
-        raise PackingFileError(f"{path}: an atom's position is not finite (the run blew up)")
-    if not np.array_equal(table[:, 0], np.arange(1, n + 1)):
-        raise PackingFileError(f"{path}: its atom ids are not 1 to {n} in order")
+    check_atoms(path, table, spheres.index.size, "placed spheres", table[:, :6])
     if not np.allclose(table[:, 5], spheres.radius, rtol=1e-9, atol=0.0):
         raise PackingFileError(
             f"{path}: its radii are not those of the packing's spheres times {scale!r}; "
@@ -327,3 +324,48 @@ def read_sphere_dump(
         return moved(packing, spheres.index, shift, stats={"settled_steps": step})
     except PackingError as err:
         raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err
+
+
+def read_dump(path: Path, program: str) -> tuple[float, list[str], FloatArray]:
+    """Read a dump of one time step: its step, its atoms' columns and their values.
+
+    Raises
+    ------
+    PackingFileError
+        One line naming ``path``, when it is unreadable, holds no single time
+        step, or a value is not a number or a row has another length.
+    """
+    from regopack.base.errors import PackingFileError
+
+    try:
+        lines = Path(path).read_text(encoding="utf-8").splitlines()
+    except (OSError, UnicodeDecodeError) as err:
+        raise PackingFileError(f"{path}: cannot read a {program} dump: {err}") from err
+    heads = [k for k, line in enumerate(lines) if line.startswith("ITEM: ATOMS")]
+    if len(heads) != 1 or len(lines) < 2 or not lines[0].startswith("ITEM: TIMESTEP"):
+        raise PackingFileError(f"{path}: not a {program} dump of one time step")
+    columns = lines[heads[0]].split()[2:]
+    rows = [line.split() for line in lines[heads[0] + 1 :] if line.strip()]
+    if any(len(row) != len(columns) for row in rows):
+        raise PackingFileError(f"{path}: a row does not have the {len(columns)} columns")
+    try:
+        table = np.array(rows, dtype=np.float64).reshape(-1, len(columns))
+        step = float(lines[1])
+    except ValueError as err:
+        raise PackingFileError(f"{path}: a value is not a number ({err})") from err
+    return step, columns, table
+
+
+def check_atoms(path: Path, table: FloatArray, n: int, what: str, state: FloatArray) -> None:
+    """Refuse a dump whose rows are not ``n`` atoms with ids 1 to ``n`` and a finite ``state``."""
+    from regopack.base.errors import PackingFileError
+
+    if table.shape[0] != n:
+        raise PackingFileError(
+            f"{path}: {table.shape[0]} atoms, but the packing has {n} {what}; is it the dump "
+            "of another packing?"
+        )
+    if not np.isfinite(state).all():
+        raise PackingFileError(f"{path}: an atom's state is not finite (the run blew up)")
+    if not np.array_equal(table[:, 0], np.arange(1, n + 1)):
+        raise PackingFileError(f"{path}: its atom ids are not 1 to {n} in order")

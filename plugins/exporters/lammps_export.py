@@ -76,7 +76,13 @@ from regopack.base.units import length_scale, length_unit
 from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.body_dump import read_body_dump
-from regopack.plugins.exporters.export_common import Analyses, AnyPacking, _num, _write_text
+from regopack.plugins.exporters.export_common import (
+    Analyses,
+    AnyPacking,
+    _num,
+    _write_text,
+    scene_label,
+)
 from regopack.plugins.exporters.granular_common import RAYLEIGH_FRACTION as RAYLEIGH_FRACTION
 from regopack.plugins.exporters.granular_common import UNIT_STYLE_LENGTH as UNIT_STYLE_LENGTH
 from regopack.plugins.exporters.granular_common import GranularSpheres as GranularSpheres
@@ -805,7 +811,7 @@ class LammpsExporter(Exporter[AnyPacking]):
         lo, hi = layout.lo, layout.hi
         lines = [
             f"LAMMPS data file from regopack {packing.version}: scene "
-            f"{packing.scene.get('name', '?')}, seed {packing.seed}, "
+            f"{scene_label(packing)}, seed {packing.seed}, "
             f"atom_style body rounded/{style.body} {layout.n_min} {layout.n_max}",
             "",
             f"# {style.body} bodies: {style.eroded} eroded by the {rounding_note}; the Bodies "
@@ -846,7 +852,7 @@ class LammpsExporter(Exporter[AnyPacking]):
         return "\n".join(
             [
                 f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
-                f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+                f"(scene {scene_label(packing)}, seed {packing.seed}).",
                 f"# Run it in this folder: lmp -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var E 7e7 -var steps 50000.",
                 "# Domain: "
@@ -895,7 +901,7 @@ class LammpsExporter(Exporter[AnyPacking]):
         return "\n".join(
             [
                 f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
-                f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+                f"(scene {scene_label(packing)}, seed {packing.seed}).",
                 f"# Run it in this folder: lmp -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var k_n 1e5 -var steps 50000.",
                 *layout.domain,

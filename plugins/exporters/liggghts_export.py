@@ -45,7 +45,7 @@ from regopack.base.errors import ExportError
 from regopack.base.units import length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
-from regopack.plugins.exporters.export_common import Analyses, _num, _write_text
+from regopack.plugins.exporters.export_common import Analyses, _num, _write_text, scene_label
 from regopack.plugins.exporters.granular_common import (
     RAYLEIGH_FRACTION,
     GranularSpheres,
@@ -258,7 +258,7 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
         return "\n".join(
             [
                 f"# LIGGGHTS input for {path.name}, written by regopack {packing.version} "
-                f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+                f"(scene {scene_label(packing)}, seed {packing.seed}).",
                 f"# Run it in this folder: liggghts -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var E 7e7 -var steps 50000.",
                 "# Domain: "

@@ -28,6 +28,7 @@ from regopack.base.errors import ConfigError
 from regopack.base.units import check_length_unit, conversion, length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
+from regopack.plugins.exporters.export_common import scene_label
 from regopack.plugins.exporters.solid_export_common import fan_triangles, placed_solids, write_bytes
 from regopack.registry.interfaces import Analyzer, Exporter
 
@@ -107,7 +108,7 @@ class StlExporter(Exporter[Packing[Box]]):
         records["vertices"] = tris
         text = (
             f"regopack {packing.version} 3D packing, unit {unit.replace('µ', 'u')}, "
-            f"scene {packing.scene.get('name', '?')}, seed {packing.seed}, "
+            f"scene {scene_label(packing)}, seed {packing.seed}, "
             f"{packing.n_placed} particles"
         )
         header = text.encode("ascii", "replace")[:80].ljust(80, b" ")

@@ -29,7 +29,7 @@ volume of overlap: the script gives the polyhedra ``young /
 volumetric_length``, ``volumetric_length`` being the packing's smallest
 equivalent diameter by default, so that a contact between the smallest
 grains is about as stiff as one between spheres of that size. The time step
-is ``dt_fraction`` of the shortest oscillation period a body can have on its
+is ``dt_fraction`` of the shortest characteristic time a body can have on its
 stiffest contact: YADE's P-wave time step of the spheres, and
 ``√(m / (k D²))`` of each polyhedron (mass ``m``, circumscribed diameter
 ``D``, ``k`` the volumetric stiffness).
@@ -55,8 +55,8 @@ from regopack.base.errors import ExportError
 from regopack.base.units import conversion, length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
-from regopack.plugins.exporters.export_common import Analyses, _num, _write_text
-from regopack.plugins.exporters.granular_common import mineral_densities
+from regopack.plugins.exporters.export_common import Analyses, _num, _write_text, scene_label
+from regopack.plugins.exporters.granular_common import mineral_densities, mineral_values
 from regopack.plugins.exporters.solid_export_common import (
     PlacedSolid,
     mass_properties,
@@ -187,7 +187,7 @@ class YadeConfig(BaseModel):
         gt=0,
         le=1,
         description=(
-            "Time step as a fraction of the shortest oscillation period of a body on its "
+            "Time step as a fraction of the shortest characteristic time of a body on its "
             "stiffest contact (safety factor; no unit)."
         ),
     )
@@ -260,6 +260,7 @@ class YadeExporter(Exporter[Packing[Box]]):
             )
         if packing.domain.periodic:
             _check_cell(packing, solids)
+        _check_reach(packing, solids, scale)
         _write_text(bodies_path(path), _bodies_text(packing, solids, scale))
         text = _script(
             packing,
@@ -339,6 +340,24 @@ def read_yade_state(packing: Packing[Box], path: Path, scale: float) -> Packing[
         raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err
 
 
+MAX_COORDINATE = 1.0e4
+"""Largest coordinate of a polyhedron's vertex in the script's lengths: YADE 2023.02a built
+polyhedra up to 10⁴ and crashed or kept no vertex at 10⁵ and beyond."""
+
+
+def _check_reach(packing: Packing[Box], solids: list[PlacedSolid], scale: float) -> None:
+    """Refuse polyhedra whose vertices lie farther than MAX_COORDINATE from the origin."""
+    box = packing.domain
+    origin = box.bounds().reshape(3, 2)[:, 0] if box.periodic else np.zeros(3)
+    reach = max((float(np.abs(p.world - origin).max()) for p in solids if p.loops), default=0.0)
+    if reach * scale > MAX_COORDINATE:
+        raise ExportError(
+            f"exporter 'yade': a polyhedron's vertex lies at {reach * scale:.3g} in the script's "
+            f"lengths (length_scale = {scale!r}); YADE builds polyhedra only up to "
+            f"{MAX_COORDINATE:g}: give a smaller length_scale"
+        )
+
+
 def _check_cell(packing: Packing[Box], solids: list[PlacedSolid]) -> None:
     """Refuse a periodic box in which a body is half a side across (YADE's cell refuses it)."""
     side = np.diff(packing.domain.bounds().reshape(3, 2), axis=1)[:, 0]
@@ -358,20 +377,8 @@ def _check_cell(packing: Packing[Box], solids: list[PlacedSolid]) -> None:
 
 def _mineral_friction(packing: Packing[Box], cfg: YadeConfig) -> list[float]:
     """Friction coefficient of each mineral (the mineral index's entry)."""
-    from regopack.base.errors import ConfigError
-
-    names = [str(n) for n in packing.mineral_names]
-    unknown = sorted(set(cfg.mineral_friction) - set(names))
-    if unknown:
-        raise ConfigError(
-            f"exporter 'yade': mineral_friction names {unknown[0]!r}, not a mineral of this "
-            f"packing (its minerals: {', '.join(names)})"
-        )
-    n = max(1, len(names), int(packing.mineral.max(initial=-1)) + 1)
-    out = [cfg.friction] * n
-    for k, name in enumerate(names):
-        out[k] = cfg.mineral_friction.get(name, cfg.friction)
-    return out
+    values = mineral_values(packing, cfg.friction, cfg.mineral_friction, "mineral_friction", "yade")
+    return [float(v) for v in values]
 
 
 def _equivalent_diameter(p: PlacedSolid) -> float:
@@ -391,7 +398,7 @@ def _bodies_text(packing: Packing[Box], solids: list[PlacedSolid], scale: float)
     box = packing.domain
     origin = box.bounds().reshape(3, 2)[:, 0] if box.periodic else np.zeros(3)
     lines = [
-        f"# bodies of {packing.scene.get('name', '?')} (seed {packing.seed}), regopack "
+        f"# bodies of {scene_label(packing)} (seed {packing.seed}), regopack "
         f"{packing.version}: draw index, mineral index, vertices, radius, coordinates",
         f"# coordinates = (packing lengths ({length_unit(packing)}) - origin) x {_num(scale)}, "
         f"origin {' '.join(_num(x) for x in origin)}",
@@ -436,7 +443,7 @@ def _script(
     engines = _engines(spheres, polyhedra)
     head = [
         f"# YADE scene of {bodies_path(path).name}, written by regopack {packing.version} "
-        f"(scene {packing.scene.get('name', '?')}, seed {packing.seed}).",
+        f"(scene {scene_label(packing)}, seed {packing.seed}).",
         f"# Build the scene and exit:    yade -n -x {path.name}",
         f"# Build it and run 5000 steps: yade -n -x {path.name} --run 5000 [--gravity 9.81]",
         f"#   (then {state_path(path).name}: every body's centroid, displacement and rotation)",
@@ -462,7 +469,7 @@ def _script(
         f"YOUNG = {_num(cfg.youngs_modulus)}  # Young's modulus of grains and walls (--young)",
         f"POISSON = {_num(cfg.poisson_ratio)}  # Poisson's ratio",
         f"DAMPING = {_num(cfg.damping)}  # NewtonIntegrator's local damping (--damping)",
-        f"DT_FRACTION = {_num(cfg.dt_fraction)}  # of the shortest period (--dt-fraction)",
+        f"DT_FRACTION = {_num(cfg.dt_fraction)}  # of the shortest contact time (--dt-fraction)",
         f"VOLUMETRIC_LENGTH = {_num(kappa_length)}  # polyhedra: stiffness per overlap volume "
         "YOUNG / VOLUMETRIC_LENGTH",
         f"DENSITY = {_dict_text(names, density)}  # by mineral",
@@ -527,6 +534,12 @@ def _engines(spheres: bool, polyhedra: bool) -> str:
 _SCRIPT_BODY = '''
 DRAW_INDEX = {}
 """The packing's draw index of each body, by YADE body id."""
+FOLDER = "."
+"""The folder of the bodies file read, where save_state writes the state by default."""
+SPHERE_MASK, POLYHEDRA_MASK = 0b101, 0b110
+"""Collision masks: spheres and polyhedra meet each other (bit 3) ..."""
+SPHERE_WALL_MASK, POLYHEDRA_WALL_MASK = 0b001, 0b010
+"""... and each kind the walls of its own material."""
 
 
 def _options(argv):
@@ -540,11 +553,15 @@ def _options(argv):
     return parser.parse_known_args(argv)[0]
 
 
-def _beside(name):
-    """A file beside this script when yade runs it, else in the working folder."""
+def _bodies_file():
+    """The bodies file: REGOPACK_BODIES when a script of yours set it before exec, else
+    the file of that name beside the script yade runs, else in the working folder."""
+    given = globals().get("REGOPACK_BODIES")
+    if given:
+        return given
     folder = os.path.dirname(os.path.abspath(sys.argv[0])) if sys.argv and sys.argv[0] else ""
-    there = os.path.join(folder, name)
-    return there if folder and os.path.exists(there) else name
+    there = os.path.join(folder, BODIES)
+    return there if folder and os.path.exists(there) else BODIES
 
 
 def _material(polyhedra, friction, density, label):
@@ -562,7 +579,7 @@ def _material(polyhedra, friction, density, label):
 
 def _materials():
     """Per mineral, a material for its spheres and one for its polyhedra (those present),
-    and one for the walls (of polyhedra where there are polyhedra)."""
+    and the walls' for each kind present."""
     kinds = {}
     for name in DENSITY:
         kinds[name] = tuple(
@@ -571,15 +588,21 @@ def _materials():
             for polyhedra, kind, present in ((False, "spheres", SPHERES),
                                              (True, "polyhedra", POLYHEDRA))
         )
-    wall = _material(POLYHEDRA, WALL_FRICTION, 1000.0, "walls")
-    return kinds, wall
+    walls = [(_material(polyhedra, WALL_FRICTION, 1000.0, "walls of " + kind), mask)
+             for polyhedra, kind, mask, present in (
+                 (False, "spheres", SPHERE_WALL_MASK, SPHERES),
+                 (True, "polyhedra", POLYHEDRA_WALL_MASK, POLYHEDRA)) if present]
+    return kinds, walls
 
 
 def _bodies(kinds):
     """Read the bodies file: every placed particle as a YADE body, in draw order."""
     names = list(DENSITY)
     bodies = []
-    with open(_beside(BODIES)) as lines:
+    global FOLDER
+    source = _bodies_file()
+    FOLDER = os.path.dirname(os.path.abspath(source))
+    with open(source) as lines:
         for line in lines:
             if line.startswith("#") or not line.strip():
                 continue
@@ -588,10 +611,15 @@ def _bodies(kinds):
             xyz = [float(w) for w in words[4:4 + 3 * n]]
             sphere_mat, polyhedra_mat = kinds[names[mineral]]
             if radius > 0:
-                body = utils.sphere(xyz[:3], radius, material=sphere_mat)
+                body = utils.sphere(xyz[:3], radius, material=sphere_mat, mask=SPHERE_MASK)
             else:
                 points = [Vector3(*xyz[3 * k:3 * k + 3]) for k in range(n)]
-                body = polyhedra_utils.polyhedra(polyhedra_mat, v=points)
+                body = polyhedra_utils.polyhedra(polyhedra_mat, v=points, mask=POLYHEDRA_MASK)
+                if len(body.shape.v) < 4:
+                    raise RuntimeError(
+                        "YADE could not build polyhedron %d from its vertices (%d kept): "
+                        "export with a length_scale that keeps coordinates near 1" % (
+                            index, len(body.shape.v)))
             bodies.append((index, body))
     ids = O.bodies.append([body for _, body in bodies])
     for body_id, (index, body) in zip(ids, bodies):
@@ -600,34 +628,39 @@ def _bodies(kinds):
         DRAW_INDEX[body_id] = index
 
 
-def _walls(wall):
-    """The six walls of a walled box (sense: towards the inside), or YADE's periodic cell."""
+def _walls(walls):
+    """The six walls of a walled box (sense: towards the inside), or YADE's periodic cell.
+
+    Spheres and polyhedra meet walls of their own material (the masks keep the
+    others apart): YADE has no functor for a sphere and a wall of polyhedra."""
     if PERIODIC:
         O.periodic = True
         O.cell.setBox(UPPER)
         return
-    for axis in range(3):
-        O.bodies.append(utils.wall(LOWER[axis], axis=axis, sense=1, material=wall))
-        O.bodies.append(utils.wall(UPPER[axis], axis=axis, sense=-1, material=wall))
+    for material, mask in walls:
+        for axis in range(3):
+            for where, sense in ((LOWER[axis], 1), (UPPER[axis], -1)):
+                O.bodies.append(utils.wall(where, axis=axis, sense=sense, material=material,
+                                           mask=mask))
 
 
 def time_step():
-    """DT_FRACTION of the shortest period of a body on its stiffest contact."""
-    periods = []
+    """DT_FRACTION of the shortest characteristic time of a body on its stiffest contact."""
+    times = []
     kappa = YOUNG / VOLUMETRIC_LENGTH
     for body in O.bodies:
         if isinstance(body.shape, Polyhedra):
             size = 2.0 * max(v.norm() for v in body.shape.v)
-            periods.append(math.sqrt(body.state.mass / (kappa * size * size)))
+            times.append(math.sqrt(body.state.mass / (kappa * size * size)))
     if any(isinstance(body.shape, Sphere) for body in O.bodies):
-        periods.append(utils.PWaveTimeStep())
-    return DT_FRACTION * min(periods) if periods else O.dt
+        times.append(utils.PWaveTimeStep())
+    return DT_FRACTION * min(times) if times else O.dt
 
 
 def build():
     """Create the materials, the walls or the cell, the bodies, the engines and the step."""
-    kinds, wall = _materials()
-    _walls(wall)
+    kinds, walls = _materials()
+    _walls(walls)
     _bodies(kinds)
     verlet = VERLET
     O.engines = [
@@ -645,7 +678,7 @@ def save_state(path=None):
         moved = state.pos - state.refPos
         values = list(state.pos) + list(moved) + [turn[i, j] for i in range(3) for j in range(3)]
         rows.append(str(index) + " " + " ".join(repr(float(x)) for x in values))
-    target = path or _beside(STATE)
+    target = path or os.path.join(FOLDER, STATE)
     with open(target + ".part", "w") as out:
         out.write(STATE_FORMAT + "\\n")
         out.write("# steps %d, time %r, dt %r, length scale %r, bodies %d\\n"

@@ -60,7 +60,7 @@ def test_wrong_dumps_are_refused_in_one_line(tmp_path) -> None:
     index, pivot = np.array([0, 1]), np.zeros((2, 3))
     cases = [
         (dump(tmp_path / "a", good, BODY_DUMP_COLUMNS[:-1] + ["x"]), "its columns are not"),
-        (dump(tmp_path / "b", good[:1]), "1 bodies, but the packing has 2"),
+        (dump(tmp_path / "b", good[:1]), "1 atoms, but the packing has 2 bodies"),
         (dump(tmp_path / "c", rows_of(q * 0, q, np.zeros((2, 3)))), "not a unit quaternion"),
         (dump(tmp_path / "d", good[::-1]), "ids are not 1 to 2"),
     ]

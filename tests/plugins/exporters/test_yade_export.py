@@ -15,6 +15,7 @@ import pytest
 from cli_helpers import one_error_line
 from packings3d import cube_and_sphere, packing3d, spheres3d
 from pydantic import ValidationError
+from scipy.spatial.transform import Rotation
 
 import regopack
 from regopack.base.errors import ConfigError, ExportError
@@ -177,8 +178,13 @@ def read_state(path: Path) -> tuple[dict[str, float], np.ndarray]:
     return {k: float(v) for k, v in head.items()}, table
 
 
-def check_bodies(path: Path, packing: Packing, density: float = 3100.0) -> None:
-    """YADE built every placed particle with its exact vertices, volume and mass."""
+def check_bodies(
+    path: Path, packing: Packing, density: dict[str, float] | None = None, origin=(0, 0, 0)
+) -> None:
+    """YADE built every placed particle with its exact vertices, volume and mass.
+
+    ``density`` by mineral name (3100 for the others); ``origin``: the corner
+    that the script's frame starts at (a periodic box's lower corner)."""
     check = path.with_name("check.py")
     check.write_text(CHECK.format(script=path.name))
     run_yade(check)
@@ -190,25 +196,28 @@ def check_bodies(path: Path, packing: Packing, density: float = 3100.0) -> None:
         mass, volume, n = float(row[1]), float(row[2]), int(float(row[3]))
         points = np.array(row[4:], dtype=float).reshape(n, 3)
         if p.loops:
-            want = p.world * scale
+            want = (p.world - origin) * scale
             exact = mass_properties(p.local, p.loops)[0] * scale**3
         else:
-            want = p.centre[None, :] * scale
+            want = (p.centre[None, :] - origin) * scale
             exact = 4 / 3 * math.pi * (p.rounding * scale) ** 3
+        name = packing.mineral_names[packing.mineral[p.index]]
+        rho = (density or {}).get(name, 3100.0)
         # YADE keeps the vertices of the convex hull in its principal frame: the same
         # points, in another order, within rounding
         order = np.lexsort(points.T[::-1]), np.lexsort(want.T[::-1])
         np.testing.assert_allclose(points[order[0]], want[order[1]], rtol=0, atol=1e-12 * scale)
         assert volume == pytest.approx(exact, rel=1e-12)
-        assert mass == pytest.approx(density * exact, rel=1e-12)
+        assert mass == pytest.approx(rho * exact, rel=1e-12)
 
 
 def test_yade_builds_every_polyhedron_exactly_and_holds_the_packing_still(tmp_path) -> None:
     """505 polyhedra of the dem3d scene: exact bodies, then steps without gravity."""
     packing = dem3d_like()
     assert packing.n_placed >= 500
-    path = YadeExporter().export(packing, tmp_path / "p.py")
-    check_bodies(path, packing)
+    density = {"ilmenite": 4700.0, "glass": 2400.0}
+    path = YadeExporter(YadeConfig(mineral_density=density)).export(packing, tmp_path / "p.py")
+    check_bodies(path, packing, density)
     out = run_yade(path, "--run", "20")
     assert f"regopack: {packing.n_placed} bodies" in out
     head, state = read_state(path)
@@ -307,9 +316,16 @@ def test_yade_holds_spheres_still_and_settles_them(tmp_path) -> None:
 
 def test_yade_runs_spheres_in_a_periodic_cell(tmp_path) -> None:
     packing = spheres3d(30.0)
-    periodic = dataclasses.replace(packing, domain=PeriodicBox(*packing.domain.bounds()))
+    shift = np.array([-40.0, 5.0, -12.5])  # a box whose lower corner is not the origin
+    lo, hi = packing.domain.bounds().reshape(3, 2).T + shift
+    periodic = dataclasses.replace(
+        packing,
+        domain=PeriodicBox(lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]),
+        centre=packing.centre + shift,
+    )
     path = YadeExporter().export(periodic, tmp_path / "p.py")
     assert "PERIODIC = True" in path.read_text()
+    check_bodies(path, periodic, origin=lo)
     run_yade(path, "--run", "1000")
     _, state = read_state(path)
     assert np.isfinite(state).all() and state.shape[0] == periodic.n_placed
@@ -391,3 +407,79 @@ def test_exporters_without_a_state_and_2d_packings_are_refused(tmp_path, capsys)
     save(packing_from_polygons([np.array([[0.0, 0], [1, 0], [0, 1]])]), plane)
     assert main(["settled", str(plane), str(state), "--from", "yade"]) == 2
     assert "3D packings only" in one_error_line(capsys)
+
+
+def test_a_sphere_on_the_floor_beside_polyhedra_runs(tmp_path) -> None:
+    """Spheres and polyhedra meet walls of their own material (YADE asserts otherwise)."""
+    packing = dataclasses.replace(cube_and_sphere(), centre=np.array([[3.0, 3, 5], [7.0, 3, 1]]))
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    run_yade(path, "--run", "50", "--gravity", "1e6")
+    _, state = read_state(path)
+    assert np.isfinite(state).all() and state[0, 6] < 0  # the cube falls onto the floor
+    assert abs(state[1, 6]) < 1e-3 * 1e-6  # the sphere rests on it
+
+
+def test_the_state_goes_beside_the_bodies_whatever_the_working_folder(tmp_path) -> None:
+    (tmp_path / "runs").mkdir()
+    (tmp_path / "mine").mkdir()
+    path = YadeExporter().export(packing3d(), tmp_path / "runs" / "p.py")
+    runner = tmp_path / "mine" / "go.py"  # a script of the user's, in another folder
+    runner.write_text(
+        "REGOPACK_BODIES = '../runs/p.bodies'\n"
+        "exec(open('../runs/p.py').read())\n"
+        "O.run(2, True)\n"
+        "save_state()\n"
+    )
+    run_yade(runner)
+    assert state_path(path).exists() and not list((tmp_path / "mine").glob("*.final.txt"))
+    state_path(path).unlink()
+    done = subprocess.run(  # yade started from elsewhere on the script itself
+        [YADE, "-f1", "-n", "-x", "runs/p.py", "--run", "2"],
+        cwd=tmp_path,
+        capture_output=True,
+        timeout=300,
+        check=False,
+    )
+    assert done.returncode == 0 and state_path(path).exists()
+
+
+AXIS = np.array([0.3, -0.5, 0.8]) / np.linalg.norm([0.3, -0.5, 0.8])
+"""A unit axis (YADE's Quaternion(axis, angle) takes it as it is)."""
+
+
+def test_a_turned_body_reads_back_turned(tmp_path) -> None:
+    """A polyhedron turned by hand in YADE: the state's rotation and the settled vertices."""
+    packing = packing3d()
+    path = YadeExporter().export(packing, tmp_path / "p.py")
+    (tmp_path / "turn.py").write_text(
+        SETTLE.format(script=path.name, g=0.0, steps=1).replace(
+            "save_state()",
+            "b = O.bodies[min(DRAW_INDEX)]\n"
+            f"b.state.ori = Quaternion({tuple(AXIS.tolist())!r}, 1.1) * b.state.ori\n"
+            "b.state.pos = b.state.pos + Vector3(1e-7, 0, -2e-7)\n"
+            "save_state()",
+        )
+    )
+    run_yade(tmp_path / "turn.py")
+    _, state = read_state(path)
+    want = Rotation.from_rotvec(1.1 * AXIS).as_matrix()
+    np.testing.assert_allclose(state[0, 7:].reshape(3, 3), want, atol=1e-12)
+    settled = regopack.settled(packing, state_path(path), "yade")
+    after = path.with_name("bodies.after").read_text().splitlines()
+    j = int(np.flatnonzero(packing.placed)[0])
+    yade_points = np.array(after[0].split(), dtype=float).reshape(-1, 3) / 1e-6
+    ours = settled.world_vertices(j)
+    order = np.lexsort(yade_points.T[::-1]), np.lexsort(ours.T[::-1])
+    np.testing.assert_allclose(yade_points[order[0]], ours[order[1]], atol=1e-9)
+    assert np.abs(ours - packing.world_vertices(j)).max() > 0.1  # it did turn
+
+
+def test_far_coordinates_and_odd_scene_names(tmp_path) -> None:
+    with pytest.raises(ExportError, match="YADE builds polyhedra only up to 10000"):
+        YadeExporter(YadeConfig(length_scale=1e4)).export(packing3d(), tmp_path / "p.py")
+    odd = dataclasses.replace(packing3d(), scene={"name": "a\nprint('INJECTED')"})
+    path = YadeExporter().export(odd, tmp_path / "q.py")
+    text = path.read_text()
+    compile(text, "q.py", "exec")
+    assert "\nprint('INJECTED')" not in text
+    assert "a?print('INJECTED')" in text.splitlines()[0]
