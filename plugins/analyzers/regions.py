@@ -145,8 +145,10 @@ def disk_areas(geoms: NDArray[np.object_], centre: Centre, radius: float) -> Flo
     a, b = coords[:-1][same] - c, coords[1:][same] - c
     owner = part_of[ring[:-1][same]]
     d = b - a
+    dd = np.einsum("ij,ij->i", d, d)
+    edge = dd > 0  # a repeated vertex closes no triangle (and has no direction)
+    a, b, d, dd, owner = a[edge], b[edge], d[edge], dd[edge], owner[edge]
     r2 = radius * radius
-    dd = np.maximum(np.einsum("ij,ij->i", d, d), 1e-300)
     mid = -np.einsum("ij,ij->i", a, d) / dd
     disc = mid * mid - (np.einsum("ij,ij->i", a, a) - r2) / dd
     root = np.sqrt(np.maximum(disc, 0.0))
