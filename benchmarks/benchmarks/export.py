@@ -71,7 +71,7 @@ class Export2D(_Export):
 class Export3D(_Export):
     """3D exporters on the polyhedra of the 60 µm cube."""
 
-    params = ["vtk", "stl", "lammps", "gsd", "slice"]
+    params = ["vtk", "stl", "lammps", "gsd", "slice", "yade"]
     param_names = ["exporter"]
     key = "polyhedra"
 

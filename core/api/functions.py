@@ -622,8 +622,6 @@ def settled(
         raise ConfigError(f"exporter: expected an exporter's name, not {type(exporter).__name__}")
     loaded = _packing(packing)
     built = build_exporter(reg, exporter, dict(params or {}), source=params_source)
-    if loaded.dimension != 3:
-        raise ConfigError(f"exporter {exporter!r}: reads the states of 3D packings only")
     try:
         moved: Packing = built.read_state(loaded, Path(state))
     except NotImplementedError:

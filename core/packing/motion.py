@@ -1,8 +1,8 @@
 """Rigid motions of a packing's particles: the packing as a simulation left it.
 
 A DEM code moves and turns the particles it was given; :func:`moved` applies
-such motions to a 3D :class:`~regopack.packing.core.Packing` and returns the
-moved packing, which every analysis reads as it reads the packing itself
+such motions to a :class:`~regopack.packing.core.Packing` of either
+dimension and returns the moved packing, which every analysis reads as it reads the packing itself
 (contacts, φ, Z, the fabric, g(r)), so that a sample can be compared before
 and after settling.
 """
@@ -52,16 +52,16 @@ def moved(
     Parameters
     ----------
     packing
-        A 3D packing.
+        A packing of dimension ``d`` (2 or 3).
     index
         Draw indices of the particles that move (placed particles, each once).
     shift
-        ``(k, 3)`` displacement of each one's pivot, in the packing's lengths.
+        ``(k, d)`` displacement of each one's pivot, in the packing's lengths.
     turn
-        ``(k, 3, 3)`` rotation matrices, each about its particle's pivot; none:
+        ``(k, d, d)`` rotation matrices, each about its particle's pivot; none:
         the particles keep their orientation.
     pivot
-        ``(k, 3)`` point of each particle, relative to its reference point
+        ``(k, d)`` point of each particle, relative to its reference point
         (``centre``), that moves by ``shift`` and about which it turns (its
         centroid, as DEM codes turn bodies); none: the reference point.
     stats
@@ -73,7 +73,8 @@ def moved(
         The same particles, draw order, minerals and domain; the centres of
         the moved particles in a periodic box are wrapped into it. The
         vertices, face normals and supports of each turned polyhedron are
-        turned, and its ``rotation`` composed with the turn.
+        turned, and its ``rotation`` composed with the turn; in 2D the
+        outline is turned and the turn's angle added to ``orientation``.
 
     Raises
     ------
@@ -89,18 +90,17 @@ def moved(
     >>> moved(p, np.array([1]), np.array([[0.0, 0, -0.5]])).centre.tolist()
     [[1.0, 1.0, 1.0], [3.0, 1.0, 0.5]]
     """
-    if packing.dimension != 3:
-        raise PackingError("moved: a 3D packing is needed")
+    dim = packing.dimension
     index = np.asarray(index, dtype=np.int64)
     k = index.size
     shift = np.asarray(shift, dtype=np.float64)
-    checks: list[tuple[str, FloatArray, tuple[int, ...]]] = [("shift", shift, (k, 3))]
+    checks: list[tuple[str, FloatArray, tuple[int, ...]]] = [("shift", shift, (k, dim))]
     if turn is not None:
         turn = np.asarray(turn, dtype=np.float64)
-        checks.append(("turn", turn, (k, 3, 3)))
+        checks.append(("turn", turn, (k, dim, dim)))
     if pivot is not None:
         pivot = np.asarray(pivot, dtype=np.float64)
-        checks.append(("pivot", pivot, (k, 3)))
+        checks.append(("pivot", pivot, (k, dim)))
     for name, array, shape in checks:
         if array.shape != shape:
             raise PackingError(f"moved: {name} has shape {array.shape}, expected {shape}")
@@ -112,23 +112,41 @@ def moved(
     if np.unique(index).size != k:
         raise PackingError("moved: a particle is given twice")
     if turn is not None:
-        error = np.abs(np.einsum("kij,kil->kjl", turn, turn) - np.eye(3)).max(initial=0.0)
+        error = np.abs(np.einsum("kij,kil->kjl", turn, turn) - np.eye(dim)).max(initial=0.0)
         if error > 1e-6 or (k and np.linalg.det(turn).min() <= 0):
             raise PackingError("moved: a turn is not a rotation matrix")
-    g = np.zeros((k, 3)) if pivot is None else pivot
+    g = np.zeros((k, dim)) if pivot is None else pivot
     centre = packing.centre.copy()
     centre[index] += shift
     box = packing.domain
     if box.periodic:
-        lo, hi = box.bounds().reshape(3, 2).T
+        lo, hi = box.bounds().reshape(dim, 2).T
         centre[index] = lo + np.mod(centre[index] - lo, hi - lo)
     changes: dict[str, Any] = {
         "centre": centre,
         "stats": {**packing.stats, **(stats or {})},
     }
     if turn is not None:
-        changes.update(_turned(packing, index, turn, g))
+        changes.update(
+            _turned(packing, index, turn, g) if dim == 3 else _turned2(packing, index, turn, g)
+        )
     return dataclasses.replace(packing, **changes)
+
+
+def _turned2(
+    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray, pivot: FloatArray
+) -> dict[str, FloatArray]:
+    """Outlines and orientations of the 2D packing with ``index`` turned."""
+    vertices = packing.vertices.copy()
+    orientation = packing.orientation.copy()
+    offsets = packing.offsets
+    for r, j, g in zip(turn, index.tolist(), pivot, strict=True):
+        rows = slice(offsets[j], offsets[j + 1])
+        vertices[rows] = (vertices[rows] - g) @ r.T + g
+    if orientation.size:
+        angle = np.arctan2(turn[:, 1, 0], turn[:, 0, 0])
+        orientation[index] += angle
+    return {"vertices": vertices, "orientation": orientation}
 
 
 def _turned(

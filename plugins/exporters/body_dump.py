@@ -1,6 +1,6 @@
 """Read the final dump of LAMMPS bodies back into a packing.
 
-The ``lammps`` script of a 3D packing of bodies stores each body's first
+The ``lammps`` script of a packing of bodies (2D or 3D) stores each body's first
 orientation (``fix store/state 0`` of its quaternion) and, after its run,
 writes ``<stem>.final.dump``: ``id type x y z``, the displacement of the centre
 of mass (``compute displace/atom``, unwrapped in a periodic box) and the
@@ -92,9 +92,15 @@ def read_body_dump(
     if (np.linalg.norm(now, axis=1) < 0.5).any() or (np.linalg.norm(start, axis=1) < 0.5).any():
         raise PackingFileError(f"{path}: a body's quaternion is not a unit quaternion")
     turn = rotation_matrices(now) @ rotation_matrices(start).transpose(0, 2, 1)
+    dim = packing.dimension  # in 2D the bodies turn about z and move in the plane
     try:
         return moved(
-            packing, index, table[:, 5:8] / scale, turn, pivot, stats={"settled_steps": step}
+            packing,
+            index,
+            table[:, 5 : 5 + dim] / scale,
+            turn[:, :dim, :dim],
+            pivot,
+            stats={"settled_steps": step},
         )
     except PackingError as err:
         raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err

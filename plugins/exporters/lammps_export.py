@@ -53,7 +53,7 @@ and polyhedra is always written as bodies.
 ``mineral_density`` (by mineral name); in the bodies it sets the mass and
 the inertia, for granular spheres the atoms' density column.
 
-**The final state.** After its run, the script of a 3D packing writes
+**The final state.** After its run, the script writes
 ``<stem>.final.dump`` (:func:`dump_path`): each body's displacement and its
 orientation at the start and at the end, or each granular sphere's centre;
 :meth:`LammpsExporter.read_state` (``regopack settled``) reads it back.
@@ -741,12 +741,12 @@ class LammpsExporter(Exporter[AnyPacking]):
         return (script_path(path),)
 
     def read_state(self, packing: AnyPacking, path: Path) -> AnyPacking:
-        """Return a 3D ``packing`` as the run whose final dump (``<stem>.final.dump``) is ``path``.
+        """Return ``packing`` as the run whose final dump (``<stem>.final.dump``) is ``path``.
 
-        Granular spheres take the dump's centres; bodies move by their
-        displacement and turn about their centre of mass by the turn from
-        their first orientation to their last. The lengths are divided by this
-        exporter's length scale (so give the parameters of the export).
+        Granular spheres take the dump's centres; bodies (2D and 3D) move by
+        their displacement and turn about their centre of mass by the turn
+        from their first orientation to their last. The lengths are divided
+        by this exporter's length scale (so give the parameters of the export).
         """
         cfg = self.config
         s = (
@@ -754,11 +754,13 @@ class LammpsExporter(Exporter[AnyPacking]):
             if cfg.length_scale is None
             else cfg.length_scale
         )
-        if packing.dimension != 3:
-            raise ConfigError("exporter 'lammps': reads the final states of 3D packings only")
-        if cfg.spheres == "granular" and granular_spheres(packing, cfg, s) is not None:
-            return read_sphere_dump(packing, path, cfg, s, "LAMMPS")
-        bodies = polyhedron_bodies(packing, cfg)
+        if packing.dimension == 3 and cfg.spheres == "granular":
+            if granular_spheres(packing, cfg, s) is not None:
+                return read_sphere_dump(packing, path, cfg, s, "LAMMPS")
+        if packing.dimension == 3:
+            bodies: PolyhedronBodies | LammpsBodies = polyhedron_bodies(packing, cfg)
+        else:
+            bodies = lammps_bodies(packing, cfg)
         pivot = bodies.position - packing.centre[bodies.index]
         settled: AnyPacking = read_body_dump(packing, path, bodies.index, pivot, s)
         return settled
@@ -942,12 +944,12 @@ class LammpsExporter(Exporter[AnyPacking]):
                 *layout.walls,
                 f"fix          weight all gravity ${{g}} vector {style.gravity}",
                 *(["fix          plane all enforce2d"] if style.dimension == 2 else []),
-                *(self._final_state(path) if style.dimension == 3 else []),
+                *self._final_state(path),
                 "",
                 "thermo_style custom step atoms ke pe",
                 "thermo       1000",
                 "run          ${steps}",
-                *(self._final_dump(path) if style.dimension == 3 else []),
+                *self._final_dump(path),
                 "",
             ]
         )

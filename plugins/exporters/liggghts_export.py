@@ -41,7 +41,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.base.errors import ExportError
+from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
@@ -203,6 +203,8 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
         :func:`~regopack.plugins.exporters.granular_common.read_sphere_dump`.
         """
         cfg = self.config
+        if packing.dimension != 3:
+            raise ConfigError("exporter 'liggghts': reads the states of 3D packings only")
         scale = (
             default_length_scale(packing, cfg.units)
             if cfg.length_scale is None

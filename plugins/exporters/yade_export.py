@@ -51,7 +51,7 @@ from typing import Annotated
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.base.errors import ExportError
+from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import conversion, length_unit
 from regopack.geometry.domain import Box
 from regopack.packing.core import Packing
@@ -214,6 +214,8 @@ class YadeExporter(Exporter[Packing[Box]]):
         See :func:`read_yade_state`; the lengths are divided by this
         exporter's ``length_scale`` (so give the parameters of the export).
         """
+        if packing.dimension != 3:
+            raise ConfigError("exporter 'yade': reads the states of 3D packings only")
         return read_yade_state(packing, path, self._scale(packing))
 
     def _scale(self, packing: Packing[Box]) -> float:

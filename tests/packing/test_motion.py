@@ -13,6 +13,7 @@ from regopack.base.errors import PackingError
 from regopack.geometry.domain import Box, PeriodicBox
 from regopack.packing.core import Packing
 from regopack.packing.motion import moved, quaternion_of
+from regopack.testing import packing_from_polygons
 
 
 def spheres() -> Packing:
@@ -84,3 +85,18 @@ def test_quaternions_of_rotation_matrices() -> None:
 def test_wrong_motions_are_refused_in_one_line(args, message) -> None:
     with pytest.raises(PackingError, match=message):
         moved(cube_packing([[3.0, 3, 3], [6, 6, 6]]), *args)
+
+
+def test_a_turned_polygon_in_2d() -> None:
+    square = np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])
+    p = packing_from_polygons([square, square + 3.0])
+    quarter = np.array([[[0.0, -1], [1, 0]]])
+    g = np.array([[0.25, 0.0]])
+    q = moved(p, np.array([1]), np.array([[0.5, -0.5]]), quarter, g)
+    before = p.polygon(1) - p.centre[1] - g[0]
+    want = before @ quarter[0].T + p.centre[1] + g[0] + [0.5, -0.5]
+    np.testing.assert_allclose(q.polygon(1), want, atol=1e-15)
+    np.testing.assert_array_equal(q.polygon(0), p.polygon(0))
+    assert q.orientation[1] == pytest.approx(p.orientation[1] + np.pi / 2)
+    with pytest.raises(PackingError, match="shift has shape"):
+        moved(p, np.array([1]), np.zeros((1, 3)))

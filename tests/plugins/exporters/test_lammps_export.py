@@ -271,7 +271,7 @@ def test_lammps_reads_back_what_was_written(small, tmp_path):
             "\n".join(
                 line
                 for line in script_path(path).read_text().splitlines()
-                if not line.startswith("run")
+                if not line.startswith(("run", "write_dump"))
             )
         )
         lmp.command(f"write_data {tmp_path / 'back.data'}")
@@ -315,6 +315,15 @@ def test_lammps_settles_the_packing_under_gravity_inside_its_walls(small, tmp_pa
     assert np.all(verts[:, 2] - r > ymin - slack) and np.all(verts[:, 2] + r < ymax + slack)
     floor = verts[:, 2] - r
     assert floor.min() < ymin + 0.05 * float(r.min())  # it reached the floor, which held it
+    # read back: the settled packing, exported again, puts every core where LAMMPS left it
+    settled = regopack.settled(small, dump_path(path), "lammps")
+    assert settled.stats["settled_steps"] == steps and settled.dimension == 2
+    again = lammps_bodies(settled)
+    for k, core in enumerate(again.core):
+        ours = core + again.position[k]
+        theirs = verts[verts[:, 0] == k + 1, 1:3]
+        order = np.lexsort(ours.T[::-1]), np.lexsort(theirs.T[::-1])
+        np.testing.assert_allclose(ours[order[0]], theirs[order[1]], atol=1e-9)
 
 
 def test_lammps_reads_many_sided_and_large_bodies(tmp_path):
