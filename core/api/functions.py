@@ -50,6 +50,7 @@ __all__ = [
     "pack",
     "pack_and_summarise",
     "scene",
+    "settled",
     "sweep",
     "verify",
 ]
