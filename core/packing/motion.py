@@ -118,6 +118,11 @@ def moved(
     g = np.zeros((k, dim)) if pivot is None else pivot
     centre = packing.centre.copy()
     centre[index] += shift
+    if turn is not None:
+        # the reference point moves with the particle, so it stays inside it: turned
+        # about the pivot it lands at g - R g from where the pivot's shift takes it,
+        # and the outline turns about the reference point
+        centre[index] += g - np.einsum("kij,kj->ki", turn, g)
     box = packing.domain
     if box.periodic:
         lo, hi = box.bounds().reshape(dim, 2).T
@@ -128,21 +133,21 @@ def moved(
     }
     if turn is not None:
         changes.update(
-            _turned(packing, index, turn, g) if dim == 3 else _turned2(packing, index, turn, g)
+            _turned(packing, index, turn) if dim == 3 else _turned2(packing, index, turn)
         )
     return dataclasses.replace(packing, **changes)
 
 
 def _turned2(
-    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray, pivot: FloatArray
+    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray
 ) -> dict[str, FloatArray]:
-    """Outlines and orientations of the 2D packing with ``index`` turned."""
+    """Outlines and orientations of the 2D packing with ``index`` turned about their centres."""
     vertices = packing.vertices.copy()
     orientation = packing.orientation.copy()
     offsets = packing.offsets
-    for r, j, g in zip(turn, index.tolist(), pivot, strict=True):
+    for r, j in zip(turn, index.tolist(), strict=True):
         rows = slice(offsets[j], offsets[j + 1])
-        vertices[rows] = (vertices[rows] - g) @ r.T + g
+        vertices[rows] = vertices[rows] @ r.T
     if orientation.size:
         angle = np.arctan2(turn[:, 1, 0], turn[:, 0, 0])
         orientation[index] += angle
@@ -150,28 +155,28 @@ def _turned2(
 
 
 def _turned(
-    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray, pivot: FloatArray
+    packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray
 ) -> dict[str, FloatArray]:
-    """Vertices, normals, supports and rotations of the packing with ``index`` turned."""
+    """Vertices, normals and rotations of the packing with ``index`` turned about their centres.
+
+    A face plane ``n · x = s`` through the reference point's frame keeps its
+    offset ``s`` when the solid turns about that point.
+    """
     vertices = packing.vertices.copy()
     normals = packing.normals.copy()
-    support = packing.support.copy()
     rotation = packing.rotation.copy()
     offsets = packing.offsets
     faces = packing.face_offsets
-    for r, j, g in zip(turn, index.tolist(), pivot, strict=True):
+    for r, j in zip(turn, index.tolist(), strict=True):
         rows = slice(offsets[j], offsets[j + 1])
-        vertices[rows] = (vertices[rows] - g) @ r.T + g
+        vertices[rows] = vertices[rows] @ r.T
         if faces.size:
             f = slice(faces[j], faces[j + 1])
-            old = normals[f].copy()
-            normals[f] = old @ r.T
-            # the plane n·x = s through the turned points: s' = s - n·g + n'·g
-            support[f] = support[f] - old @ g + normals[f] @ g
+            normals[f] = normals[f] @ r.T
     if rotation.shape[0]:
         q = quaternion_of(turn)
         rotation[index] = _compose(q, rotation[index])
-    return {"vertices": vertices, "normals": normals, "support": support, "rotation": rotation}
+    return {"vertices": vertices, "normals": normals, "rotation": rotation}
 
 
 def _compose(a: FloatArray, b: FloatArray) -> FloatArray:
