@@ -525,6 +525,8 @@ def _cmd_settled(args: argparse.Namespace, out: Console, err: Console) -> int:
     target = args.out or args.state.with_suffix(".npz")
     if target.is_dir():
         target = target / args.state.with_suffix(".npz").name
+    if not target.parent.is_dir():
+        raise ConfigError(f"--out {target}: its folder {target.parent} does not exist")
     for given in (args.packing, args.state):
         if target.exists() and given.exists() and target.samefile(given):
             raise ConfigError(f"--out {target}: is {given} itself; give another file")

@@ -106,6 +106,12 @@ def moved(
             raise PackingError(f"moved: {name} has shape {array.shape}, expected {shape}")
         if not np.isfinite(array).all():
             raise PackingError(f"moved: {name} has a number that is not finite")
+    extent = float(np.ptp(packing.domain.bounds().reshape(dim, 2), axis=1).max())
+    if k and np.abs(shift).max() > 1e12 * extent:
+        raise PackingError(
+            f"moved: a shift of {np.abs(shift).max():.3g} is beyond 1e12 times the domain's "
+            f"size ({extent:.3g})"
+        )
     placed = packing.placed
     if k and (index.min() < 0 or index.max() >= placed.size or not placed[index].all()):
         raise PackingError("moved: an index is not a placed particle")

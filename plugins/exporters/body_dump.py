@@ -60,6 +60,7 @@ def read_body_dump(
     index: NDArray[np.int64],
     pivot: FloatArray,
     scale: float,
+    start: FloatArray | None = None,
 ) -> Packing[Any]:
     """Return ``packing`` as the LAMMPS run whose final dump of bodies is ``path`` left it.
 
@@ -75,6 +76,10 @@ def read_body_dump(
         particle's reference point, in the packing's lengths.
     scale
         The export's length scale: the dump's lengths are divided by it.
+    start
+        Where the export put each body's centre of mass, in the packing's
+        lengths: each body's position less its displacement must be there
+        (modulo a periodic box), else the dump was read with another scale.
 
     Raises
     ------
@@ -88,11 +93,14 @@ def read_body_dump(
             f"({' '.join(BODY_DUMP_COLUMNS)})"
         )
     check_atoms(path, table, index.size, "bodies", table)
-    now, start = table[:, 8:12], table[:, 12:16]
-    if (np.linalg.norm(now, axis=1) < 0.5).any() or (np.linalg.norm(start, axis=1) < 0.5).any():
+    dim = packing.dimension
+    if start is not None:
+        _check_start(path, packing, table[:, 2 : 2 + dim] - table[:, 5 : 5 + dim], start, scale)
+    now, first = table[:, 8:12], table[:, 12:16]
+    if (np.linalg.norm(now, axis=1) < 0.5).any() or (np.linalg.norm(first, axis=1) < 0.5).any():
         raise PackingFileError(f"{path}: a body's quaternion is not a unit quaternion")
-    turn = rotation_matrices(now) @ rotation_matrices(start).transpose(0, 2, 1)
-    dim = packing.dimension  # in 2D the bodies turn about z and move in the plane
+    turn = rotation_matrices(now) @ rotation_matrices(first).transpose(0, 2, 1)
+    # in 2D the bodies turn about z and move in the plane
     try:
         return moved(
             packing,
@@ -104,3 +112,20 @@ def read_body_dump(
         )
     except PackingError as err:
         raise PackingFileError(f"{path}: {str(err).removeprefix('moved: ')}") from err
+
+
+def _check_start(
+    path: Path, packing: Packing[Any], origin: FloatArray, start: FloatArray, scale: float
+) -> None:
+    """Refuse a dump whose bodies did not start where the export put them (another scale)."""
+    dim = packing.dimension
+    bounds = packing.domain.bounds().reshape(dim, 2) * scale
+    side = bounds[:, 1] - bounds[:, 0]
+    gap = origin - start * scale
+    if packing.domain.periodic:
+        gap -= side * np.round(gap / side)
+    if np.abs(gap).max(initial=0.0) > 1e-9 * float(side.max()):
+        raise PackingFileError(
+            f"{path}: its bodies did not start where the export with length scale {scale!r} "
+            "put them; give the export's units and length_scale"
+        )

@@ -11,6 +11,7 @@ sphere whose Rayleigh time is shortest (:func:`rayleigh_step_lines`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Protocol
@@ -353,6 +354,8 @@ def read_dump(path: Path, program: str) -> tuple[float, list[str], FloatArray]:
         step = float(lines[1])
     except ValueError as err:
         raise PackingFileError(f"{path}: a value is not a number ({err})") from err
+    if not (math.isfinite(step) and step >= 0 and step == int(step)):
+        raise PackingFileError(f"{path}: its time step {lines[1].strip()!r} is no step count")
     return step, columns, table
 
 

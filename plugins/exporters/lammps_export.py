@@ -762,7 +762,9 @@ class LammpsExporter(Exporter[AnyPacking]):
         else:
             bodies = lammps_bodies(packing, cfg)
         pivot = bodies.position - packing.centre[bodies.index]
-        settled: AnyPacking = read_body_dump(packing, path, bodies.index, pivot, s)
+        settled: AnyPacking = read_body_dump(
+            packing, path, bodies.index, pivot, s, start=bodies.position
+        )
         return settled
 
     def export(self, packing: AnyPacking, path: Path, *, analyses: Analyses = None) -> Path:

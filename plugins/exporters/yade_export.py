@@ -327,8 +327,22 @@ def read_yade_state(packing: Packing[Box], path: Path, scale: float) -> Packing[
     pivot = np.array(
         [mass_properties(p.local, p.loops)[1] if p.loops else np.zeros(3) for p in solids]
     ).reshape(-1, 3)
-    head = dict(re.findall(r"(steps|time) ([^,\s]+)", lines[1] if len(lines) > 1 else ""))
-    stats = {f"settled_{k}": float(v) for k, v in head.items()}
+    head = dict(
+        re.findall(r"(steps|time|length scale) ([^,\s]+)", lines[1] if len(lines) > 1 else "")
+    )
+    try:
+        numbers = {k: float(v) for k, v in head.items()}
+    except ValueError as err:
+        raise PackingFileError(f"{path}: its header holds a value that is not a number") from err
+    if not all(math.isfinite(v) for v in numbers.values()):
+        raise PackingFileError(f"{path}: its header holds a value that is not finite")
+    written = numbers.pop("length scale", None)
+    if written is not None and not math.isclose(written, scale, rel_tol=1e-12):
+        raise PackingFileError(
+            f"{path}: written with length scale {written!r}, read with {scale!r}; give the "
+            "export's length_scale"
+        )
+    stats = {f"settled_{k}": v for k, v in numbers.items()}
     try:
         return moved(
             packing,

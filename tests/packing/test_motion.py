@@ -100,3 +100,9 @@ def test_a_turned_polygon_in_2d() -> None:
     assert q.orientation[1] == pytest.approx(p.orientation[1] + np.pi / 2)
     with pytest.raises(PackingError, match="shift has shape"):
         moved(p, np.array([1]), np.zeros((1, 3)))
+
+
+def test_a_shift_beyond_any_precision_is_refused() -> None:
+    p = spheres()
+    with pytest.raises(PackingError, match="beyond 1e12 times the domain's size"):
+        moved(p, np.array([0]), np.array([[1e300, 0, 0]]))

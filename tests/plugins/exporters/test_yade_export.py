@@ -483,3 +483,37 @@ def test_far_coordinates_and_odd_scene_names(tmp_path) -> None:
     compile(text, "q.py", "exec")
     assert "\nprint('INJECTED')" not in text
     assert "a?print('INJECTED')" in text.splitlines()[0]
+
+
+@pytest.mark.parametrize(
+    ("header", "message"),
+    [
+        ("# steps abc, time 0.5", "header holds a value that is not a number"),
+        ("# steps 3, time nan", "header holds a value that is not finite"),
+        ("# steps 3, time 0.5, dt 1e-9, length scale 1e-06, bodies 57", None),
+        ("# steps 3, time 0.5, dt 1e-9, length scale 1.0, bodies 57", "written with length"),
+    ],
+)
+def test_the_state_s_header_is_checked(tmp_path, capsys, header, message) -> None:
+    packing = packing3d()
+    file = tmp_path / "packing.npz"
+    save(packing, file)
+    state = write_state(tmp_path / "s.txt", packing)
+    lines = state.read_text().split("\n")
+    state.write_text("\n".join([lines[0], header, *lines[2:]]))
+    status = main(["settled", str(file), str(state), "--from", "yade"])
+    if message is None:
+        assert status == 0 and regopack.load(tmp_path / "s.npz").stats["settled_steps"] == 3
+        return
+    assert status == 2
+    line = one_error_line(capsys)
+    assert str(state) in line and message in line
+
+
+def test_an_output_folder_that_does_not_exist_is_named(tmp_path, capsys) -> None:
+    file = tmp_path / "packing.npz"
+    save(packing3d(), file)
+    state = write_state(tmp_path / "s.txt", packing3d())
+    out = tmp_path / "nowhere" / "x.npz"
+    assert main(["settled", str(file), str(state), "--from", "yade", "--out", str(out)]) == 2
+    assert f"--out {out}: its folder {out.parent} does not exist" in one_error_line(capsys)
