@@ -248,20 +248,19 @@ class YadeExporter(Exporter[Packing[Box]]):
         names = [str(n) for n in packing.mineral_names]
         density = mineral_densities(packing, cfg, "yade")
         friction = _mineral_friction(packing, cfg)
-        diameters = [_equivalent_diameter(p) for p in solids]
-        d_min = min(diameters) if diameters else 1.0
+        index = np.array([p.index for p in solids], dtype=np.int64)
+        volume = packing.solids.volume[index]  # every face at once
+        d_min = float((6.0 / math.pi * volume.min()) ** (1.0 / 3.0)) if index.size else 1.0
         kappa_length = cfg.volumetric_length or d_min * scale
-        masses = [
-            math.pi / 6.0 * d**3 * scale**3 * density[packing.mineral[p.index]]
-            for p, d in zip(solids, diameters, strict=True)
-        ]
-        if not all(math.isfinite(m) and m >= np.finfo(np.float64).tiny for m in masses):
+        with np.errstate(over="ignore", under="ignore"):  # checked below
+            mass = volume * np.float64(scale) ** 3 * density[packing.mineral[index]]
+        if mass.size and not (np.isfinite(mass).all() and mass.min() >= np.finfo(float).tiny):
             raise ExportError(
                 f"exporter 'yade': length_scale = {scale} and the densities give a body no "
                 "positive finite mass; give values nearer 1"
             )
         if packing.domain.periodic:
-            _check_cell(packing, solids)
+            _check_cell(packing, solids, d_min)
         _check_reach(packing, solids, scale)
         _write_text(bodies_path(path), _bodies_text(packing, solids, scale))
         text = _script(
@@ -374,10 +373,9 @@ def _check_reach(packing: Packing[Box], solids: list[PlacedSolid], scale: float)
         )
 
 
-def _check_cell(packing: Packing[Box], solids: list[PlacedSolid]) -> None:
+def _check_cell(packing: Packing[Box], solids: list[PlacedSolid], d_min: float) -> None:
     """Refuse a periodic box in which a body is half a side across (YADE's cell refuses it)."""
     side = np.diff(packing.domain.bounds().reshape(3, 2), axis=1)[:, 0]
-    d_min = min((_equivalent_diameter(p) for p in solids), default=0.0)
     for p in solids:
         points = p.world if p.loops else p.centre[None, :]
         extent = points.max(axis=0) - points.min(axis=0) + 2.0 * p.rounding
@@ -395,14 +393,6 @@ def _mineral_friction(packing: Packing[Box], cfg: YadeConfig) -> list[float]:
     """Friction coefficient of each mineral (the mineral index's entry)."""
     values = mineral_values(packing, cfg.friction, cfg.mineral_friction, "mineral_friction", "yade")
     return [float(v) for v in values]
-
-
-def _equivalent_diameter(p: PlacedSolid) -> float:
-    """Diameter of the sphere of the solid's volume."""
-    if not p.loops:
-        return 2.0 * p.rounding
-    volume = mass_properties(p.local, p.loops)[0]
-    return float((6.0 * volume / math.pi) ** (1.0 / 3.0))
 
 
 def _bodies_text(packing: Packing[Box], solids: list[PlacedSolid], scale: float) -> str:
