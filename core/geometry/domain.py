@@ -8,9 +8,9 @@ to a packing file (:meth:`Domain.to_dict`, :func:`domain_from_dict`).
 In the plane (:class:`PlaneDomain`): walled rectangles, convex polygons and
 circles, and periodic rectangles; they also give their outline and the area
 of polygons that lies inside them. In space: the walled :class:`Box` and the
-:class:`PeriodicBox`. A cylinder is not offered: the available-surface
-inserter clips centres by boxes, and a curved wall would need its own exact
-clipping.
+:class:`PeriodicBox`, and the walled :class:`Cylinder` (a vertical axis, a
+side wall, a floor and a lid: the container of a triaxial or oedometer
+specimen).
 
 A periodic domain (:class:`PeriodicDomain`) has no walls: particles may cross
 its sides and continue on the opposite side. Its interior window is the whole
@@ -37,6 +37,7 @@ __all__ = [
     "Box",
     "Circle",
     "ConvexPolygon",
+    "Cylinder",
     "Domain",
     "PeriodicBox",
     "PeriodicDomain",
@@ -655,6 +656,131 @@ class PeriodicBox(PeriodicDomain, Box):
     kind: ClassVar[str] = "periodic-box"
 
 
+@dataclass(frozen=True)
+class Cylinder(Domain):
+    """Walled cylinder with a vertical axis: a side wall, a floor and a lid.
+
+    Parameters
+    ----------
+    cx, cy
+        Position of the axis (parallel to z).
+    radius
+        Radius of the side wall.
+    zmin, zmax
+        Heights of the floor and the lid.
+
+    Raises
+    ------
+    GeometryError
+        When a value is not finite, the radius is not positive or the floor
+        is not below the lid.
+    """
+
+    dimension: ClassVar[int] = 3
+    kind: ClassVar[str] = "cylinder"
+
+    cx: float
+    cy: float
+    radius: float
+    zmin: float
+    zmax: float
+
+    def __post_init__(self) -> None:
+        values = [self.cx, self.cy, self.radius, self.zmin, self.zmax]
+        if not all(math.isfinite(v) for v in values):
+            raise GeometryError(f"cylinder {values} must be finite")
+        self._check_extent()
+
+    def _check_extent(self) -> None:
+        if not (self.radius > 0 and self.zmin < self.zmax):
+            raise GeometryError(
+                f"cylinder of radius {self.radius:g} from z = {self.zmin:g} to {self.zmax:g}: "
+                "the radius must be > 0 and the floor below the lid"
+            )
+
+    @classmethod
+    def centred(
+        cls, radius: float, height: float, center: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    ) -> Self:
+        """Build the cylinder of this ``radius`` and ``height`` about its middle ``center``."""
+        cx, cy, cz = center
+        return cls(cx, cy, radius, cz - height / 2, cz + height / 2)
+
+    @property
+    def height(self) -> float:
+        """Distance from the floor to the lid."""
+        return self.zmax - self.zmin
+
+    @property
+    def size(self) -> tuple[float, float, float]:
+        """Extents ``(x, y, z)`` of the bounding box."""
+        return (2.0 * self.radius, 2.0 * self.radius, self.height)
+
+    @property
+    def volume(self) -> float:
+        """Volume of the cylinder."""
+        return math.pi * self.radius * self.radius * self.height
+
+    @property
+    def measure(self) -> float:
+        """Volume of the domain (:attr:`volume`)."""
+        return self.volume
+
+    @property
+    def center(self) -> tuple[float, float, float]:
+        """Middle of the axis."""
+        return (self.cx, self.cy, 0.5 * (self.zmin + self.zmax))
+
+    def bounds(self) -> FloatArray:
+        """Bounding box ``[xmin, xmax, ymin, ymax, zmin, zmax]``."""
+        r = self.radius
+        return np.array(
+            [self.cx - r, self.cx + r, self.cy - r, self.cy + r, self.zmin, self.zmax],
+            dtype=np.float64,
+        )
+
+    def interior(self, margin: float) -> Cylinder:
+        """Return the coaxial cylinder farther than ``margin`` from the side, floor and lid.
+
+        An inset larger than the radius or half the height collapses the
+        window (zero volume).
+        """
+        m = float(margin)
+        cz = 0.5 * (self.zmin + self.zmax)
+        half = max(0.0, 0.5 * self.height - m)
+        return _CylinderWindow(self.cx, self.cy, max(0.0, self.radius - m), cz - half, cz + half)
+
+    def contains(self, points: ArrayLike) -> BoolArray:
+        """Mask of the ``(n, 3)`` points strictly inside the cylinder (NaN is outside)."""
+        c = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+        with np.errstate(invalid="ignore"):
+            out = np.asarray(
+                (np.hypot(c[:, 0] - self.cx, c[:, 1] - self.cy) < self.radius)
+                & (c[:, 2] > self.zmin)
+                & (c[:, 2] < self.zmax),
+                dtype=np.bool_,
+            )
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        """``{"kind": "cylinder", "axis": [x, y], "radius": r, "z": [zmin, zmax]}``."""
+        return {
+            "kind": self.kind,
+            "axis": [float(self.cx), float(self.cy)],
+            "radius": float(self.radius),
+            "z": [float(self.zmin), float(self.zmax)],
+        }
+
+
+@dataclass(frozen=True)
+class _CylinderWindow(Cylinder):
+    """An interior window: a cylinder that may have zero radius or height."""
+
+    def _check_extent(self) -> None:
+        if not (self.radius >= 0 and self.zmin <= self.zmax):
+            raise GeometryError(f"window {self.to_dict()} is not a cylinder")
+
+
 DOMAIN_KINDS: dict[str, type[Domain]] = {
     "rectangle": Rectangle,
     "polygon": ConvexPolygon,
@@ -662,6 +788,7 @@ DOMAIN_KINDS: dict[str, type[Domain]] = {
     "periodic": PeriodicRectangle,
     "box": Box,
     "periodic-box": PeriodicBox,
+    "cylinder": Cylinder,
 }
 """Domain classes by the ``kind`` written in scenes and packing files (both dimensions)."""
 
@@ -669,7 +796,7 @@ DOMAIN_KINDS: dict[str, type[Domain]] = {
 @overload
 def domain_from_dict(data: Mapping[str, Any], dimension: Literal[2]) -> PlaneDomain: ...
 @overload
-def domain_from_dict(data: Mapping[str, Any], dimension: Literal[3]) -> Box: ...
+def domain_from_dict(data: Mapping[str, Any], dimension: Literal[3]) -> Box | Cylinder: ...
 @overload
 def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> Domain: ...
 def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> Domain:
@@ -706,6 +833,15 @@ def domain_from_dict(data: Mapping[str, Any], dimension: int | None = None) -> D
         )
     if cls is ConvexPolygon:
         return ConvexPolygon(tuple((float(x), float(y)) for x, y in data["vertices"]))
+    if cls is Cylinder:
+        cx, cy = _pair(data["axis"], "axis")
+        zmin, zmax = _pair(data["z"], "z")
+        radius = _finite(data["radius"], "radius")
+        if radius <= 0:
+            raise GeometryError(f"radius {radius:g} must be > 0")
+        if not zmin < zmax:
+            raise GeometryError(f"z [{zmin:g}, {zmax:g}] must be [zmin, zmax] with zmin < zmax")
+        return Cylinder(cx, cy, radius, zmin, zmax)
     if cls is Circle:
         cx, cy = (_finite(c, "center") for c in data["center"])
         radius = _finite(data["radius"], "radius")
@@ -729,6 +865,16 @@ def _bounds(values: Any, dimension: int) -> list[float]:
         order = " and ".join(f"{a}min < {a}max" for a in axes)
         raise GeometryError(f"bounds [{shown}] must be [{names}] with {order}")
     return bounds
+
+
+def _pair(values: Any, what: str) -> tuple[float, float]:
+    """Return a record's two finite numbers named ``what``."""
+    if isinstance(values, str | bytes | Mapping) or not isinstance(values, Iterable):
+        raise TypeError(f"{what}: {values!r} is not a list of two numbers")
+    pair = [_finite(v, what) for v in values]
+    if len(pair) != 2:
+        raise ValueError(f"{what} must be two numbers, not {len(pair)}")
+    return pair[0], pair[1]
 
 
 def _finite(value: Any, what: str) -> float:
@@ -846,6 +992,6 @@ def __getattr__(name: str) -> Any:
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-def _domain3d_from_dict(data: Mapping[str, Any]) -> Box:
+def _domain3d_from_dict(data: Mapping[str, Any]) -> Box | Cylinder:
     """Rebuild a 3D domain: ``domain_from_dict(data, 3)``."""
     return domain_from_dict(data, 3)

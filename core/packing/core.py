@@ -29,7 +29,14 @@ from typing_extensions import TypeVar
 
 from regopack._compat import renamed_names
 from regopack.base.errors import GeometryError, PackingError, PackingFileError
-from regopack.geometry.domain import Box, Domain, PlaneDomain, Rectangle, domain_from_dict
+from regopack.geometry.domain import (
+    Box,
+    Cylinder,
+    Domain,
+    PlaneDomain,
+    Rectangle,
+    domain_from_dict,
+)
 from regopack.geometry.solids import SolidBatch
 
 if TYPE_CHECKING:
@@ -614,8 +621,10 @@ class Packing(PlacedParticles, Generic[D]):
             self.rounding,
             self.stats,
         )
-        if not isinstance(self.domain, Box):
-            raise PackingError(f"'domain' is a {type(self.domain).__name__}, not a 3D box")
+        if not isinstance(self.domain, Box | Cylinder):
+            raise PackingError(
+                f"'domain' is a {type(self.domain).__name__}, not a 3D box or cylinder"
+            )
         volume = self.domain.volume
         if not (math.isfinite(volume) and volume > 0):
             raise PackingError(f"'domain' {self.domain.to_dict()} has no positive finite volume")
@@ -739,10 +748,10 @@ class Packing(PlacedParticles, Generic[D]):
         cls,
         centre: ArrayLike,
         radius: ArrayLike,
-        domain: Box,
+        domain: Box | Cylinder,
         mineral: ArrayLike | None = None,
         mineral_names: Sequence[str] = ("sphere",),
-    ) -> Packing[Box]:
+    ) -> Packing[Box | Cylinder]:
         """Return a packing of spheres, every one placed, in the order given.
 
         For spheres that come from elsewhere (a DEM code's final state, a
@@ -756,7 +765,7 @@ class Packing(PlacedParticles, Generic[D]):
         radius
             ``(n,)`` radii.
         domain
-            The box.
+            The box or cylinder.
         mineral
             ``(n,)`` indices into ``mineral_names``; all 0 by default.
         mineral_names
@@ -952,7 +961,7 @@ class Packing(PlacedParticles, Generic[D]):
 
     def __repr__(self) -> str:
         if self.dimension == 3:
-            sx, sy, sz = cast(Box, self.domain).size
+            sx, sy, sz = cast(Box | Cylinder, self.domain).size
             return (
                 f"<Packing: {self.n_placed} of {self.n_particles} placed in a "
                 f"{sx:g} × {sy:g} × {sz:g} {self.domain.kind}, phi {self.phi:.4f}>"

@@ -288,6 +288,8 @@ def _field_value(scene: ResolvedScene, field: str) -> Any:
 def domain_extents(scene: ResolvedScene) -> dict[str, float]:
     """Each extent of the domain by the scene field that sets it (for :func:`check_extents`)."""
     d = scene.scene.domain
+    if d.kind == "cylinder":
+        return {"domain.radius": 2.0 * float(d.radius or 0.0), "domain.height": float(d.height)}
     if d.dimension == 3:
         width, depth, height = d.to_box().size
         return {"domain.width": width, "domain.depth": depth, "domain.height": height}

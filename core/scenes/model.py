@@ -42,7 +42,14 @@ from regopack.base.errors import ConfigError, GeometryError, PluginError
 from regopack.base.messages import describe_validation_error, dotted, format_value, where
 from regopack.base.outdir import MARKER, NAME_RULE, name_key, name_problem
 from regopack.base.units import _ALIASES, LENGTH_UNITS, _allowed
-from regopack.geometry.domain import DOMAIN_KINDS, Box, Circle, ConvexPolygon, Rectangle
+from regopack.geometry.domain import (
+    DOMAIN_KINDS,
+    Box,
+    Circle,
+    ConvexPolygon,
+    Cylinder,
+    Rectangle,
+)
 from regopack.geometry.domain import Domain as DomainGeometry
 from regopack.registry.manager import Registry
 from regopack.registry.plugin_types import PluginSpec, misplaced_field, served_dimensions
@@ -97,24 +104,28 @@ expected; an integer is still a valid float (``width = 200``).
 
 
 class Domain(BaseModel):
-    """The container: a walled rectangle, polygon, circle or box, or a periodic rectangle or box.
+    """The container: a walled rectangle, polygon, circle, box or cylinder, or a periodic one.
 
     ``kind = "rectangle"`` (the default) and ``"periodic"`` use ``width``,
     ``height`` and ``center``; ``"circle"`` uses ``radius`` and ``center``;
     ``"polygon"`` uses ``vertices``; ``"box"`` and ``"periodic-box"`` use
     ``width`` (x), ``depth`` (y), ``height`` (z, the vertical) and a
-    three-number ``center``: they make the scene three-dimensional. A field
+    three-number ``center``: they make the scene three-dimensional, as does
+    ``"cylinder"`` (vertical axis) with ``radius``, ``height`` and a
+    three-number ``center`` (the middle of its axis). A field
     that does not belong to the kind is an error.
     """
 
     model_config = STRICT
 
-    kind: Literal["rectangle", "periodic", "polygon", "circle", "box", "periodic-box"] = Field(
+    kind: Literal[
+        "rectangle", "periodic", "polygon", "circle", "box", "periodic-box", "cylinder"
+    ] = Field(
         "rectangle",
         description=(
             "Shape of the container: 'rectangle' (walls), 'periodic' (a rectangle whose "
             "opposite sides are identified), 'polygon' (convex, walls) or 'circle' (wall); "
-            "in 3D 'box' (walls) or 'periodic-box'."
+            "in 3D 'box' (walls), 'periodic-box' or 'cylinder' (vertical axis, walls)."
         ),
     )
     width: float = Field(
@@ -129,7 +140,7 @@ class Domain(BaseModel):
         allow_inf_nan=False,
         description=(
             "Extent along y (micrometres), the vertical; rectangle and periodic "
-            "(boxes: along z, the vertical)."
+            "(boxes and cylinders: along z, the vertical)."
         ),
     )
     depth: float = Field(
@@ -142,11 +153,14 @@ class Domain(BaseModel):
         (0.0, 0.0),
         description=(
             "Centre (micrometres): [x, y] of a rectangle, periodic rectangle or circle; "
-            "[x, y, z] of a box (default: the origin)."
+            "[x, y, z] of a box, or of a cylinder's middle (default: the origin)."
         ),
     )
     radius: float | None = Field(
-        None, gt=0, allow_inf_nan=False, description="Radius of the circle (micrometres)."
+        None,
+        gt=0,
+        allow_inf_nan=False,
+        description="Radius of the circle or the cylinder (micrometres).",
     )
     vertices: list[Point] | None = Field(
         None,
@@ -161,9 +175,11 @@ class Domain(BaseModel):
         "polygon": ("vertices",),
         "box": ("width", "height", "depth", "center"),
         "periodic-box": ("width", "height", "depth", "center"),
+        "cylinder": ("radius", "height", "center"),
     }
     _REQUIRED: ClassVar[dict[str, tuple[str, ...]]] = {
         "circle": ("radius",),
+        "cylinder": ("radius",),
         "polygon": ("vertices",),
     }
 
@@ -194,7 +210,9 @@ class Domain(BaseModel):
                 raise
             raise ValueError(f"vertices: {err}") from err
         if not math.isfinite(domain.measure):
-            if self.dimension == 3:
+            if self.kind == "cylinder":
+                given = f"radius x height = {self.radius:g} x {self.height:g}"
+            elif self.dimension == 3:
                 given = (
                     f"width x depth x height = {self.width:g} x {self.depth:g} x {self.height:g}"
                 )
@@ -218,6 +236,9 @@ class Domain(BaseModel):
         if self.kind == "circle":
             assert self.radius is not None
             sides = [2.0 * self.radius]
+        elif self.kind == "cylinder":
+            assert self.radius is not None
+            sides = [2.0 * self.radius, self.height]
         else:
             sides = [self.width, self.height] + ([self.depth] if self.dimension == 3 else [])
         side = min(sides)
@@ -237,7 +258,7 @@ class Domain(BaseModel):
 
     @property
     def dimension(self) -> int:
-        """Dimension of the container: 3 for a box or periodic box, 2 otherwise."""
+        """Dimension of the container: 3 for a box, periodic box or cylinder, 2 otherwise."""
         return DOMAIN_KINDS[self.kind].dimension
 
     def to_domain(self) -> DomainGeometry:
@@ -249,6 +270,10 @@ class Domain(BaseModel):
         if cls is ConvexPolygon:
             assert self.vertices is not None
             return ConvexPolygon(tuple(self.vertices))
+        if cls is Cylinder:
+            assert self.radius is not None
+            cx, cy, cz = (float(c) for c in self.center)
+            return Cylinder.centred(self.radius, self.height, (cx, cy, cz))
         if issubclass(cls, Box):
             cx, cy, cz = (float(c) for c in self.center)
             return cls.centred(self.width, self.height, self.depth, (cx, cy, cz))
@@ -830,6 +855,8 @@ class ResolvedScene:
         d = self.scene.domain
         if d.kind == "circle":
             where = f"circle of radius {d.radius:g} µm"
+        elif d.kind == "cylinder":
+            where = f"cylinder of radius {d.radius:g} µm and height {d.height:g} µm"
         elif d.kind == "polygon":
             where = f"polygon of {len(d.vertices or ())} vertices"
         else:

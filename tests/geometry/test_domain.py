@@ -16,6 +16,7 @@ from regopack.geometry.domain import (
     Box,
     Circle,
     ConvexPolygon,
+    Cylinder,
     Domain,
     PeriodicBox,
     PeriodicDomain,
@@ -34,6 +35,7 @@ ONE_OF_EACH_KIND = [
     Circle(1.5, -2.0, 3.25),
     Box(-1.0, 2.0, -3.0, 4.0, 0.5, 1.5),
     PeriodicBox(0.0, 1.0, 0.0, 2.0, -1.0, 1.0),
+    Cylinder(0.5, -0.5, 2.0, -1.0, 3.0),
 ]
 
 

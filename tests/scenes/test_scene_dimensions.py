@@ -134,3 +134,16 @@ def test_2d_domains_are_unchanged() -> None:
     d = Domain.model_validate({"kind": "rectangle", "center": [1.0, 2.0]})
     assert d.dimension == 2 and d.center == (1.0, 2.0)
     assert d.to_domain().bounds().tolist() == [-399.0, 401.0, -398.0, 402.0]
+
+
+def test_a_cylinder_scene_is_three_dimensional() -> None:
+    from regopack.geometry.domain import Cylinder
+    from regopack.scenes.model import Domain as DomainSpec
+
+    d = DomainSpec(kind="cylinder", radius=20.0, height=50.0, center=(1.0, 2.0, 3.0))
+    assert d.dimension == 3
+    assert d.to_domain() == Cylinder(1.0, 2.0, 20.0, -22.0, 28.0)
+    with pytest.raises(ValueError, match="depth does not apply to kind 'cylinder'"):
+        DomainSpec(kind="cylinder", radius=20.0, depth=5.0)
+    with pytest.raises(ValueError, match="kind 'cylinder' needs radius"):
+        DomainSpec(kind="cylinder", height=5.0)

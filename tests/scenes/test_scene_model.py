@@ -262,7 +262,7 @@ def test_bad_overrides(override, message):
             'kind = "rectangle"',
             'kind = "hexagon"',
             "scene.toml: domain.kind = \"hexagon\": Input should be 'rectangle', 'periodic', "
-            "'polygon', 'circle', 'box' or 'periodic-box'",
+            "'polygon', 'circle', 'box', 'periodic-box' or 'cylinder'",
         ),
         (
             "center = [0.0, 0.0]",
