@@ -228,5 +228,5 @@ def test_a_3d_file_whose_domain_names_no_kind_says_so(tmp_path) -> None:
         load(path)
     assert str(caught.value) == (
         f"{path}: invalid packing file: meta 'domain' (kind None): 'rectangle' is a 2D "
-        "domain kind, not 3D; 3D kinds: box, periodic-box"
+        "domain kind, not 3D; 3D kinds: box, periodic-box, cylinder"
     )
