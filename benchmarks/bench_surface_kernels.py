@@ -88,7 +88,7 @@ def _loop_free(e: Polyhedron, c: np.ndarray, it: Interferers, lo: np.ndarray,
                hi: np.ndarray, n: int) -> float:  # fmt: skip
     s = 0.0
     for _ in range(n):
-        s += free_surface(e, c, it, lo, hi).area
+        s += free_surface(e, c, it, lo, hi, np.zeros((0, 4))).area
     return s
 
 
@@ -117,7 +117,7 @@ def measure(
     lo = np.full(3, -np.inf)
     hi = np.full(3, np.inf)
     origin = np.zeros(3)
-    fs = free_surface(ek, origin, it, lo, hi)
+    fs = free_surface(ek, origin, it, lo, hi, np.zeros((0, 4)))
     _loop_envelope(pk, q, 1)
     _loop_free(ek, origin, it, lo, hi, 1)
     _loop_sample(fs, 1)
@@ -126,7 +126,9 @@ def measure(
         "envelope": best_us(lambda: _loop_envelope(pk, q, n), n, repeats),
         "envelope_py": best_us(lambda: minkowski_envelope(pk, q), 1, 20 * repeats),
         "free": best_us(lambda: _loop_free(ek, origin, it, lo, hi, n), n, repeats),
-        "free_py": best_us(lambda: free_surface(ek, origin, it, lo, hi), 1, 20 * repeats),
+        "free_py": best_us(
+            lambda: free_surface(ek, origin, it, lo, hi, np.zeros((0, 4))), 1, 20 * repeats
+        ),
         "sample": best_us(lambda: _loop_sample(fs, 10 * n), 10 * n, repeats),
         "free_fraction": fs.area / _area(ek),
         "pieces": len(fs.cumulative),

@@ -230,3 +230,34 @@ class Domains(_Slow):
 
     def time_pack(self, _cache: Any, kind: str, shapes: str) -> None:
         regopack.pack(self.scene, verify=False)
+
+
+class Cylinder3D(_Slow):
+    """3D: the sweep of ``dem3d`` (sizes 2-12 µm) in a cylinder, against a box of its volume.
+
+    The side wall is the prism inscribed in it whose facets lie at most
+    ``insertion.wall_gap`` smallest diameters inside; ``box`` packs a square
+    box of the same volume and height. The cylinder's radius is half the side.
+    """
+
+    params = (list(common.SHAPES_3D), ["box", "0.01", "0.001", "1e-05"], [60.0])
+    param_names = ["shape", "wall_gap", "side_um"]
+
+    def setup(self, _cache: Any, shape: str, gap: str, side: float) -> None:
+        common.warm_3d(shape)
+        radius, height = side / 2.0, side
+        if gap == "box":
+            width = math.sqrt(math.pi) * radius
+            domain = {"kind": "box", "width": width, "depth": width, "height": height}
+            extra: dict[str, float] = {}
+        else:
+            domain = {"kind": "cylinder", "radius": radius, "height": height}
+            extra = {"insertion.wall_gap": float(gap)}
+        shapes = common.spheres() if shape == "spheres" else {}
+        domain["center"] = [0.0, 0.0, 0.0]
+        self.scene = regopack.scene(
+            "dem3d", domain=domain, **{**common.SIZE_3D, **shapes, "outputs.fabric": False, **extra}
+        )
+
+    def time_pack(self, _cache: Any, shape: str, gap: str, side: float) -> None:
+        regopack.pack(self.scene, verify=False)

@@ -49,6 +49,7 @@ from regopack.plugins.inserters.available_surface.free_surface import (
 )
 from regopack.plugins.inserters.available_surface.halfspaces import halfspaces_of_arcs
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
+from regopack.plugins.inserters.available_surface.prism_wall import NO_WALL, wall_planes
 from regopack.plugins.inserters.available_surface.spheres import (
     COVER_MARGIN,
     EPS,
@@ -69,6 +70,8 @@ takes the vertices' certificate (:func:`.cap_cover.cover_by_vertices`) for an em
 far beyond the rounding of :func:`.spheres.free_arcs`, which then finds no arc either."""
 FOUND, EMPTY, FULL = 1, 0, -1
 """Return codes of :func:`analyse`: a centre, no free area, the cache needs more room."""
+NO_VERTICES = np.zeros((0, 3))
+"""A sphere's vertices for :func:`.prism_wall.wall_planes` (none: its radius is its support)."""
 
 
 class Solids(NamedTuple):
@@ -149,6 +152,9 @@ class Bounds(NamedTuple):
     hi: FloatArray
     adm_lo: FloatArray
     adm_hi: FloatArray
+    wall: FloatArray = NO_WALL
+    """A cylinder's side wall as its inscribed prism (:func:`.prism_wall.prism_wall`);
+    empty for a box. ``lo``/``hi`` are then the cylinder's bounding box."""
 
 
 class Screening(NamedTuple):
@@ -413,7 +419,7 @@ def _interferers(
     (27), or more in a box thinner than that reach.
     """
     _, centre, circum, reach_max = placed
-    period, lo, hi, _, _ = bounds
+    period, lo, hi = bounds.period, bounds.lo, bounds.hi
     ck = centre[pk]
     reach = circum[pk] + reach_max + 2.0 * circum[i] + margin
     near = np.empty(64, dtype=np.int64)
@@ -462,6 +468,7 @@ def _sphere_caps(
     circum: FloatArray,
     wall_lo: FloatArray,
     wall_hi: FloatArray,
+    planes: FloatArray,
     margin: float,
     tau: float,
     caps: FloatArray,
@@ -469,7 +476,8 @@ def _sphere_caps(
     """Fill ``caps`` for a sphere of radius ``r`` touching one of ``big_r - r`` at ``ck``.
 
     Interferers ``near[:count]`` at ``at``; the centre must stay within
-    ``wall_lo``/``wall_hi`` (infinite: no wall). Returns the number of caps,
+    ``wall_lo``/``wall_hi`` (infinite: no wall) and on the inner side of
+    ``planes`` (rows ``n, b``: ``n · x <= b``). Returns the number of caps,
     or -1 when one of them holds the whole sphere (but a point).
     """
     nc = int(np.int64(0))  # not a literal 0 (second compilations of free_arcs, sample_free)
@@ -505,6 +513,21 @@ def _sphere_caps(
             caps[nc, ax] = side
             caps[nc, 3] = h
             nc += 1
+    for w in range(planes.shape[0]):
+        h = (
+            planes[w, 3]
+            - margin
+            - (planes[w, 0] * ck[0] + planes[w, 1] * ck[1] + planes[w, 2] * ck[2])
+        )
+        if h >= big_r - tau:
+            continue
+        if h <= -big_r + tau:
+            return -1
+        caps[nc, 0] = planes[w, 0]
+        caps[nc, 1] = planes[w, 1]
+        caps[nc, 2] = planes[w, 2]
+        caps[nc, 3] = h
+        nc += 1
     return nc
 
 
@@ -532,10 +555,12 @@ def analyse_sphere(
     r = circum[i]
     big_r = circum[pk] + r
     tau = EPS * big_r
-    caps = np.empty((count + 6, 4))
+    planes = wall_planes(bounds.wall, ck, big_r, NO_VERTICES, r)
+    caps = np.empty((count + 6 + planes.shape[0], 4))
     nc = _sphere_caps(
-        ck, big_r, r, count, near, at, circum, bounds.adm_lo, bounds.adm_hi, margin, tau, caps
-    )
+        ck, big_r, r, count, near, at, circum, bounds.adm_lo, bounds.adm_hi, planes, margin,
+        tau, caps,
+    )  # fmt: skip
     if nc < 0:
         return EMPTY
     nc = drop_contained(caps, nc, big_r, tau)
@@ -580,10 +605,11 @@ def sphere_shut(
     shift = circum[i] - level  # the admissible box of a sphere of radius level
     big_r = circum[pk] + level
     depth = COVER_MARGIN * big_r
-    caps = np.empty((count + 6, 4))
+    planes = wall_planes(bounds.wall, ck, big_r + depth, NO_VERTICES, level)
+    caps = np.empty((count + 6 + planes.shape[0], 4))
     nc = _sphere_caps(
         ck, big_r, level, count, near, at, circum,
-        bounds.adm_lo - shift, bounds.adm_hi + shift, 0.0, -depth, caps,
+        bounds.adm_lo - shift, bounds.adm_hi + shift, planes, 0.0, -depth, caps,
     )  # fmt: skip
     # -1: a ball holds the whole sphere, deeper than depth (the tolerance given is -depth)
     if nc < 0:
@@ -714,10 +740,13 @@ def analyse(
         radii[m] = circum[j] + circum[i] + margin
     inter = Interferers(normals, support, offsets, at[:count].copy(), radii)
     envelope = minkowski_envelope(solid(s, pk), q)
+    planes = wall_planes(bounds.wall, ck, circum[pk] + circum[i], q.vertices, 0.0)
     if margin > 0.0:
         adm_lo = adm_lo + margin
         adm_hi = adm_hi - margin
-    surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi)
+        for w in range(planes.shape[0]):
+            planes[w, 3] -= margin
+    surface = free_surface(envelope, ck.copy(), inter, adm_lo, adm_hi, planes)
     if surface.area > 0.0:
         if out.shape[0] == 0:
             return FOUND

@@ -264,10 +264,14 @@ def _face_polygon(
     f: int,
     blo: FloatArray,
     bhi: FloatArray,
+    walls: FloatArray,
     geom: FloatArray,
     work: FloatArray,
 ) -> int:
-    """Face ``f`` in its plane's 2D frame, clipped by the box; return its vertex count.
+    """Face ``f`` in its plane's 2D frame, clipped by the box and ``walls``; return its size.
+
+    ``walls`` are rows ``n, b`` of half-spaces ``n · x <= b`` relative to the
+    candidate's centre (a cylinder's facets).
 
     Writes the frame to row ``G_FRAME`` of ``geom`` and the polygon to rows
     ``W_FX, W_FY`` of ``work``.
@@ -332,6 +336,22 @@ def _face_polygon(
             copy_polygon(work, W_IX, W_IY, n, W_FX, W_FY)
             if n < 3:
                 return 0
+    for w in range(walls.shape[0]):  # keep (b - n·o) - (n·e1) s - (n·e2) t >= 0
+        c0 = walls[w, 3]
+        sa = 0.0
+        sb = 0.0
+        for a in range(3):
+            c0 -= walls[w, a] * geom[fr, F_O + a]
+            sa -= walls[w, a] * geom[fr, F_E1 + a]
+            sb -= walls[w, a] * geom[fr, F_E2 + a]
+        if c0 >= rf:
+            continue  # the whole face is on the inner side
+        for i in range(n):
+            work[W_G, i] = c0 + sa * work[W_FX, i] + sb * work[W_FY, i]
+        n = clip_polygon(work, W_FX, W_FY, n, W_G, W_IX, W_IY)
+        copy_polygon(work, W_IX, W_IY, n, W_FX, W_FY)
+        if n < 3:
+            return 0
     return n
 
 
@@ -623,6 +643,7 @@ def free_surface(
     interferers: Interferers,
     lo: FloatArray,
     hi: FloatArray,
+    planes: FloatArray,
 ) -> FreeSurface:
     """Free part of the boundary of the candidate envelope ``E_k`` placed at ``centre``.
 
@@ -637,6 +658,9 @@ def free_surface(
     lo, hi
         ``(3,)`` closed box of admissible centres of ``Q``; bounds may be
         infinite.
+    planes
+        ``(m, 4)`` more admissible half-spaces ``n · x <= b`` (rows ``n, b``;
+        a cylinder's wall facets), or none.
 
     Returns
     -------
@@ -660,6 +684,16 @@ def free_surface(
     for a in range(3):  # the box relative to c_k, widened by tau
         blo[a] = lo[a] - centre[a] - tau
         bhi[a] = hi[a] - centre[a] + tau
+    walls = np.empty((planes.shape[0], 4))  # the planes relative to c_k, widened by tau
+    for w in range(planes.shape[0]):
+        walls[w, 0] = planes[w, 0]
+        walls[w, 1] = planes[w, 1]
+        walls[w, 2] = planes[w, 2]
+        walls[w, 3] = (
+            planes[w, 3]
+            + tau
+            - (planes[w, 0] * centre[0] + planes[w, 1] * centre[1] + planes[w, 2] * centre[2])
+        )
     # scratch: no polygon has more corners than a face, the box's 6 sides and
     # one side per facet of an interferer
     most_facets = 0
@@ -668,7 +702,7 @@ def free_surface(
     largest = 0
     for f in range(nf):
         largest = max(largest, envelope.face_offsets[f + 1] - envelope.face_offsets[f])
-    width = largest + most_facets + 8
+    width = largest + most_facets + 8 + planes.shape[0]
     work = np.empty((N_WORK, width))
     geom = np.empty((G_FRAME + 1, max(most_facets + 1, N_FRAME)))
     pieces = np.empty((4, 8 * width))
@@ -683,7 +717,7 @@ def free_surface(
     npieces = int(np.int64(0))
     f = int(np.int64(0))
     while f < nf:
-        n = _face_polygon(envelope, f, blo, bhi, geom, work)
+        n = _face_polygon(envelope, f, blo, bhi, walls, geom, work)
         if n < 3 or is_thin(work, W_FX, W_FY, n, thin):
             f += 1
             continue

@@ -14,6 +14,8 @@ the smallest radius refused at ``k`` so far). The analysis is exact:
   their envelopes ``E_j``, open, hold the centres at which ``Q`` would
   overlap ``P_j``;
 - the walls admit the centres of a box (``Q``'s vertices inside the domain);
+  a cylinder's side wall is taken as its inscribed regular prism
+  (:mod:`.prism_wall`), within ``wall_gap`` smallest diameters of the wall;
 - the free part of ``∂E_k`` is computed exactly as convex polygons
   (:func:`free_surface.free_surface`), and the centre is drawn uniformly **by
   area** on it (:func:`free_surface.sample_free_point`, three uniform
@@ -53,8 +55,9 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from regopack.base.errors import ConfigError
-from regopack.geometry.domain import Box, Domain
+from regopack.geometry.domain import Box, Cylinder, Domain
 from regopack.geometry.population import Population
+from regopack.plugins.inserters.available_surface.prism_wall import NO_WALL, prism_wall
 from regopack.plugins.inserters.options import ZONE_PER_RADIUS as ZONE_PER_RADIUS
 from regopack.plugins.inserters.options import (
     ScreeningCoefficient,
@@ -162,6 +165,19 @@ class AvailableSurfaceConfig(BaseModel):
         ),
     )
 
+    wall_gap: float = Field(
+        1e-3,
+        gt=0,
+        le=1,
+        allow_inf_nan=False,
+        description=(
+            "Cylinders only: the largest gap, as a fraction of the smallest particle's "
+            "equivalent diameter, that a particle touching the side wall may keep from it. "
+            "The analyses take the wall as the regular prism inscribed in it whose facets lie "
+            "at most this far inside; a smaller gap means more facets near each candidate."
+        ),
+    )
+
     @model_validator(mode="after")
     def _facet_with_its_front(self) -> AvailableSurfaceConfig:
         if self.facet > 0.0 and self.front != "faceted":
@@ -222,8 +238,8 @@ class AvailableSurface(InsertionStrategy):
 
         started = time.perf_counter()
         shapes = population.shapes
-        if not isinstance(domain, Box) or not isinstance(shapes, SolidBatch):
-            raise ConfigError("insertion 'available-surface' packs solids in a 3D box")
+        if not isinstance(domain, Box | Cylinder) or not isinstance(shapes, SolidBatch):
+            raise ConfigError("insertion 'available-surface' packs solids in a 3D box or cylinder")
         rounding = shapes.rounding_radius
         spheres = shapes.normals.shape[0] == 0 and bool(np.all(rounding > 0))
         if np.any(rounding > 0) and not spheres:
@@ -241,11 +257,17 @@ class AvailableSurface(InsertionStrategy):
         cfg = self.config
         n = len(population)
         radius = np.asarray(population.radius, dtype=np.float64)
-        lo = np.array([domain.xmin, domain.ymin, domain.zmin])
-        hi = np.array([domain.xmax, domain.ymax, domain.zmax])
+        bounds = domain.bounds()
+        lo = np.ascontiguousarray(bounds[0::2])
+        hi = np.ascontiguousarray(bounds[1::2])
+        wall = NO_WALL
+        if isinstance(domain, Cylinder) and n:
+            d_min = 2.0 * float(np.min(radius))
+            wall = prism_wall(domain.cx, domain.cy, domain.radius, d_min, cfg.wall_gap)
         st = SurfaceState(
-            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta
-        )
+            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta,
+            wall=wall,
+        )  # fmt: skip
         partner = st.start_partner()
         try:
             stats = _insert(st, shapes, radius, cfg, n, rng, progress)

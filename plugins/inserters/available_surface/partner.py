@@ -142,10 +142,13 @@ def serve(
     period: FloatArray,
     lo: FloatArray,
     hi: FloatArray,
+    wall: FloatArray,
     p: SurfacePartner,
     rng: KernelSource,
 ) -> None:
     """Claim posted slots and analyse them until asked to stop (the partner's loop).
+
+    ``wall`` is a cylinder's side wall (:attr:`.analysis.Bounds.wall`; empty: none).
 
     ``own`` is the partner's half-space cache (grown here when full); ``rng``
     is never drawn from (the analyses give their answer alone).
@@ -156,6 +159,7 @@ def serve(
         borrowed(circum),
     )  # fmt: skip
     period, lo, hi, p = borrowed(period), borrowed(lo), borrowed(hi), borrowed(p)
+    wall = borrowed(wall)
     cache = own
     nothing = np.empty(0)  # the answer alone: no centre drawn
     last = -1
@@ -179,8 +183,9 @@ def serve(
             last = i
         placed = Placed(order, centre, circum, p.fpar[F_REACH])
         bounds = Bounds(
-            period, lo, hi, p.fpar[F_ADM : F_ADM + 3].copy(), p.fpar[F_ADM + 3 : F_ADM + 6].copy()
-        )
+            period, lo, hi, p.fpar[F_ADM : F_ADM + 3].copy(), p.fpar[F_ADM + 3 : F_ADM + 6].copy(),
+            wall,
+        )  # fmt: skip
         k = p.task[base + T_PK]  # the candidate's insertion index
         code = analyse(k, i, q_arcs, s, a, g, cache, placed, bounds, 0.0, rng, nothing)
         while code == FULL:
@@ -391,10 +396,11 @@ class PartnerThread:
         period: FloatArray,
         lo: FloatArray,
         hi: FloatArray,
+        wall: FloatArray,
     ) -> None:
         self.shared = new_surface_partner()
         self._args = (
-            solids, arcs, grid, cache, order, centre, circum, period, lo, hi, self.shared,
+            solids, arcs, grid, cache, order, centre, circum, period, lo, hi, wall, self.shared,
             np.zeros(4, dtype=np.uint64),  # a source never drawn from
         )  # fmt: skip
         self._thread: threading.Thread | None = None

@@ -41,6 +41,7 @@ from regopack.plugins.inserters.available_surface.partner import (
     scan_shared,
 )
 from regopack.plugins.inserters.available_surface.polyhedron import Polyhedron
+from regopack.plugins.inserters.available_surface.prism_wall import NO_WALL, inside_prism
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -94,6 +95,10 @@ class SurfaceState:
         Whether the box's opposite faces are identified (no walls): then the
         interferers include the periodic images of the placed particles (and
         of the candidate itself), and a centre is wrapped into the box.
+    wall
+        A cylinder's side wall as its inscribed prism
+        (:func:`.prism_wall.prism_wall`); ``lo``/``hi`` are then the
+        cylinder's bounding box. Empty: the box's walls alone.
     """
 
     def __init__(
@@ -105,8 +110,10 @@ class SurfaceState:
         periodic: bool = False,
         t: float = 0.999,
         eta: float = 0.0,
+        wall: FloatArray = NO_WALL,
     ):
         n = len(shapes)
+        self.wall = wall
         self.n = n
         self.period = (hi - lo) if periodic else None
         self.t = t
@@ -154,7 +161,7 @@ class SurfaceState:
         self._rng: np.random.Generator | None = None
         self._source: KernelSource = np.zeros(4, dtype=np.uint64)
         self._placed = Placed(self.order, self.centre, self.circum, self.reach_max)
-        self._bounds = Bounds(self._period, lo, hi, lo, hi)
+        self._bounds = Bounds(self._period, lo, hi, lo, hi, wall)
         self._unbounded = (np.full(3, -np.inf), np.full(3, np.inf))
 
     def start_partner(self) -> bool:
@@ -174,7 +181,7 @@ class SurfaceState:
                 return False
             self._partner = PartnerThread(
                 self.solids, self.arcs, self.grid, cache_for(self.n, 4096), self.order,
-                self.centre, self.circum, self._period, self.lo, self.hi,
+                self.centre, self.circum, self._period, self.lo, self.hi, self.wall,
             )  # fmt: skip
         self._shared = self._partner.start()
         return True
@@ -199,7 +206,9 @@ class SurfaceState:
         self.cache.fill[0] = 0
         if self.period is not None:
             self.adm_lo, self.adm_hi = self._unbounded
-            self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
+            self._bounds = Bounds(
+                self._period, self.lo, self.hi, self.adm_lo, self.adm_hi, self.wall
+            )
             return not self._meets_own_images(i)
         if self.spheres:
             r = self.rounding[i]
@@ -209,7 +218,7 @@ class SurfaceState:
             q = self.polys[i]
             self.adm_lo = self.lo - q.vertices.min(axis=0)
             self.adm_hi = self.hi - q.vertices.max(axis=0)
-        self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi)
+        self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi, self.wall)
         lo, hi = self.adm_lo, self.adm_hi
         return not (lo[0] > hi[0] or lo[1] > hi[1] or lo[2] > hi[2])
 
@@ -235,8 +244,15 @@ class SurfaceState:
         return bool(np.any(inside))
 
     def fits_at(self, x: FloatArray) -> bool:
-        """Whether the current particle's centre ``x`` keeps it inside the box."""
-        return bool(np.all(x >= self.adm_lo) and np.all(x <= self.adm_hi))
+        """Whether the current particle's centre ``x`` keeps it inside the box (and the prism)."""
+        if not (np.all(x >= self.adm_lo) and np.all(x <= self.adm_hi)):
+            return False
+        if self.wall.shape[0] == 0:
+            return True
+        i = self._particle
+        if self.spheres:
+            return inside_prism(self.wall, x, np.zeros((0, 3)), float(self.rounding[i]))
+        return inside_prism(self.wall, x, self.polys[i].vertices, 0.0)
 
     def scan(
         self,

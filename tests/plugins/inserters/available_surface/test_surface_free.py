@@ -38,11 +38,12 @@ from regopack.plugins.inserters.available_surface.polyhedron import (
 )
 
 OPEN = (np.full(3, -np.inf), np.full(3, np.inf))
+NO_PLANES = np.zeros((0, 4))
 
 
 def run(scene: dict, lo: np.ndarray = OPEN[0], hi: np.ndarray = OPEN[1]) -> FreeSurface:
     it = interferers_from(scene["envelopes"], scene["centres"])
-    return free_surface(scene["ek"], scene["centre"], it, lo, hi)
+    return free_surface(scene["ek"], scene["centre"], it, lo, hi, NO_PLANES)
 
 
 def per_face_area(fs: FreeSurface, nfaces: int) -> np.ndarray:
@@ -383,12 +384,12 @@ def test_the_culling_radii_only_cull() -> None:
     scene = crowded_scene(np.random.default_rng(9), 10, gap=(1.0, 1.5))
     culled = run(scene)
     it = interferers_from(scene["envelopes"], scene["centres"], np.full(10, np.inf))
-    plain = free_surface(scene["ek"], scene["centre"], it, *OPEN)
+    plain = free_surface(scene["ek"], scene["centre"], it, *OPEN, NO_PLANES)
     assert plain.area == pytest.approx(culled.area, rel=1e-12)
     far = interferers_from(
         scene["envelopes"], scene["centres"] + 1e3, [circumradius(e) for e in scene["envelopes"]]
     )
-    assert free_surface(scene["ek"], scene["centre"], far, *OPEN).area == pytest.approx(
+    assert free_surface(scene["ek"], scene["centre"], far, *OPEN, NO_PLANES).area == pytest.approx(
         total_area(scene["ek"]), rel=1e-12
     )
 
