@@ -74,7 +74,8 @@ def moved(
         the moved particles in a periodic box are wrapped into it. The
         vertices, face normals and supports of each turned polyhedron are
         turned, and its ``rotation`` composed with the turn; in 2D the
-        outline is turned and the turn's angle added to ``orientation``.
+        outline is turned and the turn's angle added to ``orientation``
+        (modulo 2π, in ``[0, 2π)`` as the shapes draw it).
 
     Raises
     ------
@@ -156,7 +157,9 @@ def _turned2(
         vertices[rows] = vertices[rows] @ r.T
     if orientation.size:
         angle = np.arctan2(turn[:, 1, 0], turn[:, 0, 0])
-        orientation[index] += angle
+        # the shapes draw their orientations in [0, 2 pi): a turned one stays there
+        turned = np.mod(orientation[index] + angle, 2.0 * np.pi)
+        orientation[index] = np.where(turned >= 2.0 * np.pi, 0.0, turned)  # mod's rounding
     return {"vertices": vertices, "orientation": orientation}
 
 

@@ -97,7 +97,15 @@ def test_a_turned_polygon_in_2d() -> None:
     want = before @ quarter[0].T + p.centre[1] + g[0] + [0.5, -0.5]
     np.testing.assert_allclose(q.polygon(1), want, atol=1e-15)
     np.testing.assert_array_equal(q.polygon(0), p.polygon(0))
-    assert q.orientation[1] == pytest.approx(p.orientation[1] + np.pi / 2)
+    assert q.orientation[1] == pytest.approx(np.mod(p.orientation[1] + np.pi / 2, 2 * np.pi))
+    # three more quarter turns bring it back, within [0, 2 pi)
+    r = q
+    for _ in range(3):
+        r = moved(r, np.array([1]), np.zeros((1, 2)), quarter)
+    assert 0.0 <= r.orientation[1] < 2 * np.pi
+    assert r.orientation[1] == pytest.approx(p.orientation[1], abs=1e-12) or abs(
+        r.orientation[1] - p.orientation[1]
+    ) == pytest.approx(2 * np.pi, abs=1e-12)
     with pytest.raises(PackingError, match="shift has shape"):
         moved(p, np.array([1]), np.zeros((1, 3)))
 
