@@ -149,12 +149,8 @@ def _turned2(
     packing: Packing[Any], index: NDArray[np.int64], turn: FloatArray
 ) -> dict[str, FloatArray]:
     """Outlines and orientations of the 2D packing with ``index`` turned about their centres."""
-    vertices = packing.vertices.copy()
+    vertices = _rows_turned(packing.vertices, packing.offsets, index, turn)
     orientation = packing.orientation.copy()
-    offsets = packing.offsets
-    for r, j in zip(turn, index.tolist(), strict=True):
-        rows = slice(offsets[j], offsets[j + 1])
-        vertices[rows] = vertices[rows] @ r.T
     if orientation.size:
         angle = np.arctan2(turn[:, 1, 0], turn[:, 0, 0])
         # the shapes draw their orientations in [0, 2 pi): a turned one stays there
@@ -171,21 +167,38 @@ def _turned(
     A face plane ``n · x = s`` through the reference point's frame keeps its
     offset ``s`` when the solid turns about that point.
     """
-    vertices = packing.vertices.copy()
-    normals = packing.normals.copy()
+    vertices = _rows_turned(packing.vertices, packing.offsets, index, turn)
+    normals = packing.normals
+    if packing.face_offsets.size:
+        normals = _rows_turned(normals, packing.face_offsets, index, turn)
     rotation = packing.rotation.copy()
-    offsets = packing.offsets
-    faces = packing.face_offsets
-    for r, j in zip(turn, index.tolist(), strict=True):
-        rows = slice(offsets[j], offsets[j + 1])
-        vertices[rows] = vertices[rows] @ r.T
-        if faces.size:
-            f = slice(faces[j], faces[j + 1])
-            normals[f] = normals[f] @ r.T
     if rotation.shape[0]:
         q = quaternion_of(turn)
         rotation[index] = _compose(q, rotation[index])
     return {"vertices": vertices, "normals": normals, "rotation": rotation}
+
+
+def _rows_turned(
+    values: FloatArray, offsets: NDArray[np.int64], index: NDArray[np.int64], turn: FloatArray
+) -> FloatArray:
+    """Return ``values`` with particle ``index[m]``'s rows turned by ``turn[m]``, vectorised.
+
+    Particle ``j`` owns rows ``offsets[j]`` to ``offsets[j + 1] - 1``; each row
+    ``v`` becomes ``turn[m] @ v``, its terms summed in axis order.
+    """
+    out = values.copy()
+    counts = offsets[index + 1] - offsets[index]
+    if not counts.sum():
+        return out
+    starts = np.repeat(offsets[index] - np.cumsum(counts) + counts, counts)
+    rows = starts + np.arange(int(counts.sum()))
+    r = np.repeat(turn, counts, axis=0)
+    v = values[rows]
+    turned = r[:, :, 0] * v[:, 0:1]
+    for a in range(1, v.shape[1]):
+        turned = turned + r[:, :, a] * v[:, a : a + 1]
+    out[rows] = turned
+    return out
 
 
 def _compose(a: FloatArray, b: FloatArray) -> FloatArray:
