@@ -1,0 +1,170 @@
+"""Packings in a walled cylinder, exported and run by LAMMPS, LIGGGHTS and YADE.
+
+Every program must keep the particles inside the cylinder: at rest (no
+gravity) nothing moves, and under gravity tilted sideways, which presses the
+particles onto the side wall, none passes the side wall, the floor or the lid.
+The packings (``cylinder_packings.py``) have an axis off the origin and
+particles that touch the side wall from the start.
+"""
+
+from __future__ import annotations
+
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+from cylinder_packings import CYLINDER, cylinder_cubes, cylinder_spheres
+
+import regopack
+from regopack.packing.core import Packing
+from regopack.plugins.exporters.lammps_export import (
+    LammpsConfig,
+    LammpsExporter,
+    dump_path,
+    script_path,
+)
+
+LIGGGHTS = shutil.which("liggghts")
+YADE = shutil.which("yade")
+
+
+def excess(centre: np.ndarray, radius: np.ndarray) -> float:
+    """How far the farthest sphere reaches past the cylinder (side wall, floor or lid)."""
+    c = CYLINDER
+    side = np.hypot(centre[:, 0] - c.cx, centre[:, 1] - c.cy) + radius - c.radius
+    floor = c.zmin - (centre[:, 2] - radius)
+    lid = centre[:, 2] + radius - c.zmax
+    return float(np.max([side.max(), floor.max(), lid.max()]))
+
+
+def points_excess(points: np.ndarray, rounding: np.ndarray) -> float:
+    """How far the farthest rounded point reaches past the cylinder."""
+    return excess(points, rounding)
+
+
+def tilt(script: Path, old: str, new: str) -> None:
+    """Turn the script's gravity sideways (towards +x): replace ``old`` by ``new``, once."""
+    text = script.read_text()
+    assert text.count(old) == 1, old
+    script.write_text(text.replace(old, new))
+
+
+# ---------------------------------------------------------------------------
+# LAMMPS
+
+
+def simulate(path: Path, chunks: list[int], **variables: float) -> dict:
+    """Run the exported script in a child process (the driver of the LAMMPS tests)."""
+    from test_lammps_export import simulate as run
+
+    return run(path, chunks, **variables)
+
+
+@pytest.fixture(scope="module")
+def spheres() -> Packing:
+    return cylinder_spheres()
+
+
+@pytest.fixture(scope="module")
+def cubes() -> Packing:
+    return cylinder_cubes()
+
+
+def test_lammps_granular_spheres_script_has_the_cylinder(spheres, tmp_path) -> None:
+    path = LammpsExporter().export(spheres, tmp_path / "p.data")
+    script = script_path(path).read_text()
+    c = CYLINDER
+    assert (
+        f"\nregion       container cylinder z {c.cx} {c.cy} {c.radius} {c.zmin} {c.zmax} "
+        "side in units box\n" in script
+    )
+    assert script.count("wall/gran/region granular hertz/material") == 1
+    assert "plane" not in script
+    lo = [float(v) for v in re.findall(r"^(\S+) \S+ [xyz]lo", path.read_text(), re.M)]
+    hi = [float(v) for v in re.findall(r"^\S+ (\S+) [xyz]lo", path.read_text(), re.M)]
+    bounds = c.bounds().reshape(3, 2)
+    assert np.all(np.array(lo) <= bounds[:, 0]) and np.all(np.array(hi) >= bounds[:, 1])
+
+
+def test_lammps_holds_granular_spheres_still_in_a_cylinder(spheres, tmp_path) -> None:
+    path = LammpsExporter().export(spheres, tmp_path / "p.data")
+    report = simulate(path, [500, 500])
+    d_min = 2.0 * float(spheres.solids.rounding_radius.min())
+    assert report["natoms"] == spheres.n_placed and report["finite"]
+    assert np.abs(report["x"] - report["x0"]).max() < 0.01 * d_min
+
+
+def test_lammps_keeps_granular_spheres_in_the_cylinder_under_tilted_gravity(
+    spheres, tmp_path
+) -> None:
+    path = LammpsExporter().export(spheres, tmp_path / "p.data")
+    tilt(script_path(path), "gravity ${g} vector 0 0 -1", "gravity ${g} vector 1 0 -1")
+    report = simulate(path, [3000], g=0.05)
+    assert report["natoms"] == spheres.n_placed and report["finite"]
+    r = np.array(report["radius"])
+    moved = report["x"] - report["x0"]
+
+    assert np.median(moved[:, 0]) > 0.1  # pushed sideways
+    d_min = 2.0 * r.min()
+    assert excess(report["x"], r) < 0.01 * d_min
+    settled = regopack.settled(spheres, dump_path(path), "lammps")
+    np.testing.assert_allclose(settled.centre, report["x"], atol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# LIGGGHTS
+
+
+def run_liggghts(path: Path, **variables: float) -> dict:
+    """Run ``liggghts`` on the exported script (the runner of the LIGGGHTS tests)."""
+    from test_liggghts_export import run_liggghts as run
+
+    return run(path, **variables)
+
+
+def test_liggghts_script_has_the_cylinder(spheres, tmp_path) -> None:
+    from regopack.plugins.exporters.liggghts_export import LiggghtsExporter
+    from regopack.plugins.exporters.liggghts_export import script_path as liggghts_script
+
+    path = LiggghtsExporter().export(spheres, tmp_path / "p.data")
+    script = liggghts_script(path).read_text()
+    walls = re.findall(r"^fix +(\w+) all wall/gran .* primitive type 1 (.*)$", script, re.M)
+    c = CYLINDER
+    assert walls == [
+        ("wall_side", f"zcylinder {c.radius} {c.cx} {c.cy}"),
+        ("wall_zlo", f"zplane {c.zmin}"),
+        ("wall_zhi", f"zplane {c.zmax}"),
+    ]
+
+
+def test_liggghts_holds_spheres_still_in_a_cylinder(spheres, tmp_path) -> None:
+    from regopack.plugins.exporters.liggghts_export import LiggghtsExporter
+
+    path = LiggghtsExporter().export(spheres, tmp_path / "p.data")
+    report = run_liggghts(path, steps=1000)
+    final = report["final"]
+    d_min = 2.0 * float(spheres.solids.rounding_radius.min())
+    assert report["natoms"] == final.shape[0] == spheres.n_placed
+    assert set(report["atoms"]) == {spheres.n_placed} and np.isfinite(final).all()
+    assert np.abs(final[:, 2:5] - spheres.centre).max() < 0.01 * d_min
+
+
+def test_liggghts_keeps_spheres_in_the_cylinder_under_tilted_gravity(spheres, tmp_path) -> None:
+    from regopack.plugins.exporters.liggghts_export import LiggghtsExporter
+    from regopack.plugins.exporters.liggghts_export import dump_path as liggghts_dump
+    from regopack.plugins.exporters.liggghts_export import script_path as liggghts_script
+
+    path = LiggghtsExporter().export(spheres, tmp_path / "p.data")
+    tilt(liggghts_script(path), "gravity ${g} vector 0 0 -1", "gravity ${g} vector 1 0 -1")
+    report = run_liggghts(path, steps=3000, g=0.05)
+    final = report["final"]
+    assert set(report["atoms"]) == {spheres.n_placed} and np.isfinite(final).all()
+    moved = final[:, 2:5] - spheres.centre
+
+    assert np.median(moved[:, 0]) > 0.1  # pushed sideways
+    assert excess(final[:, 2:5], final[:, 5]) < 0.01 * 2.0 * final[:, 5].min()
+    settled = regopack.settled(spheres, liggghts_dump(path), "liggghts")
+    np.testing.assert_allclose(settled.centre, final[:, 2:5], atol=1e-12)
