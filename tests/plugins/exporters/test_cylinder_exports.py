@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import re
 import shutil
-import subprocess
 from pathlib import Path
 
 import numpy as np
@@ -21,7 +20,6 @@ from cylinder_packings import CYLINDER, cylinder_cubes, cylinder_spheres
 import regopack
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.lammps_export import (
-    LammpsConfig,
     LammpsExporter,
     dump_path,
     script_path,
@@ -168,3 +166,93 @@ def test_liggghts_keeps_spheres_in_the_cylinder_under_tilted_gravity(spheres, tm
     assert excess(final[:, 2:5], final[:, 5]) < 0.01 * 2.0 * final[:, 5].min()
     settled = regopack.settled(spheres, liggghts_dump(path), "liggghts")
     np.testing.assert_allclose(settled.centre, final[:, 2:5], atol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# YADE
+
+TILTED = """
+exec(open({script!r}).read())
+O.run({rest}, True)
+save_state("rest.txt")
+O.engines[-1].gravity = ({g!r}, 0, -{g!r})
+O.run({steps}, True)
+save_state()
+with open("bodies.after", "w") as out:
+    for body_id, index in sorted(DRAW_INDEX.items(), key=lambda item: item[1]):
+        b = O.bodies[body_id]
+        points = [b.state.pos + b.state.ori * v for v in b.shape.v] if POLYHEDRA else [b.state.pos]
+        radius = 0.0 if POLYHEDRA else b.shape.radius
+        out.write(repr(radius) + " " + " ".join(repr(float(c)) for p in points for c in p) + "\\n")
+"""
+
+
+def run_yade_tilted(path: Path, rest: int, g: float, steps: int) -> tuple[np.ndarray, list]:
+    """Run the export at rest for ``rest`` steps, then under gravity ``g`` tilted by 45°
+    towards +x; return the state at rest and every body's points and radius at the end."""
+    from test_yade_export import read_state, run_yade
+
+    check = path.with_name("tilted.py")
+    check.write_text(TILTED.format(script=path.name, rest=rest, g=g, steps=steps))
+    run_yade(check)
+    rest_state = np.array(
+        [line.split() for line in path.with_name("rest.txt").read_text().splitlines()[3:]],
+        dtype=float,
+    )
+    _, state = read_state(path)
+    assert np.isfinite(state).all() and np.isfinite(rest_state).all()
+    bodies = []
+    for line in path.with_name("bodies.after").read_text().splitlines():
+        values = np.array(line.split(), dtype=float)
+        bodies.append((values[1:].reshape(-1, 3) / 1e-6, values[0] / 1e-6))
+    return rest_state, bodies
+
+
+def yade_excess(bodies: list) -> float:
+    """How far the farthest point of a body reaches past the cylinder."""
+    return max(excess(points, np.full(len(points), radius)) for points, radius in bodies)
+
+
+def test_yade_script_has_the_side_wall(cubes, tmp_path) -> None:
+    from regopack.plugins.exporters.yade_export import YadeExporter
+
+    text = YadeExporter().export(cubes, tmp_path / "p.py").read_text()
+    c = CYLINDER
+    found = re.search(r"^CYLINDER = \((\S+), (\S+), (\S+), (\d+)\)", text, re.M)
+    assert found is not None
+    cx, cy, radius, n = (float(v) for v in found.groups())
+    assert (cx, cy, radius) == pytest.approx((c.cx * 1e-6, c.cy * 1e-6, c.radius * 1e-6))
+    d_min = 2.0 * float(cubes.radius.min())
+    assert c.radius * (1 / np.cos(np.pi / n) - 1) <= 0.01 * d_min  # corners close to the circle
+    assert "Ig2_Facet_Polyhedra_PolyhedraGeom()" in text and "Bo1_Facet_Aabb()" in text
+
+
+def test_yade_keeps_spheres_in_the_cylinder(spheres, tmp_path) -> None:
+    from regopack.plugins.exporters.yade_export import YadeExporter, state_path
+
+    path = YadeExporter().export(spheres, tmp_path / "p.py")
+    assert "Ig2_Facet_Sphere_ScGeom()" in path.read_text()
+    rest, bodies = run_yade_tilted(path, 1000, 1e5, 3000)
+    d_min = 2.0 * float(spheres.solids.rounding_radius.min())
+    assert rest.shape[0] == spheres.n_placed
+    assert np.abs(rest[:, 4:7]).max() / 1e-6 < 0.01 * d_min  # at rest nothing moved
+    centre = np.array([p[0] for p, _ in bodies])
+    assert np.median(centre[:, 0] - spheres.centre[:, 0]) > 0.1  # pushed sideways
+    assert yade_excess(bodies) < 0.01 * d_min
+    settled = regopack.settled(spheres, state_path(path), "yade")
+    np.testing.assert_allclose(settled.centre, centre, atol=1e-6)
+
+
+def test_yade_keeps_polyhedra_in_the_cylinder(cubes, tmp_path) -> None:
+    from regopack.plugins.exporters.yade_export import YadeExporter, state_path
+
+    path = YadeExporter().export(cubes, tmp_path / "p.py")
+    rest, bodies = run_yade_tilted(path, 1000, 1e7, 300)
+    d_min = 2.0 * float(cubes.radius.min())
+    assert rest.shape[0] == cubes.n_placed
+    assert np.abs(rest[:, 4:7]).max() / 1e-6 < 0.01 * d_min  # at rest nothing moved
+    centre = np.array([p.mean(axis=0) for p, _ in bodies])
+    assert np.median(centre[:, 0] - cubes.centre[:, 0]) > 0.1  # pushed sideways
+    assert yade_excess(bodies) < 0.05 * d_min
+    settled = regopack.settled(cubes, state_path(path), "yade")
+    assert settled.n_placed == cubes.n_placed
