@@ -650,6 +650,12 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
     misplaced = misplaced_field(cfg, 3)  # thickness: regopack.export refuses it first
     if misplaced is not None:
         raise ConfigError(f"exporter 'lammps': {misplaced[1]}")
+    if isinstance(packing.domain, Cylinder):
+        raise ExportError(
+            "exporter 'lammps': a walled cylinder holds polyhedra (bodies) that LAMMPS cannot "
+            "wall in (fix wall/body/polyhedron has planes only); export them with yade, or "
+            "a packing of spheres alone as granular spheres"
+        )
     bodies = polyhedron_bodies(packing, cfg)
     density = mineral_densities(packing, cfg)[packing.mineral[bodies.index]]
     with np.errstate(over="ignore", under="ignore"):  # checked below

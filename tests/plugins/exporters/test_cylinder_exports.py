@@ -20,6 +20,7 @@ from cylinder_packings import CYLINDER, cylinder_cubes, cylinder_spheres
 import regopack
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.lammps_export import (
+    LammpsConfig,
     LammpsExporter,
     dump_path,
     script_path,
@@ -256,3 +257,66 @@ def test_yade_keeps_polyhedra_in_the_cylinder(cubes, tmp_path) -> None:
     assert yade_excess(bodies) < 0.05 * d_min
     settled = regopack.settled(cubes, state_path(path), "yade")
     assert settled.n_placed == cubes.n_placed
+
+
+# ---------------------------------------------------------------------------
+# the other 3D exporters
+
+
+def test_voxels_outside_the_cylinder_are_neither_solid_nor_pore(spheres, tmp_path) -> None:
+    ps = pytest.importorskip("porespy", reason="PoreSpy (test extra) analyses the image")
+    from regopack.plugins.exporters.image_export import ImageConfig, ImageExporter, image_paths
+
+    h = 0.1
+    path = ImageExporter(ImageConfig(pixel_size=h)).export(spheres, tmp_path / "p.png")
+    im = np.load(image_paths(path)["phases"])
+    assert im.shape == (100, 100, 100)
+    c = CYLINDER
+    inside = im != 2
+    # the voxels inside: those of the circle in every layer (its area within the voxel error)
+    assert inside.sum() * h**3 == pytest.approx(c.volume, rel=4 * h / c.radius)
+    assert np.array_equal(inside[0], inside[-1])
+    solid = sum(4 / 3 * np.pi * r**3 for r in spheres.solids.rounding_radius)
+    phi = solid / c.volume
+    assert spheres.phi == pytest.approx(phi, rel=1e-12)
+    assert ps.metrics.porosity(im) == pytest.approx(1 - phi, abs=0.002)
+    # solid outside the cylinder, or pore, would give another porosity
+    assert abs(ps.metrics.porosity(np.where(inside, im, 0)) - (1 - phi)) > 0.1
+    assert abs(ps.metrics.porosity(np.where(inside, im, 1)) - (1 - phi)) > 0.01
+
+
+def test_sections_of_a_cylinder_lie_in_its_circle_or_chord(spheres, tmp_path) -> None:
+    from regopack.base.errors import ConfigError
+    from regopack.geometry.domain import Circle, Rectangle
+    from regopack.plugins.exporters.slice_export import SliceConfig, slice_packing
+
+    c = CYLINDER
+    level = slice_packing(spheres, SliceConfig(axis="z", at=1.0))
+    assert level.domain == Circle(c.cx, c.cy, c.radius)
+    assert level.n_placed == 9  # the lower ring and the sphere on the axis
+    assert level.stats["slice_phi"] == pytest.approx((8 + 1.2**2 - 0.2**2) / c.radius**2, rel=0.01)
+    side = slice_packing(spheres, SliceConfig(axis="x", at=c.cx + 3.0))
+    assert side.domain == Rectangle(c.cy - 4.0, c.cy + 4.0, c.zmin, c.zmax)
+    with pytest.raises(ConfigError, match="outside the box along y"):
+        slice_packing(spheres, SliceConfig(axis="y", at=c.cy + c.radius + 0.0))
+    for to in ("slice", "gsd", "image"):
+        regopack.export(spheres, to, tmp_path / f"p-{to}")
+    for to in ("vtk", "stl", "gsd", "yade", "image", "slice"):
+        regopack.export(cylinder_cubes(), to, tmp_path / f"c-{to}")
+
+
+def test_lammps_refuses_bodies_in_a_cylinder_in_one_line(cubes, spheres, tmp_path, capsys) -> None:
+    """LAMMPS' wall/body/polyhedron has planes only: no side wall for bodies."""
+    from regopack.base.errors import ExportError
+    from regopack.cli import main
+    from regopack.packing.core import save
+
+    with pytest.raises(ExportError, match="fix wall/body/polyhedron has planes only"):
+        LammpsExporter().export(cubes, tmp_path / "c.data")
+    with pytest.raises(ExportError, match="fix wall/body/polyhedron has planes only"):
+        LammpsExporter(LammpsConfig(spheres="bodies")).export(spheres, tmp_path / "s.data")
+    assert not list(tmp_path.iterdir())
+    save(cubes, tmp_path / "c.npz")
+    assert main(["export", str(tmp_path / "c.npz"), "--to", "lammps"]) != 0
+    err = capsys.readouterr().err.strip()
+    assert "planes only" in err and "Traceback" not in err and len(err.splitlines()) == 1
