@@ -10,7 +10,9 @@ image is a stack of such layers, ``[layer, row, column]``, layer 0 at the
 bottom (smallest z): every layer is the 2D image of a horizontal section seen
 from above. Pixels whose centre lies outside the domain (around a circle or
 polygon, or past a side that the pixel size does not divide) have their own
-value in every image and are neither solid nor pore. In a periodic domain a
+value in every image and are neither solid nor pore; so do the voxels
+around a walled cylinder (outside its circle, in every layer), so that the
+porosity of the image is that of the cylinder. In a periodic domain a
 particle that crosses a side is drawn on both sides.
 
 >>> from regopack.testing import packing_from_polygons
@@ -46,7 +48,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ExportError
-from regopack.geometry.domain import Box, Domain, PeriodicRectangle, Rectangle
+from regopack.geometry.domain import Box, Cylinder, Domain, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing, _atomic_file, _finite_or_none
 from regopack.registry.hookspecs import hookimpl
 from regopack.registry.interfaces import Analyzer, Exporter
@@ -664,6 +666,12 @@ def _domain_mask(domain: Domain, grid: PixelGrid) -> BoolArray:
             for a, c in enumerate(centres)
         ]
         out: BoolArray = along[2][:, None, None] & along[1][None, :, None] & along[0][None, None, :]
+        return out
+    if isinstance(domain, Cylinder):  # the voxels of every layer inside the circle
+        zs = grid.z(np.arange(grid.n_layers))
+        disk = np.hypot(xs[None, :] - domain.cx, ys[:, None] - domain.cy) < domain.radius
+        height = (zs > domain.zmin) & (zs < domain.zmax)
+        out = height[:, None, None] & disk[None, :, :]
         return out
     if isinstance(domain, PeriodicRectangle):  # half-open: [xmin, xmax) x [ymin, ymax)
         cols = (xs >= domain.xmin) & (xs < domain.xmax)

@@ -73,7 +73,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from regopack._compat import renamed_names
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import length_scale, length_unit
-from regopack.geometry.domain import Box, PeriodicRectangle, Rectangle
+from regopack.geometry.domain import Box, Cylinder, PeriodicRectangle, Rectangle
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.body_dump import read_body_dump
 from regopack.plugins.exporters.export_common import (
@@ -650,6 +650,12 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
     misplaced = misplaced_field(cfg, 3)  # thickness: regopack.export refuses it first
     if misplaced is not None:
         raise ConfigError(f"exporter 'lammps': {misplaced[1]}")
+    if isinstance(packing.domain, Cylinder):
+        raise ExportError(
+            "exporter 'lammps': a walled cylinder holds polyhedra (bodies) that LAMMPS cannot "
+            "wall in (fix wall/body/polyhedron has planes only); export them with yade, or "
+            "a packing of spheres alone as granular spheres"
+        )
     bodies = polyhedron_bodies(packing, cfg)
     density = mineral_densities(packing, cfg)[packing.mineral[bodies.index]]
     with np.errstate(over="ignore", under="ignore"):  # checked below
@@ -848,19 +854,29 @@ class LammpsExporter(Exporter[AnyPacking]):
             "hertz/material ${E} ${e_n} ${nu} tangential mindlin NULL 1.0 ${mu} "
             "damping coeff_restitution"
         )
-        walls = [
-            f"fix          wall{i + 1} all wall/gran granular {model} "
-            f"{axis}plane {_num(g.lo[i])} {_num(g.hi[i])}"
-            for i, axis in enumerate("xyz")
-        ]
+        domain = packing.domain
+        if isinstance(domain, Cylinder):
+            cx, cy, radius = (v * g.scale for v in (domain.cx, domain.cy, domain.radius))
+            walls = [
+                f"region       container cylinder z {_num(cx)} {_num(cy)} {_num(radius)} "
+                f"{_num(g.lo[2])} {_num(g.hi[2])} side in units box",
+                f"fix          wall1 all wall/gran/region granular {model} region container",
+            ]
+            where = "a walled cylinder (side wall, floor and lid)."
+        else:
+            walls = [
+                f"fix          wall{i + 1} all wall/gran granular {model} "
+                f"{axis}plane {_num(g.lo[i])} {_num(g.hi[i])}"
+                for i, axis in enumerate("xyz")
+            ]
+            where = "periodic in x, y and z." if g.periodic else "walls on all six sides."
         return "\n".join(
             [
                 f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
                 f"(scene {scene_label(packing)}, seed {packing.seed}).",
                 f"# Run it in this folder: lmp -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var E 7e7 -var steps 50000.",
-                "# Domain: "
-                + ("periodic in x, y and z." if g.periodic else "walls on all six sides."),
+                f"# Domain: {where}",
                 "",
                 *material_variable_lines(cfg),
                 *rayleigh_step_lines(g.r_rho),

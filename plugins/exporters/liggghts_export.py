@@ -17,7 +17,8 @@ runs:
   (Coulomb friction);
 - ``fix nve/sphere``; walls of the same contact model (``fix wall/gran ...
   primitive``) on the six faces of a walled box, or ``boundary p p p`` for a
-  periodic box;
+  periodic box; in a walled cylinder, its side wall (``primitive ...
+  zcylinder R cx cy``) and the planes of its floor and lid (``zplane``);
 - a time step of ``rayleigh_fraction`` (0.2 by default) of the Rayleigh time
   of the sphere whose Rayleigh time is shortest, computed in the script from
   the variables ``E`` and ``nu``, so it follows them when they are changed
@@ -43,7 +44,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import length_unit
-from regopack.geometry.domain import Box
+from regopack.geometry.domain import Box, Cylinder
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.export_common import Analyses, _num, _write_text, scene_label
 from regopack.plugins.exporters.granular_common import (
@@ -250,12 +251,22 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
         def per_type(name: str, var: str) -> str:
             return f"fix          {name} all property/global {var}"
 
+        planes = "z" if isinstance(packing.domain, Cylinder) else "xyz"
         walls = [
             f"fix          wall_{axis}{side} all wall/gran {model} primitive type 1 "
-            f"{axis}plane {_num(bound[i])}"
-            for i, axis in enumerate("xyz")
+            f"{axis}plane {_num(bound['xyz'.index(axis)])}"
+            for axis in planes
             for side, bound in (("lo", g.lo), ("hi", g.hi))
         ]
+        where = "periodic in x, y and z." if g.periodic else "walls on all six sides."
+        if isinstance(packing.domain, Cylinder):
+            d = packing.domain
+            walls.insert(
+                0,
+                f"fix          wall_side all wall/gran {model} primitive type 1 zcylinder "
+                + " ".join(_num(v * g.scale) for v in (d.radius, d.cx, d.cy)),
+            )
+            where = "a walled cylinder (side wall, floor and lid)."
         unit = length_unit(packing)
         return "\n".join(
             [
@@ -263,8 +274,7 @@ class LiggghtsExporter(Exporter[Packing[Box]]):
                 f"(scene {scene_label(packing)}, seed {packing.seed}).",
                 f"# Run it in this folder: liggghts -in {script_path(path).name}",
                 "# Change a parameter with -var, e.g. -var E 7e7 -var steps 50000.",
-                "# Domain: "
-                + ("periodic in x, y and z." if g.periodic else "walls on all six sides."),
+                f"# Domain: {where}",
                 f"# Lengths: packing lengths ({unit}) x {_num(g.scale)}, units {cfg.units}.",
                 f"# At the end: {dump_path(path).name}, id type x y z radius mass and the "
                 "displacement from the packing (dx dy dz |d|).",

@@ -5,8 +5,9 @@ The plane ``x[axis] = at`` cuts every placed solid
 which becomes one particle of a 2D :class:`~regopack.packing.core.Packing` in the
 plane's coordinates (the two other axes in order: x, y for a z section; y, z
 for an x section; x, z for a y section), keeping its mineral, in a walled
-rectangle, the box's face. Every 2D analysis and export then reads the
-section as it reads a packing of polygons.
+rectangle, the box's face (in a walled cylinder: its circle for a z section,
+the rectangle of the chord the plane cuts for an x or y one). Every 2D
+analysis and export then reads the section as it reads a packing of polygons.
 
 - **Particles**: the cuts, in the order their solids were inserted, each
   with its centroid as centre, its outline around it counter-clockwise, the
@@ -14,7 +15,7 @@ section as it reads a packing of polygons.
   Cuts of less than 10⁻¹² of the section's area (the plane grazing a vertex
   or an edge) are left out.
 - **Scene**: ``name`` (the 3D scene's, with ``-slice``), a ``rectangle``
-  domain, the 3D scene's ``density`` section and a ``slice`` table (the 3D
+  (or ``circle``) domain, the 3D scene's ``density`` section and a ``slice`` table (the 3D
   scene's name, ``axis``, ``at``, and the index of each cut's solid in the
   3D packing, ``solids``). There is no ``size`` section: the sizes of the
   cuts do not follow the 3D size distribution.
@@ -36,7 +37,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import reference_diameter
-from regopack.geometry.domain import Box, Rectangle
+from regopack.geometry.domain import Box, Circle, Cylinder, Rectangle
 from regopack.packing.core import Packing, save
 from regopack.plugins.exporters.solid_export_common import write_bytes
 from regopack.registry.interfaces import Analyzer, Exporter
@@ -95,6 +96,34 @@ def _plane(packing: Packing[Box], config: SliceConfig) -> tuple[int, float]:
     return axis, float(config.at)
 
 
+def _section_domain(box: Box | Cylinder, axis: int, at: float) -> Rectangle | Circle:
+    """Return the domain of the section ``x[axis] = at``, in the plane's coordinates.
+
+    A box's face, a rectangle; a cylinder's is its circle (a z section) or the
+    rectangle of the chord that the plane cuts from its circle (x or y).
+
+    Raises
+    ------
+    ConfigError
+        When the plane misses the cylinder's circle.
+    """
+    bounds = box.bounds().reshape(3, 2)
+    keep = [a for a in range(3) if a != axis]
+    if not isinstance(box, Cylinder):
+        return Rectangle(*bounds[keep[0]], *bounds[keep[1]])
+    if axis == 2:
+        return Circle(box.cx, box.cy, box.radius)
+    offset = at - (box.cx, box.cy)[axis]
+    half = float(np.sqrt(max(box.radius**2 - offset**2, 0.0)))
+    if not half > 0:
+        raise ConfigError(
+            f"exporter 'slice': at = {at:g}: the plane misses the cylinder's circle; give a "
+            "value between its sides"
+        )
+    across = (box.cy, box.cx)[axis]
+    return Rectangle(across - half, across + half, box.zmin, box.zmax)
+
+
 def _area_centroid(poly: FloatArray) -> tuple[float, FloatArray]:
     x, y = poly[:, 0], poly[:, 1]
     xn, yn = np.roll(x, -1), np.roll(y, -1)
@@ -121,9 +150,7 @@ def slice_packing(packing: Packing[Box], config: SliceConfig | None = None) -> P
     if box.periodic:
         raise ExportError("the slice export cuts walled boxes only, not a periodic box")
     axis, at = _plane(packing, cfg)
-    bounds = box.bounds().reshape(3, 2)
-    keep = [a for a in range(3) if a != axis]
-    domain = Rectangle(*bounds[keep[0]], *bounds[keep[1]])
+    domain = _section_domain(box, axis, at)
     polygons, owners = section_polygons(packing, axis, at)
     smallest = SLIVER * domain.area
     rows = []

@@ -53,7 +53,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from regopack.base.errors import ConfigError, ExportError
 from regopack.base.units import conversion, length_unit
-from regopack.geometry.domain import Box
+from regopack.geometry.domain import Box, Cylinder
 from regopack.packing.core import Packing
 from regopack.plugins.exporters.export_common import Analyses, _num, _write_text, scene_label
 from regopack.plugins.exporters.granular_common import mineral_densities, mineral_values
@@ -74,6 +74,13 @@ __all__ = [
 ]
 
 VERLET_FRACTION = 0.05
+FACET_GAP = 0.01
+"""A walled cylinder's side wall is made of flat facets whose planes touch the circle at their
+middles (the polygon circumscribes it): its corners stand farther out, by at most this
+fraction of the smallest equivalent diameter (it sets the number of facets)."""
+
+MIN_SEGMENTS = 16
+"""Fewest facets (around) of a cylinder's side wall."""
 """Margin of YADE's collider (``verletDist``) as a fraction of the smallest equivalent diameter."""
 
 STATE_FORMAT = "regopack-yade-state 1"
@@ -275,6 +282,7 @@ class YadeExporter(Exporter[Packing[Box]]):
             verlet=VERLET_FRACTION * d_min * scale,
             spheres=any(not p.loops for p in solids),
             polyhedra=any(p.loops for p in solids),
+            d_min=d_min,
         )
         _write_text(path, text)
         return path
@@ -437,16 +445,18 @@ def _script(
     verlet: float,
     spheres: bool,
     polyhedra: bool,
+    d_min: float,
 ) -> str:
     """Text of the YADE script (see the module documentation)."""
     box = packing.domain
+    cylinder = _side_wall(box, d_min, scale)
     lo, hi = box.bounds().reshape(3, 2).T
     size = (hi - lo) * scale
     lower = np.zeros(3) if box.periodic else lo * scale
     upper = size if box.periodic else hi * scale
     bounds = ", ".join(_num(x) for x in lower), ", ".join(_num(x) for x in upper)
     unit = length_unit(packing)
-    engines = _engines(spheres, polyhedra)
+    engines = _engines(spheres, polyhedra, facets=cylinder is not None)
     head = [
         f"# YADE scene of {bodies_path(path).name}, written by regopack {packing.version} "
         f"(scene {scene_label(packing)}, seed {packing.seed}).",
@@ -468,7 +478,7 @@ def _script(
         "import sys",
         "",
         "from yade import *  # noqa: F403 (O, the bodies, engines and materials)",
-        "from yade import polyhedra_utils, utils",
+        "from yade import geom, polyhedra_utils, utils",
         "",
         f"RUN_STEPS = {cfg.steps}  # steps run after building (--run)",
         f"GRAVITY = {_num(cfg.gravity)}  # acceleration along -z (--gravity)",
@@ -485,8 +495,16 @@ def _script(
         f"PERIODIC = {box.periodic}",
         f"SPHERES = {spheres}  # bodies of each kind present",
         f"POLYHEDRA = {polyhedra}",
-        f"LOWER = ({bounds[0]})  # box corners",
+        f"LOWER = ({bounds[0]})  # box corners" + (" (of the cylinder's box)" if cylinder else ""),
         f"UPPER = ({bounds[1]})",
+        *(
+            [
+                f"CYLINDER = ({', '.join(_num(v) for v in cylinder[:3])}, {int(cylinder[3])})  "
+                "# axis x, y, radius and facets of the side wall",
+            ]
+            if cylinder
+            else ["CYLINDER = None  # no side wall: a box"]
+        ),
         f"BODIES = {bodies_path(path).name!r}",
         f"STATE = {state_path(path).name!r}",
         f"STATE_FORMAT = {STATE_FORMAT!r}",
@@ -496,7 +514,22 @@ def _script(
     return "\n".join(head) + _SCRIPT_BODY.replace("@ENGINES@", engines)
 
 
-def _engines(spheres: bool, polyhedra: bool) -> str:
+def _side_wall(domain: object, d_min: float, scale: float) -> tuple[float, ...] | None:
+    """Return ``(cx, cy, R, N)`` of a cylinder's side wall in the script's lengths, or ``None``.
+
+    ``N`` flat facets circumscribe the circle of radius ``R``: their corners
+    stand ``R (1 / cos(π / N) - 1)`` outside it, at most :data:`FACET_GAP` ×
+    ``d_min`` (and at least :data:`MIN_SEGMENTS` facets).
+    """
+    if not isinstance(domain, Cylinder):
+        return None
+    radius = domain.radius
+    gap = FACET_GAP * d_min
+    segments = max(MIN_SEGMENTS, math.ceil(math.pi / math.acos(radius / (radius + gap))))
+    return (domain.cx * scale, domain.cy * scale, radius * scale, float(segments))
+
+
+def _engines(spheres: bool, polyhedra: bool, facets: bool = False) -> str:
     """Return the script's engines: the functors the bodies present need, and no other."""
     bounds = []
     geoms = []
@@ -505,6 +538,7 @@ def _engines(spheres: bool, polyhedra: bool) -> str:
     if spheres:
         bounds.append("Bo1_Sphere_Aabb()")
         geoms += ["Ig2_Sphere_Sphere_ScGeom()", "Ig2_Wall_Sphere_ScGeom()"]
+        geoms += ["Ig2_Facet_Sphere_ScGeom()"] if facets else []
         physics.append("Ip2_FrictMat_FrictMat_FrictPhys()")
         laws.append("Law2_ScGeom_FrictPhys_CundallStrack()")
     if polyhedra:
@@ -513,12 +547,15 @@ def _engines(spheres: bool, polyhedra: bool) -> str:
             "Ig2_Polyhedra_Polyhedra_PolyhedraGeom()",
             "Ig2_Wall_Polyhedra_PolyhedraGeom()",
         ]
+        geoms += ["Ig2_Facet_Polyhedra_PolyhedraGeom()"] if facets else []
         physics.append("Ip2_PolyhedraMat_PolyhedraMat_PolyhedraPhys()")
         laws.append("Law2_PolyhedraGeom_PolyhedraPhys_Volumetric()")
     if spheres and polyhedra:
         geoms.append("Ig2_Sphere_Polyhedra_ScGeom()")
         physics.append("Ip2_FrictMat_PolyhedraMat_FrictPhys()")
     bounds.append("Bo1_Wall_Aabb()")
+    if facets:
+        bounds.append("Bo1_Facet_Aabb()")
 
     def listed(items: list[str]) -> str:
         return "[" + ", ".join(items) + "]"
@@ -635,7 +672,8 @@ def _bodies(kinds):
 
 
 def _walls(walls):
-    """The six walls of a walled box (sense: towards the inside), or YADE's periodic cell.
+    """The six walls of a walled box (sense: towards the inside), YADE's periodic cell, or
+    a walled cylinder: its floor and lid (walls) and its side wall (facets).
 
     Spheres and polyhedra meet walls of their own material (the masks keep the
     others apart): YADE has no functor for a sphere and a wall of polyhedra."""
@@ -644,10 +682,23 @@ def _walls(walls):
         O.cell.setBox(UPPER)
         return
     for material, mask in walls:
-        for axis in range(3):
+        for axis in ((2,) if CYLINDER else range(3)):
             for where, sense in ((LOWER[axis], 1), (UPPER[axis], -1)):
                 O.bodies.append(utils.wall(where, axis=axis, sense=sense, material=material,
                                            mask=mask))
+        if CYLINDER:
+            O.bodies.append(side_wall(material, mask))
+
+
+def side_wall(material, mask):
+    """The cylinder's side wall: flat facets from the floor to the lid whose planes touch
+    the circle of radius R at their middles, so that the polygon holds the whole cylinder
+    (a particle inside the cylinder overlaps no facet)."""
+    cx, cy, radius, segments = CYLINDER
+    corners = radius / math.cos(math.pi / segments)
+    centre = (cx, cy, 0.5 * (LOWER[2] + UPPER[2]))
+    return geom.facetCylinder(centre, corners, UPPER[2] - LOWER[2], segmentsNumber=segments,
+                              wallMask=4, material=material, mask=mask)
 
 
 def time_step():
