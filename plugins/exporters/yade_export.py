@@ -741,7 +741,7 @@ def save_state(path=None):
         out.write("# steps %d, time %r, dt %r, length scale %r, bodies %d\\n"
                   % (O.iter, O.time, O.dt, LENGTH_SCALE, len(rows)))
         out.write("# index x y z dx dy dz r11 r12 r13 r21 r22 r23 r31 r32 r33\\n")
-        out.write("\\n".join(rows) + "\\n")
+        out.write("".join(row + "\\n" for row in rows))
     os.replace(target + ".part", target)
     return target
 
