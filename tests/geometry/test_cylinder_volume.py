@@ -119,8 +119,12 @@ def test_random_spheres_against_quadpack(scale):
     rng = np.random.default_rng(7)
     c = rng.uniform(-3, 3, (30, 3))
     r = rng.uniform(0.3, 1.5, 30)
-    got = spheres_in_cylinder(c * scale, r * scale, (0.2 * scale, 0.0), 2.5 * scale, -1 * scale,
-                              2 * scale) / scale**3  # fmt: skip
+    got = (
+        spheres_in_cylinder(
+            c * scale, r * scale, (0.2 * scale, 0.0), 2.5 * scale, -1 * scale, 2 * scale
+        )
+        / scale**3
+    )
     for k in range(30):
         lo, hi = max(c[k, 2] - r[k], -1.0), min(c[k, 2] + r[k], 2.0)
         d = math.hypot(c[k, 0] - 0.2, c[k, 1])
@@ -146,6 +150,8 @@ def test_cut_volumes_add_up_over_adjacent_windows():
     rng = np.random.default_rng(11)
     polys = [rng.normal(size=(12, 3)) * 0.8 + rng.uniform(-3, 3, 3) for _ in range(20)]
     whole = polyhedra_in_cylinder(polys, (0.1, -0.2), 2.2, -2.0, 2.0)
-    parts = sum(polyhedra_in_cylinder(polys, (0.1, -0.2), 2.2, a, b) for a, b in
-                [(-2.0, -0.7), (-0.7, 0.4), (0.4, 2.0)])  # fmt: skip
+    parts = sum(
+        polyhedra_in_cylinder(polys, (0.1, -0.2), 2.2, a, b)
+        for a, b in [(-2.0, -0.7), (-0.7, 0.4), (0.4, 2.0)]
+    )
     np.testing.assert_allclose(parts, whole, rtol=1e-10, atol=1e-12)

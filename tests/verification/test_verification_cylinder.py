@@ -55,8 +55,9 @@ def test_a_sphere_tangent_to_the_side_wall_is_inside_and_one_beyond_is_out(scale
     assert tangent.ok and tangent.n_outside == 0
     grazing = verify_spheres([at(1e-12)], [r * scale], lo, hi, cylinder=cyl)
     assert grazing.ok  # within the inserter's rounding of a wall
-    beyond = verify_spheres([at(0.0), at(1e-9)], [r * scale, r * scale], lo, hi, cylinder=cyl,
-                            rel_tol=1e-10)  # fmt: skip
+    beyond = verify_spheres(
+        [at(0.0), at(1e-9)], [r * scale, r * scale], lo, hi, cylinder=cyl, rel_tol=1e-10
+    )
     assert not beyond.ok and beyond.n_outside == 1
     assert beyond.worst_outside == (1, pytest.approx(1e-9, rel=1e-3))
     assert "leave the cylinder" in str(beyond) and "particle 1" in str(beyond)
@@ -71,12 +72,15 @@ def test_a_cube_with_corners_on_the_side_wall_is_inside_and_one_beyond_is_out(sc
     radial = np.hypot(tangent[:, 0] - R * scale, tangent[:, 1] - R * scale)
     assert radial.max() == pytest.approx(R * scale, rel=1e-15)
     assert verify_polyhedra([tangent], None, lo, hi, cylinder=cyl).ok
-    assert verify_polyhedra([_side_cube(half, 1e-12 * size) * scale], None, lo, hi,
-                            cylinder=cyl).ok  # fmt: skip
+    assert verify_polyhedra([_side_cube(half, 1e-12 * size) * scale], None, lo, hi, cylinder=cyl).ok
     beyond = verify_polyhedra(
-        [tangent, _side_cube(half, 1e-9 * size, theta=2.0) * scale], None, lo, hi,
-        rel_tol=1e-10, cylinder=cyl,
-    )  # fmt: skip
+        [tangent, _side_cube(half, 1e-9 * size, theta=2.0) * scale],
+        None,
+        lo,
+        hi,
+        rel_tol=1e-10,
+        cylinder=cyl,
+    )
     assert beyond.n_outside == 1
     assert beyond.worst_outside == (1, pytest.approx(1e-9, rel=1e-3))
     assert "particle 1, by 1e-09 of its size" in str(beyond)
@@ -95,10 +99,20 @@ def test_the_floor_and_the_lid(scale):
     assert report.worst_outside == (3, pytest.approx(2e-8, rel=1e-4))
     r = half * scale
     spheres = verify_spheres(
-        np.array([[R, R, half], [R, R + 2, H - half], [R + 2, R, half - 1e-8],
-                  [R - 2, R, H - half + 2e-8]]) * scale,
-        [r] * 4, lo, hi, cylinder=cyl,
-    )  # fmt: skip
+        np.array(
+            [
+                [R, R, half],
+                [R, R + 2, H - half],
+                [R + 2, R, half - 1e-8],
+                [R - 2, R, H - half + 2e-8],
+            ]
+        )
+        * scale,
+        [r] * 4,
+        lo,
+        hi,
+        cylinder=cyl,
+    )
     size = (4 / 3 * math.pi) ** (1 / 3) * half
     assert spheres.n_outside == 2
     assert spheres.worst_outside == (3, pytest.approx(2e-8 / size, rel=1e-4))
@@ -135,12 +149,16 @@ def test_a_cylinder_packing_is_verified_by_the_summary(scale):
     spheres = Packing.of_spheres(np.array(centres) * scale, [half * scale] * 2, cyl)
     assert regopack.verify(spheres).ok
     assert verify_summary(spheres) == {
-        "ok": True, "overlap_pairs": 0, "worst_overlap": 0.0, "outside": 0,
-    }  # fmt: skip
+        "ok": True,
+        "overlap_pairs": 0,
+        "worst_overlap": 0.0,
+        "outside": 0,
+    }
     cubes = cube_packing(
         [[R, R, half], [2 * R - half + 0.1, R, H / 2], [1.8 * R, 1.8 * R, H / 2]],
-        half=half, domain=Cylinder(R, R, R, 0.0, H),
-    )  # fmt: skip
+        half=half,
+        domain=Cylinder(R, R, R, 0.0, H),
+    )
     report = regopack.verify(cubes)
     assert not report.ok and report.n_outside == 2
     assert "particle 2" in str(report) and "leave the cylinder" in str(report)
