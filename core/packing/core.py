@@ -1292,14 +1292,15 @@ def check_file_values(packing: Packing, version: int | None = None) -> None:
         _check_values(packing, version)
 
 
-def check_solid_values(packing: Packing[Box]) -> None:
+def check_solid_values(packing: Packing[Box | Cylinder]) -> None:
     """Check what a 3D file's numbers mean, beyond :meth:`Packing.validate`.
 
     Every radius is the volume-equivalent radius of its solid within
     :data:`RADIUS_RTOL` (the volume as the cones from the centre over the
     faces, plus a sphere's; a flat or empty solid has none); every placed
-    particle lies within :data:`REACH` box sizes of the box and its radius is
-    at least :data:`MIN_RADIUS` of the box's largest side; in a periodic box
+    particle lies within :data:`REACH` box sizes of the box (a cylinder: of its
+    bounding box, and of its side wall) and its radius is at least
+    :data:`MIN_RADIUS` of the box's largest side; in a periodic box
     every centre lies in the cell. Relative tolerances only; vectorised.
 
     Raises
@@ -1328,15 +1329,16 @@ def check_solid_values(packing: Packing[Box]) -> None:
         volume = volume + np.bincount(face_owner, weights=cone, minlength=n)
     check_equivalent_radius(packing.radius, volume, 3)
     placed = packing.placed
-    b = packing.domain.bounds()
+    b = packing.domain.bounds()  # a cylinder's bounding box
     low, high = b[0::2], b[1::2]
     size = float(np.max(high - low))
+    box = "box" if isinstance(packing.domain, Box) else packing.domain.kind
     small = placed & (packing.radius < MIN_RADIUS * size)
     if small.any():
         j = _first(small)
         raise PackingError(
             f"array 'radius' has the value {packing.radius[j]} at placed particle {j}, less "
-            f"than {MIN_RADIUS:g} of the box's largest side {size:g}"
+            f"than {MIN_RADIUS:g} of the {box}'s largest side {size:g}"
         )
     offsets = packing.offsets
     far = np.abs(packing.vertices[:, 0])
@@ -1353,9 +1355,21 @@ def check_solid_values(packing: Packing[Box]) -> None:
         j = _first(bad)
         raise PackingError(
             f"array 'centre' places particle {j} at {packing.centre[j]} (reaching "
-            f"{reach[j]:.6g} from it), more than the box's largest side ({size:g}) beyond "
+            f"{reach[j]:.6g} from it), more than the {box}'s largest side ({size:g}) beyond "
             f"its bounds {b.tolist()}"
         )
+    dom = packing.domain
+    if isinstance(dom, Cylinder):
+        # beyond the side wall too, by the same measure
+        radial = np.hypot(centre[:, 0] - dom.cx, centre[:, 1] - dom.cy) - reach
+        bad = placed & (radial > dom.radius + REACH * size)
+        if bad.any():
+            j = _first(bad)
+            raise PackingError(
+                f"array 'centre' places particle {j} at {packing.centre[j]} (reaching "
+                f"{reach[j]:.6g} from it), more than the cylinder's largest side ({size:g}) "
+                f"beyond its side wall (axis ({dom.cx:g}, {dom.cy:g}), radius {dom.radius:g})"
+            )
     if packing.domain.periodic:
         c = packing.centre
         top = np.maximum(high, low + (high - low))

@@ -12,6 +12,7 @@ style of the section exporter.
 from __future__ import annotations
 
 import io
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -21,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from regopack.base.colours import mineral_colours
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_unit
+from regopack.geometry.domain import Cylinder
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
@@ -411,6 +413,7 @@ def draw_section(
     )
     b = packing.domain.bounds().reshape(3, 2)
     keep = [a for a in range(3) if a != axis]
+    _wall_section(packing, ax, axis, at)
     ax.set_xlim(*b[keep[0]])
     ax.set_ylim(*b[keep[1]])
     ax.set_aspect("equal")
@@ -426,12 +429,34 @@ def draw_section(
     )
 
 
+def _wall_section(packing: Packing, ax: Axes, axis: int, at: float | None) -> None:
+    """Draw a cylinder's wall where the plane ``x[axis] = at`` cuts it (a box: nothing)."""
+    dom = packing.domain
+    if not isinstance(dom, Cylinder):
+        return
+    at = dom.center[axis] if at is None else at
+    style: dict[str, Any] = {"color": "black", "linewidth": 0.8}
+    if axis == 2:
+        t = np.linspace(0.0, 2.0 * np.pi, 181)
+        ax.plot(dom.cx + dom.radius * np.cos(t), dom.cy + dom.radius * np.sin(t), **style)
+        return
+    off = at - (dom.cx, dom.cy)[axis]
+    if abs(off) >= dom.radius:
+        return
+    half = float(np.sqrt(dom.radius**2 - off**2))
+    mid = (dom.cy, dom.cx)[axis]  # the other horizontal coordinate of the axis
+    for x in (mid - half, mid + half):
+        ax.plot([x, x], [dom.zmin, dom.zmax], **style)
+
+
 def draw_view(packing: Packing[Box], ax: Any, depth: float | None = None) -> int:
     """Render the solids seen from outside the box on the 3D axes ``ax``; return how many.
 
     The solids within ``depth`` (default: the largest circumradius, twice)
     of the faces ``x = xmax``, ``y = ymin`` and ``z = zmax`` are drawn, their
-    faces shaded by the angle to a light from the viewer's side.
+    faces shaded by the angle to a light from the viewer's side; in a
+    cylinder, those within ``depth`` of the lid or of the half of the side
+    wall that faces the viewer (towards ``+x, -y``).
     """
     from mpl_toolkits.mplot3d.art3d import Poly3DCollection
 
@@ -447,7 +472,12 @@ def draw_view(packing: Packing[Box], ax: Any, depth: float | None = None) -> int
     for j in packing.placed_in_order():
         j = int(j)
         c = packing.centre[j]
-        if not (c[0] > box.xmax - depth or c[1] < box.ymin + depth or c[2] > box.zmax - depth):
+        if isinstance(box, Cylinder):
+            dx, dy = c[0] - box.cx, c[1] - box.cy
+            near_side = math.hypot(dx, dy) > box.radius - depth and dx - dy >= 0
+            if not (near_side or c[2] > box.zmax - depth):
+                continue
+        elif not (c[0] > box.xmax - depth or c[1] < box.ymin + depth or c[2] > box.zmax - depth):
             continue
         if solids.face_offsets[j] == solids.face_offsets[j + 1]:
             continue  # spheres are not rendered here

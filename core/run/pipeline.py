@@ -46,12 +46,13 @@ from regopack.base.outdir import (
     replace_folder,
 )
 from regopack.exports.pipeline import run_exports
+from regopack.geometry.domain import Cylinder
 from regopack.geometry.population import FloatArray, IntArray, Population, concat_shapes
 from regopack.geometry.solids import SolidBatch, concat_solids
 from regopack.packing.core import Packing, save, write_json_atomic
 from regopack.packing.phi_references import references_3d, references_row
 from regopack.packing.sieve import unplaced_per_class
-from regopack.packing.solid_fraction import phi_in_box
+from regopack.packing.solid_fraction import phi_in_box, phi_in_cylinder
 from regopack.packing.solid_fraction import phi_in_window as phi_in_window
 from regopack.registry.interfaces import (
     Analyzer,
@@ -763,6 +764,8 @@ def _phi_interior(packing: Packing, margin: float) -> tuple[float, str]:
     A periodic box has no walls: its whole cell is interior. A solid that
     crosses the faces of the interior window of a box of polyhedra is not
     cut yet (``NaN``, as :func:`regopack.packing.solid_fraction.phi_in_box` says).
+    A cylinder's interior is the coaxial cylinder ``margin`` inside its side
+    wall, floor and lid (:func:`regopack.packing.solid_fraction.phi_in_cylinder`).
     """
     empty = f"the interior window is empty: the domain is not wider than 2 x {margin:g}"
     if packing.dimension == 2:
@@ -772,6 +775,9 @@ def _phi_interior(packing: Packing, margin: float) -> tuple[float, str]:
     if box.periodic:
         return packing.phi, ""
     try:
+        if isinstance(box, Cylinder):  # a coaxial cylinder inside the walls
+            phi = phi_in_cylinder(packing, box.interior(margin))
+            return phi, empty if math.isnan(phi) else ""
         return phi_in_box(packing, box.interior(margin)), ""
     except NotImplementedError:
         return math.nan, ""

@@ -33,7 +33,17 @@ What is exact and what is tolerance-based
   volume exceeds ``rel_tol`` times the smaller particle volume, and a particle
   as outside when one of its vertices lies beyond a wall of the box by more than
   ``rel_tol`` times its size (the cube root of its volume). All tolerances are
-  relative, so a packing scaled by any factor gives the same report. Before a
+  relative, so a packing scaled by any factor gives the same report.
+* In a walled cylinder (a vertical axis, a side wall, a floor and a lid) a
+  convex polyhedron lies inside exactly when all its vertices do, and a
+  sphere when ``hypot(centre - axis) + r <= R`` and its z-extent lies between
+  the floor and the lid. How far a particle reaches beyond the walls (the
+  largest of its radial excess ``hypot - R`` and its excesses below the floor
+  and above the lid) is compared with the same ``rel_tol`` times its size as
+  in a box. The radial excess is computed with :func:`numpy.hypot`, exact to
+  about ``1e-16 R``: a surface the inserter put within ``1e-12`` of the
+  particle size of the wall is inside for any ``rel_tol`` above a few
+  ``1e-16 R / size``. Before a
   pair is measured, the directions of the separating-axis theorem (the facet
   normals of both and the cross products of an edge of each) are tried on all
   pairs at once: a direction along which the two overlap by at most
@@ -440,6 +450,8 @@ class Report3D:
     kind
         What was checked, as the report names it: ``"convex polyhedra"`` or
         ``"spheres"``.
+    domain
+        The walls checked: ``"box"``, or ``"cylinder"`` (a side wall, a floor and a lid).
     """
 
     ok: bool
@@ -454,13 +466,14 @@ class Report3D:
     periodic: bool
     rel_tol: float
     kind: str = "convex polyhedra"
+    domain: str = "box"
 
     def __bool__(self) -> bool:
         """Return whether the packing is valid."""
         return self.ok
 
     def __str__(self) -> str:
-        box = "a periodic box" if self.periodic else "a walled box"
+        box = "a periodic box" if self.periodic else f"a walled {self.domain}"
         status = "valid" if self.ok else "INVALID"
         parts = [
             f"Checked {self.n_checked} {self.kind} in {box} "
@@ -481,11 +494,12 @@ class Report3D:
         elif self.worst_outside is not None:
             k, frac = self.worst_outside
             parts.append(
-                f"{self.n_outside} particles leave the box beyond rel_tol; the farthest, "
+                f"{self.n_outside} particles leave the {self.domain} beyond rel_tol; the "
+                f"farthest, "
                 f"particle {k}, by {frac:.3g} of its size."
             )
         else:
-            parts.append("Every particle lies inside the box.")
+            parts.append(f"Every particle lies inside the {self.domain}.")
         return " ".join(parts)
 
 
@@ -518,6 +532,27 @@ def _box(lo: ArrayLike, hi: ArrayLike) -> tuple[Float, Float]:
     if not (np.isfinite(blo).all() and np.isfinite(bhi).all() and np.all(bhi > blo)):
         raise ConfigError(f"box from {blo.tolist()} to {bhi.tolist()}: need finite lo < hi")
     return blo, bhi
+
+
+def _cylinder(cylinder: ArrayLike | None, periodic: bool) -> tuple[float, float, float] | None:
+    """Validate the axis and radius ``(cx, cy, radius)`` of a walled cylinder (or ``None``)."""
+    if cylinder is None:
+        return None
+    c = np.asarray(cylinder, dtype=np.float64).reshape(-1)
+    if c.shape != (3,) or not np.isfinite(c).all() or not c[2] > 0:
+        raise ConfigError(
+            f"cylinder {c.tolist()}: need the axis and radius (cx, cy, radius), finite, radius > 0"
+        )
+    if periodic:
+        raise ConfigError("a cylinder has walls: it cannot be periodic")
+    return float(c[0]), float(c[1]), float(c[2])
+
+
+def _radial_excess(x: Float, y: Float, cylinder: tuple[float, float, float]) -> Float:
+    """Distance of the points ``(x, y)`` beyond the circle of ``cylinder`` (negative inside)."""
+    cx, cy, rad = cylinder
+    out: Float = np.hypot(x - cx, y - cy) - rad
+    return out
 
 
 def _hull_edges(hull: ConvexHull) -> Float:
@@ -732,8 +767,9 @@ def verify_polyhedra(
     box_hi: ArrayLike,
     periodic: bool = False,
     rel_tol: float = 1e-9,
+    cylinder: ArrayLike | None = None,
 ) -> Report3D:
-    """Check that convex polyhedra do not overlap and stay inside a box.
+    """Check that convex polyhedra do not overlap and stay inside a box or a cylinder.
 
     Every pair whose bounding boxes overlap is measured: pairs that a facet
     plane of one of them separates share no volume; the others get their
@@ -762,6 +798,11 @@ def verify_polyhedra(
         A pair violates when its intersection volume exceeds ``rel_tol`` times
         the smaller of the two volumes; a particle violates when a vertex lies
         beyond a wall by more than ``rel_tol`` times the cube root of its volume.
+    cylinder
+        ``(cx, cy, radius)``: the walls are then those of the cylinder of this
+        vertical axis and radius, its floor at ``box_lo[2]`` and its lid at
+        ``box_hi[2]`` (``box_lo``, ``box_hi`` being its bounding box). A
+        polyhedron lies inside when all its vertices do.
 
     Returns
     -------
@@ -771,7 +812,7 @@ def verify_polyhedra(
     Raises
     ------
     ConfigError
-        When ``rel_tol`` is negative or not finite, or the box is malformed.
+        When ``rel_tol`` is negative or not finite, or the box or the cylinder is malformed.
     PackingError
         When the arrays are malformed.
     GeometryError
@@ -787,10 +828,12 @@ def verify_polyhedra(
     if not (math.isfinite(rel_tol) and rel_tol >= 0):
         raise ConfigError(f"rel_tol = {rel_tol!r}: must be a finite number >= 0")
     lo, hi = _box(box_lo, box_hi)
+    cyl = _cylinder(cylinder, periodic)
+    domain = "box" if cyl is None else "cylinder"
     raw = _split(vertices, offsets)
     n = len(raw)
     if n == 0:
-        return Report3D(True, 0, 0, 0, (), 0.0, None, 0, None, periodic, rel_tol)
+        return Report3D(True, 0, 0, 0, (), 0.0, None, 0, None, periodic, rel_tol, domain=domain)
     parts = _Particles(raw)
     i, j, t = _candidates(parts, lo, hi, periodic)
     # what _overlap's first test would find, for all pairs at once
@@ -815,7 +858,13 @@ def verify_polyhedra(
 
     n_outside, worst_outside = 0, None
     if not periodic:
-        beyond = np.maximum(lo - parts.lower, parts.upper - hi).max(axis=1)
+        if cyl is None:
+            beyond = np.maximum(lo - parts.lower, parts.upper - hi).max(axis=1)
+        else:
+            # all the vertices (the padding repeats one): the hull is inside iff they are
+            radial = _radial_excess(parts.corners[:, :, 0], parts.corners[:, :, 1], cyl)
+            floor_lid = np.maximum(lo[2] - parts.lower[:, 2], parts.upper[:, 2] - hi[2])
+            beyond = np.maximum(radial.max(axis=1), floor_lid)
         rel = np.maximum(beyond, 0.0) / np.cbrt(parts.volume)
         out = rel > rel_tol
         n_outside = int(np.count_nonzero(out))
@@ -834,6 +883,7 @@ def verify_polyhedra(
         worst_outside=worst_outside,
         periodic=periodic,
         rel_tol=rel_tol,
+        domain=domain,
     )
 
 
@@ -847,15 +897,19 @@ def verify_spheres(
     box_hi: ArrayLike,
     periodic: bool = False,
     rel_tol: float = 1e-9,
+    cylinder: ArrayLike | None = None,
 ) -> Report3D:
-    """Check that spheres do not overlap and stay inside a box.
+    """Check that spheres do not overlap and stay inside a box or a cylinder.
 
     Pairs closer than the sum of their radii (every periodic image, in a
     periodic box, found by a k-d tree over the wrapped centres) share the
     volume of a lens (:func:`lens_volume`); a pair overlaps when that volume
     exceeds ``rel_tol`` times the smaller ball's. A sphere leaves a walled box
     when it reaches beyond a wall by more than ``rel_tol`` times the cube
-    root of its volume.
+    root of its volume. With ``cylinder = (cx, cy, radius)`` the walls are
+    those of the cylinder of this vertical axis and radius between the floor
+    ``box_lo[2]`` and the lid ``box_hi[2]``: a sphere reaches
+    ``hypot(centre - axis) + r - radius`` beyond the side wall.
 
     Examples
     --------
@@ -872,6 +926,7 @@ def verify_spheres(
         raise ConfigError(f"{c.shape[0]} centres but {r.shape[0]} radii")
     if not (np.isfinite(c).all() and np.isfinite(r).all() and np.all(r > 0)):
         raise ConfigError("sphere centres and radii must be finite, radii positive")
+    cyl = _cylinder(cylinder, periodic)
     n = c.shape[0]
     volume = 4.0 / 3.0 * math.pi * r**3
     rmax = float(r.max()) if n else 0.0
@@ -913,7 +968,13 @@ def verify_spheres(
     worst_out: tuple[int, float] | None = None
     if not periodic and n:
         size = np.cbrt(volume)
-        reach = np.maximum((lo - (c - r[:, None])).max(axis=1), ((c + r[:, None]) - hi).max(axis=1))
+        if cyl is None:
+            reach = np.maximum(
+                (lo - (c - r[:, None])).max(axis=1), ((c + r[:, None]) - hi).max(axis=1)
+            )
+        else:
+            radial = _radial_excess(c[:, 0], c[:, 1], cyl) + r
+            reach = np.maximum(radial, np.maximum(lo[2] - (c[:, 2] - r), (c[:, 2] + r) - hi[2]))
         frac_out = reach / size
         out = frac_out > rel_tol
         outside = int(out.sum())
@@ -933,4 +994,5 @@ def verify_spheres(
         periodic=periodic,
         rel_tol=rel_tol,
         kind="spheres",
+        domain="box" if cyl is None else "cylinder",
     )

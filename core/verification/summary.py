@@ -14,7 +14,7 @@ import dataclasses
 from typing import Any
 
 from regopack.base.errors import ConfigError
-from regopack.geometry.domain import Box
+from regopack.geometry.domain import Box, Cylinder
 from regopack.packing.core import Packing
 from regopack.verification.polygons import VerifyReport, verify
 from regopack.verification.polyhedra import Report3D, verify_polyhedra, verify_spheres
@@ -38,12 +38,14 @@ def verify_packing(packing: Packing, rel_tol: float = 1e-9) -> VerifyReport | Re
     return verify(packing, rel_tol=rel_tol)
 
 
-def _verify_solids(packing: Packing[Box], rel_tol: float) -> Report3D:
+def _verify_solids(packing: Packing[Box | Cylinder], rel_tol: float) -> Report3D:
     placed = packing.placed_in_order()
     box = packing.domain
     solids = packing.solids
-    lo = [box.xmin, box.ymin, box.zmin]
-    hi = [box.xmax, box.ymax, box.zmax]
+    bounds = box.bounds()
+    lo, hi = bounds[0::2].tolist(), bounds[1::2].tolist()
+    # a cylinder's walls: its axis and radius, the floor and lid at the bounding box's z
+    cylinder = (box.cx, box.cy, box.radius) if isinstance(box, Cylinder) else None
     if packing.rounded:
         if solids.normals.shape[0] != 0:
             raise ConfigError("verify: rounded polyhedra are not verified yet")
@@ -54,6 +56,7 @@ def _verify_solids(packing: Packing[Box], rel_tol: float) -> Report3D:
             hi,
             periodic=box.periodic,
             rel_tol=rel_tol,
+            cylinder=cylinder,
         )
     else:
         report = verify_polyhedra(
@@ -63,6 +66,7 @@ def _verify_solids(packing: Packing[Box], rel_tol: float) -> Report3D:
             hi,
             periodic=box.periodic,
             rel_tol=rel_tol,
+            cylinder=cylinder,
         )
     ix = [int(j) for j in placed]
 

@@ -13,7 +13,7 @@ from pydantic import BaseModel
 
 from regopack.base.errors import ConfigError
 from regopack.base.units import length_scale
-from regopack.geometry.domain import Box
+from regopack.geometry.domain import Box, Cylinder
 from regopack.packing.core import Packing
 from regopack.registry.interfaces import Analyzer
 
@@ -259,6 +259,6 @@ def scaled_defaults(config: _Config, packing: Any, defaults: Mapping[str, Any]) 
     return config.model_copy(update=update)
 
 
-def solid_volumes(packing: Packing[Box]) -> NDArray[np.float64]:
+def solid_volumes(packing: Packing[Box] | Packing[Cylinder]) -> NDArray[np.float64]:
     """Volume of every solid (:attr:`regopack.geometry.solids.SolidBatch.volume`)."""
     return packing.solids.volume

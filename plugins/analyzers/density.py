@@ -3,7 +3,9 @@
 The area fraction of a 2D packing, the volume fraction of a 3D one; particles
 that cross the window are clipped exactly to it
 (:func:`~regopack.packing.solid_fraction.phi_in_window`,
-:func:`~regopack.packing.solid_fraction.phi_in_box`).
+:func:`~regopack.packing.solid_fraction.phi_in_box`; in a cylinder the interior
+is the coaxial cylinder inside the walls by the margin,
+:func:`~regopack.packing.solid_fraction.phi_in_cylinder`).
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field
 
-from regopack.geometry.domain import Box
+from regopack.geometry.domain import Box, Cylinder
 from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import (
     Measured,
@@ -58,12 +60,15 @@ def _volume_fraction_in(
 
     A periodic box has no walls: its interior is the whole cell.
     """
-    from regopack.packing.solid_fraction import phi_in_box
+    from regopack.packing.solid_fraction import phi_in_box, phi_in_cylinder
 
     if p3.domain.periodic:
         return phi_domain
     try:
-        phi = phi_in_box(p3, window, solid)
+        if isinstance(window, Cylinder):
+            phi = phi_in_cylinder(p3, window, solid)
+        else:
+            phi = phi_in_box(p3, window, solid)
     except NotImplementedError:  # a rounded polyhedron crossing the window's faces
         return None
     return None if math.isnan(phi) else phi
@@ -74,7 +79,8 @@ class Density(Measured):
 
     Scalars: ``phi_domain``, ``phi_interior``, the void ratios
     ``e = (1 - phi) / phi`` of both, ``interior_margin``, in 3D the
-    ``window``'s sides, ``n_placed`` and ``eta``.
+    ``window``'s sides (a cylinder's: its diameter twice and its height),
+    ``n_placed`` and ``eta``.
     """
 
     name = "density"

@@ -1,6 +1,7 @@
 """Spatial homogeneity: density, solid fraction, size (and minerals) over regions.
 
-A 3D packing is cut into horizontal layers and nested boxes
+A 3D packing is cut into horizontal layers and nested boxes (in a cylinder:
+discs of its cross-section and nested coaxial cylinders)
 (:mod:`~regopack.plugins.analyzers.homogeneity_boxes`); a 2D one as follows.
 The interior window (see :func:`~regopack.plugins.analyzers.common.interior_window`)
 is cut into rings about the domain centre and into a grid of tiles. In each
@@ -46,7 +47,7 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 from regopack.base.errors import ConfigError
 from regopack.base.limits import derived_count
 from regopack.base.units import length_scale
-from regopack.geometry.domain import PlaneDomain
+from regopack.geometry.domain import Cylinder, PlaneDomain
 from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import (
     Measured,
@@ -54,7 +55,10 @@ from regopack.plugins.analyzers.common import (
     interior_margin,
     interior_window,
 )
-from regopack.plugins.analyzers.homogeneity_boxes import layers_and_shells
+from regopack.plugins.analyzers.homogeneity_boxes import (
+    layers_and_shells,
+    layers_and_shells_cylinder,
+)
 from regopack.plugins.analyzers.regions import (
     Tiles,
     ring_edges,
@@ -419,7 +423,10 @@ class Homogeneity(Measured):
         if packing.dimension == 3:
             layers = self.config.layers or DEFAULT_REGIONS["layers"]
             shells = self.config.shells or DEFAULT_REGIONS["shells"]
-            self._tables, self._results = layers_and_shells(packing, window, margin, layers, shells)
+            measure = (
+                layers_and_shells_cylinder if isinstance(window, Cylinder) else layers_and_shells
+            )
+            self._tables, self._results = measure(packing, window, margin, layers, shells)
             self.layers = self._tables["homogeneity_layers"]
             self.shells = self._tables["homogeneity_shells"]
             overall = {

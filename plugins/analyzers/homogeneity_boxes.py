@@ -10,6 +10,14 @@ the volume fraction of the solids clipped exactly to it
 (:func:`regopack.packing.solid_fraction.phi_in_box`; a shell's is the difference of its two
 boxes'). A homogeneous packing has the same values in every region, up to the
 noise of its particle count.
+
+In a cylinder (:func:`layers_and_shells_cylinder`) the window is the coaxial
+cylinder inside the walls: a layer is a disc of its cross-section (volume
+``pi R^2 dz``), whose φ error comes from :data:`RINGS` rings of equal area
+about the axis (rather than columns); a shell is the difference of nested
+coaxial cylinders about the window's centre, whose radii and half-heights
+grow in equal steps to the window's. The solids are clipped to each by
+:func:`regopack.packing.solid_fraction.phi_in_cylinder`.
 """
 
 from __future__ import annotations
@@ -22,7 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.geometry.domain import Box, PeriodicBox
+from regopack.geometry.domain import Box, Cylinder, PeriodicBox
 from regopack.packing.core import Packing
 from regopack.plugins.analyzers.common import solid_volumes
 from regopack.plugins.analyzers.regions import scatter_error
@@ -32,9 +40,12 @@ FloatArray = NDArray[np.float64]
 LAYER_SPLIT = 3
 """Each layer is cut into this many by this many columns for the error of its φ."""
 
+RINGS = 3
+"""A cylinder's layer is cut into this many rings of equal area for the error of its φ."""
+
 
 def _region_stats(
-    packing: Packing[Box], inside: NDArray[np.bool_], volume: float
+    packing: Packing[Box] | Packing[Cylinder], inside: NDArray[np.bool_], volume: float
 ) -> tuple[int, float, float]:
     """Centres inside, their number density and mean diameter (NaN when none)."""
     n = int(inside.sum())
@@ -195,6 +206,137 @@ def layers_and_shells(
     )
     shell_table = {k: np.asarray(v) for k, v in shells.items()}
     # as the layers: the columns under the names of the 2D tables, with their sampling errors
+    shell_table.update(
+        {
+            "number_density": shell_table["density"],
+            "number_density_err": np.asarray(shell_errors["density"]),
+            "mean_d": shell_table["mean_diameter"],
+            "mean_d_err": np.asarray(shell_errors["mean_diameter"]),
+        }
+    )
+    tables = {"homogeneity_layers": layer_table, "homogeneity_shells": shell_table}
+    return tables, results
+
+
+def layers_and_shells_cylinder(
+    p3: Packing[Cylinder], w: Cylinder, margin: float, n_layers: int, n_shells: int
+) -> tuple[dict[str, dict[str, FloatArray]], dict[str, Any]]:
+    """Measure every layer and shell of the coaxial interior window ``w`` of a cylinder.
+
+    The tables and scalars of :func:`layers_and_shells`: layers are discs of
+    the window's cross-section, shells differences of nested coaxial
+    cylinders (``half_lo``, ``half_hi`` are their smaller half-extents,
+    ``min(radius, height / 2)`` scaled, as a box's smallest half-side).
+    """
+    from regopack.packing.solid_fraction import cylinder_volumes
+
+    volume = solid_volumes(p3)
+
+    def solid_in(window: Cylinder) -> float:
+        if not window.volume > 0:
+            return 0.0
+        return float(np.sum(cylinder_volumes(p3, window, volume)))
+
+    centre = p3.centre
+    placed = p3.placed
+    axis_r = np.hypot(centre[:, 0] - w.cx, centre[:, 1] - w.cy)
+    layers: dict[str, list[float]] = {k: [] for k in ("z_lo", "z_hi", "n", "density")}
+    layers.update({"phi": [], "mean_diameter": []})
+    errors: dict[str, list[float]] = {k: [] for k in ("density", "phi", "mean_diameter")}
+    with np.errstate(invalid="ignore"):
+        inside_xy = placed & (axis_r < w.radius)
+        edges = np.linspace(w.zmin, w.zmax, n_layers + 1)
+        rings = w.radius * np.sqrt(np.arange(1, RINGS + 1) / RINGS)  # equal areas
+        for lo, hi in itertools.pairwise(edges if w.volume > 0 else []):
+            disc = Cylinder(w.cx, w.cy, w.radius, float(lo), float(hi))
+            sel = inside_xy & (centre[:, 2] >= lo) & (centre[:, 2] < hi)
+            n, density, diameter = _region_stats(p3, sel, disc.volume)
+            within = np.array(
+                [solid_in(Cylinder(w.cx, w.cy, float(r), float(lo), float(hi))) for r in rings]
+            )
+            parts = np.diff(within, prepend=0.0)[None, :]
+            cells = np.full((1, RINGS), disc.volume / RINGS)
+            for key, value in zip(
+                layers,
+                (lo, hi, n, density, within[-1] / disc.volume, diameter),
+                strict=True,
+            ):
+                layers[key].append(float(value))
+            d = 2.0 * p3.radius[sel]
+            errors["density"].append(math.sqrt(max(n, 1)) / disc.volume)
+            errors["phi"].append(float(scatter_error(parts, cells)[0]))
+            errors["mean_diameter"].append(
+                float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.nan
+            )
+        shells: dict[str, list[float]] = {k: [] for k in ("half_lo", "half_hi", "n")}
+        shells.update({"density": [], "phi": [], "mean_diameter": []})
+        cz = w.center[2]
+        half_h = 0.5 * w.height
+        smallest = min(w.radius, half_h)
+        inner_solid, inner_volume = 0.0, 0.0
+        shell_errors: dict[str, list[float]] = {"density": [], "mean_diameter": []}
+        reach = np.maximum(
+            axis_r / w.radius if w.radius > 0 else np.inf,
+            np.abs(centre[:, 2] - cz) / half_h if half_h > 0 else np.inf,
+        )
+        for lo, hi in itertools.pairwise(
+            np.linspace(0.0, 1.0, n_shells + 1) if w.volume > 0 else []
+        ):
+            nested = Cylinder(w.cx, w.cy, hi * w.radius, cz - hi * half_h, cz + hi * half_h)
+            solid = solid_in(nested)
+            sel = placed & (reach >= lo) & (reach < hi)
+            shell_volume = nested.volume - inner_volume
+            n, density, diameter = _region_stats(p3, sel, shell_volume)
+            phi = (solid - inner_solid) / shell_volume if shell_volume > 0 else math.nan
+            for key, value in zip(
+                shells, (lo * smallest, hi * smallest, n, density, phi, diameter), strict=True
+            ):
+                shells[key].append(float(value))
+            d = 2.0 * p3.radius[sel]
+            shell_errors["density"].append(
+                math.sqrt(max(n, 1)) / shell_volume if shell_volume > 0 else math.nan
+            )
+            shell_errors["mean_diameter"].append(
+                float(d.std(ddof=1) / math.sqrt(n)) if n > 1 else math.nan
+            )
+            inner_solid, inner_volume = solid, nested.volume
+
+    def clean(values: list[float]) -> list[float | None]:
+        return [float(v) if math.isfinite(v) else None for v in values]
+
+    whole = inside_xy & (centre[:, 2] > w.zmin) & (centre[:, 2] < w.zmax)
+    n_whole, density_whole, d_whole = (
+        _region_stats(p3, whole, w.volume) if w.volume > 0 else (0, math.nan, math.nan)
+    )
+    phi_whole = solid_in(w) / w.volume if w.volume > 0 else math.nan
+    results = {
+        "interior_margin": margin,
+        "n_interior": n_whole,
+        "number_density": float(density_whole) if math.isfinite(density_whole) else None,
+        "phi": float(phi_whole) if math.isfinite(phi_whole) else None,
+        "mean_d": float(d_whole) if math.isfinite(d_whole) else None,
+        "window": [float(s) for s in w.size],
+        "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
+        "phi_layers": clean(layers["phi"]),
+        "density_layers": clean(layers["density"]),
+        "mean_diameter_layers": clean(layers["mean_diameter"]),
+        "phi_layers_cv": _cv(layers["phi"]),
+        "phi_shells": clean(shells["phi"]),
+        "density_shells": clean(shells["density"]),
+        "mean_diameter_shells": clean(shells["mean_diameter"]),
+        "phi_shells_cv": _cv(shells["phi"]),
+    }
+    layer_table = {k: np.asarray(v) for k, v in layers.items()}
+    layer_table.update(
+        {
+            "number_density": layer_table["density"],
+            "number_density_err": np.asarray(errors["density"]),
+            "phi_err": np.asarray(errors["phi"]),
+            "mean_d": layer_table["mean_diameter"],
+            "mean_d_err": np.asarray(errors["mean_diameter"]),
+        }
+    )
+    shell_table = {k: np.asarray(v) for k, v in shells.items()}
     shell_table.update(
         {
             "number_density": shell_table["density"],

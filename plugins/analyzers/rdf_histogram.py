@@ -16,7 +16,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from regopack.geometry.domain import Box, Circle, ConvexPolygon, PeriodicRectangle, PlaneDomain
+from regopack.geometry.domain import (
+    Box,
+    Circle,
+    ConvexPolygon,
+    Cylinder,
+    PeriodicRectangle,
+    PlaneDomain,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -157,7 +164,7 @@ def rdf3d_histogram(
     r_lo: float,
     width: float,
     bins: int,
-    window: Box,
+    window: Box | Cylinder,
 ) -> tuple[FloatArray, FloatArray]:
     """Edge-corrected ``g(r)`` of ``points`` in ``window``, total and per kind pair.
 
@@ -170,7 +177,9 @@ def rdf3d_histogram(
     r_lo, width, bins
         The bins ``[r_lo + k width, r_lo + (k + 1) width)``.
     window
-        A walled box (translation correction) or a periodic box (nearest image).
+        A walled box (translation correction), a periodic box (nearest image)
+        or a cylinder with a vertical axis (translation correction, see
+        :func:`cylinder_pair_histogram`).
 
     Returns
     -------
@@ -189,12 +198,57 @@ def rdf3d_histogram(
     if not np.isfinite(pts).all():
         raise ValueError("the points must be finite")
     _check_bins(r_lo, width, bins)
+    edges = r_lo + width * np.arange(bins + 1)
+    if isinstance(window, Cylinder):
+        per_pair = cylinder_pair_histogram(pts, kind, n_kinds, r_lo, width, bins, window)
+        return _normalised(per_pair, kind, n_kinds, window.volume, shells(edges, 3))
     side = np.array(window.size, dtype=np.float64)
     per_pair = weighted_pair_histogram3d(
         pts, kind, n_kinds, float(r_lo), float(width), int(bins), side, bool(window.periodic)
     )
-    edges = r_lo + width * np.arange(bins + 1)
     return _normalised(per_pair, kind, n_kinds, float(np.prod(side)), shells(edges, 3))
+
+
+def cylinder_pair_histogram(
+    points: FloatArray,
+    kind: IntArray,
+    n_kinds: int,
+    r_lo: float,
+    width: float,
+    bins: int,
+    window: Cylinder,
+) -> FloatArray:
+    """Pair-distance histogram of ``(n, 3)`` points in a vertical cylinder, translation-weighted.
+
+    A pair at separation ``(dx, dy, dz)`` weighs ``1 / gamma``, where
+    ``gamma = (H - |dz|) L(hypot(dx, dy))`` is the volume of the window
+    ``W ∩ (W + d)`` (``H`` its height, ``L(s) = 2 R^2 acos(s / 2R) - (s / 2)
+    sqrt(4 R^2 - s^2)`` the area two disks of its radius ``R`` share at a
+    distance ``s``): the Ohser–Stoyan correction of the box, for the
+    cylinder. ``gamma > 0`` for ``r < min(2R, H)``; farther pairs are left
+    out. Unordered pairs are counted once, in cell ``[min(kind), max(kind)]``
+    of the ``(n_kinds, n_kinds, bins)`` result.
+    """
+    from scipy.spatial import cKDTree
+
+    out = np.zeros((n_kinds, n_kinds, bins))
+    r_hi = r_lo + width * bins
+    if len(points) < 2:
+        return out
+    ij = cKDTree(points).query_pairs(r_hi, output_type="ndarray")
+    d = points[ij[:, 1]] - points[ij[:, 0]]
+    r = np.sqrt(np.einsum("ij,ij->i", d, d))
+    k = np.floor((r - r_lo) / width).astype(np.int64)
+    keep = (r >= r_lo) & (k >= 0) & (k < bins)
+    ij, d, k = ij[keep], d[keep], k[keep]
+    radius = window.radius
+    s = np.minimum(np.hypot(d[:, 0], d[:, 1]) / (2.0 * radius), 1.0)
+    lens = 2.0 * radius * radius * (np.arccos(s) - s * np.sqrt(np.maximum(1.0 - s * s, 0.0)))
+    gamma = (window.height - np.abs(d[:, 2])) * lens
+    ok = gamma > 0
+    a, b = kind[ij[ok, 0]], kind[ij[ok, 1]]
+    np.add.at(out, (np.minimum(a, b), np.maximum(a, b), k[ok]), 1.0 / gamma[ok])
+    return out
 
 
 def shells(edges: NDArray[Any], dimension: int) -> FloatArray:
