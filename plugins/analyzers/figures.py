@@ -439,7 +439,8 @@ def draw_z_per_mineral(packing: Packing, coordination: Coordination) -> Figure:
     ax.set_xlabel(f"contacts per particle Z (last bars: Z ≥ {ks[-1]})")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_ylabel("fraction of the mineral's particles")
-    ax.legend(loc="upper right")
+    if z_in.size:  # no interior particle: no bar, no legend
+        ax.legend(loc="upper right")
     tol = coordination.results()["tol"]
     ax.set_title(f"distribution of Z, interior particles, tol = {tol:g} {length_unit(packing)}")
     x = np.arange(len(names))

@@ -108,10 +108,14 @@ def _height_profile(
         note(ax, "no layers (empty window)")
         return
     z = 0.5 * (z0 + z1)
+    y = scale * np.asarray(layers[column], dtype=float)
+    err = scale * np.asarray(layers[f"{column}_err"], dtype=float)
+    # densities, fractions and diameters are not negative: the bar stops at zero
+    low = np.where(np.isfinite(y), np.minimum(err, np.maximum(y, 0.0)), err)
     ax.errorbar(
         z,
-        scale * np.asarray(layers[column], dtype=float),
-        yerr=scale * np.asarray(layers[f"{column}_err"], dtype=float),
+        y,
+        yerr=np.vstack([low, err]),
         xerr=[z - z0, z1 - z],
         **POINT_STYLE,
         label="layers: value ± 1 standard error, layer extent",
