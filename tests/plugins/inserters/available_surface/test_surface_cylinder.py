@@ -234,3 +234,35 @@ def test_the_same_seed_gives_the_same_packing() -> None:
             "order": "paper", "eta": 0.0, "wide": 3.0, "gap": 1e-3}  # fmt: skip
     a, b = _pack(case), _pack(case)
     assert np.array_equal(a.centre, b.centre, equal_nan=True)
+
+
+def _facet_clearance(packing: Packing, gap: float) -> np.ndarray:
+    """Each particle's distance inside the prism's nearest facet, in its own diameters."""
+    d = packing.domain
+    wall = prism_wall(d.cx, d.cy, d.radius, 2.0 * float(packing.radius.min()), gap)
+    nf = int(wall[3])
+    t = 2.0 * math.pi * np.arange(nf) / nf
+    n = np.column_stack([np.cos(t), np.sin(t)])
+    out = []
+    for k in packing.placed_in_order()[1:]:
+        k = int(k)
+        if packing.rounded:
+            reach = n @ (packing.centre[k, :2] - wall[:2]) + packing.solids.circumradius[k]
+        else:
+            reach = (n @ (packing.world_vertices(k)[:, :2] - wall[:2]).T).max(axis=1)
+        out.append((wall[2] - reach.max()) / (2.0 * float(packing.radius[k])))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("shape", ["sphere", "polyhedron"])
+def test_the_packing_control_moves_every_facet_in_by_its_margin(shape: str) -> None:
+    """With ``eta`` the margin keeps each particle at least ``(eta - 1) / 100`` diameters
+    inside every facet, as inside the floor and the roof: the facets listed for an
+    analysis are those within its reach *plus* the margin (a facet just beyond the
+    envelope comes within it once moved in)."""
+    eta = 30.0
+    case = {"seed": 3, "n": 25, "ratio": 1.0, "scale": 1.0, "psi": 1000.0, "shape": shape,
+            "order": "paper", "eta": eta, "wide": 3.0, "gap": 1e-3}  # fmt: skip
+    clearance = _facet_clearance(_pack(case), 1e-3)
+    assert clearance.size > 0
+    assert clearance.min() >= (eta - 1.0) / 100.0 * (1.0 - 1e-9), clearance.min()
