@@ -555,7 +555,8 @@ def analyse_sphere(
     r = circum[i]
     big_r = circum[pk] + r
     tau = EPS * big_r
-    planes = wall_planes(bounds.wall, ck, big_r, NO_VERTICES, r)
+    # a facet within the margin beyond the sphere of centres comes onto it once moved in
+    planes = wall_planes(bounds.wall, ck, big_r + margin, NO_VERTICES, r)
     caps = np.empty((count + 6 + planes.shape[0], 4))
     nc = _sphere_caps(
         ck, big_r, r, count, near, at, circum, bounds.adm_lo, bounds.adm_hi, planes, margin,
@@ -740,7 +741,8 @@ def analyse(
         radii[m] = circum[j] + circum[i] + margin
     inter = Interferers(normals, support, offsets, at[:count].copy(), radii)
     envelope = minkowski_envelope(solid(s, pk), q)
-    planes = wall_planes(bounds.wall, ck, circum[pk] + circum[i], q.vertices, 0.0)
+    # a facet within the margin beyond the envelope comes onto it once moved in
+    planes = wall_planes(bounds.wall, ck, circum[pk] + circum[i] + margin, q.vertices, 0.0)
     if margin > 0.0:
         adm_lo = adm_lo + margin
         adm_hi = adm_hi - margin

@@ -188,6 +188,9 @@ def check_cylinder(packing: Packing, gap: float) -> None:
 def test_inside_overlap_free_and_touching_at_the_extremes(case: dict[str, Any]) -> None:
     packing = _pack(case)
     check_cylinder(packing, case["gap"])
+    # inside the prism too, up to the analyses' tolerance (1e-9 R, over the smallest diameter)
+    d_min = 2.0 * float(packing.radius.min())
+    assert _facet_clearance(packing, case["gap"]).min() >= -1e-9 * packing.domain.radius / d_min
 
 
 @pytest.mark.parametrize("shape", ["sphere", "polyhedron"])
@@ -234,3 +237,56 @@ def test_the_same_seed_gives_the_same_packing() -> None:
             "order": "paper", "eta": 0.0, "wide": 3.0, "gap": 1e-3}  # fmt: skip
     a, b = _pack(case), _pack(case)
     assert np.array_equal(a.centre, b.centre, equal_nan=True)
+
+
+def _facet_clearance(packing: Packing, gap: float) -> np.ndarray:
+    """Each particle's distance inside the prism's nearest facet, in its own diameters."""
+    d = packing.domain
+    wall = prism_wall(d.cx, d.cy, d.radius, 2.0 * float(packing.radius.min()), gap)
+    nf = int(wall[3])
+    t = 2.0 * math.pi * np.arange(nf) / nf
+    n = np.column_stack([np.cos(t), np.sin(t)])
+    out = []
+    for k in packing.placed_in_order():
+        k = int(k)
+        if packing.rounded:
+            reach = n @ (packing.centre[k, :2] - wall[:2]) + packing.solids.circumradius[k]
+        else:
+            reach = (n @ (packing.world_vertices(k)[:, :2] - wall[:2]).T).max(axis=1)
+        out.append((wall[2] - reach.max()) / (2.0 * float(packing.radius[k])))
+    return np.array(out)
+
+
+@pytest.mark.parametrize("shape", ["sphere", "polyhedron"])
+def test_the_packing_control_moves_every_facet_in_by_its_margin(shape: str) -> None:
+    """With ``eta`` the margin keeps each particle at least ``(eta - 1) / 100`` diameters
+    inside every facet, as inside the floor and the roof: the facets listed for an
+    analysis are those within its reach *plus* the margin (a facet just beyond the
+    envelope comes within it once moved in)."""
+    eta = 30.0
+    case = {"seed": 3, "n": 25, "ratio": 1.0, "scale": 1.0, "psi": 1000.0, "shape": shape,
+            "order": "paper", "eta": eta, "wide": 3.0, "gap": 1e-3}  # fmt: skip
+    clearance = _facet_clearance(_pack(case), 1e-3)[1:]  # the first is placed as it fits
+    assert clearance.size > 0
+    assert clearance.min() >= (eta - 1.0) / 100.0 * (1.0 - 1e-9), clearance.min()
+
+
+@pytest.mark.parametrize("order", ["paper", "sweep"])
+def test_a_sphere_wider_than_the_prism_is_refused_though_it_fits_the_cylinder(order: str) -> None:
+    """The first particle is placed without an analysis, at the axis: the prism alone
+    refuses a sphere between the facets' distance and the radius; the others go in,
+    inside the prism."""
+    rng = np.random.default_rng(1)
+    radius = np.array([1.0] + [0.3] * 12)
+    pop = Population(
+        radius=radius, mineral=np.zeros(13, dtype=np.int64), mineral_names=("m",),
+        shapes=Sphere().generate(radius, rng),
+    )  # fmt: skip
+    cyl = Cylinder.centred(1.0003, 6.0, (5.0, -3.0, 0.0))
+    cfg = AvailableSurfaceConfig(order=order)
+    result = AvailableSurface(cfg).pack(pop, cyl, EtaController(EtaConfig(eta=0.0)), rng)
+    packing = Packing.from_parts(pop, result, cyl, {}, 1)
+    assert packing.insertion_index[0] < 0
+    assert len(packing.placed_in_order()) == 12
+    check_cylinder(packing, 1e-3)
+    assert _facet_clearance(packing, 1e-3).min() >= -1e-9
