@@ -109,13 +109,13 @@ def _height_profile(
         return
     z = 0.5 * (z0 + z1)
     y = scale * np.asarray(layers[column], dtype=float)
-    err = scale * np.asarray(layers[f"{column}_err"], dtype=float)
+    spread = scale * np.asarray(layers[f"{column}_err"], dtype=float)
     # densities, fractions and diameters are not negative: the bar stops at zero
-    low = np.where(np.isfinite(y), np.minimum(err, np.maximum(y, 0.0)), err)
+    low = np.where(np.isfinite(y), np.minimum(spread, np.maximum(y, 0.0)), spread)
     ax.errorbar(
         z,
         y,
-        yerr=np.vstack([low, err]),
+        yerr=np.vstack([low, spread]),
         xerr=[z - z0, z1 - z],
         **POINT_STYLE,
         label="layers: value ± 1 standard error, layer extent",
