@@ -825,7 +825,9 @@ class LammpsExporter(Exporter[AnyPacking]):
 
     One body per placed particle, in draw order: atom type = mineral index + 1,
     position = its centre of mass. See the module documentation for how the
-    cores are made. In the ``Bodies`` section each body lists
+    cores are made. In a walled cylinder the plates of the side wall follow
+    the grains, with one more atom type (:func:`_side_plates`). In the
+    ``Bodies`` section each body lists
 
     - 2D: its vertex count, the six components of its inertia tensor in the
       box frame (``ixx iyy izz ixy ixz iyz`` of a uniform lamina), its core
