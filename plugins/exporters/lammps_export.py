@@ -28,7 +28,10 @@ default), or ``rounding_radius``; a particle whose core would vanish (or, in
 Beside ``<stem>.data`` the exporter writes ``<stem>.in``, an input script that
 reads it with the pair style ``body/rounded/polygon`` (``polyhedron``), walls
 (``wall/body/polygon``, ``wall/body/polyhedron``) or periodic boundaries from
-the domain, gravity along -y (-z in 3D), a time step from the lightest body's
+the domain (in a walled cylinder: ``zplane`` walls for the floor and lid and a
+ring of fixed plate bodies for the side wall, see
+:mod:`~regopack.plugins.exporters.lammps_side_wall`), gravity along -y (-z in
+3D), a time step from the lightest body's
 mass and the stiffness (t_c / 50 of a collision of the two lightest bodies
 in 2D, t_c / 20 in 3D: see :data:`STEPS_PER_COLLISION`), and its parameters
 as LAMMPS ``index`` variables (``lmp -in packing.in -var k_n 1e5`` changes
@@ -97,6 +100,7 @@ from regopack.plugins.exporters.granular_common import (
     sphere_data,
 )
 from regopack.plugins.exporters.granular_common import mineral_densities as mineral_densities
+from regopack.plugins.exporters.lammps_side_wall import CORNER_GAP, SideWall, side_wall
 from regopack.plugins.exporters.rounded_bodies import (
     CLEAN_TOLERANCE,
     clean_outline,
@@ -538,6 +542,36 @@ _STYLES = {
 
 
 @dataclass(frozen=True)
+class _Plates:
+    """The side wall of a walled cylinder as fixed plate bodies, laid out as LAMMPS reads them.
+
+    ``wall`` is the layout in the packing's lengths; ``mass`` (of each plate),
+    ``position``, ``lo`` and ``hi`` (the box, which holds the rounded plates)
+    are in LAMMPS units; ``blocks`` continues the ``Bodies`` section after the
+    grains and ``note`` describes the domain.
+    """
+
+    wall: SideWall
+    mass: FloatArray
+    position: FloatArray
+    blocks: list[str]
+    lo: FloatArray
+    hi: FloatArray
+    note: str
+
+    @property
+    def n_min(self) -> int:
+        """Vertices of a plate's core."""
+        return int(self.wall.core.vertices.shape[0])
+
+    @property
+    def n_max(self) -> int:
+        """Largest of the counts of vertices, edges and faces of a plate's core."""
+        core = self.wall.core
+        return int(max(core.vertices.shape[0], core.edges.shape[0], body_faces(core).shape[0]))
+
+
+@dataclass(frozen=True)
 class _Layout:
     """The bodies of a packing laid out as LAMMPS reads them, in LAMMPS units.
 
@@ -563,6 +597,7 @@ class _Layout:
     d_min: float
     notes: tuple[str, str]
     domain: list[str]
+    plates: _Plates | None = None
 
     @property
     def rounding(self) -> FloatArray:
@@ -645,17 +680,80 @@ def _polygon_layout(packing: Packing, cfg: LammpsConfig, s: float) -> _Layout:
     )
 
 
+def _polyhedron_block(
+    ident: int, core: Core, vertices: FloatArray, inertia: FloatArray, diameter: float
+) -> list[str]:
+    """Lines of one polyhedron body of the ``Bodies`` section (LAMMPS units given)."""
+    faces = body_faces(core)
+    t = inertia
+    values = [_num(v) for v in (t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])]
+    values += [_num(x) for x in vertices.ravel()]
+    values += [str(int(i)) for i in core.edges.ravel()]
+    values += [str(int(i)) for i in faces.ravel()]
+    values.append(_num(diameter))
+    return [
+        f"{ident} 3 {len(values)}",
+        f"{core.vertices.shape[0]} {core.edges.shape[0]} {faces.shape[0]}",
+        *_lines(values),
+    ]
+
+
+def _side_plates(
+    packing: Packing[Cylinder],
+    cylinder: Cylinder,
+    bodies: PolyhedronBodies,
+    cfg: LammpsConfig,
+    s: float,
+) -> _Plates:
+    """Lay out the plates of a cylinder's side wall (see :mod:`.lammps_side_wall`).
+
+    Their rounding radius is that of the smallest grain's (``rounding_radius``,
+    or ``rounding_fraction`` × the smallest equivalent radius), their density
+    ``density``; their ids follow the grains'.
+    """
+    radius = packing.radius[bodies.index]
+    d_min, d_max = (
+        (2.0 * float(radius.min()), 2.0 * float(radius.max())) if radius.size else (1.0, 1.0)
+    )
+    rounding = cfg.rounding_radius or cfg.rounding_fraction * 0.5 * d_min
+    wall = side_wall(cylinder, rounding, d_min, d_max)
+    first = bodies.index.size + 1
+    vertices = wall.core.vertices
+    blocks: list[str] = []
+    with np.errstate(over="ignore", under="ignore"):  # checked below
+        mass = np.full(wall.count, wall.volume * np.float64(s) ** 3 * cfg.density)
+        per_density = np.float64(s) ** 5 * cfg.density
+        for k in range(wall.count):
+            inertia = np.eye(3) * (wall.moment * per_density)
+            vertices = wall.vertices(k) * s
+            blocks += _polyhedron_block(first + k, wall.core, vertices, inertia, 2.0 * rounding * s)
+    _check_finite(
+        f"length_scale = {s}, density = {cfg.density}",
+        [("mass", mass), ("moment of inertia", np.array([wall.moment * per_density]))],
+    )
+    reach = wall.reach
+    c = cylinder
+    end = wall.overhang + rounding
+    lo = np.array([c.cx - reach, c.cy - reach, c.zmin - end]) * s
+    hi = np.array([c.cx + reach, c.cy + reach, c.zmax + end]) * s
+    note = (
+        f"a walled cylinder: floor and lid are walls (zplane), the side wall {wall.segments} "
+        f"x {wall.layers} fixed plates (around x up; atom type {_atom_types(packing) + 1}, "
+        f"group plates) whose corners stand at most {CORNER_GAP} x d_min outside the circle"
+    )
+    return _Plates(wall, mass, wall.centre * s, blocks, lo, hi, note)
+
+
+def _atom_types(packing: AnyPacking) -> int:
+    """Atom types of the grains: one per mineral."""
+    return max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
+
+
 def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _Layout:
     """Lay out the bodies of a 3D packing: rounded polyhedra (and spheres), grains' inertia."""
     misplaced = misplaced_field(cfg, 3)  # thickness: regopack.export refuses it first
     if misplaced is not None:
         raise ConfigError(f"exporter 'lammps': {misplaced[1]}")
-    if isinstance(packing.domain, Cylinder):
-        raise ExportError(
-            "exporter 'lammps': a walled cylinder holds polyhedra (bodies) that LAMMPS cannot "
-            "wall in (fix wall/body/polyhedron has planes only); export them with yade, or "
-            "a packing of spheres alone as granular spheres"
-        )
     bodies = polyhedron_bodies(packing, cfg)
     density = mineral_densities(packing, cfg)[packing.mineral[bodies.index]]
     with np.errstate(over="ignore", under="ignore"):  # checked below
@@ -675,27 +773,32 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
     n_min, n_max = (min(counts), max(sizes)) if counts else (1, 1)
     box = packing.domain
     lo, hi = box.bounds().reshape(3, 2).T * s
+    plates = None
+    if isinstance(box, Cylinder):
+        plates = _side_plates(packing, box, bodies, cfg, s)
+        n_min, n_max = min(n_min, plates.n_min), max(n_max, plates.n_max)
+        lo, hi = plates.lo, plates.hi
     pos = bodies.position * s
     if box.periodic:
         pos = lo + np.mod(pos - lo, hi - lo)
     blocks: list[str] = []
     for k in range(bodies.index.size):
         core = bodies.cores[k]
-        faces = body_faces(core)
-        t = inertia[k]
-        values = [_num(v) for v in (t[0, 0], t[1, 1], t[2, 2], t[0, 1], t[0, 2], t[1, 2])]
-        values += [_num(x) for x in (core.vertices * s).ravel()]
-        values += [str(int(i)) for i in core.edges.ravel()]
-        values += [str(int(i)) for i in faces.ravel()]
-        values.append(_num(2.0 * bodies.rounding[k] * s))
-        blocks.append(f"{k + 1} 3 {len(values)}")
-        blocks.append(f"{core.vertices.shape[0]} {core.edges.shape[0]} {faces.shape[0]}")
-        blocks += _lines(values)
+        blocks += _polyhedron_block(
+            k + 1, core, core.vertices * s, inertia[k], 2.0 * bodies.rounding[k] * s
+        )
     walls = [
         f"fix          wall{i + 1} all wall/body/polyhedron ${{k_n}} ${{c_n}} ${{c_t}} "
         f"{axis}plane {_num(lo[i])} {_num(hi[i])}"
         for i, axis in enumerate("xyz")
     ]
+    where = "periodic in x, y and z" if box.periodic else "walls on all six sides"
+    if plates is not None:
+        walls = [
+            "fix          wall1 grains wall/body/polyhedron ${k_n} ${c_n} ${c_t} "
+            f"zplane {_num(box.zmin * s)} {_num(box.zmax * s)}"
+        ]
+        where = plates.note
     n = bodies.index.size
     return _Layout(
         style=_STYLES[3],
@@ -711,12 +814,9 @@ def _polyhedron_layout(packing: Packing[Box], cfg: LammpsConfig, s: float) -> _L
         n_min=n_min,
         n_max=n_max,
         d_min=float(2.0 * packing.radius[bodies.index].min() * s) if n else 1.0,
-        notes=(
-            "",
-            f"particle volume x {_density_note(cfg)}; "
-            + ("periodic in x, y and z" if box.periodic else "walls on all six sides"),
-        ),
-        domain=[],
+        notes=("", f"particle volume x {_density_note(cfg)}; {where}"),
+        domain=[] if plates is None else [f"# Domain: {where}."],
+        plates=plates,
     )
 
 
@@ -725,7 +825,9 @@ class LammpsExporter(Exporter[AnyPacking]):
 
     One body per placed particle, in draw order: atom type = mineral index + 1,
     position = its centre of mass. See the module documentation for how the
-    cores are made. In the ``Bodies`` section each body lists
+    cores are made. In a walled cylinder the plates of the side wall follow
+    the grains, with one more atom type (:func:`_side_plates`). In the
+    ``Bodies`` section each body lists
 
     - 2D: its vertex count, the six components of its inertia tensor in the
       box frame (``ixx iyy izz ixy ixz iyz`` of a uniform lamina), its core
@@ -806,12 +908,28 @@ class LammpsExporter(Exporter[AnyPacking]):
         cfg = self.config
         style = layout.style
         n = layout.bodies.index.size
-        n_types = max(1, len(packing.mineral_names), int(packing.mineral.max(initial=-1)) + 1)
+        n_types = _atom_types(packing)
         atoms = [
             f"{k + 1} {int(packing.mineral[j]) + 1} 1 {_num(layout.mass[k])} "
             + " ".join(_num(x) for x in layout.position[k])
             for k, j in enumerate(layout.bodies.index.tolist())
         ]
+        plates = layout.plates
+        n_all, types, wall_note, blocks = n, n_types, [], layout.blocks
+        if plates is not None:
+            n_all, types = n + plates.wall.count, n_types + 1
+            atoms += [
+                f"{n + k + 1} {types} 1 {_num(plates.mass[k])} "
+                + " ".join(_num(x) for x in plates.position[k])
+                for k in range(plates.wall.count)
+            ]
+            wall = plates.wall
+            wall_note = [
+                f"# atoms {n + 1} to {n_all} (type {types}): the cylinder's side wall, "
+                f"{wall.segments} x {wall.layers} fixed plates of rounding radius "
+                f"{_num(wall.rounding)} (x {_num(s)}) circumscribing the circle"
+            ]
+            blocks = [*blocks, *plates.blocks]
         rounding_note = (
             f"rounding radius {_num(cfg.rounding_radius)}"
             if cfg.rounding_radius
@@ -831,10 +949,11 @@ class LammpsExporter(Exporter[AnyPacking]):
             f"halved radius{layout.notes[0]}",
             f"# lengths = packing lengths ({length_unit(packing)}) x {_num(s)}; "
             f"mass = {layout.notes[1]}",
+            *wall_note,
             "",
-            f"{n} atoms",
-            f"{n} bodies",
-            f"{n_types} atom types",
+            f"{n_all} atoms",
+            f"{n_all} bodies",
+            f"{types} atom types",
             "",
             *(f"{_num(lo[i])} {_num(hi[i])} {a}lo {a}hi" for i, a in enumerate("xyz")),
             "",
@@ -844,7 +963,7 @@ class LammpsExporter(Exporter[AnyPacking]):
             "",
             "Bodies",
             "",
-            *layout.blocks,
+            *blocks,
         ]
         return "\n".join(lines) + "\n"
 
@@ -918,6 +1037,21 @@ class LammpsExporter(Exporter[AnyPacking]):
         m_min = float(layout.mass.min()) if layout.mass.size else 1.0
         d_min = layout.d_min
         r_min = float(layout.rounding.min()) if layout.rounding.size else 0.05 * d_min
+        grains, groups, exclude = "all", [], []
+        thermo = ["thermo_style custom step atoms ke pe"]
+        if layout.plates is not None:  # the side wall's plates: never integrated or counted
+            grains, plates = "grains", _atom_types(packing) + 1
+            groups = [
+                f"group        plates type {plates}",
+                "group        grains subtract all plates",
+            ]
+            exclude = [f"neigh_modify exclude type {plates} {plates}"]
+            thermo = [
+                "variable     grains equal count(grains)",
+                "compute      t_grains grains temp",
+                "thermo_style custom step v_grains ke pe",
+                "thermo_modify temp t_grains norm no",
+            ]
         return "\n".join(
             [
                 f"# LAMMPS input for {path.name}, written by regopack {packing.version} "
@@ -950,42 +1084,45 @@ class LammpsExporter(Exporter[AnyPacking]):
                 f"atom_style   body rounded/{style.body} {layout.n_min} {layout.n_max}",
                 "atom_modify  map array",
                 f"read_data    {path.name}",
+                *groups,
                 "",
                 f"pair_style   body/rounded/{style.body} ${{c_n}} ${{c_t}} ${{mu}} 1.0 ${{cut}}",
                 "pair_coeff   * * ${k_n} 0.0",
                 "comm_modify  vel yes",
                 "neighbor     ${skin} bin",
                 "neigh_modify every 1 delay 0 check yes",
+                *exclude,
                 "timestep     ${dt}",
                 "",
-                "fix          integrate all nve/body",
+                f"fix          integrate {grains} nve/body",
                 *layout.walls,
-                f"fix          weight all gravity ${{g}} vector {style.gravity}",
+                f"fix          weight {grains} gravity ${{g}} vector {style.gravity}",
                 *(["fix          plane all enforce2d"] if style.dimension == 2 else []),
-                *self._final_state(path),
+                *self._final_state(path, grains),
                 "",
-                "thermo_style custom step atoms ke pe",
+                *thermo,
                 "thermo       1000",
                 "run          ${steps}",
-                *self._final_dump(path),
+                *self._final_dump(path, grains),
                 "",
             ]
         )
 
     @staticmethod
-    def _final_state(path: Path) -> list[str]:
+    def _final_state(path: Path, group: str = "all") -> list[str]:
         """Script lines that keep each body's start: its displacement and first orientation."""
         return [
-            "compute      disp all displace/atom",
-            "compute      q all property/atom quatw quati quatj quatk",
-            "fix          q0 all store/state 0 c_q[1] c_q[2] c_q[3] c_q[4]",
+            f"compute      disp {group} displace/atom",
+            f"compute      q {group} property/atom quatw quati quatj quatk",
+            f"fix          q0 {group} store/state 0 c_q[1] c_q[2] c_q[3] c_q[4]",
         ]
 
     @staticmethod
-    def _final_dump(path: Path) -> list[str]:
+    def _final_dump(path: Path, group: str = "all") -> list[str]:
         """Script lines that write each body's final position, displacement and orientations."""
         return [
-            f"write_dump   all custom {dump_path(path).name} id type x y z c_disp[1] c_disp[2] "
+            f"write_dump   {group} custom {dump_path(path).name} id type x y z c_disp[1] "
+            "c_disp[2] "
             "c_disp[3] c_q[1] c_q[2] c_q[3] c_q[4] f_q0[1] f_q0[2] f_q0[3] f_q0[4] "
             'modify sort id format line "%d %d' + " %.17g" * 14 + '"',
         ]

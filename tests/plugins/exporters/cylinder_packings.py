@@ -46,17 +46,25 @@ def _turned(points: np.ndarray, angle: float) -> np.ndarray:
     return points @ np.array([[ca, sa, 0.0], [-sa, ca, 0.0], [0.0, 0.0, 1.0]])
 
 
-def cylinder_cubes(half: float = 0.6) -> Packing:
+def cylinder_cubes(half: float = 0.6, turn: float = 0.0) -> Packing:
     """Cubes of half-side ``half`` facing the axis: a ring on the floor whose outer corners
     touch the side wall, a ring above it turned by half a step that touches it too, and a
-    cube under the lid (17 cubes)."""
+    cube under the lid (17 cubes), all turned by ``turn`` about the axis.
+
+    With ``turn = 0`` some cubes have edges parallel to x or y; LAMMPS turns them to their
+    principal axes and back, and its edge-edge contact test, which divides by an edge's x
+    extent unless that is exactly 0, mistakes the rounding error left there for a real
+    extent (and finds contacts beyond the edge). Packings that regopack makes turn their
+    grains at random; the LAMMPS tests turn these cubes too.
+    """
     c = CYLINDER
     rho = np.sqrt(c.radius**2 - half**2) - half  # the outer corners on the circle
-    low, t_low = _ring(rho, half)
-    high, t_high = _ring(rho, 3.0 * half + 0.4, np.pi / RING)
-    top = np.array([[c.cx + 1.0, c.cy, c.zmax - half]])
+    low, t_low = _ring(rho, half, turn)
+    high, t_high = _ring(rho, 3.0 * half + 0.4, np.pi / RING + turn)
+    ct, st = np.cos(turn), np.sin(turn)
+    top = np.array([[c.cx + 1.0 * ct, c.cy + 1.0 * st, c.zmax - half]])
     centres = np.vstack([low, high, top])
-    angles = np.concatenate([t_low, t_high, [0.0]])
+    angles = np.concatenate([t_low, t_high, [turn]])
     n = centres.shape[0]
     cube = _cube_arrays(half)
     return Packing(

@@ -25,6 +25,7 @@ from regopack.plugins.exporters.lammps_export import (
     dump_path,
     script_path,
 )
+from regopack.plugins.exporters.lammps_side_wall import CORNER_GAP, side_wall
 
 LIGGGHTS = shutil.which("liggghts")
 YADE = shutil.which("yade")
@@ -111,6 +112,183 @@ def test_lammps_keeps_granular_spheres_in_the_cylinder_under_tilted_gravity(
     assert excess(report["x"], r) < 0.01 * d_min
     settled = regopack.settled(spheres, dump_path(path), "lammps")
     np.testing.assert_allclose(settled.centre, report["x"], atol=1e-12)
+
+
+# ---------------------------------------------------------------------------
+# LAMMPS bodies: the side wall is a ring of fixed plates
+
+TILTED_G = 2.0
+"""Gravity of the tilted LAMMPS runs of bodies: 1 000 steps move the free cubes sideways by
+about a quarter of their size."""
+
+SIDE_SLACK = CORNER_GAP + 0.005
+"""How far a rounded cube may reach past the side wall, as a fraction of d_min: the corners
+of the plates' polygon (CORNER_GAP, 1 %) and the overlap of the body pair's linear springs
+under the tilted weight and the impacts (measured below 0.1 %; 0.5 % allowed)."""
+
+
+@pytest.fixture(scope="module")
+def turned_cubes() -> Packing:
+    """The cubes turned off the axes (LAMMPS cannot take edges parallel to x or y)."""
+    return cylinder_cubes(turn=0.1)
+
+
+def body_points(report: dict, n: int, rounding: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Core vertices of the first ``n`` bodies where LAMMPS left them, and their rounding."""
+    verts = report["vertices"]
+    verts = verts[verts[:, 0] <= n]
+    return verts[:, 1:4], rounding[verts[:, 0].astype(int) - 1]
+
+
+def plate_blocks(path: Path, n: int) -> list[np.ndarray]:
+    """Core vertices (box frame, relative to the centre) of the plates of a data file."""
+    from test_lammps_export import solid_blocks
+
+    blocks = solid_blocks(path.read_text())
+    return [np.array(values[6 : 6 + 3 * h[3]]).reshape(-1, 3) for h, values in blocks[n:]]
+
+
+def test_lammps_walls_bodies_in_a_cylinder_with_a_ring_of_plates(turned_cubes, tmp_path) -> None:
+    from test_lammps_export import solid_blocks
+
+    from regopack.plugins.exporters.lammps_export import polyhedron_bodies
+
+    cubes = turned_cubes
+    path = LammpsExporter().export(cubes, tmp_path / "p.data")
+    text, script = path.read_text(), script_path(path).read_text()
+    n, c = cubes.n_placed, CYLINDER
+    d_min, d_max = 2.0 * float(cubes.radius.min()), 2.0 * float(cubes.radius.max())
+    r_w = 0.05 * 0.5 * d_min  # the smallest grain's rounding radius
+    wall = side_wall(c, r_w, d_min, d_max)
+    atoms = n + wall.count
+    assert f"{atoms} atoms\n{atoms} bodies\n2 atom types" in text
+    assert wall.corner_gap <= CORNER_GAP * d_min
+    # the plates: type 2, ids after the grains', their rounded inner faces on the circle
+    rows = text.split("Atoms # body\n\n", 1)[1].split("\n\n", 1)[0].splitlines()
+    table = np.array([row.split() for row in rows], dtype=float)
+    assert table[:n, 1].tolist() == [1.0] * n and table[n:, 1].tolist() == [2.0] * wall.count
+    blocks = solid_blocks(text)
+    assert [b[0][0] for b in blocks] == list(range(1, atoms + 1))
+    bodies = polyhedron_bodies(cubes)
+    np.testing.assert_allclose(table[:n, 4:7], bodies.position)
+    around, heights = [], []
+    for k, local in enumerate(plate_blocks(path, n)):
+        points = local + table[n + k, 4:7]
+        assert blocks[n + k][1][-1] == pytest.approx(2 * r_w)
+        assert blocks[n + k][1][3:6] == [0.0, 0.0, 0.0]  # isotropic inertia: box frame kept
+        axis = np.array([c.cx, c.cy])
+        mid = table[n + k, 4:6] - axis
+        normal = mid / np.linalg.norm(mid)
+        inner = (points[:, :2] - axis) @ normal
+        assert inner.min() - r_w == pytest.approx(c.radius, abs=1e-12)  # tangent to the circle
+        extent = np.ptp(points, axis=0)
+        assert extent[2] <= d_max and np.hypot(*extent[:2]) <= 1.1 * d_max  # about a grain
+        heights.append(points[:, 2])
+        around.append(np.arctan2(normal[1], normal[0]))
+    z = np.concatenate(heights)  # past the floor and the lid, by more than the rounding
+    assert z.min() < c.zmin - r_w and z.max() > c.zmax + r_w
+    steps = np.diff(np.sort(np.unique(np.round(around, 9))))
+    assert steps == pytest.approx(2 * np.pi / wall.segments)  # the whole ring, evenly
+    # the box holds every rounded plate
+    lo = np.array([float(v) for v in re.findall(r"^(\S+) \S+ [xyz]lo", text, re.M)])
+    hi = np.array([float(v) for v in re.findall(r"^\S+ (\S+) [xyz]lo", text, re.M)])
+    for k, local in enumerate(plate_blocks(path, n)):
+        points = local + table[n + k, 4:7]
+        assert np.all(points - r_w >= lo - 1e-12) and np.all(points + r_w <= hi + 1e-12)
+    # only the grains are integrated, pulled, walled, counted and dumped
+    assert "group        plates type 2\ngroup        grains subtract all plates\n" in script
+    assert "neigh_modify exclude type 2 2" in script
+    for line in (
+        "integrate grains nve/body",
+        "weight grains gravity",
+        "disp grains displace",
+        "q grains property/atom",
+        "q0 grains store/state",
+        "write_dump   grains custom",
+        "thermo_style custom step v_grains ke pe",
+        "temp t_grains norm no",
+    ):
+        assert line in script, line
+    assert (
+        f"wall1 grains wall/body/polyhedron ${{k_n}} ${{c_n}} ${{c_t}} zplane {c.zmin} "
+        f"{c.zmax}\n" in script
+    )
+    assert script.count("wall/body/polyhedron") == 1 and " all " not in script.split("plates\n")[1]
+
+
+def test_lammps_holds_bodies_still_in_a_cylinder(turned_cubes, tmp_path) -> None:
+    """1 000 steps without gravity: no NaN, no body lost, no cube moves, the plates stay."""
+    cubes = turned_cubes
+    path = LammpsExporter().export(cubes, tmp_path / "p.data")
+    report = simulate(path, [1000])
+    n = cubes.n_placed
+    d_min = 2.0 * float(cubes.radius.min())
+    assert report["natoms"] == n + len(plate_blocks(path, n)) and report["finite"]
+    assert np.abs(report["x"][:n] - report["x0"][:n]).max() < 0.01 * d_min
+    assert np.array_equal(report["x"][n:], report["x0"][n:])  # never integrated
+    assert max(report["ke"]) < 1e-12 * n
+
+
+def test_lammps_holds_spheres_written_as_bodies_still_in_a_cylinder(spheres, tmp_path) -> None:
+    path = LammpsExporter(LammpsConfig(spheres="bodies")).export(spheres, tmp_path / "p.data")
+    assert "atom_style   body rounded/polyhedron 1 12" in script_path(path).read_text()
+    report = simulate(path, [1000])
+    n = spheres.n_placed
+    d_min = 2.0 * float(spheres.solids.rounding_radius.min())
+    assert report["natoms"] > n and report["finite"]
+    assert np.abs(report["x"][:n] - report["x0"][:n]).max() < 0.01 * d_min
+
+
+def tilted_run(cubes: Packing, path: Path) -> tuple[dict, float, float]:
+    """Export, tilt the gravity towards +x, run 1 000 steps; return the report and how far
+    the rounded cubes reach past the side wall and past the floor or lid (over d_min)."""
+    from regopack.plugins.exporters.lammps_export import polyhedron_bodies
+
+    LammpsExporter().export(cubes, path)
+    tilt(script_path(path), "gravity ${g} vector 0 0 -1", "gravity ${g} vector 1 0 -1")
+    report = simulate(path, [1000], g=TILTED_G)
+    points, r = body_points(report, cubes.n_placed, polyhedron_bodies(cubes).rounding)
+    c, d_min = CYLINDER, 2.0 * float(cubes.radius.min())
+    side = np.hypot(points[:, 0] - c.cx, points[:, 1] - c.cy) + r - c.radius
+    ends = np.maximum(c.zmin - (points[:, 2] - r), points[:, 2] + r - c.zmax)
+    return report, float(side.max()) / d_min, float(ends.max()) / d_min
+
+
+def test_lammps_keeps_bodies_in_the_cylinder_under_tilted_gravity(turned_cubes, tmp_path) -> None:
+    from regopack.plugins.exporters.lammps_export import polyhedron_bodies
+
+    cubes = turned_cubes
+    path = tmp_path / "p.data"
+    report, side, ends = tilted_run(cubes, path)
+    n = cubes.n_placed
+    assert report["natoms"] > n and report["finite"]
+    moved = report["x"][:n] - report["x0"][:n]
+    assert np.median(moved[:, 0]) > 0.1  # pushed sideways
+    assert side < SIDE_SLACK and ends < 0.01
+    # read back: the settled cubes, exported again, have their cores where LAMMPS left them
+    settled = regopack.settled(cubes, dump_path(path), "lammps")
+    assert settled.stats["settled_steps"] == 1000 and settled.n_placed == n
+    again = polyhedron_bodies(settled)
+    verts = report["vertices"]
+    for k, core in enumerate(again.cores):
+        ours = core.vertices + again.position[k]
+        theirs = verts[verts[:, 0] == k + 1, 1:4]
+        order = np.lexsort(ours.T[::-1]), np.lexsort(theirs.T[::-1])
+        np.testing.assert_allclose(ours[order[0]], theirs[order[1]], atol=1e-9)
+
+
+def test_a_side_wall_farther_out_lets_the_cubes_out(turned_cubes, tmp_path, monkeypatch) -> None:
+    """The check above fails when the plates stand 5 % of the radius farther out."""
+    from dataclasses import replace
+
+    import regopack.plugins.exporters.lammps_export as module
+
+    def farther(domain, *args):
+        return side_wall(replace(domain, radius=1.05 * domain.radius), *args)
+
+    monkeypatch.setattr(module, "side_wall", farther)
+    report, side, _ = tilted_run(turned_cubes, tmp_path / "p.data")
+    assert report["finite"] and side > 5 * SIDE_SLACK
 
 
 # ---------------------------------------------------------------------------
@@ -303,20 +481,3 @@ def test_sections_of_a_cylinder_lie_in_its_circle_or_chord(spheres, tmp_path) ->
         regopack.export(spheres, to, tmp_path / f"p-{to}")
     for to in ("vtk", "stl", "gsd", "yade", "image", "slice"):
         regopack.export(cylinder_cubes(), to, tmp_path / f"c-{to}")
-
-
-def test_lammps_refuses_bodies_in_a_cylinder_in_one_line(cubes, spheres, tmp_path, capsys) -> None:
-    """LAMMPS' wall/body/polyhedron has planes only: no side wall for bodies."""
-    from regopack.base.errors import ExportError
-    from regopack.cli import main
-    from regopack.packing.core import save
-
-    with pytest.raises(ExportError, match="fix wall/body/polyhedron has planes only"):
-        LammpsExporter().export(cubes, tmp_path / "c.data")
-    with pytest.raises(ExportError, match="fix wall/body/polyhedron has planes only"):
-        LammpsExporter(LammpsConfig(spheres="bodies")).export(spheres, tmp_path / "s.data")
-    assert not list(tmp_path.iterdir())
-    save(cubes, tmp_path / "c.npz")
-    assert main(["export", str(tmp_path / "c.npz"), "--to", "lammps"]) != 0
-    err = capsys.readouterr().err.strip()
-    assert "planes only" in err and "Traceback" not in err and len(err.splitlines()) == 1
