@@ -60,7 +60,14 @@ def test_every_command_runs(tmp_path: Path) -> None:
     finally:
         os.chdir(here)
     run = tmp_path / "runs" / "cylinder-seed1"
-    for name in ("packing.npz", "summary.json", "packing.py", "packing.bodies", "packing.vtu"):
+    for name in (
+        "packing.npz",
+        "summary.json",
+        "packing.py",
+        "packing.bodies",
+        "packing.vtu",
+        "packing.in",
+    ):
         assert (run / name).is_file(), name
     import json
 
