@@ -155,3 +155,23 @@ def test_cut_volumes_add_up_over_adjacent_windows():
         for a, b in [(-2.0, -0.7), (-0.7, 0.4), (0.4, 2.0)]
     )
     np.testing.assert_allclose(parts, whole, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("bump", [1e-9, 1e-7, 1e-6])
+def test_a_face_folded_by_a_hair_keeps_its_fold(bump):
+    """Two faces that meet at a tiny angle still meet along an edge: the slice has a corner there.
+
+    A tilted cube whose corner ``(1, 1, 1)`` is pushed out by ``bump``: each of its three faces
+    there folds along a diagonal. Cut by the floor, the two parts add up to the whole hull.
+    """
+    c, s = math.cos(0.5), math.sin(0.5)
+    turn = np.array([[c, 0.0, s], [0.0, 1.0, 0.0], [-s, 0.0, c]]) @ np.array(
+        [[1.0, 0.0, 0.0], [0.0, math.cos(0.3), -math.sin(0.3)], [0.0, math.sin(0.3), math.cos(0.3)]]
+    )
+    cube = CUBE.copy()
+    cube[7] += bump
+    points = cube @ turn.T
+    whole = ConvexHull(points).volume
+    above = polyhedra_in_cylinder([points], (0.0, 0.0), 10.0, 0.0, 10.0)[0]
+    below = polyhedra_in_cylinder([points], (0.0, 0.0), 10.0, -10.0, 0.0)[0]
+    assert above + below == pytest.approx(whole, rel=1e-13)
