@@ -320,3 +320,23 @@ def test_lammps_refuses_bodies_in_a_cylinder_in_one_line(cubes, spheres, tmp_pat
     assert main(["export", str(tmp_path / "c.npz"), "--to", "lammps"]) != 0
     err = capsys.readouterr().err.strip()
     assert "planes only" in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_the_yade_constants_each_have_their_own_documentation():
+    """Each constant of the YADE exporter is followed by the string that documents it."""
+    import ast
+    import inspect
+    import itertools
+
+    from regopack.plugins.exporters import yade_export
+
+    body = ast.parse(inspect.getsource(yade_export)).body
+    docs: dict[str, str] = {}
+    for here, after in itertools.pairwise(body):
+        if isinstance(here, ast.Assign) and isinstance(here.targets[0], ast.Name):
+            if isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant):
+                docs[here.targets[0].id] = str(after.value.value)
+    assert "verletDist" in docs["VERLET_FRACTION"]
+    assert "facets" in docs["FACET_GAP"] and "Fewest facets" in docs["MIN_SEGMENTS"]
+    strings = [n for n in body if isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant)]
+    assert len(strings) == 1 + len(docs)  # the module's docstring and one per constant
