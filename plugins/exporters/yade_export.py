@@ -74,6 +74,8 @@ __all__ = [
 ]
 
 VERLET_FRACTION = 0.05
+"""Margin of YADE's collider (``verletDist``) as a fraction of the smallest equivalent diameter."""
+
 FACET_GAP = 0.01
 """A walled cylinder's side wall is made of flat facets whose planes touch the circle at their
 middles (the polygon circumscribes it): its corners stand farther out, by at most this
@@ -81,7 +83,6 @@ fraction of the smallest equivalent diameter (it sets the number of facets)."""
 
 MIN_SEGMENTS = 16
 """Fewest facets (around) of a cylinder's side wall."""
-"""Margin of YADE's collider (``verletDist``) as a fraction of the smallest equivalent diameter."""
 
 STATE_FORMAT = "regopack-yade-state 1"
 """First line of the final state that the script writes."""

@@ -481,3 +481,23 @@ def test_sections_of_a_cylinder_lie_in_its_circle_or_chord(spheres, tmp_path) ->
         regopack.export(spheres, to, tmp_path / f"p-{to}")
     for to in ("vtk", "stl", "gsd", "yade", "image", "slice"):
         regopack.export(cylinder_cubes(), to, tmp_path / f"c-{to}")
+
+
+def test_the_yade_constants_each_have_their_own_documentation():
+    """Each constant of the YADE exporter is followed by the string that documents it."""
+    import ast
+    import inspect
+    import itertools
+
+    from regopack.plugins.exporters import yade_export
+
+    body = ast.parse(inspect.getsource(yade_export)).body
+    docs: dict[str, str] = {}
+    for here, after in itertools.pairwise(body):
+        if isinstance(here, ast.Assign) and isinstance(here.targets[0], ast.Name):
+            if isinstance(after, ast.Expr) and isinstance(after.value, ast.Constant):
+                docs[here.targets[0].id] = str(after.value.value)
+    assert "verletDist" in docs["VERLET_FRACTION"]
+    assert "facets" in docs["FACET_GAP"] and "Fewest facets" in docs["MIN_SEGMENTS"]
+    strings = [n for n in body if isinstance(n, ast.Expr) and isinstance(n.value, ast.Constant)]
+    assert len(strings) == 1 + len(docs)  # the module's docstring and one per constant
