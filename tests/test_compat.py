@@ -53,6 +53,7 @@ def test_the_old_3d_names_read_boxes_and_warn(fresh_domain3d: None) -> None:
     assert DOMAIN3D_KINDS == {
         "box": regopack.geometry.domain.Box,
         "periodic-box": regopack.geometry.domain.PeriodicBox,
+        "cylinder": regopack.geometry.domain.Cylinder,
     }
     box = domain3d_from_dict({"kind": "periodic-box", "bounds": [0, 1, 0, 2, 0, 3]})
     assert box == regopack.geometry.domain.PeriodicBox(0.0, 1.0, 0.0, 2.0, 0.0, 3.0)
