@@ -168,54 +168,13 @@ def layers_and_shells(
             )
             inner_solid, inner_volume = solid, box.volume
 
-    def clean(values: list[float]) -> list[float | None]:
-        return [float(v) if math.isfinite(v) else None for v in values]
-
     whole = inside_xy & low(centre[:, 2], w.zmin) & (centre[:, 2] < w.zmax)
     n_whole, density_whole, d_whole = (
         _region_stats(p3, whole, w.volume) if w.volume > 0 else (0, math.nan, math.nan)
     )
     phi_whole = phi_in_box(p3, w, volume) if w.volume > 0 else math.nan
-    results = {
-        "interior_margin": margin,
-        "n_interior": n_whole,
-        "number_density": float(density_whole) if math.isfinite(density_whole) else None,
-        "phi": float(phi_whole) if math.isfinite(phi_whole) else None,
-        "mean_d": float(d_whole) if math.isfinite(d_whole) else None,
-        "window": [float(s) for s in w.size],
-        "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
-        "phi_layers": clean(layers["phi"]),
-        "density_layers": clean(layers["density"]),
-        "mean_diameter_layers": clean(layers["mean_diameter"]),
-        "phi_layers_cv": _cv(layers["phi"]),
-        "phi_shells": clean(shells["phi"]),
-        "density_shells": clean(shells["density"]),
-        "mean_diameter_shells": clean(shells["mean_diameter"]),
-        "phi_shells_cv": _cv(shells["phi"]),
-    }
-    layer_table = {k: np.asarray(v) for k, v in layers.items()}
-    # the columns under the names of the 2D tables, with their sampling errors
-    layer_table.update(
-        {
-            "number_density": layer_table["density"],
-            "number_density_err": np.asarray(errors["density"]),
-            "phi_err": np.asarray(errors["phi"]),
-            "mean_d": layer_table["mean_diameter"],
-            "mean_d_err": np.asarray(errors["mean_diameter"]),
-        }
-    )
-    shell_table = {k: np.asarray(v) for k, v in shells.items()}
-    # as the layers: the columns under the names of the 2D tables, with their sampling errors
-    shell_table.update(
-        {
-            "number_density": shell_table["density"],
-            "number_density_err": np.asarray(shell_errors["density"]),
-            "mean_d": shell_table["mean_diameter"],
-            "mean_d_err": np.asarray(shell_errors["mean_diameter"]),
-        }
-    )
-    tables = {"homogeneity_layers": layer_table, "homogeneity_shells": shell_table}
-    return tables, results
+    overall = (n_whole, density_whole, phi_whole, d_whole)
+    return _assembled(w, margin, overall, (layers, errors), (shells, shell_errors))
 
 
 def layers_and_shells_cylinder(
@@ -301,14 +260,37 @@ def layers_and_shells_cylinder(
             )
             inner_solid, inner_volume = solid, nested.volume
 
-    def clean(values: list[float]) -> list[float | None]:
-        return [float(v) if math.isfinite(v) else None for v in values]
-
     whole = inside_xy & (centre[:, 2] > w.zmin) & (centre[:, 2] < w.zmax)
     n_whole, density_whole, d_whole = (
         _region_stats(p3, whole, w.volume) if w.volume > 0 else (0, math.nan, math.nan)
     )
     phi_whole = solid_in(w) / w.volume if w.volume > 0 else math.nan
+    overall = (n_whole, density_whole, phi_whole, d_whole)
+    return _assembled(w, margin, overall, (layers, errors), (shells, shell_errors))
+
+
+def _clean(values: list[float]) -> list[float | None]:
+    """Return the values as JSON numbers, ``None`` for a non-finite one."""
+    return [float(v) if math.isfinite(v) else None for v in values]
+
+
+def _assembled(
+    w: Box | Cylinder,
+    margin: float,
+    overall: tuple[int, float, float, float],
+    layers: tuple[dict[str, list[float]], dict[str, list[float]]],
+    shells: tuple[dict[str, list[float]], dict[str, list[float]]],
+) -> tuple[dict[str, dict[str, FloatArray]], dict[str, Any]]:
+    """Return the tables and scalars of a window's layers and shells from columns and errors.
+
+    ``overall`` is the whole window's particle count, number density, φ and
+    mean diameter; ``layers`` and ``shells`` each their columns and their
+    sampling errors. The tables carry the columns also under the names of
+    the 2D tables.
+    """
+    n_whole, density_whole, phi_whole, d_whole = overall
+    layer_columns, errors = layers
+    shell_columns, shell_errors = shells
     results = {
         "interior_margin": margin,
         "n_interior": n_whole,
@@ -317,16 +299,17 @@ def layers_and_shells_cylinder(
         "mean_d": float(d_whole) if math.isfinite(d_whole) else None,
         "window": [float(s) for s in w.size],
         "notes": [] if w.volume > 0 else [f"no interior window: margin {margin:g}"],
-        "phi_layers": clean(layers["phi"]),
-        "density_layers": clean(layers["density"]),
-        "mean_diameter_layers": clean(layers["mean_diameter"]),
-        "phi_layers_cv": _cv(layers["phi"]),
-        "phi_shells": clean(shells["phi"]),
-        "density_shells": clean(shells["density"]),
-        "mean_diameter_shells": clean(shells["mean_diameter"]),
-        "phi_shells_cv": _cv(shells["phi"]),
+        "phi_layers": _clean(layer_columns["phi"]),
+        "density_layers": _clean(layer_columns["density"]),
+        "mean_diameter_layers": _clean(layer_columns["mean_diameter"]),
+        "phi_layers_cv": _cv(layer_columns["phi"]),
+        "phi_shells": _clean(shell_columns["phi"]),
+        "density_shells": _clean(shell_columns["density"]),
+        "mean_diameter_shells": _clean(shell_columns["mean_diameter"]),
+        "phi_shells_cv": _cv(shell_columns["phi"]),
     }
-    layer_table = {k: np.asarray(v) for k, v in layers.items()}
+    layer_table = {k: np.asarray(v) for k, v in layer_columns.items()}
+    # the columns under the names of the 2D tables, with their sampling errors
     layer_table.update(
         {
             "number_density": layer_table["density"],
@@ -336,7 +319,7 @@ def layers_and_shells_cylinder(
             "mean_d_err": np.asarray(errors["mean_diameter"]),
         }
     )
-    shell_table = {k: np.asarray(v) for k, v in shells.items()}
+    shell_table = {k: np.asarray(v) for k, v in shell_columns.items()}
     shell_table.update(
         {
             "number_density": shell_table["density"],
@@ -345,5 +328,4 @@ def layers_and_shells_cylinder(
             "mean_d_err": np.asarray(shell_errors["mean_diameter"]),
         }
     )
-    tables = {"homogeneity_layers": layer_table, "homogeneity_shells": shell_table}
-    return tables, results
+    return {"homogeneity_layers": layer_table, "homogeneity_shells": shell_table}, results
