@@ -165,6 +165,19 @@ class AvailableSurfaceConfig(BaseModel):
         ),
     )
 
+    facet_slope: float | None = Field(
+        None,
+        gt=0,
+        lt=90,
+        allow_inf_nan=False,
+        description=(
+            "Angle in degrees between the faceted front's face normals and z; default: a "
+            "cube's corner, arctan(sqrt(2)) = 54.7 degrees, whose four normals have an "
+            "isotropic second moment (spheres pack isotropic there). Polyhedra keep a "
+            "vertical lean at that angle; 65-72 degrees halve it (see "
+            "docs/how-to/deposited-or-isotropic.md). Only with front = 'faceted'."
+        ),
+    )
     wall_gap: float = Field(
         1e-3,
         gt=0,
@@ -184,6 +197,11 @@ class AvailableSurfaceConfig(BaseModel):
             raise ValueError(
                 f"facet = {self.facet} sizes the faceted front's pyramids: give "
                 "front = 'faceted' with it, or leave facet out"
+            )
+        if self.facet_slope is not None and self.front != "faceted":
+            raise ValueError(
+                f"facet_slope = {self.facet_slope} tilts the faceted front's faces: give "
+                "front = 'faceted' with it, or leave facet_slope out"
             )
         if self.front == "faceted" and self.order != "sweep":
             raise ValueError("front = 'faceted' is a front of the sweep: give order = 'sweep'")
@@ -325,7 +343,7 @@ def _insert(
         facet = 0.0
         if cfg.front == "faceted":
             facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
-        sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet)
+        sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet, cfg.facet_slope)
         if cfg.lag == "pilot":
             piloted = time.perf_counter()
             lags, info = _pilot_lags(st, shapes, radius, cfg, sweep, rng)

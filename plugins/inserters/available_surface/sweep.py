@@ -54,7 +54,10 @@ whose second moment is isotropic: each face deposits a layer whose fabric
 leans along its normal, and the four faces' fabrics average to an isotropic
 one, while the front keeps its shape and area as it rises (the sample stays
 homogeneous). The first particle still goes to the floor below the box's
-centre, the apex of a pyramid.
+centre, the apex of a pyramid. Polyhedra gather their contact normals more
+tightly about the front's normals than spheres do and keep a vertical lean
+at that slope; ``slope`` sets another angle between the faces' normals and
+``z`` (the height is then ``z cos(slope) + g sin(slope)``).
 """
 
 from __future__ import annotations
@@ -214,6 +217,10 @@ class SurfaceSweep:
     facet
         Side of the faceted front's pyramids (length units, > 0 with it): the
         floor is cut into equal squares of about this side.
+    slope
+        Angle (degrees, in (0, 90)) between the faceted front's face normals
+        and ``z``; ``None``: a cube's corner, ``arctan(sqrt(2))`` (54.7°),
+        computed as ``(z + sqrt(2) g) / sqrt(3)``.
     """
 
     def __init__(
@@ -225,6 +232,7 @@ class SurfaceSweep:
         strip: float = 0.0,
         front: str = "bottom-up",
         facet: float = 0.0,
+        slope: float | None = None,
     ) -> None:
         if closing not in CLOSINGS:
             raise ValueError(f"closing must be one of {CLOSINGS}, not {closing!r}")
@@ -237,6 +245,7 @@ class SurfaceSweep:
         span = state.hi[:2] - state.lo[:2]
         self.faceted = front == "faceted"
         self._facets = (0.0, 0.0, 1.0, 1.0)
+        self._slope: tuple[float, float] | None = None
         if self.faceted:
             if not facet > 0:
                 raise ValueError(f"a faceted front needs facet > 0, not {facet!r}")
@@ -249,7 +258,14 @@ class SurfaceSweep:
                 float(side[0]),
                 float(side[1]),
             )
-            height = (height + math.sqrt(2.0) * 0.5 * float(side.max())) / math.sqrt(3.0)
+            if slope is None:
+                height = (height + math.sqrt(2.0) * 0.5 * float(side.max())) / math.sqrt(3.0)
+            else:
+                if not 0.0 < slope < 90.0:
+                    raise ValueError(f"slope must be in (0, 90) degrees, not {slope!r}")
+                angle = math.radians(slope)
+                self._slope = (math.cos(angle), math.sin(angle))
+                height = height * self._slope[0] + 0.5 * float(side.max()) * self._slope[1]
         self.ntile = np.array(
             [
                 strip_count(float(span[0]), strip, MAX_TILES),
@@ -337,6 +353,8 @@ class SurfaceSweep:
         u = float(c[0]) - mx
         v = float(c[1]) - my
         g = max(abs(u - sx * round(u / sx)), abs(v - sy * round(v / sy)))
+        if self._slope is not None:
+            return self.z0 + (float(c[2]) - self.z0) * self._slope[0] + g * self._slope[1]
         return self.z0 + (float(c[2]) - self.z0 + math.sqrt(2.0) * g) / math.sqrt(3.0)
 
     def _bin_of(self, z: float) -> int:

@@ -540,3 +540,40 @@ def test_the_faceted_front_and_its_facet_are_checked_by_the_config() -> None:
         regopack.pack(faceted_scene(front="bottom-up", facet=5.0), verify=False)
     with pytest.raises(ConfigError, match=r"front = 'faceted' is a front of the sweep"):
         regopack.pack(faceted_scene(order="paper"), verify=False)
+
+
+def test_a_steeper_facet_slope_tilts_the_faces(monkeypatch: pytest.MonkeyPatch) -> None:
+    """``facet_slope`` sets the angle of the faces' normals from z: ``z cos + g sin``."""
+    seen: list[sweep_module.SurfaceSweep] = []
+    run = sweep_module.SurfaceSweep.run
+
+    def keep(self: sweep_module.SurfaceSweep, *args: Any, **kwargs: Any) -> None:
+        seen.append(self)
+        run(self, *args, **kwargs)
+
+    monkeypatch.setattr(sweep_module.SurfaceSweep, "run", keep)
+    packing = _pack(faceted_scene(count=60, facet=7.0, facet_slope=68.0))
+    assert regopack.verify(packing).ok
+    sweep = seen[-1]
+    z0, a = -8.0, np.radians(68.0)
+    for point, level in (
+        ((0.0, 0.0, z0 + 2.0), z0 + 2.0 * np.cos(a)),
+        ((-1.0, -2.5, z0 + 1.0), z0 + np.cos(a) + 2.5 * np.sin(a)),
+    ):
+        assert sweep._level(np.array(point)) == pytest.approx(level, abs=1e-12)
+    # the bins reach the highest level: the box's top above an edge of a square
+    assert sweep.nbins * sweep.delta >= 16.0 * np.cos(a) + 4.0 * np.sin(a)
+
+
+@pytest.mark.parametrize(
+    ("insertion", "words"),
+    [
+        ({"facet_slope": 60.0, "front": "bottom-up", "facet": 0.0}, "facet_slope = 60.0 tilts"),
+        ({"facet_slope": 90.0}, "facet_slope"),
+        ({"facet_slope": 0.0}, "facet_slope"),
+    ],
+)
+def test_a_facet_slope_is_checked_by_the_config(insertion: dict[str, Any], words: str) -> None:
+    with pytest.raises(ConfigError, match=words) as caught:
+        regopack.pack(faceted_scene(**insertion), verify=False)
+    assert "\n" not in str(caught.value)
