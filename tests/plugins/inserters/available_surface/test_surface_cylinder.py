@@ -290,3 +290,18 @@ def test_a_sphere_wider_than_the_prism_is_refused_though_it_fits_the_cylinder(or
     assert len(packing.placed_in_order()) == 12
     check_cylinder(packing, 1e-3)
     assert _facet_clearance(packing, 1e-3).min() >= -1e-9
+
+
+@pytest.mark.parametrize(
+    ("value", "words"),
+    [(0.0, "greater than 0"), (2.0, "less than or equal to 1"), ("abc", "valid number")],
+)
+def test_a_bad_wall_gap_is_refused_in_one_line_naming_the_field(value: object, words: str) -> None:
+    from pathlib import Path
+
+    import regopack
+
+    example = Path(__file__).resolve().parents[4] / "docs" / "examples" / "cylinder.toml"
+    with pytest.raises(ConfigError, match=words) as caught:
+        regopack.scene(example, **{"insertion.wall_gap": value})
+    assert "insertion.wall_gap" in str(caught.value) and "\n" not in str(caught.value)
