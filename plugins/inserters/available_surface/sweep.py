@@ -62,7 +62,9 @@ at that slope; ``slope`` sets another angle between the faces' normals and
 
 from __future__ import annotations
 
+import heapq
 import math
+from bisect import bisect_right, insort
 from collections import deque
 from collections.abc import Callable
 
@@ -158,7 +160,8 @@ class Zone:
     values, leaf ``leaves + p`` for ``members[p]``).
     """
 
-    def __init__(self) -> None:
+    def __init__(self, index: int = 0) -> None:
+        self.index = index  # the column's position among the sweep's columns
         self.bins: dict[int, list[int]] = {}  # filled bins only
         self.lo = self.hi = 0
         self.full = self.closed = self.seeded = False
@@ -284,7 +287,13 @@ class SurfaceSweep:
         if not self.delta > 0:
             self.delta = 1.0
         self.nbins = max(1, math.ceil(height / self.delta)) + 1
-        self.zones = [Zone() for _ in range(int(self.ntile.prod()))]
+        self.zones = [Zone(k) for k in range(int(self.ntile.prod()))]
+        # the open columns by zone top (entries (hi, column), pushed when a top moves; an
+        # entry whose column has closed or moved on is dropped when it comes up), and the
+        # open full columns in index order: the column choice does not list every column
+        self._tops: list[tuple[int, int]] = []
+        self._full_open: list[int] = []
+        self._any_full = False  # some column's zone has reached the box's top
         self._tiles = (
             [float(v) for v in state.lo[:2]],
             [float(v) for v in self.twidth],
@@ -391,6 +400,7 @@ class SurfaceSweep:
             z.seeded = True
             z.hi = b
             z.lo = max(0, b - self.nzone + 1)
+            self._moved(z)
             for bb, ks in z.bins.items():  # candidates filed before it join the zone
                 if z.lo <= bb <= z.hi:
                     for kk in ks:
@@ -411,7 +421,7 @@ class SurfaceSweep:
         """Retire zone ``z``'s lowest bin; close the column when no bin is left."""
         self._retire_lowest(z)
         if z.lo > z.hi:
-            z.closed = True
+            self._close(z)
 
     def _raise(self, z: Zone) -> bool:
         """Raise zone ``z`` by one bin; False when its top is the box's top already."""
@@ -419,6 +429,7 @@ class SurfaceSweep:
             return False
         z.hi += 1
         z.raises += 1
+        self._moved(z)
         for k in z.bins.get(z.hi, ()):
             if self.flag[k] == FROZEN:
                 self._flag(k, ACTIVE)
@@ -437,27 +448,59 @@ class SurfaceSweep:
         z.lo = lo0
         z.hi = hi0
         z.raises -= raises
+        self._moved(z)
+
+    def _moved(self, z: Zone) -> None:
+        """Record zone ``z``'s top for the column choice (after it was seeded or moved)."""
+        heapq.heappush(self._tops, (z.hi, z.index))
+
+    def _close(self, z: Zone) -> None:
+        """Close zone ``z``'s column: no particle is offered to it any more."""
+        z.closed = True
+        if z.full:
+            at = bisect_right(self._full_open, z.index) - 1
+            if at >= 0 and self._full_open[at] == z.index:
+                del self._full_open[at]
+
+    def _set_full(self, z: Zone) -> None:
+        """Mark zone ``z`` at the box's top: its column takes turns with the other full ones."""
+        z.full = True
+        self._any_full = True
+        insort(self._full_open, z.index)
 
     def _choose(self, tried: set[int]) -> int:
         """Return the column to offer the particle to next; -1 when no open one is left.
 
         The open column whose zone top is lowest, the first such one, among
         those not yet tried; among full columns the turn passes on after the
-        current one, so that they close together.
+        current one, so that they close together. The tops come from a heap
+        and the full columns from a sorted list: the cost does not grow with
+        the number of columns.
         """
+        tops = self._tops
+        zones = self.zones
         best = -1
-        for k, z in enumerate(self.zones):
-            if z.seeded and not z.closed and k not in tried:
-                if best < 0 or z.hi < self.zones[best].hi:
-                    best = k
-        if best >= 0 and len(self.zones) > 1 and self.zones[best].full and self.cur >= 0:
-            m = len(self.zones)
-            for d in range(1, m + 1):
-                k = (self.cur + d) % m
-                z = self.zones[k]
-                if z.seeded and not z.closed and k not in tried and z.full:
-                    if z.hi == self.zones[best].hi:
-                        return k
+        kept: list[tuple[int, int]] = []
+        while tops:
+            hi, k = tops[0]
+            z = zones[k]
+            if z.hi != hi or z.closed or not z.seeded:
+                heapq.heappop(tops)  # an old top, or a closed column
+                continue
+            if k not in tried:
+                best = k
+                break
+            kept.append(heapq.heappop(tops))
+        for entry in kept:
+            heapq.heappush(tops, entry)
+        if best >= 0 and len(zones) > 1 and zones[best].full and self.cur >= 0:
+            full = self._full_open
+            start = bisect_right(full, self.cur)
+            top = zones[best].hi
+            for d in range(len(full)):
+                k = full[(start + d) % len(full)]
+                if k not in tried and zones[k].hi == top:
+                    return k
         return best
 
     # ------------------------------------------------------------------ lags
@@ -582,7 +625,7 @@ class SurfaceSweep:
                 if self._raise(z):
                     raises += 1
                     continue
-                z.full = True
+                self._set_full(z)
                 z.pace = max(1, z.offered // max(1, z.raises))
             if raises > 0:
                 # rising did not help: the bins it retired reopen, those it opened
@@ -607,7 +650,7 @@ class SurfaceSweep:
             self._offer(i, rng, queued, prefer)
             return
         c = int(self.size_class[i])
-        closing = any(z.full for z in self.zones)
+        closing = self._any_full
         if closing and held_back(self.class_offered, self.class_placed, c):
             self.class_offered[c] += 1
             self.status[i] = STATUS_HELD
@@ -630,6 +673,7 @@ class SurfaceSweep:
                     z = self.zones[self.cur]
                     z.seeded = True
                     z.hi = self._bin_of(self._level(first))
+                    self._moved(z)
                     self._register(st.insert(i, first))
                     self.status[i] = STATUS_PLACED
                     return
@@ -667,7 +711,7 @@ class SurfaceSweep:
             if x is not None:
                 break
             if was_full and self.closing == "tail" and not queued:
-                z.closed = True  # the first refusal under the top closes the column
+                self._close(z)  # the first refusal under the top closes the column
             if not fits:
                 break  # larger than the box
             # a particle one column refuses goes on to the other open columns
