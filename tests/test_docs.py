@@ -24,7 +24,7 @@ from regopack.cli.commands import build_parser
 from regopack.registry import hookspecs
 from regopack.registry.manager import default_registry
 from regopack.registry.plugin_types import KINDS
-from regopack.scenes.model import Domain, Outputs, Phase, PluginRef, Scene
+from regopack.scenes.model import Domain, Outputs, Phase, PluginRef, Scene, Tiles
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
@@ -38,6 +38,7 @@ CORE_MODELS: dict[type[BaseModel], str] = {
     PluginRef: "Plugin sections",
     Phase: "`[[phases]]`",
     Outputs: "`[outputs]`",
+    Tiles: "`[tiles]`",
 }
 """Core scene models and a text that the heading of their section contains."""
 

@@ -32,8 +32,8 @@ LAYERS: dict[str, int] = {
             "analysis exports",
             # 6 the run pipeline
             "run",
-            # 7 the Python API, experiments, helpers for plugin authors
-            "api experiments testing",
+            # 7 the Python API, experiments, tiled packings, helpers for plugin authors
+            "api experiments testing tiling",
             # 8 the command line
             "cli __main__",
         ]

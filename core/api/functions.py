@@ -186,6 +186,9 @@ def pack_and_summarise(
     verify: bool | None = None,
     figures: bool = True,
     registry: Registry | None = None,
+    workers: int | None = None,
+    threads_per_worker: int | None = None,
+    client: Any = None,
     **overrides: Any,
 ) -> RunOutcome:
     """Pack a scene and summarise the run, as ``regopack run`` does.
@@ -212,13 +215,24 @@ def pack_and_summarise(
             refuse_inside(Path(source), folder, "scene file")
         check_replaceable(folder, RUN_FOLDER)
     check_runnable(resolved)
-    with _progress(progress, f"packing {resolved.name}") as callback:
+    from regopack.tiling.executors import InProcess, executor_for
+    from regopack.tiling.run import check_tiled, packer_for
+
+    tiled = resolved.scene.tiles is not None
+    if tiled:
+        check_tiled(resolved)
+    with (
+        executor_for(tiled, workers, threads_per_worker, client) as executor,
+        _progress(progress, f"packing {resolved.name}") as callback,
+    ):
+        packer = packer_for(executor if executor is not None else InProcess()) if tiled else None
         return run_scene(
             resolved,
             folder,
             progress=callback,
             verify=verify,
             figures=figures,
+            tiled=packer,
         )
 
 
@@ -230,6 +244,9 @@ def pack(
     progress: Progress = False,
     out: str | os.PathLike[str] | None = None,
     verify: bool | None = None,
+    workers: int | None = None,
+    threads_per_worker: int | None = None,
+    client: Any = None,
     **overrides: Any,
 ) -> Packing:
     """Pack a scene, as ``regopack run`` does (a 3D packing for a 3D scene).
@@ -251,6 +268,15 @@ def pack(
     verify
         Check the packing for overlaps (``None``: when the insertion
         settings may overlap); the outcome is in ``summary.json``.
+    workers
+        Local worker processes that pack a tiled scene's tiles (``tiles``
+        in the scene); ``None`` or 1: this process. The packing is the same.
+    threads_per_worker
+        Compiled-kernel threads of each local worker (default: its share
+        of the cores).
+    client
+        A ``distributed.Client`` (or a scheduler's address) whose cluster
+        packs a tiled scene's tiles.
     **overrides
         Scene fields to change, as for :func:`scene` (``density__eta=5``).
 
@@ -268,7 +294,15 @@ def pack(
     (40, True)
     """
     outcome = pack_and_summarise(
-        source, seed=seed, progress=progress, out=out, verify=verify, **overrides
+        source,
+        seed=seed,
+        progress=progress,
+        out=out,
+        verify=verify,
+        workers=workers,
+        threads_per_worker=threads_per_worker,
+        client=client,
+        **overrides,
     )
     return outcome.packing
 

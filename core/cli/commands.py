@@ -106,6 +106,25 @@ def build_parser() -> argparse.ArgumentParser:
         help="check the packing for overlaps and wall violations; exit 1 if violated "
         "(done anyway, without the exit status, when the insertion settings may overlap)",
     )
+    run.add_argument(
+        "--workers",
+        type=int,
+        metavar="N",
+        help="local worker processes that pack a tiled scene's tiles (default: 1, this "
+        "process); the packing is the same on any number",
+    )
+    run.add_argument(
+        "--threads-per-worker",
+        type=int,
+        metavar="T",
+        help="compiled-kernel threads of each local worker (default: its share of the cores)",
+    )
+    run.add_argument(
+        "--scheduler",
+        metavar="ADDR",
+        help="pack a tiled scene's tiles on a Dask cluster, e.g. tcp://host:8786 "
+        "(needs Dask: pip install distributed)",
+    )
     run.set_defaults(handler=_cmd_run)
 
     compile_ = sub.add_parser(
@@ -318,8 +337,20 @@ def _cmd_run(args: argparse.Namespace, out: Console, err: Console) -> int:
     out_dir = args.out if args.out is not None else default_out_dir(resolved)
     if args.scene is not None and Path(args.scene).is_file():
         refuse_inside(Path(args.scene), out_dir, "scene file")
+    from regopack.tiling.executors import executor_for
+
+    tiled = resolved.scene.tiles is not None
+    flags = ("--workers", "--threads-per-worker", "--scheduler")
+    with executor_for(tiled, args.workers, args.threads_per_worker, args.scheduler, flags=flags):
+        pass  # the options are checked before anything is drawn
     outcome = pack_and_summarise(
-        resolved, out=out_dir, progress=not args.quiet, verify=args.verify or None
+        resolved,
+        out=out_dir,
+        progress=not args.quiet,
+        verify=args.verify or None,
+        workers=args.workers,
+        threads_per_worker=args.threads_per_worker,
+        client=args.scheduler,
     )
     tried, placed = outcome.summary["tried"], outcome.summary["placed"]
     checked = outcome.summary.get("verify")

@@ -8,13 +8,7 @@ process is gone; a Dask cluster is reached through ``distributed.Client``.
 
 from __future__ import annotations
 
-import ctypes
 import json
-import os
-import signal
-import sys
-import threading
-import time
 import uuid
 from collections.abc import Iterator, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
@@ -26,7 +20,10 @@ import numpy as np
 
 from regopack.base.errors import ConfigError, RegopackError
 from regopack.base.messages import install_hint
-from regopack.base.threads import kernel_threads
+from regopack.base.worker_processes import PARENT_POLL_S as PARENT_POLL_S
+from regopack.base.worker_processes import init_worker as _init_worker
+from regopack.base.worker_processes import stop_workers as _stop_workers
+from regopack.base.worker_processes import threads_per_worker as threads_per_worker
 from regopack.experiments.grid import SCENE_JSON
 from regopack.packing.core import Packing
 from regopack.packing.voids import void_metrics
@@ -124,9 +121,23 @@ def _warm_up(resolved: ResolvedScene) -> None:
     try:
         count = resolved.scene.count
         few = WARM_COUNT if not isinstance(count, int) else min(count, WARM_COUNT)
-        run_scene(resolved.with_(count=max(1, few)), None, figures=False, verify=False)
+        run_scene(
+            resolved.with_(count=max(1, few)), None, figures=False, verify=False,
+            tiled=_tiled(resolved),
+        )  # fmt: skip
     except Exception:  # the timed run reports the same error
         pass
+
+
+def _tiled(resolved: ResolvedScene) -> Any:
+    """Return the packer of a tiled scene's tiles in this worker (``None``: no tiles)."""
+    if resolved.scene.tiles is None:
+        return None
+    from regopack.tiling.executors import InProcess
+    from regopack.tiling.run import check_tiled, packer_for
+
+    check_tiled(resolved)
+    return packer_for(InProcess())
 
 
 def _run_job(job: _Job) -> tuple[dict[str, Any] | None, str | None]:
@@ -155,91 +166,11 @@ def _run_job(job: _Job) -> tuple[dict[str, Any] | None, str | None]:
             figures=job.figures,
             summary_extras=extras,
             extra_files={SCENE_JSON: job.scene_text},
+            tiled=_tiled(resolved),
         )
     except Exception as exc:  # a failed run is recorded; the others go on
         return None, _one_line(exc)
     return outcome.summary, None
-
-
-def threads_per_worker(workers: int, cores: int | None) -> int:
-    """Compiled-kernel threads for each of ``workers`` processes sharing ``cores`` cores.
-
-    A thread that waits for a core makes the whole batch it belongs to wait, so
-    the workers share the cores instead of each starting one thread per core.
-    """
-    return max(1, (cores or 1) // max(1, workers))
-
-
-def _init_worker(workers: int = 1) -> None:
-    """Start a worker process: Ctrl-C goes to the main process, which stops the workers.
-
-    SIGTERM keeps its default action (the process ends at once); the main
-    process removes what a stopped worker left. The worker's compiled kernels
-    use its share of the cores (:func:`threads_per_worker`).
-    """
-    import numba
-
-    numba.set_num_threads(min(kernel_threads(), threads_per_worker(workers, os.cpu_count())))
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    parent = os.getppid()
-    _killed_with_parent(parent)
-    threading.Thread(target=_exit_with_parent, args=(parent,), daemon=True).start()
-
-
-PR_SET_PDEATHSIG = 1
-"""Linux ``prctl`` option: the signal a process gets when its parent ends."""
-
-
-def _killed_with_parent(parent: int) -> None:
-    """Have Linux end this worker (SIGKILL) the moment its parent ``parent`` ends.
-
-    Unlike the watchdog thread (:func:`_exit_with_parent`), this needs no
-    Python thread to run: a worker inside a compiled kernel or the compiler,
-    which hold Python's lock for long, dies too. Elsewhere, and if the call
-    fails, the watchdog alone remains.
-    """
-    if not sys.platform.startswith("linux"):
-        return
-    try:
-        libc = ctypes.CDLL(None, use_errno=True)
-        if libc.prctl(PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0) != 0:
-            return
-    except (OSError, AttributeError):
-        return
-    if os.getppid() != parent:  # the parent ended before the call
-        os._exit(1)
-
-
-PARENT_POLL_S = 0.5
-"""How often a worker process checks that the sweep that started it is still alive."""
-
-
-def _exit_with_parent(parent: int) -> None:
-    """End this worker as soon as its parent is gone (e.g. killed with SIGKILL).
-
-    A worker whose parent died is re-parented and would otherwise go on taking
-    runs; its half-written run folder stays a temporary that the next sweep
-    removes.
-    """
-    while os.getppid() == parent:
-        time.sleep(PARENT_POLL_S)
-    os._exit(1)
-
-
-def _stop_workers(pool: ProcessPoolExecutor) -> None:
-    """End the pool's worker processes now (SIGTERM), and wait until they are gone."""
-    # no public way before Python 3.14 (ProcessPoolExecutor.terminate_workers)
-    processes = list((getattr(pool, "_processes", None) or {}).values())
-    for process in processes:
-        if process.is_alive():
-            process.terminate()
-    for process in processes:
-        process.join(timeout=10)
-        if process.is_alive():
-            process.kill()
-            process.join(timeout=10)
-    pool.shutdown(wait=True, cancel_futures=True)
 
 
 def _submit_local(

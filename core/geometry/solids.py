@@ -11,6 +11,7 @@ The equivalent radius of a solid is that of the sphere of equal volume.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -139,6 +140,26 @@ class SolidBatch:
             rounding=None if self.rounding is None else self.rounding[:m],
         )
 
+    def take(self, indices: ArrayLike) -> SolidBatch:
+        """Return the solids of particles ``indices`` (in that order, repeats allowed)."""
+        idx = np.asarray(indices, dtype=np.int64).reshape(-1)
+        if idx.shape[0] and (idx.min() < 0 or idx.max() >= len(self)):
+            raise IndexError(f"particle indices must lie in [0, {len(self)})")
+        rows, offsets = _ragged_rows(self.offsets, idx)
+        faces, face_offsets = _ragged_rows(self.face_offsets, idx)
+        loops, loop_offsets = _ragged_rows(self.face_vertex_offsets, faces)
+        return SolidBatch(
+            vertices=self.vertices[rows],
+            offsets=offsets,
+            face_vertices=self.face_vertices[loops],
+            face_vertex_offsets=loop_offsets,
+            face_offsets=face_offsets,
+            normals=self.normals[faces],
+            support=self.support[faces],
+            rotation=self.rotation[idx],
+            rounding=None if self.rounding is None else self.rounding[idx],
+        )
+
     def solid(self, j: int) -> tuple[FloatArray, list[IntArray]]:
         """Vertices of particle ``j`` and its faces as loops of local vertex indices."""
         verts = self.vertices[self.offsets[j] : self.offsets[j + 1]]
@@ -193,6 +214,44 @@ class SolidBatch:
         face_owner = np.repeat(np.arange(n), faces)
         out = out + np.bincount(face_owner, weights=cone, minlength=n)
         return np.asarray(out, dtype=np.float64)
+
+
+def _ragged_rows(offsets: IntArray, idx: IntArray) -> tuple[IntArray, IntArray]:
+    """Rows of the segments ``idx`` of a ragged array (``offsets``), and their new offsets."""
+    starts = offsets[idx]
+    counts = offsets[idx + 1] - starts
+    new = np.zeros(idx.shape[0] + 1, dtype=np.int64)
+    np.cumsum(counts, out=new[1:])
+    rows = np.arange(int(new[-1]), dtype=np.int64) + np.repeat(starts - new[:-1], counts)
+    return rows, new
+
+
+def join_solids(batches: Sequence[SolidBatch]) -> SolidBatch:
+    """Return the solids of ``batches`` one after the other (rounded when any batch is)."""
+    if not batches:
+        return SolidBatch.of_spheres(np.zeros(0)).take(np.zeros(0, dtype=np.int64))
+
+    def shifted(name: str) -> IntArray:
+        parts = [np.zeros(1, dtype=np.int64)]
+        base = 0
+        for b in batches:
+            off = getattr(b, name)
+            parts.append(off[1:] - off[0] + base)
+            base += int(off[-1] - off[0])
+        return np.concatenate(parts)
+
+    rounded = any(b.rounding is not None for b in batches)
+    return SolidBatch(
+        vertices=np.concatenate([b.vertices for b in batches]),
+        offsets=shifted("offsets"),
+        face_vertices=np.concatenate([b.face_vertices for b in batches]).astype(np.int64),
+        face_vertex_offsets=shifted("face_vertex_offsets"),
+        face_offsets=shifted("face_offsets"),
+        normals=np.concatenate([b.normals for b in batches]),
+        support=np.concatenate([b.support for b in batches]),
+        rotation=np.concatenate([b.rotation for b in batches]),
+        rounding=np.concatenate([b.rounding_radius for b in batches]) if rounded else None,
+    )
 
 
 def concat_solids(parts: list[tuple[IntArray, SolidBatch]], n: int) -> SolidBatch:

@@ -201,12 +201,42 @@ class InsertionResult:
         return self.insertion_index >= 0
 
 
+@dataclass(frozen=True)
+class TileTask:
+    """What a tile of a tiled packing packs against (see :mod:`regopack.tiling`).
+
+    Attributes
+    ----------
+    lo, hi
+        The centre window: every placed particle's reference point lies in
+        ``[lo, hi]`` (``dimension`` values each; the vertical bounds are the
+        domain's). In a periodic domain the window may be given in any image.
+    obstacles
+        The particles of the tiles packed before this one that the tile's
+        particles can reach, already placed: solids (or outlines) relative
+        to their reference points, as a population's shapes are.
+    obstacle_centre
+        ``(m, dimension)`` reference points of the obstacles.
+    obstacle_radius
+        ``(m,)`` equivalent radii of the obstacles.
+    """
+
+    lo: FloatArray
+    hi: FloatArray
+    obstacles: SolidBatch | ShapeBatch
+    obstacle_centre: FloatArray
+    obstacle_radius: FloatArray
+
+
 class InsertionStrategy(ABC):
     """Algorithm that places a population inside a domain without overlaps."""
 
     steered_by_density: ClassVar[bool] = True
     """Whether the density controller changes what :meth:`pack` places (a
     density target needs it; a strategy that ignores the controller says False)."""
+
+    packs_tiles: ClassVar[bool] = False
+    """Whether :meth:`pack_tile` packs one tile of a tiled packing (``tiles`` in a scene)."""
 
     @abstractmethod
     def pack(
@@ -218,6 +248,24 @@ class InsertionStrategy(ABC):
         progress: ProgressCallback | None = None,
     ) -> InsertionResult:
         """Place the particles in population order; return where each went."""
+
+    def pack_tile(
+        self,
+        population: Population,
+        domain: Domain,
+        controller: DensityController,
+        rng: np.random.Generator,
+        tile: TileTask,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Place ``population`` with every centre in ``tile``'s window, against its obstacles.
+
+        The obstacles stay where they are and are neither counted nor
+        returned; the result holds the population's particles only. A
+        strategy that sets :attr:`packs_tiles` implements it; the default
+        refuses.
+        """
+        raise NotImplementedError(f"{type(self).__name__} does not pack tiles")
 
     def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
         """Say, before anything is drawn, why this strategy cannot pack a scene.

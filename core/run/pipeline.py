@@ -73,6 +73,12 @@ from regopack.scenes.analysis_plan import plan_analyses, run_analyses
 from regopack.scenes.model import ANALYSIS_FOLDER, ResolvedPlugin, ResolvedScene, output_files
 from regopack.verification.summary import verify_summary
 
+TiledPacker = Callable[
+    [ResolvedScene, DensityController, ProgressCallback | None],
+    tuple[InsertionResult, Population],
+]
+"""Packs a scene with tiles: the insertion's result and the particles drawn (tile by tile)."""
+
 RUN_FOLDER = "run"
 """Kind of the folder a run writes (in its :data:`regopack.base.outdir.MARKER` file)."""
 
@@ -464,7 +470,9 @@ def draw_sizes_and_minerals(
     return radii, minerals
 
 
-def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Population:
+def draw_population(
+    scene: ResolvedScene, rng: np.random.Generator, count: int | None = None
+) -> Population:
     """Draw every particle of ``scene`` up front, in insertion order.
 
     The random draws happen in exactly this order, in both dimensions: the
@@ -472,8 +480,12 @@ def draw_population(scene: ResolvedScene, rng: np.random.Generator) -> Populatio
     phases with the normalised fractions); then, for each phase in scene
     order, the shapes of that phase's particles
     (``shape.generate(radii[idx], rng)``): outlines in 2D, solids in 3D.
+    ``count`` draws that many instead of the scene's count (a tile's share;
+    the scene is checked all the same).
     """
     n = check_scene(scene)
+    if count is not None:
+        n = count
     radii, minerals = draw_sizes_and_minerals(scene, rng, n)
     solid = scene.scene.domain.dimension == 3
     interface = SolidGenerator if solid else ShapeGenerator
@@ -530,6 +542,7 @@ def run_scene(
     summary_extras: Callable[[Any], Mapping[str, Any]] | None = None,
     verify: bool | None = None,
     extra_files: Mapping[str, str] | None = None,
+    tiled: TiledPacker | None = None,
 ) -> RunOutcome:
     """Draw, insert and summarise ``resolved``; write the files into ``out_dir``.
 
@@ -558,6 +571,10 @@ def run_scene(
         More text files for the run folder, by plain file name (a sweep's
         ``scene.json``); a name that is also one of the run's outputs is
         refused.
+    tiled
+        Packs a scene with ``tiles`` (:func:`regopack.tiling.run.packer_for`,
+        which chooses where the tiles are packed); a tiled scene without it
+        is refused.
 
     Returns
     -------
@@ -594,10 +611,15 @@ def run_scene(
     if out_dir is not None:
         check_replaceable(out_dir, RUN_FOLDER)
         _check_extra_files(resolved, extra_files or {})
+    if resolved.scene.tiles is not None and tiled is None:
+        raise ConfigError(
+            f"scene {resolved.name!r} has tiles: pack it with regopack.pack or 'regopack run'"
+        )
     with compile_timer() as compiling:
         return _run(
-            resolved, out_dir, progress, figures, summary_extras, verify, extra_files, compiling
-        )
+            resolved, out_dir, progress, figures, summary_extras, verify, extra_files, compiling,
+            tiled,
+        )  # fmt: skip
 
 
 def _run(
@@ -609,6 +631,7 @@ def _run(
     verify: bool | None,
     extra_files: Mapping[str, str] | None,
     compiling: CompileTime,
+    tiled: TiledPacker | None = None,
 ) -> RunOutcome:
     start = time.perf_counter()
     inserter: InsertionStrategy = _build(resolved.insertion, InsertionStrategy, "insertion")
@@ -619,10 +642,14 @@ def _run(
     scene_dict = resolved.to_dict()
 
     def pack_with(ctl: DensityController) -> tuple[InsertionResult, Packing]:
-        rng = np.random.default_rng(resolved.seed)
-        population = draw_population(resolved, rng)
         try:
-            result = inserter.pack(population, domain, ctl, rng, progress)
+            if resolved.scene.tiles is not None:
+                assert tiled is not None
+                result, population = tiled(resolved, ctl, progress)
+            else:
+                rng = np.random.default_rng(resolved.seed)
+                population = draw_population(resolved, rng)
+                result = inserter.pack(population, domain, ctl, rng, progress)
         except LimitError as err:  # a size the inserter derived from the scene, refused
             raise located_limit(resolved, err) from None
         packing = Packing.from_parts(

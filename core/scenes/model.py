@@ -382,6 +382,46 @@ class Outputs(BaseModel):
         return name
 
 
+class Tiles(BaseModel):
+    """One packing built in tiles over the floor (:mod:`regopack.tiling`)."""
+
+    model_config = STRICT
+
+    side: float | list[float] = Field(
+        description=(
+            "Side of the tiles (length units) along the floor: x in the plane, x and y in "
+            "space; a list gives one side per floor axis ([x, y]; a side as long as the "
+            "box gives one tile along that axis, strips). Each tile draws its share of the "
+            "particles from its own stream and is packed against the tiles before it; the "
+            "packing depends on the tiles, not on the workers that pack them. At least six "
+            "largest circumradii."
+        ),
+    )
+
+    @field_validator("side")
+    @classmethod
+    def _check_side(cls, side: float | list[float]) -> float | list[float]:
+        values = side if isinstance(side, list) else [side]
+        if not 1 <= len(values) <= 2:
+            raise ValueError(f"give one side, or one per floor axis ([x, y]), not {len(values)}")
+        for v in values:
+            if not (math.isfinite(v) and v > 0):
+                raise ValueError(f"a side must be a positive finite length, not {v!r}")
+        return side
+
+    def sides(self, floor_axes: int) -> list[float]:
+        """Return the side along each of ``floor_axes`` floor axes."""
+        if isinstance(self.side, list):
+            return list(self.side)
+        return [float(self.side)] * floor_axes
+
+    def label(self) -> str:
+        """``tiles.side = ...`` as the scene gives it, for messages."""
+        if isinstance(self.side, list):
+            return "tiles.side = [" + ", ".join(f"{v:g}" for v in self.side) + "]"
+        return f"tiles.side = {self.side:g}"
+
+
 class Scene(BaseModel):
     """A packing scene: domain, particle population, insertion and density control.
 
@@ -419,6 +459,13 @@ class Scene(BaseModel):
     insertion: PluginRef = Field(description="Insertion strategy.")
     density: PluginRef = Field(description="Density controller used by the insertion.")
     outputs: Outputs = Field(default_factory=Outputs, description="Output file names.")
+    tiles: Tiles | None = Field(
+        None,
+        description=(
+            "Build the packing in tiles that workers pack side by side "
+            "(regopack run --workers); absent: one packing in one process."
+        ),
+    )
 
     _source: str | None = PrivateAttr(default=None)
     _overridden: dict[str, str] = PrivateAttr(default_factory=dict)
@@ -826,6 +873,7 @@ class ResolvedScene:
                 # only when off: the scenes stored in packings stay as they were
                 **({} if s.outputs.fabric else {"fabric": False}),
             },
+            **({} if s.tiles is None else {"tiles": {"side": s.tiles.side}}),
         }
 
     def to_toml(self) -> str:

@@ -156,7 +156,7 @@ def test_plugin_branch_keeps_ranges():
 def test_nested_definitions_of_a_plugin_are_renamed(schema):
     # every definition of a plugin model lives under its own prefix
     for name in schema["$defs"]:
-        assert name in {"Domain", "Phase", "Outputs"} or name.split(".")[0] in KINDS, name
+        assert name in {"Domain", "Phase", "Outputs", "Tiles"} or name.split(".")[0] in KINDS, name
 
 
 def test_builtin_scenes_fit_the_structure(schema, registry):

@@ -48,7 +48,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Iterable, Sequence
-from typing import TYPE_CHECKING, Literal
+from typing import TYPE_CHECKING, ClassVar, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -71,6 +71,7 @@ from regopack.registry.interfaces import (
     InsertionResult,
     InsertionStrategy,
     ProgressCallback,
+    TileTask,
 )
 from regopack.registry.plugin_types import InserterSpec
 
@@ -242,19 +243,14 @@ class AvailableSurface(InsertionStrategy):
             )
         return None
 
-    def pack(
-        self,
-        population: Population,
-        domain: Domain,
-        controller: DensityController,
-        rng: np.random.Generator,
-        progress: ProgressCallback | None = None,
-    ) -> InsertionResult:
-        """Insert the solids one by one; see the module docstring."""
-        from regopack.geometry.solids import SolidBatch
-        from regopack.plugins.inserters.available_surface.state import SurfaceState
+    packs_tiles: ClassVar[bool] = True
 
-        started = time.perf_counter()
+    def _box(
+        self, population: Population, domain: Domain, controller: DensityController
+    ) -> tuple[SolidBatch, FloatArray, FloatArray, FloatArray, FloatArray, float]:
+        """Check what this inserter packs; return shapes, radii, box corners, wall and eta."""
+        from regopack.geometry.solids import SolidBatch
+
         shapes = population.shapes
         if not isinstance(domain, Box | Cylinder) or not isinstance(shapes, SolidBatch):
             raise ConfigError("insertion 'available-surface' packs solids in a 3D box or cylinder")
@@ -272,23 +268,122 @@ class AvailableSurface(InsertionStrategy):
                 "insertion 'available-surface' needs the built-in 'eta' density controller "
                 "(density.kind = 'eta')"
             )
-        cfg = self.config
-        n = len(population)
         radius = np.asarray(population.radius, dtype=np.float64)
         bounds = domain.bounds()
         lo = np.ascontiguousarray(bounds[0::2])
         hi = np.ascontiguousarray(bounds[1::2])
         wall = NO_WALL
-        if isinstance(domain, Cylinder) and n:
+        if isinstance(domain, Cylinder) and len(population):
             d_min = 2.0 * float(np.min(radius))
-            wall = prism_wall(domain.cx, domain.cy, domain.radius, d_min, cfg.wall_gap)
+            wall = prism_wall(domain.cx, domain.cy, domain.radius, d_min, self.config.wall_gap)
+        return shapes, radius, lo, hi, wall, float(controller.eta)
+
+    def pack(
+        self,
+        population: Population,
+        domain: Domain,
+        controller: DensityController,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Insert the solids one by one; see the module docstring."""
+        from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+        started = time.perf_counter()
+        shapes, radius, lo, hi, wall, eta = self._box(population, domain, controller)
+        n = len(population)
         st = SurfaceState(
-            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=controller.eta,
+            shapes, radius, lo, hi, periodic=bool(domain.periodic), t=self.config.t, eta=eta,
             wall=wall,
         )  # fmt: skip
+        stats = self._run(st, shapes, radius, n, 0, rng, progress)
+        stats["insert_time_s"] = time.perf_counter() - started
+        return InsertionResult(centre=st.centre, insertion_index=st.index, stats=stats)
+
+    def pack_tile(
+        self,
+        population: Population,
+        domain: Domain,
+        controller: DensityController,
+        rng: np.random.Generator,
+        tile: TileTask,
+        progress: ProgressCallback | None = None,
+    ) -> InsertionResult:
+        """Pack one tile in the sweep order: centres in its window, against its obstacles.
+
+        The obstacles are placed first, lowest first, and filed as the sweep's
+        candidates; the tile's particles are then offered as in :meth:`pack`,
+        with the window bounding every centre (and the sweep's columns cut
+        over the window). In a periodic box the box is taken about the
+        window (the same box, another image), so that the obstacles' images
+        next to the window are the ones analysed.
+        """
+        from regopack.geometry.solids import join_solids
+        from regopack.plugins.inserters.available_surface.state import SurfaceState
+
+        started = time.perf_counter()
+        cfg = self.config
+        if cfg.order != "sweep":
+            raise ConfigError(
+                "tiles: insertion 'available-surface' packs tiles in the sweep order; "
+                "give insertion.order = 'sweep'"
+            )
+        if cfg.lag == "pilot":
+            raise ConfigError(
+                "tiles: insertion.lag = 'pilot' is not available in tiles; give lag = 'none'"
+            )
+        own, radius, lo, hi, wall, eta = self._box(population, domain, controller)
+        obstacles = tile.obstacles
+        if not isinstance(obstacles, type(own)):
+            raise ConfigError("tiles: the obstacles of a 3D tile must be solids")
+        m = len(obstacles)
+        n_own = len(population)
+        w_lo = np.array(tile.lo, dtype=np.float64)
+        w_hi = np.array(tile.hi, dtype=np.float64)
+        if domain.periodic:
+            # the box about the window: its periodic images sit next to the window
+            period = hi - lo
+            bounded = np.isfinite(w_lo) & np.isfinite(w_hi)
+            mid = np.where(
+                bounded, 0.5 * (np.where(bounded, w_lo, 0) + np.where(bounded, w_hi, 0)), 0
+            )
+            lo = np.where(bounded, mid - 0.5 * period, lo)
+            hi = lo + period
+        order = np.lexsort((np.arange(m), tile.obstacle_centre[:, 2])) if m else np.zeros(0, int)
+        shapes = join_solids([obstacles.take(order), own])
+        radius_all = np.concatenate([np.asarray(tile.obstacle_radius, float)[order], radius])
+        st = SurfaceState(
+            shapes, radius_all, lo, hi, periodic=bool(domain.periodic), t=cfg.t, eta=eta,
+            wall=wall, window=(w_lo, w_hi),
+        )  # fmt: skip
+        centres = np.asarray(tile.obstacle_centre, dtype=np.float64)[order]
+        for j in range(m):
+            st.insert(j, centres[j])
+        stats = self._run(st, shapes, radius_all, st.n, m, rng, progress, floor=(w_lo, w_hi))
+        centre = st.centre[m:].copy()
+        index = st.index[m:].copy()
+        placed = index >= 0
+        index[placed] -= m
+        stats["insert_time_s"] = time.perf_counter() - started
+        stats["obstacles"] = float(m)
+        assert centre.shape[0] == n_own
+        return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+    def _run(
+        self,
+        st: SurfaceState,
+        shapes: SolidBatch,
+        radius: FloatArray,
+        n: int,
+        first: int,
+        rng: np.random.Generator,
+        progress: ProgressCallback | None,
+        floor: tuple[FloatArray, FloatArray] | None = None,
+    ) -> dict[str, float]:
+        """Insert particles ``first..n - 1`` of ``st`` with a partner thread; return the stats."""
         partner = st.start_partner()
         try:
-            stats = _insert(st, shapes, radius, cfg, n, rng, progress)
+            stats = _insert(st, shapes, radius, self.config, n, rng, progress, first, floor)
         finally:
             failure = st.stop_partner()
         # an error that ended the partner is raised once the insertion is over, unless
@@ -296,8 +391,8 @@ class AvailableSurface(InsertionStrategy):
         if failure is not None:
             raise failure
         if progress is not None:
-            progress(n, st.count, n)
-        stats = {
+            progress(n - first, st.count - first, n - first)
+        return {
             "candidate_analyses": float(st.analyses),
             "empty_analyses": float(st.empty),
             **(
@@ -311,9 +406,7 @@ class AvailableSurface(InsertionStrategy):
             ),
             **stats,
             "partner": float(partner),
-            "insert_time_s": time.perf_counter() - started,
         }
-        return InsertionResult(centre=st.centre, insertion_index=st.index, stats=stats)
 
 
 def _insert(
@@ -324,8 +417,15 @@ def _insert(
     n: int,
     rng: np.random.Generator,
     progress: ProgressCallback | None,
+    first: int = 0,
+    floor: tuple[FloatArray, FloatArray] | None = None,
 ) -> dict[str, float]:
-    """Insert the population in the configured order; return the order's own statistics."""
+    """Insert particles ``first..n - 1`` in the configured order; return the order's statistics.
+
+    The particles before ``first`` are placed already (a tile's obstacles:
+    the sweep takes them as candidates); ``floor`` bounds the sweep's
+    columns (a tile's window).
+    """
     from regopack.plugins.inserters.available_surface.sweep import (
         STATUS_HELD,
         STATUS_REFUSED,
@@ -343,16 +443,19 @@ def _insert(
         facet = 0.0
         if cfg.front == "faceted":
             facet = cfg.facet or FACET_PER_DIAMETER * 2.0 * float(np.max(radius, initial=0.5))
-        sweep = SurfaceSweep(st, cfg.t, zone, cfg.closing, strip, cfg.front, facet, cfg.facet_slope)
+        sweep = SurfaceSweep(
+            st, cfg.t, zone, cfg.closing, strip, cfg.front, facet, cfg.facet_slope, floor
+        )
+        sweep.seed_with(first)
         if cfg.lag == "pilot":
             piloted = time.perf_counter()
             lags, info = _pilot_lags(st, shapes, radius, cfg, sweep, rng)
             sweep.set_lags(lags)
             stats.update({k: float(v) for k, v in info.items()})
             stats["pilot_time_s"] = time.perf_counter() - piloted
-        sweep.run(rng, progress, PROGRESS_EVERY)
-        refused = int(np.count_nonzero(sweep.status[:n] == STATUS_REFUSED))
-        held = int(np.count_nonzero(sweep.status[:n] == STATUS_HELD))
+        sweep.run(rng, progress, PROGRESS_EVERY, first)
+        refused = int(np.count_nonzero(sweep.status[first:n] == STATUS_REFUSED))
+        held = int(np.count_nonzero(sweep.status[first:n] == STATUS_HELD))
         stats = {
             **stats,
             "zone": float(sweep.zone),
@@ -360,7 +463,7 @@ def _insert(
             "strips": float(len(sweep.zones)),
             "refused": float(refused),
             **({"held": float(held)} if cfg.closing == "even" else {}),
-            "not_offered": float(n - st.count - refused - held),
+            "not_offered": float(n - st.count - refused - held),  # obstacles: first = placed
         }
     else:
         _pack_paper(st, rng, progress)

@@ -99,6 +99,10 @@ class SurfaceState:
         A cylinder's side wall as its inscribed prism
         (:func:`.prism_wall.prism_wall`); ``lo``/``hi`` are then the
         cylinder's bounding box. Empty: the box's walls alone.
+    window
+        Bounds ``(lo, hi)`` that every centre must keep besides the walls
+        (a tile's centre window; infinite values bound nothing). ``None``:
+        none.
     """
 
     def __init__(
@@ -111,9 +115,11 @@ class SurfaceState:
         t: float = 0.999,
         eta: float = 0.0,
         wall: FloatArray = NO_WALL,
+        window: tuple[FloatArray, FloatArray] | None = None,
     ):
         n = len(shapes)
         self.wall = wall
+        self.window = window
         self.n = n
         self.period = (hi - lo) if periodic else None
         self.t = t
@@ -206,6 +212,9 @@ class SurfaceState:
         self.cache.fill[0] = 0
         if self.period is not None:
             self.adm_lo, self.adm_hi = self._unbounded
+            if self.window is not None:
+                self.adm_lo = np.maximum(self.adm_lo, self.window[0])
+                self.adm_hi = np.minimum(self.adm_hi, self.window[1])
             self._bounds = Bounds(
                 self._period, self.lo, self.hi, self.adm_lo, self.adm_hi, self.wall
             )
@@ -218,6 +227,9 @@ class SurfaceState:
             q = self.polys[i]
             self.adm_lo = self.lo - q.vertices.min(axis=0)
             self.adm_hi = self.hi - q.vertices.max(axis=0)
+        if self.window is not None:
+            self.adm_lo = np.maximum(self.adm_lo, self.window[0])
+            self.adm_hi = np.minimum(self.adm_hi, self.window[1])
         self._bounds = Bounds(self._period, self.lo, self.hi, self.adm_lo, self.adm_hi, self.wall)
         lo, hi = self.adm_lo, self.adm_hi
         return not (lo[0] > hi[0] or lo[1] > hi[1] or lo[2] > hi[2])

@@ -224,6 +224,9 @@ class SurfaceSweep:
         Angle (degrees, in (0, 90)) between the faceted front's face normals
         and ``z``; ``None``: a cube's corner, ``arctan(sqrt(2))`` (54.7°),
         computed as ``(z + sqrt(2) g) / sqrt(3)``.
+    floor
+        Corners ``(lo, hi)`` of the floor the columns cover (``x`` and ``y``;
+        a tile's window); ``None``: the box's.
     """
 
     def __init__(
@@ -236,6 +239,7 @@ class SurfaceSweep:
         front: str = "bottom-up",
         facet: float = 0.0,
         slope: float | None = None,
+        floor: tuple[FloatArray, FloatArray] | None = None,
     ) -> None:
         if closing not in CLOSINGS:
             raise ValueError(f"closing must be one of {CLOSINGS}, not {closing!r}")
@@ -245,7 +249,8 @@ class SurfaceSweep:
         self.t = t
         height = float(state.hi[2] - state.lo[2])
         self.z0 = float(state.lo[2])
-        span = state.hi[:2] - state.lo[:2]
+        floor_lo, floor_hi = (state.lo[:2], state.hi[:2]) if floor is None else floor
+        span = floor_hi[:2] - floor_lo[:2]
         self.faceted = front == "faceted"
         self._facets = (0.0, 0.0, 1.0, 1.0)
         self._slope: tuple[float, float] | None = None
@@ -294,8 +299,10 @@ class SurfaceSweep:
         self._tops: list[tuple[int, int]] = []
         self._full_open: list[int] = []
         self._any_full = False  # some column's zone has reached the box's top
+        # a tile's obstacles not yet filed, per column, by bin (:meth:`seed_with`)
+        self._pending: list[deque[tuple[int, int]]] = []
         self._tiles = (
-            [float(v) for v in state.lo[:2]],
+            [float(v) for v in floor_lo[:2]],
             [float(v) for v in self.twidth],
             [int(v) for v in self.ntile],
         )
@@ -430,6 +437,7 @@ class SurfaceSweep:
         z.hi += 1
         z.raises += 1
         self._moved(z)
+        self._admit(z)
         for k in z.bins.get(z.hi, ()):
             if self.flag[k] == FROZEN:
                 self._flag(k, ACTIVE)
@@ -743,17 +751,49 @@ class SurfaceSweep:
         z = self.zones[k]
         return z.seeded and not z.closed
 
+    def seed_with(self, count: int) -> None:
+        """Take the first ``count`` placed particles as candidates as the front reaches them.
+
+        A tile's obstacles (placed before its own particles, lowest first)
+        join their column's candidates when its zone's top reaches their bin,
+        as the particles of a sweep are filed when the front has built up to
+        them: the scan meets them in the order of a sweep that had placed
+        them, not all before the tile's own. Each column's zone starts at its
+        lowest obstacle; the sweep counts as started when there is one.
+        """
+        st = self.state
+        pending: list[list[tuple[int, int]]] = [[] for _ in self.zones]
+        for k in range(count):
+            c = st.centre[st.order[k]]
+            pending[self._tile_of(c)].append((self._bin_of(self._level(c)), k))
+        self._pending = [deque(sorted(q)) for q in pending]
+        for z in self.zones:
+            q = self._pending[z.index]
+            if q:
+                low = q[0][0]
+                while q and q[0][0] == low:
+                    self._register(q.popleft()[1])
+        if count > 0:
+            self.started = True
+
+    def _admit(self, z: Zone) -> None:
+        """File the obstacles of zone ``z``'s column that its top has reached."""
+        q = self._pending[z.index] if self._pending else None
+        while q and q[0][0] <= z.hi:
+            self._register(q.popleft()[1])
+
     def run(
         self,
         rng: np.random.Generator,
         progress: Callable[[int, int, int], None] | None = None,
         every: int = 500,
+        first: int = 0,
     ) -> None:
-        """Offer every particle in population order, each after its lag."""
+        """Offer every particle from ``first`` on in population order, each after its lag."""
         n = self.state.n
-        for i in range(n + 1):
+        for i in range(first, n + 1):
             if progress is not None and i % every == 0 and i < n:
-                progress(i, self.state.count, n)
+                progress(i - first, self.state.count - first, n - first)
             if self.done:
                 break
             self._release(rng, ended=i == n)
