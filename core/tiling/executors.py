@@ -12,7 +12,7 @@ import importlib
 import os
 import uuid
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from concurrent.futures.process import BrokenProcessPool
 from contextlib import contextmanager
 from typing import Any, Protocol, TypeVar
@@ -24,20 +24,33 @@ T = TypeVar("T")
 R = TypeVar("R")
 
 
+Done = Callable[[int, Any], None]
+"""Called as ``done(position, result)`` as each task finishes, in the order they finish."""
+
+
 class TileExecutor(Protocol):
     """Runs tasks; the results come back in the tasks' order."""
 
-    def map(self, fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
-        """Return ``[fn(item) for item in items]``, computed wherever the executor runs."""
+    def map(self, fn: Callable[[T], R], items: Sequence[T], done: Done | None = None) -> list[R]:
+        """Return ``[fn(item) for item in items]``, computed wherever the executor runs.
+
+        ``done`` hears of each task as it finishes (for progress; the order
+        of the results does not depend on it).
+        """
         ...
 
 
 class InProcess:
     """Every task in this process, one after another."""
 
-    def map(self, fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
+    def map(self, fn: Callable[[T], R], items: Sequence[T], done: Done | None = None) -> list[R]:
         """Run the tasks here, in order."""
-        return [fn(item) for item in items]
+        out = []
+        for k, item in enumerate(items):
+            out.append(fn(item))
+            if done is not None:
+                done(k, out[-1])
+        return out
 
 
 def _init_tile_worker(threads: int) -> None:
@@ -63,7 +76,7 @@ class LocalProcesses:
         self.threads = threads if threads is not None else max(1, cores // workers)
         self._pool: ProcessPoolExecutor | None = None
 
-    def map(self, fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
+    def map(self, fn: Callable[[T], R], items: Sequence[T], done: Done | None = None) -> list[R]:
         """Run the tasks on the workers; a task's error is raised here."""
         if self._pool is None:
             import multiprocessing
@@ -75,7 +88,12 @@ class LocalProcesses:
                 initargs=(self.threads,),
             )
         futures = [self._pool.submit(fn, item) for item in items]
+        position = {f: k for k, f in enumerate(futures)}
         try:
+            for f in as_completed(futures):
+                result = f.result()
+                if done is not None:
+                    done(position[f], result)
             return [f.result() for f in futures]
         except BrokenProcessPool as err:
             raise RegopackError(f"a tile's worker process died: {err}") from None
@@ -121,14 +139,19 @@ class DaskClient:
             self._own = client
         self.client = client
 
-    def map(self, fn: Callable[[T], R], items: Sequence[T]) -> list[R]:
+    def map(self, fn: Callable[[T], R], items: Sequence[T], done: Done | None = None) -> list[R]:
         """Submit the tasks (keys of their own) and gather their results in order."""
+        distributed: Any = importlib.import_module("distributed")
         tag = uuid.uuid4().hex
         futures = [
             self.client.submit(fn, item, pure=False, key=f"regopack-tile-{tag}-{k}")
             for k, item in enumerate(items)
         ]
+        position = {f.key: k for k, f in enumerate(futures)}
         try:
+            if done is not None:
+                for f in distributed.as_completed(futures):
+                    done(position[f.key], f.result())
             return list(self.client.gather(futures))
         except BaseException:
             self.client.cancel(futures)

@@ -389,14 +389,20 @@ def pack_tiled(
         if not phase:
             continue
         tasks = [(jobs[t.index], done.near(layout, grown[t.index], reach)) for t in phase]
-        for outcome in executor.map(_tile_pack_args, tasks):
+
+        def report(_: int, outcome: TileOutcome) -> None:
+            outcomes[outcome.index] = outcome
+            if progress is not None:
+                drawn = sum(jobs[i].count for i in outcomes)
+                placed = sum(
+                    int(np.count_nonzero(o.insertion_index >= 0)) for o in outcomes.values()
+                )
+                progress(drawn, placed, total)
+
+        for outcome in executor.map(_tile_pack_args, tasks, report):
             outcomes[outcome.index] = outcome
         for t in phase:
             done.add(outcomes[t.index])
-        if progress is not None:
-            drawn = sum(jobs[i].count for i in outcomes)
-            placed = sum(int(np.count_nonzero(o.insertion_index >= 0)) for o in outcomes.values())
-            progress(drawn, placed, total)
     return _merge(layout, outcomes, time.perf_counter() - start)
 
 

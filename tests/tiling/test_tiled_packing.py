@@ -174,3 +174,13 @@ def test_a_domain_without_tiles_is_refused() -> None:
     data["domain"] = {"kind": "cylinder", "radius": 14.0, "height": 12.0}
     with pytest.raises(ConfigError, match="domain kind 'cylinder' is not tiled"):
         regopack.pack(data, verify=False)
+
+
+def test_progress_is_reported_tile_by_tile() -> None:
+    calls: list[tuple[int, int, int]] = []
+    p = regopack.pack(scene(), verify=False, progress=lambda *a: calls.append(a))
+    tiles = [c for c in calls if c[0] > 0]
+    assert len(tiles) >= 4  # one report per tile at least
+    done, placed, total = tiles[-1]
+    assert done == total and placed == p.n_placed
+    assert all(a[0] <= b[0] for a, b in zip(tiles, tiles[1:], strict=False))
