@@ -7,7 +7,8 @@ tiles of the given side (or x and y sides: a side as long as the cube gives
 strips) on each number of
 local workers given (one kernel thread each); prints the placed count,
 the wall time of `regopack.pack`, the insertion time and the solid fraction
-of the interior, and checks that the tiled packings are the same whatever
+of the interior, the peak memory of this process and of the largest
+worker so far, and checks that the tiled packings are the same whatever
 the workers. Run from the repository root (a 550 µm cube holds about 10^6
 spheres):
 
@@ -21,6 +22,7 @@ import argparse
 import hashlib
 import json
 import math
+import resource
 import sys
 import time
 from pathlib import Path
@@ -82,6 +84,11 @@ def main() -> None:
                 "insertion_s": round(float(s.get("insert_time_s", math.nan)), 1),
                 "phi_interior": round(float(s["phi_interior"]), 4),
                 "tiles": int(s.get("tiles", 0)),
+                # peak resident memory so far: this process, and the largest worker that ended
+                "peak_MB": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024),
+                "worker_peak_MB": round(
+                    resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+                ),
             }
         )
         print(json.dumps(rows[-1]), flush=True)

@@ -267,6 +267,14 @@ class InsertionStrategy(ABC):
         """
         raise NotImplementedError(f"{type(self).__name__} does not pack tiles")
 
+    def tile_conflict(self) -> tuple[str, str] | None:
+        """Say, before anything is drawn, why this strategy as configured cannot pack tiles.
+
+        Returns ``(field, reason)`` (a dotted scene path such as
+        ``insertion.order``) or ``None`` (the default).
+        """
+        return None
+
     def scene_conflict(self, shapes: Sequence[str], density: str) -> tuple[str, str] | None:
         """Say, before anything is drawn, why this strategy cannot pack a scene.
 

@@ -228,6 +228,10 @@ def check_tiled(resolved: ResolvedScene) -> None:
             f"{tiles.label()}: insertion {resolved.insertion.kind!r} does not "
             "pack tiles; leave tiles out"
         )
+    conflict = inserter.tile_conflict()
+    if conflict is not None:
+        field, reason = conflict
+        raise ConfigError(f"{tiles.label()}: {field} = {reason}")
 
 
 def layout_of(resolved: ResolvedScene) -> TileLayout:

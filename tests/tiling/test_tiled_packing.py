@@ -184,3 +184,20 @@ def test_progress_is_reported_tile_by_tile() -> None:
     done, placed, total = tiles[-1]
     assert done == total and placed == p.n_placed
     assert all(a[0] <= b[0] for a, b in zip(tiles, tiles[1:], strict=False))
+
+
+@pytest.mark.parametrize(
+    ("insertion", "says"),
+    [
+        ({"order": "paper"}, "insertion.order = 'paper': a tiled scene is packed in the sweep"),
+        ({"lag": "pilot"}, "insertion.lag = 'pilot' is not available in tiles"),
+    ],
+)
+def test_settings_a_tile_cannot_pack_are_refused_before_drawing(
+    insertion: dict[str, str], says: str
+) -> None:
+    data = scene()
+    data["insertion"] = {**data["insertion"], **insertion}
+    with pytest.raises(ConfigError, match=says) as err:
+        regopack.pack(data, verify=False, workers=2)
+    assert "\n" not in str(err.value) and str(err.value).startswith("tiles.side = 14: ")

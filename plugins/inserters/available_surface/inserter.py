@@ -323,15 +323,9 @@ class AvailableSurface(InsertionStrategy):
 
         started = time.perf_counter()
         cfg = self.config
-        if cfg.order != "sweep":
-            raise ConfigError(
-                "tiles: insertion 'available-surface' packs tiles in the sweep order; "
-                "give insertion.order = 'sweep'"
-            )
-        if cfg.lag == "pilot":
-            raise ConfigError(
-                "tiles: insertion.lag = 'pilot' is not available in tiles; give lag = 'none'"
-            )
+        conflict = self.tile_conflict()
+        if conflict is not None:
+            raise ConfigError(f"{conflict[0]}: {conflict[1]}")
         own, radius, lo, hi, wall, eta = self._box(population, domain, controller)
         obstacles = tile.obstacles
         if not isinstance(obstacles, type(own)):
@@ -368,6 +362,22 @@ class AvailableSurface(InsertionStrategy):
         stats["obstacles"] = float(m)
         assert centre.shape[0] == n_own
         return InsertionResult(centre=centre, insertion_index=index, stats=stats)
+
+    def tile_conflict(self) -> tuple[str, str] | None:
+        """Refuse the paper's order and the pilot's lags in tiles (the sweep packs tiles)."""
+        cfg = self.config
+        if cfg.order != "sweep":
+            return (
+                "insertion.order",
+                f"{cfg.order!r}: a tiled scene is packed in the sweep order; give 'sweep' "
+                "or leave tiles out",
+            )
+        if cfg.lag == "pilot":
+            return (
+                "insertion.lag",
+                "'pilot' is not available in tiles; give 'none' or leave tiles out",
+            )
+        return None
 
     def _run(
         self,
