@@ -12,7 +12,9 @@ from regopack.registry.manager import default_registry
 from regopack.scenes.model import Domain, Scene
 from regopack.testing import packing_from_polygons
 
-SCENE_FIELDS = "name, seed, count, length_unit, domain, size, phases, insertion, density, outputs, tiles"
+SCENE_FIELDS = (
+    "name, seed, count, length_unit, domain, size, phases, insertion, density, outputs, tiles"
+)
 
 
 def test_a_misspelt_section_in_set_names_set_and_the_closest_field(capsys):
