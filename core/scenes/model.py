@@ -393,8 +393,8 @@ class Tiles(BaseModel):
             "space; a list gives one side per floor axis ([x, y]; a side as long as the "
             "box gives one tile along that axis, strips). Each tile draws its share of the "
             "particles from its own stream and is packed against the tiles before it; the "
-            "packing depends on the tiles, not on the workers that pack them. At least six "
-            "largest circumradii."
+            "packing depends on the tiles, not on the workers that pack them. At least two "
+            "largest diameters and two largest circumradii."
         ),
     )
 

@@ -65,8 +65,8 @@ SUMMED_STATS = (
 REACH_SLACK = 1e-9
 """Relative slack on the reach that selects a tile's obstacles (rounding of the distances)."""
 
-MARGIN_REACHES = 2.0
-"""A tile's margin beyond its window, in largest circumradii (one largest diameter)."""
+MARGIN_DIAMETERS = 1.0
+"""A tile's margin beyond its window, in largest equivalent diameters of the size distribution."""
 
 
 @dataclass(frozen=True)
@@ -341,10 +341,12 @@ def pack_tiled(
     Raises
     ------
     ConfigError
-        When the tiles are narrower than two largest circumradii (tiles of
-        one colour could then meet), or the scene cannot be tiled.
+        When the tiles are narrower than two margins and two largest
+        circumradii (tiles of one colour could then meet), or the scene
+        cannot be tiled.
     """
-    from regopack.run.pipeline import check_scene
+    from regopack.registry.interfaces import SizeDistribution
+    from regopack.run.pipeline import _build, check_scene
 
     start = time.perf_counter()
     check_tiled(resolved)
@@ -358,21 +360,10 @@ def pack_tiled(
     data = resolved.to_dict()
     # the scene a tile resolves: its own draws, no outputs of its own
     data["outputs"] = {"packing": "packing.npz", "summary": "summary.json", "fabric": False}
-    drafts = [TileJob(data, t.index, counts[t.index], seeds[t.index], layout) for t in layout.tiles]
-    reach = max(executor.map(tile_reach, drafts), default=0.0)
-    eta = float(getattr(controller, "eta", 0.0) or 0.0)
-    # the packing control keeps particles up to eta/100 of a diameter apart: so much more reach
-    reach *= 1.0 + max(eta, 0.0) / 50.0
-    margin = MARGIN_REACHES * reach
-    narrowest = min(
-        float(np.min(t.hi[: layout.floor_axes] - t.lo[: layout.floor_axes])) for t in layout.tiles
-    )
-    least = 2.0 * margin + 2.0 * reach
-    if len(layout.tiles) > 1 and narrowest < least:
-        raise ConfigError(
-            f"{tiles_cfg.label()}: tiles {narrowest:g} wide are narrower than six "
-            f"largest circumradii ({least:g}); give tiles.side >= {least:g}"
-        )
+    # the margin: one largest equivalent diameter of the size distribution, known before any
+    # particle is drawn, so that each tile's count (its share and its margin's) is fixed first
+    size_dist: SizeDistribution = _build(resolved.size, SizeDistribution, "size")
+    margin = MARGIN_DIAMETERS * 2.0 * float(size_dist.r_max) if len(layout.tiles) > 1 else 0.0
     grown = [layout.grown(t, margin) if len(layout.tiles) > 1 else t for t in layout.tiles]
     # each tile draws for its grown window too: the particles it drops there are extra
     jobs = [
@@ -385,6 +376,21 @@ def pack_tiled(
         )
         for t, g in zip(layout.tiles, grown, strict=True)
     ]
+    # the reach: the largest circumradius of the particles the tiles will pack (the same
+    # draws as the packing tasks make)
+    reach = max(executor.map(tile_reach, jobs), default=0.0)
+    eta = float(getattr(controller, "eta", 0.0) or 0.0)
+    # the packing control keeps particles up to eta/100 of a diameter apart: so much more reach
+    reach *= 1.0 + max(eta, 0.0) / 50.0
+    narrowest = min(
+        float(np.min(t.hi[: layout.floor_axes] - t.lo[: layout.floor_axes])) for t in layout.tiles
+    )
+    least = 2.0 * margin + 2.0 * reach
+    if len(layout.tiles) > 1 and narrowest < least:
+        raise ConfigError(
+            f"{tiles_cfg.label()}: tiles {narrowest:g} wide are narrower than two margins "
+            f"and two largest circumradii ({least:g}); give tiles.side >= {least:g}"
+        )
     outcomes: dict[int, TileOutcome] = {}
     done = _Done()
     total = sum(job.count for job in jobs)

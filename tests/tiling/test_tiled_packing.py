@@ -161,7 +161,7 @@ def test_the_same_packing_on_a_dask_cluster(spheres: Packing) -> None:
 
 
 def test_tiles_narrower_than_two_particles_are_refused() -> None:
-    with pytest.raises(ConfigError, match=r"tiles\.side = 3: .* narrower than six largest"):
+    with pytest.raises(ConfigError, match=r"tiles\.side = 3: .* narrower than two margins"):
         regopack.pack(scene(side=3.0), verify=False)
 
 
