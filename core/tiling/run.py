@@ -413,7 +413,10 @@ def pack_tiled(
             outcomes[outcome.index] = outcome
         for t in phase:
             done.add(outcomes[t.index])
-    return _merge(layout, outcomes, time.perf_counter() - start)
+    tiled = _merge(layout, outcomes, time.perf_counter() - start)
+    tiled.result.stats["tile_reach"] = reach
+    tiled.result.stats["tile_margin"] = margin
+    return tiled
 
 
 def packer_for(

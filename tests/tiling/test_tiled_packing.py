@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import copy
 import itertools
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -203,3 +204,23 @@ def test_settings_a_tile_cannot_pack_are_refused_before_drawing(
     with pytest.raises(ConfigError, match=says) as err:
         regopack.pack(data, verify=False, workers=2)
     assert "\n" not in str(err.value) and str(err.value).startswith("tiles.side = 14: ")
+
+
+@pytest.mark.parametrize("seed", [4, 10, 51])
+def test_rare_giants_are_within_the_reach_that_chose_the_obstacles(
+    tmp_path: Path, seed: int
+) -> None:
+    """The reach is measured on every particle the tiles pack, their margins' share too."""
+    sizes = tmp_path / "bimodal.csv"
+    # 99.86 % of diameters 1.0-1.2, 0.14 % giants of 5.0-5.5 (by number)
+    sizes.write_text("1.0, 0\n1.2, 99.86\n5.0, 99.86\n5.5, 100\n", encoding="utf-8")
+    data = scene()
+    data["size"] = {"kind": "tabulated", "path": str(sizes), "basis": "number"}
+    data["domain"] = {"kind": "box", "width": 68.0, "height": 8.0, "depth": 68.0}
+    data["count"] = 500
+    data["seed"] = seed
+    data["tiles"] = {"side": 17.0}
+    p = regopack.pack(data, verify=False)
+    assert p.stats["tiles"] == 16
+    assert p.stats["tile_reach"] >= float(np.max(p.rounding_radius))
+    _no_overlap(p)
