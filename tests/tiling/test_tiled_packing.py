@@ -224,3 +224,12 @@ def test_rare_giants_are_within_the_reach_that_chose_the_obstacles(
     assert p.stats["tiles"] == 16
     assert p.stats["tile_reach"] >= float(np.max(p.rounding_radius))
     _no_overlap(p)
+
+
+@pytest.mark.parametrize("count", [1, 4, 20, 100])
+def test_a_sparse_tiled_scene_keeps_what_it_draws(count: int) -> None:
+    """Each tile starts below the middle of its own window, not in a neighbour's."""
+    data = {**scene(), "count": count}
+    p = regopack.pack(data, verify=False)
+    whole = regopack.pack({**data, "tiles": None}, verify=False)
+    assert p.n_placed >= 0.9 * min(count, whole.n_placed)

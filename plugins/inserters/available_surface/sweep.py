@@ -673,7 +673,13 @@ class SurfaceSweep:
         st = self.state
         if not self.started:
             if st.begin(i):
-                first = np.clip(0.5 * (st.lo + st.hi), st.adm_lo, st.adm_hi)
+                middle = 0.5 * (st.lo + st.hi)
+                if st.window is not None:
+                    # a tile starts below the middle of its window, not of the box
+                    w_lo = np.maximum(st.lo, st.window[0])
+                    w_hi = np.minimum(st.hi, st.window[1])
+                    middle = 0.5 * (w_lo + w_hi)
+                first = np.clip(middle, st.adm_lo, st.adm_hi)
                 first[2] = st.lo[2] if st.period is not None else st.adm_lo[2]
                 if st.fits_at(first):
                     self.started = True
