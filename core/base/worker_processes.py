@@ -34,16 +34,17 @@ def threads_per_worker(workers: int, cores: int | None) -> int:
     return max(1, (cores or 1) // max(1, workers))
 
 
-def init_worker(workers: int = 1) -> None:
+def init_worker(workers: int = 1, threads: int | None = None) -> None:
     """Start a worker process: Ctrl-C goes to the main process, which stops the workers.
 
     SIGTERM keeps its default action (the process ends at once); the main
     process removes what a stopped worker left. The worker's compiled kernels
-    use its share of the cores (:func:`threads_per_worker`).
+    use ``threads`` threads, or its share of the cores (:func:`threads_per_worker`).
     """
     import numba
 
-    numba.set_num_threads(min(kernel_threads(), threads_per_worker(workers, os.cpu_count())))
+    share = threads if threads is not None else threads_per_worker(workers, os.cpu_count())
+    numba.set_num_threads(max(1, min(kernel_threads(), share)))
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     parent = os.getppid()

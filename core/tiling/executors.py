@@ -57,8 +57,7 @@ def _init_tile_worker(threads: int) -> None:
     """Start a local worker: its share of the kernel threads; it ends with the parent."""
     from regopack.base.worker_processes import init_worker
 
-    cores = os.cpu_count() or 1
-    init_worker(max(1, cores // max(1, threads)))
+    init_worker(threads=threads)
 
 
 class LocalProcesses:
@@ -120,21 +119,21 @@ class LocalProcesses:
 class DaskClient:
     """Tasks on a Dask cluster through a ``distributed.Client`` (or a scheduler's address)."""
 
-    def __init__(self, client: Any) -> None:
+    def __init__(self, client: Any, flag: str = "--scheduler") -> None:
         self._own = None
         if isinstance(client, str):
             try:
                 distributed: Any = importlib.import_module("distributed")
             except ImportError as err:
                 raise ConfigError(
-                    f"--scheduler {client}: Dask is not installed; install it with: "
+                    f"{flag} {client}: Dask is not installed; install it with: "
                     f"{install_hint('dask')}"
                 ) from err
             try:
                 client = distributed.Client(client, timeout="20s")
             except (OSError, TimeoutError, ValueError) as err:
                 raise ConfigError(
-                    f"--scheduler {client}: cannot connect to the Dask scheduler: {err}"
+                    f"{flag} {client}: cannot connect to the Dask scheduler: {err}"
                 ) from err
             self._own = client
         self.client = client
@@ -182,20 +181,26 @@ def executor_for(
     ``--workers`` and the API's ``workers``).
     """
     w_flag, t_flag, c_flag = flags
-    if workers is not None and (isinstance(workers, bool) or workers < 1):
-        raise ConfigError(f"{w_flag} {workers!r}: give a whole number of workers, 1 or more")
-    if threads is not None and (isinstance(threads, bool) or threads < 1):
-        raise ConfigError(f"{t_flag} {threads!r}: give a whole number of threads, 1 or more")
-    wants = client is not None or (workers or 1) > 1
+    for flag, value, what in ((w_flag, workers, "workers"), (t_flag, threads, "threads")):
+        whole = isinstance(value, int) and not isinstance(value, bool)
+        if value is not None and not (whole and value >= 1):
+            raise ConfigError(f"{flag} {value!r}: give a whole number of {what}, 1 or more")
+    wants = client is not None or (workers or 1) > 1 or threads is not None
     if wants and not tiled:
-        what = f"{c_flag} {client}" if client is not None else f"{w_flag} {workers}"
+        what = (
+            f"{c_flag} {client}"
+            if client is not None
+            else f"{w_flag} {workers}"
+            if (workers or 1) > 1
+            else f"{t_flag} {threads}"
+        )
         raise ConfigError(
             f"{what}: the scene is packed as one task in one process; give it tiles to "
             "pack on several workers, e.g. --set tiles.side=60 (a side of several "
             "largest particles)"
         )
     if client is not None:
-        dask = DaskClient(client)
+        dask = DaskClient(client, c_flag)
         try:
             yield dask
         finally:

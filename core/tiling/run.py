@@ -382,9 +382,9 @@ def pack_tiled(
     eta = float(getattr(controller, "eta", 0.0) or 0.0)
     # the packing control keeps particles up to eta/100 of a diameter apart: so much more reach
     reach *= 1.0 + max(eta, 0.0) / 50.0
-    narrowest = min(
-        float(np.min(t.hi[: layout.floor_axes] - t.lo[: layout.floor_axes])) for t in layout.tiles
-    )
+    # only axes cut into several tiles need the width (a strip spans its other axis)
+    cut = [a for a, n in enumerate(layout.counts) if n > 1]
+    narrowest = min((float(t.hi[a] - t.lo[a]) for t in layout.tiles for a in cut), default=math.inf)
     least = 2.0 * margin + 2.0 * reach
     if len(layout.tiles) > 1 and narrowest < least:
         raise ConfigError(

@@ -233,3 +233,45 @@ def test_a_sparse_tiled_scene_keeps_what_it_draws(count: int) -> None:
     p = regopack.pack(data, verify=False)
     whole = regopack.pack({**data, "tiles": None}, verify=False)
     assert p.n_placed >= 0.9 * min(count, whole.n_placed)
+
+
+def _kernel_threads(_: int) -> int:
+    import numba
+
+    return int(numba.get_num_threads())
+
+
+def test_local_workers_run_the_threads_asked_for() -> None:
+    from regopack.tiling.executors import LocalProcesses
+
+    with LocalProcesses(2, threads=1) as local:
+        assert local.map(_kernel_threads, [0, 1]) == [1, 1]
+
+
+def test_strips_need_their_width_along_the_cut_axis_only() -> None:
+    """Strips 14 wide across a depth of 10: the uncut depth is no tile's width."""
+    data = scene()
+    data["domain"] = {"kind": "box", "width": 28.0, "height": 12.0, "depth": 10.0}
+    data["tiles"] = {"side": [14.0, 10.0]}
+    p = regopack.pack(data, verify=False)
+    assert p.stats["tiles"] == 2
+    _no_overlap(p)
+
+
+@pytest.mark.parametrize(
+    ("options", "says"),
+    [
+        ({"workers": 1.5}, "workers 1.5: give a whole number of workers"),
+        ({"workers": "2"}, "workers '2': give a whole number of workers"),
+        ({"threads_per_worker": 0}, "threads_per_worker 0: give a whole number of threads"),
+    ],
+)
+def test_bad_worker_options_are_refused_in_one_line(options: dict[str, Any], says: str) -> None:
+    with pytest.raises(ConfigError, match=says) as err:
+        regopack.pack(scene(), verify=False, **options)
+    assert "\n" not in str(err.value)
+
+
+def test_threads_per_worker_without_tiles_is_refused() -> None:
+    with pytest.raises(ConfigError, match="threads_per_worker 2: the scene is packed as one task"):
+        regopack.pack({**scene(), "tiles": None}, verify=False, threads_per_worker=2)
